@@ -1,0 +1,1 @@
+"""bt_grasp: behaviour-tree vision-guided grasping."""

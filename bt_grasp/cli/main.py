@@ -1,0 +1,91 @@
+"""`bt-grasp`: the entry point. Sub-command groups live in their own modules and are added here.
+
+Every error a user can act on (a ``BtGraspError`` with ``exit_code`` 2) is printed as one sentence on
+stderr; nothing else of it (no traceback) reaches the user.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from importlib.metadata import version as _dist_version
+
+import typer
+
+from bt_grasp.errors import BtGraspError
+
+app = typer.Typer(
+    name="bt-grasp",
+    help="Behaviour-tree vision-guided grasping with a simulated UR5 and RealSense D435.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+
+
+def _version_callback(value: bool) -> None:
+    if value:
+        typer.echo(f"bt-grasp {_dist_version('bt-grasp')}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(
+    version: bool = typer.Option(
+        False, "--version", callback=_version_callback, is_eager=True, help="Print the version and exit."
+    ),
+) -> None:
+    """bt-grasp: run, inspect and debug behaviour trees that pick objects with a simulated UR5."""
+
+
+def _register() -> None:
+    # Each command group registers itself on `app`; import order is the order in --help.
+    from bt_grasp.cli import scene_cmd
+
+    scene_cmd.register(app)
+    for name in ("demo_cmd", "run_cmd", "tree_cmd", "calibrate_cmd", "replay_cmd", "bench_cmd"):
+        try:
+            module = __import__(f"bt_grasp.cli.{name}", fromlist=["register"])
+        except ModuleNotFoundError as exc:
+            if exc.name != f"bt_grasp.cli.{name}":
+                raise
+            continue
+        module.register(app)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the CLI; returns the process exit code."""
+    _register()
+    try:
+        rv = app(args=argv, standalone_mode=False)
+    except BtGraspError as exc:
+        typer.echo(f"error: {exc}", err=True)
+        code = exc.exit_code
+    except typer.Exit as exc:
+        code = exc.exit_code
+    except typer.Abort:
+        typer.echo("aborted", err=True)
+        code = 130
+    except KeyboardInterrupt:
+        typer.echo("interrupted", err=True)
+        code = 130
+    except Exception as exc:  # click usage errors and the like
+        import click
+
+        if isinstance(exc, click.exceptions.ClickException):
+            exc.show()
+            code = exc.exit_code
+        else:
+            raise
+    else:
+        code = rv if isinstance(rv, int) else 0
+    sys.stdout.flush()
+    sys.stderr.flush()
+    if argv is None:
+        # nanobind (OMPL) prints "leaked ..." lines at interpreter exit; users should not see them.
+        os._exit(code)
+    return code
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,151 @@
+"""The robot description: one URDF that the simulator and the kinematics both load.
+
+It is the UR5 of the ``example-robot-data`` wheel (BSD, from ros-industrial/universal_robot) with its
+``package://`` mesh paths resolved to the installed files, the ROS ``world`` link dropped (the root is
+``base_link``), and bt_grasp's own gripper (``bt_grasp/assets/gripper.urdf``) mounted on ``tool0``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import sys
+import tempfile
+from dataclasses import dataclass
+from functools import cache
+from importlib.resources import files
+from pathlib import Path
+from xml.etree.ElementTree import Element, tostring
+
+import defusedxml.ElementTree as SafeET
+
+from bt_grasp.errors import BtGraspError
+
+ARM_JOINTS: tuple[str, ...] = (
+    "shoulder_pan_joint",
+    "shoulder_lift_joint",
+    "elbow_joint",
+    "wrist_1_joint",
+    "wrist_2_joint",
+    "wrist_3_joint",
+)
+FINGER_JOINT = "left_finger_joint"  # the driven finger; right_finger_joint mimics it
+MIMIC_FINGER_JOINT = "right_finger_joint"
+BASE_LINK = "base_link"
+TOOL_LINK = "tool0"
+TCP_LINK = "tcp"
+WRIST_CAMERA_LINK = "wrist_3_link"
+GRIPPER_LINKS: tuple[str, ...] = ("gripper_palm", "left_finger", "right_finger")
+#: the pad opening is twice the driven finger joint's position
+MAX_OPENING_M = 0.085
+#: distance from the tcp to the finger tips along the approach axis (tcp z)
+TCP_TO_FINGERTIP_M = 0.02
+#: adjacent or always-touching link pairs whose collisions are ignored (SRDF of the UR5 plus the gripper)
+DISABLED_COLLISION_PAIRS: tuple[tuple[str, str], ...] = (
+    ("base_link", "shoulder_link"),
+    ("base_link", "upper_arm_link"),
+    ("shoulder_link", "upper_arm_link"),
+    ("upper_arm_link", "forearm_link"),
+    ("forearm_link", "wrist_1_link"),
+    ("forearm_link", "wrist_2_link"),
+    ("forearm_link", "wrist_3_link"),
+    ("wrist_1_link", "wrist_2_link"),
+    ("wrist_1_link", "wrist_3_link"),
+    ("wrist_2_link", "wrist_3_link"),
+    ("wrist_3_link", "gripper_palm"),
+    ("wrist_2_link", "gripper_palm"),
+    ("wrist_3_link", "left_finger"),
+    ("wrist_3_link", "right_finger"),
+    ("gripper_palm", "left_finger"),
+    ("gripper_palm", "right_finger"),
+    ("left_finger", "right_finger"),
+)
+
+
+@dataclass(frozen=True)
+class JointLimits:
+    """Per-joint limits of the UR5 arm, in joint order ``ARM_JOINTS``."""
+
+    lower_rad: tuple[float, ...]
+    upper_rad: tuple[float, ...]
+    velocity_rad_s: tuple[float, ...]
+    effort_nm: tuple[float, ...]
+
+
+class RobotModelMissingError(BtGraspError):
+    exit_code = 2
+
+
+def ur_description_dir() -> Path:
+    """The installed ``ur_description`` folder of the example-robot-data wheel."""
+    for base in map(Path, sys.path):
+        candidate = base / "cmeel.prefix/share/example-robot-data/robots/ur_description"
+        if (candidate / "urdf/ur5_robot.urdf").is_file():
+            return candidate
+    raise RobotModelMissingError(
+        "the UR5 model of example-robot-data is not installed; run `make setup` to install the package"
+    )
+
+
+def _gripper_urdf_text() -> str:
+    return (files("bt_grasp") / "assets" / "gripper.urdf").read_text()
+
+
+def _resolve_mesh(filename: str, share: Path) -> str:
+    prefix = "package://example-robot-data/robots/ur_description/"
+    if filename.startswith(prefix):
+        return str(share / filename[len(prefix) :])
+    return filename
+
+
+def robot_urdf_text() -> str:
+    """The merged URDF as text (deterministic for an installed model)."""
+    share = ur_description_dir()
+    robot = SafeET.fromstring((share / "urdf/ur5_robot.urdf").read_text())
+    for child in list(robot):
+        if child.tag == "transmission" or child.tag == "gazebo":
+            robot.remove(child)
+        elif child.tag == "link" and child.get("name") == "world":
+            robot.remove(child)
+        elif child.tag == "joint" and child.get("name") == "world_joint":
+            robot.remove(child)
+    for mesh in robot.iter("mesh"):
+        mesh.set("filename", _resolve_mesh(mesh.get("filename", ""), share))
+    gripper = SafeET.fromstring(_gripper_urdf_text())
+    for child in gripper:
+        if isinstance(child, Element) and child.tag in ("link", "joint"):
+            robot.append(child)
+    robot.set("name", "ur5_bt_grasp")
+    return '<?xml version="1.0"?>\n' + tostring(robot, encoding="unicode")
+
+
+@cache
+def robot_urdf_path() -> Path:
+    """Path of the merged URDF, written once per content into a cache folder."""
+    text = robot_urdf_text()
+    digest = hashlib.sha256(text.encode()).hexdigest()[:16]
+    cache_dir = Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "bt_grasp"
+    cache_dir.mkdir(parents=True, exist_ok=True)
+    path = cache_dir / f"ur5_bt_grasp_{digest}.urdf"
+    if not path.exists():
+        fd, tmp = tempfile.mkstemp(dir=cache_dir, suffix=".urdf")
+        with os.fdopen(fd, "w") as handle:
+            handle.write(text)
+        os.replace(tmp, path)
+    return path
+
+
+@cache
+def arm_joint_limits() -> JointLimits:
+    """Limits of the six arm joints, read from the URDF (one source of truth)."""
+    robot = SafeET.fromstring(robot_urdf_text())
+    by_name = {j.get("name"): j for j in robot.iter("joint")}
+    lower, upper, vel, eff = [], [], [], []
+    for name in ARM_JOINTS:
+        limit = by_name[name].find("limit")
+        assert limit is not None
+        lower.append(float(limit.get("lower", "0")))
+        upper.append(float(limit.get("upper", "0")))
+        vel.append(float(limit.get("velocity", "0")))
+        eff.append(float(limit.get("effort", "0")))
+    return JointLimits(tuple(lower), tuple(upper), tuple(vel), tuple(eff))

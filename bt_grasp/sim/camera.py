@@ -1,0 +1,106 @@
+"""The simulated RealSense D435: aligned 640x480 colour + depth with a seeded noise model.
+
+Intrinsics: square pixels with the D435 colour imager's vertical field of view (about 42 degrees). The
+often-quoted 69 x 42 degrees is the 16:9 mode; a 4:3 640x480 frame of the same sensor is about 55 x 42.
+SAPIEN's principal point is (W/2, H/2) in its convention; OpenCV's convention puts pixel centres at
+integers, so the OpenCV intrinsics use ((W-1)/2, (H-1)/2).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+import sapien
+from numpy.typing import NDArray
+
+from bt_grasp.geometry import Mat4, T_from_xyz_rpy
+from bt_grasp.interfaces import CameraIntrinsics, RGBDFrame
+from bt_grasp.scene_config import Camera as CameraConfig
+from bt_grasp.sim.noise import apply_color_noise, apply_depth_noise
+from bt_grasp.sim.poses import cv_from_sapien_cam, look_at_cv, sapien_cam_from_cv, to_pose, to_T
+
+
+class SimCamera:
+    """Implements :class:`bt_grasp.interfaces.Camera`."""
+
+    def __init__(
+        self,
+        scene: sapien.Scene,
+        config: CameraConfig,
+        mount: str,
+        rng: np.random.Generator,
+        now_ns: Callable[[], int],
+        parent_link: sapien.physx.PhysxArticulationLinkComponent | None = None,
+    ) -> None:
+        self._scene = scene
+        self._config = config
+        self._mount = mount
+        self._rng = rng
+        self._now_ns = now_ns
+        w, h = config.width_px, config.height_px
+        self._component = sapien.render.RenderCameraComponent(w, h)
+        self._component.set_fovy(np.deg2rad(config.vfov_deg), compute_x=True)
+        self._component.near = config.near_m
+        self._component.far = config.far_m
+        if mount == "eye-to-hand":
+            e2h = config.eye_to_hand
+            T_world_cv = look_at_cv(np.array(e2h.position_m), np.array(e2h.look_at_m), np.deg2rad(e2h.roll_deg))
+            entity = sapien.Entity()
+            entity.set_name("camera_eye_to_hand")
+            entity.add_component(self._component)
+            entity.set_pose(to_pose(sapien_cam_from_cv(T_world_cv)))
+            scene.add_entity(entity)
+        elif mount == "eye-in-hand":
+            if parent_link is None:
+                raise ValueError("an eye-in-hand camera needs the link it is mounted on")
+            eih = config.eye_in_hand
+            T_link_cv = T_from_xyz_rpy(np.array(eih.xyz_m), np.deg2rad(eih.rpy_deg))
+            self._component.set_local_pose(to_pose(sapien_cam_from_cv(T_link_cv)))
+            parent_link.entity.add_component(self._component)
+        else:
+            raise ValueError(f"unknown camera mount {mount!r}")
+        K = self._component.get_intrinsic_matrix()
+        self._intrinsics = CameraIntrinsics(
+            width_px=w,
+            height_px=h,
+            fx_px=float(K[0, 0]),
+            fy_px=float(K[1, 1]),
+            cx_px=(w - 1) / 2.0,
+            cy_px=(h - 1) / 2.0,
+        )
+        self.captures = 0
+
+    @property
+    def intrinsics(self) -> CameraIntrinsics:
+        return self._intrinsics
+
+    @property
+    def mount(self) -> str:
+        return self._mount
+
+    def render_true(self) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
+        """Noise-free colour and depth (0 where nothing was hit). Deterministic for a given scene state."""
+        self._scene.update_render()
+        self._component.take_picture()
+        rgba = self._component.get_picture("Color")
+        color = np.clip(np.round(rgba[..., :3] * 255.0), 0, 255).astype(np.uint8)
+        position = self._component.get_picture("Position")
+        depth = (-position[..., 2]).astype(np.float32)
+        depth[position[..., 3] >= 1.0] = 0.0
+        depth[depth < 0] = 0.0
+        return color, depth
+
+    def capture(self) -> RGBDFrame | None:
+        color, depth = self.render_true()
+        noise = self._config.noise
+        depth = apply_depth_noise(depth, noise, self._rng)
+        color = apply_color_noise(color, noise, self._rng)
+        self.captures += 1
+        return RGBDFrame(
+            color=color, depth_m=depth, intrinsics=self._intrinsics, stamp_ns=self._now_ns(), mount=self._mount
+        )
+
+    def true_T_world_cv(self) -> Mat4:
+        """The camera's true optical-frame pose. Ground truth: only the oracle may call this."""
+        return cv_from_sapien_cam(to_T(self._component.get_global_pose()))

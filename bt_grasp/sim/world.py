@@ -1,0 +1,116 @@
+"""The simulated work cell built from a scene file and a seed."""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+
+import numpy as np
+import sapien
+
+from bt_grasp.clock import ManualClock
+from bt_grasp.scene_config import Scene, load_scene
+from bt_grasp.sim.camera import SimCamera
+from bt_grasp.sim.device import create_scene
+from bt_grasp.sim.objects import PlacedObject, build_object, draw_poses
+from bt_grasp.sim.robot import SimRobot
+
+log = logging.getLogger(__name__)
+
+_STREAM_OBJECTS, _STREAM_CAMERA, _STREAM_FAULTS = 0, 1, 2
+
+
+class World:
+    """SAPIEN scene + robot + camera + objects. Time passes only through :meth:`step`.
+
+    Implements :class:`bt_grasp.interfaces.Stepper`. ``world.robot`` and ``world.camera`` implement the
+    robot and camera interfaces; true object poses are reachable only through
+    :class:`bt_grasp.sim.oracle.GroundTruthOracle`.
+    """
+
+    def __init__(self, scene_config: Scene, seed: int, *, camera_mount: str | None = None,
+                 source: str | Path = "scene") -> None:
+        self.config = scene_config
+        self.seed = int(seed)
+        seeds = np.random.SeedSequence(self.seed).spawn(3)
+        self._object_rng = np.random.default_rng(seeds[_STREAM_OBJECTS])
+        self.camera_rng = np.random.default_rng(seeds[_STREAM_CAMERA])
+        self.fault_seed_sequence = seeds[_STREAM_FAULTS]
+        self.clock = ManualClock()
+        physics = scene_config.physics
+        self.scene = create_scene()
+        self.scene.set_timestep(physics.timestep_s)
+        sapien.physx.get_scene_config()  # touch: scene config applies to scenes created after a change
+        self._build_table()
+        self.robot = SimRobot(self.scene, scene_config.robot, scene_config.T_world_base())
+        self.placed: list[PlacedObject] = draw_poses(scene_config.objects, self._object_rng, 0.0, str(source))
+        self.objects = {p.spec.name: build_object(self.scene, p) for p in self.placed}
+        self._build_lights()
+        mount = camera_mount or scene_config.camera.mount
+        parent = None
+        if mount == "eye-in-hand":
+            parent = self.robot.links[scene_config.camera.eye_in_hand.parent_link]
+        self.camera = SimCamera(self.scene, scene_config.camera, mount, self.camera_rng, self.clock.now_ns, parent)
+        self._physics_steps = 0
+        log.debug("world built: seed %d, %d objects", self.seed, len(self.objects))
+
+    @classmethod
+    def from_file(cls, path: str | Path, seed: int, *, camera_mount: str | None = None) -> World:
+        return cls(load_scene(path), seed, camera_mount=camera_mount, source=path)
+
+    # --- building ------------------------------------------------------------------------------------
+    def _build_table(self) -> None:
+        table = self.config.table
+        builder = self.scene.create_actor_builder()
+        half = [table.size_m[0] / 2, table.size_m[1] / 2, table.size_m[2] / 2]
+        material = sapien.physx.PhysxMaterial(table.friction, table.friction, 0.0)
+        rgb = table.color if not isinstance(table.color, str) else None
+        from bt_grasp.scene_config import COLOR_NAMES
+
+        color = [*(rgb or COLOR_NAMES[str(table.color)]), 1.0]
+        builder.add_box_collision(half_size=half, material=material)
+        builder.add_box_visual(half_size=half, material=sapien.render.RenderMaterial(base_color=color, roughness=0.9))
+        builder.set_initial_pose(sapien.Pose(p=[table.center_xy_m[0], table.center_xy_m[1], -half[2]]))
+        self.table = builder.build_static(name="table")
+        ground = self.scene.create_actor_builder()
+        ground.add_plane_collision(sapien.Pose(p=[0, 0, -0.75], q=[0.7071068, 0, -0.7071068, 0]))
+        ground.add_plane_visual(
+            sapien.Pose(p=[0, 0, -0.75], q=[0.7071068, 0, -0.7071068, 0]),
+            scale=[10, 10, 10],
+            material=sapien.render.RenderMaterial(base_color=[0.35, 0.35, 0.38, 1]),
+        )
+        ground.build_static(name="floor")
+
+    def _build_lights(self) -> None:
+        for light in self.config.lights:
+            if light.kind == "ambient":
+                self.scene.set_ambient_light(list(light.color))
+            elif light.kind == "directional":
+                self.scene.add_directional_light(list(light.direction), list(light.color), shadow=light.shadow)
+            else:
+                self.scene.add_point_light(list(light.position_m), list(light.color), shadow=light.shadow)
+
+    # --- time ----------------------------------------------------------------------------------------
+    @property
+    def dt_s(self) -> float:
+        return self.config.physics.timestep_s
+
+    @property
+    def steps_per_tick(self) -> int:
+        return max(1, round(1.0 / (self.config.physics.control_rate_hz * self.dt_s)))
+
+    def now_ns(self) -> int:
+        return self.clock.now_ns()
+
+    def step(self, n: int = 1) -> None:
+        """Advance physics by n steps of dt (the robot's controller runs before each)."""
+        dt_ns = round(self.dt_s * 1e9)
+        for _ in range(n):
+            self.robot.before_physics_step()
+            self.scene.step()
+            self.clock.advance_ns(dt_ns)
+        self._physics_steps += n
+
+    def step_tick(self) -> None:
+        """Advance one control period (one behaviour-tree tick)."""
+        self.step(self.steps_per_tick)
