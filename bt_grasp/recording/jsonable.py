@@ -1,0 +1,169 @@
+"""Turning blackboard values into JSON, and keeping only what changed from one tick to the next.
+
+Conversions (documented in docs/recording.md):
+
+- numbers, strings, booleans, None: as they are; a non-finite float becomes the string "nan", "inf" or "-inf"
+  (JSON has no such numbers and Foxglove rejects them);
+- numpy scalars: the Python number; numpy arrays up to ``max_array_elements`` values: nested lists; larger
+  arrays: a summary ``{"__ndarray__": {"shape", "dtype", "min", "max", "mean"}}`` (a point cloud on the
+  blackboard must not be logged 100 times a second);
+- dataclasses: a dict of their fields plus ``"__type__"``; enums: their name; paths: a string; bytes: their
+  length; sets: a sorted list; tuples: lists; mappings: dicts with string keys;
+- an object with a ``to_dict()`` method: what it returns; anything else: its ``repr`` (at most 200 chars).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import PurePath
+from typing import Any
+
+import numpy as np
+
+JsonValue = Any
+_SCALARS = (str, int, bool, type(None))
+_REPR_LIMIT = 200
+
+
+def _float(value: float) -> float | str:
+    if math.isfinite(value):
+        return value
+    return "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf")
+
+
+def _array(value: np.ndarray, max_elements: int) -> JsonValue:
+    if value.size > max_elements:
+        summary: dict[str, Any] = {"shape": list(value.shape), "dtype": str(value.dtype)}
+        if value.size and np.issubdtype(value.dtype, np.number):
+            finite = value[np.isfinite(value)] if np.issubdtype(value.dtype, np.floating) else value
+            if finite.size:
+                summary.update(min=float(finite.min()), max=float(finite.max()), mean=float(finite.mean()))
+        return {"__ndarray__": summary}
+    if value.dtype.kind == "f" and not np.isfinite(value).all():
+        return to_jsonable(value.tolist(), max_elements)
+    if value.dtype.kind in "biuf":
+        return value.tolist()
+    return to_jsonable(value.tolist(), max_elements)
+
+
+def to_jsonable(value: Any, max_array_elements: int = 64) -> JsonValue:
+    """A JSON-serialisable copy of ``value`` (see the module docstring for the rules)."""
+    if isinstance(value, _SCALARS):
+        return value
+    if isinstance(value, float):
+        return _float(value)
+    if isinstance(value, np.ndarray):
+        return _array(value, max_array_elements)
+    if isinstance(value, np.generic):
+        return to_jsonable(value.item(), max_array_elements)
+    if isinstance(value, enum.Enum):
+        return value.name
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        out: dict[str, Any] = {"__type__": type(value).__name__}
+        for field in dataclasses.fields(value):
+            out[field.name] = to_jsonable(getattr(value, field.name), max_array_elements)
+        return out
+    if isinstance(value, Mapping):
+        return {str(k): to_jsonable(v, max_array_elements) for k, v in value.items()}
+    if isinstance(value, (set, frozenset)):
+        return sorted((to_jsonable(v, max_array_elements) for v in value), key=repr)
+    if isinstance(value, PurePath):
+        return str(value)
+    if isinstance(value, (bytes, bytearray, memoryview)):
+        return {"__bytes__": len(value)}
+    if isinstance(value, Sequence):
+        return [to_jsonable(v, max_array_elements) for v in value]
+    to_dict = getattr(value, "to_dict", None)
+    if callable(to_dict):
+        return to_jsonable(to_dict(), max_array_elements)
+    text = repr(value)
+    return text if len(text) <= _REPR_LIMIT else text[: _REPR_LIMIT - 3] + "..."
+
+
+def _is_immutable_leaf(value: Any) -> bool:
+    return isinstance(value, (*_SCALARS, float, enum.Enum, PurePath, np.generic))
+
+
+class BlackboardDiffer:
+    """Remembers the last value written per key; ``diff`` returns only the keys that changed."""
+
+    def __init__(self, max_array_elements: int = 64) -> None:
+        self._max = max_array_elements
+        self._raw: dict[str, Any] = {}
+        self._json: dict[str, JsonValue] = {}
+
+    def diff(self, blackboard: Mapping[str, Any]) -> tuple[dict[str, JsonValue], list[str]]:
+        """(changed keys with their JSON values, keys that disappeared since the last call)."""
+        changed: dict[str, JsonValue] = {}
+        for key, value in blackboard.items():
+            if key in self._raw and self._unchanged(key, value):
+                continue
+            converted = to_jsonable(value, self._max)
+            if key in self._json and self._json[key] == converted:
+                self._raw[key] = self._remember(value)
+                continue
+            changed[key] = converted
+            self._json[key] = converted
+            self._raw[key] = self._remember(value)
+        removed = [key for key in self._raw if key not in blackboard]
+        for key in removed:
+            del self._raw[key]
+            del self._json[key]
+        return changed, removed
+
+    def _unchanged(self, key: str, value: Any) -> bool:
+        last = self._raw[key]
+        if isinstance(value, np.ndarray):
+            return (
+                isinstance(last, np.ndarray)
+                and last.shape == value.shape
+                and last.dtype == value.dtype
+                and bool(np.array_equal(last, value, equal_nan=value.dtype.kind in "fc"))
+            )
+        return last is value and _is_immutable_leaf(value)
+
+    @staticmethod
+    def _remember(value: Any) -> Any:
+        return value.copy() if isinstance(value, np.ndarray) else value
+
+
+_NODE_FIELDS = ("status", "feedback", "failure_reason")
+_NAME_FIELDS = ("path", "type", "name")
+
+
+class NodeDiffer:
+    """Keeps, per node uid, the last status/feedback/reason written.
+
+    ``diff`` returns the entries to write for this tick: nodes ticked this tick or whose status, feedback or
+    failure reason changed. The first time a uid is written its path, type and name go with it, so a tick
+    stream can be read even without the tree structure.
+    """
+
+    def __init__(self) -> None:
+        self._last: dict[int, tuple[Any, ...]] = {}
+
+    def reset(self) -> None:
+        self._last.clear()
+
+    def diff(self, nodes: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
+        out: list[dict[str, Any]] = []
+        for node in nodes:
+            uid = int(node["uid"])
+            state = (node["status"], node.get("feedback", "") or "", node.get("failure_reason"))
+            last = self._last.get(uid)
+            ticked = bool(node.get("ticked", False))
+            if last == state and not ticked:
+                continue
+            entry: dict[str, Any] = {"uid": uid, "status": state[0], "feedback": state[1]}
+            entry["failure_reason"] = state[2]
+            entry["ticked"] = ticked
+            if last is None:
+                for name in _NAME_FIELDS:
+                    if name in node:
+                        entry[name] = node[name]
+            self._last[uid] = state
+            out.append(entry)
+        return out

@@ -1,0 +1,305 @@
+"""`open_log(path) -> RunLog`: a bt_grasp MCAP log as typed Python records.
+
+Everything but the bulky sensor topics is loaded at open (ticks, tree structures, events, faults, logs,
+trajectories, result); images and point clouds are read on demand. A finished file is read through its
+index; a file with no summary (a killed run) or cut short is read linearly and flagged ``truncated``.
+Anything that is not a readable bt_grasp log raises ``LogFileError`` (exit code 2 at the command line).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+from google.protobuf.json_format import MessageToDict
+from numpy.typing import NDArray
+
+from bt_grasp.errors import LogFileError
+from bt_grasp.recording import mcap_io, topics
+from bt_grasp.recording.schemas import PROTOBUF_CLASSES
+
+log = logging.getLogger(__name__)
+
+LEAF_KINDS = frozenset({"action", "condition"})
+
+
+@dataclass(frozen=True)
+class NodeUpdate:
+    """A node's state as written for one tick (only nodes ticked or changed that tick are written)."""
+
+    uid: int
+    status: str
+    feedback: str = ""
+    failure_reason: str | None = None
+    ticked: bool = False
+
+
+@dataclass(frozen=True)
+class TickRecord:
+    tick: int
+    stamp_ns: int
+    nodes: tuple[NodeUpdate, ...]
+    bb: dict[str, Any]
+    bb_removed: tuple[str, ...] = ()
+    robot: dict[str, Any] | None = None
+
+
+@dataclass(frozen=True)
+class NodeInfo:
+    uid: int
+    path: str
+    type: str
+    name: str
+    kind: str = ""
+    parent: int | None = None
+    depth: int = 0
+
+    @property
+    def is_leaf(self) -> bool:
+        return self.kind in LEAF_KINDS
+
+    @property
+    def label(self) -> str:
+        return self.name if self.name and self.name == self.type else f"{self.name} ({self.type})"
+
+
+@dataclass(frozen=True)
+class TreeSnapshot:
+    """The tree's structure as written on /bt/tree (``tick``: the last tick written before it, or None)."""
+
+    stamp_ns: int
+    tick: int | None
+    root: dict[str, Any]
+
+    def nodes(self) -> dict[int, NodeInfo]:
+        out: dict[int, NodeInfo] = {}
+        stack: list[tuple[dict[str, Any], int | None, int]] = [(self.root, None, 0)]
+        while stack:
+            node, parent, depth = stack.pop()
+            uid = int(node["uid"])
+            out[uid] = NodeInfo(uid, str(node.get("path", "")), str(node.get("type", "")),
+                                str(node.get("name", "")), str(node.get("kind", "")), parent, depth)
+            stack.extend((child, uid, depth + 1) for child in reversed(node.get("children", [])))
+        return out
+
+
+@dataclass(frozen=True)
+class TopicMessage:
+    topic: str
+    log_time_ns: int
+    publish_time_ns: int
+    schema_name: str
+    message: Any  # a dict for JSON topics, a protobuf message for Foxglove topics
+
+
+@dataclass(frozen=True)
+class Image:
+    topic: str
+    stamp_ns: int
+    frame_id: str
+    kind: str  # "color" (HxWx3 uint8 RGB) or "depth" (HxW uint16 mm or float32 m)
+    encoding: str
+    pixels: NDArray[Any]
+
+
+@dataclass
+class RunLog:
+    """One recorded run. ``ticks`` are in tick order; ``truncated`` says the file was not finished."""
+
+    path: Path
+    metadata: dict[str, str]
+    attachments: dict[str, bytes]
+    structures: list[TreeSnapshot]
+    ticks: list[TickRecord]
+    events: list[dict[str, Any]]
+    faults: list[dict[str, Any]]
+    logs: list[dict[str, Any]]
+    trajectories: list[dict[str, Any]]
+    result: dict[str, Any] | None
+    topics: dict[str, int]
+    truncated: bool
+    indexed: bool
+    library: str = ""
+    stop_reason: str = ""
+    _learned: dict[int, NodeInfo] = field(default_factory=dict, repr=False)
+
+    @property
+    def ticks_recovered(self) -> int:
+        return len(self.ticks)
+
+    @property
+    def nodes(self) -> dict[int, NodeInfo]:
+        """uid -> node, from the last tree structure, completed by names written with the first tick."""
+        merged = dict(self._learned)
+        if self.structures:
+            merged.update(self.structures[-1].nodes())
+        return merged
+
+    def structure_at(self, tick: int) -> TreeSnapshot | None:
+        chosen = self.structures[0] if self.structures else None
+        for snap in self.structures:
+            if snap.tick is None or snap.tick < tick:
+                chosen = snap
+        return chosen
+
+    def tick_record(self, tick: int) -> TickRecord | None:
+        for record in self.ticks:
+            if record.tick == tick:
+                return record
+        return None
+
+    def states_at(self, tick: int) -> dict[int, NodeUpdate]:
+        """Every node's last written state at the end of ``tick``."""
+        states: dict[int, NodeUpdate] = {}
+        for record in self.ticks:
+            if record.tick > tick:
+                break
+            for node in record.nodes:
+                states[node.uid] = node
+        return states
+
+    def blackboard_at(self, tick: int) -> dict[str, Any]:
+        board: dict[str, Any] = {}
+        for record in self.ticks:
+            if record.tick > tick:
+                break
+            board.update(record.bb)
+            for key in record.bb_removed:
+                board.pop(key, None)
+        return board
+
+    def robot_at(self, tick: int) -> dict[str, Any] | None:
+        state = None
+        for record in self.ticks:
+            if record.tick > tick:
+                break
+            if record.robot is not None:
+                state = record.robot
+        return state
+
+    def iter_messages(self, topic: str) -> Iterator[TopicMessage]:
+        """Every message on ``topic``, decoded (JSON -> dict, Foxglove -> protobuf message)."""
+        for raw in mcap_io.iter_topic(self.path, [topic], self.indexed):
+            yield TopicMessage(raw.topic, raw.log_time_ns, raw.publish_time_ns, raw.schema_name, decode(raw))
+
+    def images(self) -> Iterator[Image]:
+        """The recorded colour and depth images, decoded to numpy arrays, in file order."""
+        for raw in mcap_io.iter_topic(self.path, [topics.COLOR, topics.DEPTH], self.indexed):
+            msg = decode(raw)
+            stamp = msg.timestamp.seconds * 1_000_000_000 + msg.timestamp.nanos
+            if raw.topic == topics.COLOR:
+                bgr = cv2.imdecode(np.frombuffer(msg.data, np.uint8), cv2.IMREAD_COLOR)
+                if bgr is None:
+                    log.warning("%s: an undecodable %s image at %d ns", self.path, msg.format, stamp)
+                    continue
+                yield Image(raw.topic, stamp, msg.frame_id, "color", msg.format, bgr[:, :, ::-1].copy())
+            else:
+                dtype = "<u2" if msg.encoding == "16UC1" else "<f4"
+                pixels = np.frombuffer(msg.data, dtype=dtype).reshape(msg.height, -1)[:, : msg.width]
+                yield Image(raw.topic, stamp, msg.frame_id, "depth", msg.encoding, pixels.copy())
+
+
+def decode(raw: mcap_io.RawMessage) -> Any:
+    if raw.message_encoding == "json":
+        return json.loads(raw.data)
+    cls = PROTOBUF_CLASSES.get(raw.schema_name)
+    if raw.message_encoding == "protobuf" and cls is not None:
+        msg = cls()
+        msg.ParseFromString(raw.data)
+        return msg
+    return {"__undecoded__": {"encoding": raw.message_encoding, "schema": raw.schema_name,
+                              "bytes": len(raw.data)}}
+
+
+def message_to_jsonable(message: Any) -> Any:
+    """A decoded message as JSON-able data; bulky ``data`` fields of images and clouds become their size."""
+    if isinstance(message, (dict, list)):
+        return message
+    out = MessageToDict(message, preserving_proto_field_name=True)
+    if "data" in out:
+        out["data"] = {"__bytes__": len(message.data)}
+    return out
+
+
+def _tick_record(msg: dict[str, Any], robots: dict[int, dict[str, Any]]) -> TickRecord:
+    nodes = tuple(
+        NodeUpdate(int(n["uid"]), str(n["status"]), str(n.get("feedback") or ""), n.get("failure_reason"),
+                   bool(n.get("ticked", False)))
+        for n in msg.get("nodes", [])
+    )
+    tick = int(msg["tick"])
+    return TickRecord(tick, int(msg["stamp_ns"]), nodes, dict(msg.get("bb", {})),
+                      tuple(msg.get("bb_removed", [])), robots.get(tick))
+
+
+def _not_bt_grasp(path: Path, scan: mcap_io.Scan, size: int) -> LogFileError | None:
+    if not scan.header_seen:
+        return LogFileError(path, f"is cut off after {size} bytes, before the end of its MCAP header")
+    if topics.RUN_METADATA_NAME in scan.metadata or topics.TICK in scan.topic_counts:
+        return None
+    if not scan.complete:
+        return LogFileError(path, f"is cut off after {size} bytes, before its bt_grasp run metadata")
+    name = topics.RUN_METADATA_NAME
+    return LogFileError(path, f"is an MCAP file but not a bt_grasp log (no '{name}' metadata)")
+
+
+def open_log(path: str | Path) -> RunLog:
+    """Open a bt_grasp log; raises ``LogFileError`` for anything that is not one."""
+    p = Path(path)
+    scan = mcap_io.scan_file(p, topics.EAGER_TOPICS)
+    problem = _not_bt_grasp(p, scan, p.stat().st_size)
+    if problem is not None:
+        raise problem
+    by_topic: dict[str, list[tuple[mcap_io.RawMessage, Any]]] = {}
+    for raw in scan.messages:
+        try:
+            by_topic.setdefault(raw.topic, []).append((raw, decode(raw)))
+        except Exception as exc:
+            problem = f"has an undecodable message on {raw.topic} at {raw.log_time_ns} ns"
+            raise LogFileError(p, problem) from exc
+    robots: dict[int, dict[str, Any]] = {}
+    learned: dict[int, NodeInfo] = {}
+    for _, msg in by_topic.get(topics.JOINT_STATE, []):
+        if msg.get("tick") is not None:
+            robots[int(msg["tick"])] = msg
+    ticks = []
+    for _, msg in by_topic.get(topics.TICK, []):
+        ticks.append(_tick_record(msg, robots))
+        for n in msg.get("nodes", []):
+            uid = int(n["uid"])
+            if "path" in n and uid not in learned:
+                learned[uid] = NodeInfo(uid, n["path"], n.get("type", ""), n.get("name", ""))
+    ticks.sort(key=lambda t: t.tick)
+
+    def stamped(topic: str) -> list[dict[str, Any]]:
+        return [{"stamp_ns": raw.log_time_ns, **msg} for raw, msg in by_topic.get(topic, [])]
+
+    logs = [{"stamp_ns": raw.log_time_ns, "level": msg.Level.Name(msg.level), "name": msg.name,
+             "message": msg.message} for raw, msg in by_topic.get(topics.LOG, [])]
+    results = by_topic.get(topics.RESULT, [])
+    structures = [TreeSnapshot(raw.log_time_ns, msg.get("tick"), msg["structure"])
+                  for raw, msg in by_topic.get(topics.TREE, [])]
+    return RunLog(
+        path=p,
+        metadata=scan.metadata.get(topics.RUN_METADATA_NAME, {}),
+        attachments=scan.attachments,
+        structures=structures,
+        ticks=ticks,
+        events=stamped(topics.EVENTS),
+        faults=stamped(topics.FAULTS),
+        logs=logs,
+        trajectories=stamped(topics.TRAJECTORY),
+        result=results[-1][1] if results else None,
+        topics=dict(sorted(scan.topic_counts.items())),
+        truncated=not scan.complete,
+        indexed=scan.indexed,
+        library=scan.library,
+        stop_reason=scan.stop_reason,
+        _learned=learned,
+    )

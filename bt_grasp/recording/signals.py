@@ -1,0 +1,73 @@
+"""SIGINT/SIGTERM handling that lets a recorder finish its file (footer, summary) before the process ends.
+
+The handler turns SIGTERM into ``SystemExit(128 + 15)`` and SIGINT into ``KeyboardInterrupt``, so the stack
+unwinds through the recorder's ``__exit__``, which writes the summary. A signal that arrives while the
+recorder is in the middle of writing a record is held until that record is complete, so the file never ends
+in a half-written chunk.
+"""
+
+from __future__ import annotations
+
+import logging
+import signal
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
+from types import FrameType
+from typing import Any
+
+log = logging.getLogger(__name__)
+
+_HANDLED = (signal.SIGINT, signal.SIGTERM)
+
+
+def _interrupt_for(signum: int) -> BaseException:
+    if signum == signal.SIGINT:
+        return KeyboardInterrupt()
+    return SystemExit(128 + signum)
+
+
+class SignalGuard:
+    """Installs the handlers while active; ``busy()`` marks a critical section that signals must not cut."""
+
+    def __init__(self) -> None:
+        self._previous: dict[int, Any] = {}
+        self._busy = 0
+        self._pending: int | None = None
+
+    @property
+    def installed(self) -> bool:
+        return bool(self._previous)
+
+    def install(self) -> None:
+        if threading.current_thread() is not threading.main_thread():
+            log.debug("not on the main thread: signals are left to their current handlers")
+            return
+        for signum in _HANDLED:
+            current = signal.getsignal(signum)
+            if current not in (signal.SIG_DFL, signal.default_int_handler):
+                continue  # someone (a CLI, pytest) chose a handler on purpose: keep it
+            self._previous[signum] = current
+            signal.signal(signum, self._handle)
+
+    def uninstall(self) -> None:
+        for signum, previous in self._previous.items():
+            signal.signal(signum, previous)
+        self._previous.clear()
+
+    def _handle(self, signum: int, frame: FrameType | None) -> None:
+        if self._busy:
+            self._pending = signum
+            return
+        raise _interrupt_for(signum)
+
+    @contextmanager
+    def busy(self) -> Iterator[None]:
+        self._busy += 1
+        try:
+            yield
+        finally:
+            self._busy -= 1
+            if not self._busy and self._pending is not None:
+                signum, self._pending = self._pending, None
+                raise _interrupt_for(signum)

@@ -1,0 +1,377 @@
+"""`RunRecorder`: one crash-tolerant, indexed MCAP file per run, readable by `bt-grasp replay` and Foxglove.
+
+Usage (the runner owns the loop; the recorder only writes)::
+
+    with RunRecorder(path, metadata={...}, attachments={"tree.xml": xml_bytes}) as rec:
+        rec.write_tree_structure(0, structure)
+        for tick in ...:
+            rec.write_tick(tick, stamp_ns, nodes, blackboard, robot)
+            ...                      # images, markers, events, faults of this tick
+            rec.flush_tick()         # ends the chunk: a killed process keeps everything up to here
+        rec.write_result(stamp_ns, result)
+
+``log_time`` of every message is simulated time (``stamp_ns``); ``publish_time`` is the wall clock.
+Chunks are compressed (zstd by default) and indexed; ``close()`` (or leaving the ``with`` block, also
+through an exception, Ctrl-C or SIGTERM) writes the summary and footer. Not thread-safe: one thread writes.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import time
+from collections.abc import Callable, Mapping, Sequence
+from importlib.metadata import PackageNotFoundError
+from importlib.metadata import version as dist_version
+from pathlib import Path
+from types import TracebackType
+from typing import Any, BinaryIO, Literal
+
+import numpy as np
+from mcap.well_known import MessageEncoding, SchemaEncoding
+from mcap.writer import CompressionType, Writer
+from mcap_protobuf.schema import build_file_descriptor_set
+from numpy.typing import ArrayLike, NDArray
+
+from bt_grasp.recording import schemas, topics
+from bt_grasp.recording.jsonable import BlackboardDiffer, NodeDiffer, to_jsonable
+from bt_grasp.recording.signals import SignalGuard
+
+log = logging.getLogger(__name__)
+
+UR5_JOINT_NAMES: tuple[str, ...] = (
+    "shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
+    "wrist_1_joint", "wrist_2_joint", "wrist_3_joint",
+)
+_COMPRESSION = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}
+_MEDIA_TYPES = {".xml": "application/xml", ".yaml": "application/yaml", ".yml": "application/yaml",
+                ".json": "application/json", ".txt": "text/plain", ".urdf": "application/xml"}
+
+
+def _library_id() -> str:
+    try:
+        ours = dist_version("bt-grasp")
+    except PackageNotFoundError:
+        ours = "0"
+    return f"bt_grasp/{ours}; mcap-python/{dist_version('mcap')}"
+
+
+def _media_type(name: str, data: bytes) -> str:
+    media = _MEDIA_TYPES.get(Path(name).suffix.lower())
+    if media:
+        return media
+    try:
+        data.decode("utf-8")
+    except UnicodeDecodeError:
+        return "application/octet-stream"
+    return "text/plain"
+
+
+def _dumps(obj: Any) -> bytes:
+    return json.dumps(obj, separators=(",", ":"), allow_nan=False).encode()
+
+
+class RunRecorder:
+    """Writes one run to one MCAP file. See the module docstring for the call order.
+
+    Args:
+        path: the .mcap file to create (its folder must exist; an existing file is replaced).
+        metadata: the run's description, written as the MCAP Metadata record ``bt_grasp.run``: seed,
+            command line, tree and scene file names, versions, git commit, fault plan, tick rate. Values are
+            strings; two keys are added: ``log_format`` and ``start_unix_ns``.
+        attachments: file name -> exact bytes of every file needed to run again (tree, scene, calibration,
+            fault plan).
+        wall_clock: wall time in ns, for ``publish_time`` only.
+        compression: "zstd", "lz4" or "none" for the chunks.
+        chunk_size: a chunk is also ended when it grows past this many bytes.
+        image_format: "jpeg" or "png" for /camera/color; jpeg_quality: 0-100.
+        depth_encoding: "16UC1" (millimetres) or "32FC1" (metres) for /camera/depth.
+        fsync_interval_s: at a ``flush_tick`` at least this long after the last one, also fsync (survives a
+            power loss, not only a killed process); None never fsyncs before ``close``.
+        handle_signals: while used as a context manager, turn SIGTERM/SIGINT into exceptions that unwind
+            through ``__exit__`` (only where those signals still have their default handlers).
+        base_frame, tool_frame: frame ids of the arm base and the tool (TCP) on /tf.
+        joint_names: names on /robot/joint_state.
+        max_array_elements: blackboard arrays larger than this are logged as a summary, not element-wise.
+    """
+
+    def __init__(
+        self,
+        path: str | Path,
+        *,
+        metadata: Mapping[str, str],
+        attachments: Mapping[str, bytes] | None = None,
+        wall_clock: Callable[[], int] = time.time_ns,
+        compression: Literal["zstd", "lz4", "none"] = "zstd",
+        chunk_size: int = 4 * 1024 * 1024,
+        image_format: Literal["jpeg", "png"] = "jpeg",
+        jpeg_quality: int = 90,
+        depth_encoding: Literal["16UC1", "32FC1"] = "16UC1",
+        fsync_interval_s: float | None = None,
+        handle_signals: bool = True,
+        base_frame: str = "base",
+        tool_frame: str = "tool",
+        joint_names: Sequence[str] = UR5_JOINT_NAMES,
+        max_array_elements: int = 64,
+    ) -> None:
+        if compression not in _COMPRESSION:
+            raise ValueError(f"unknown compression {compression!r}; expected one of {sorted(_COMPRESSION)}")
+        self.path = Path(path)
+        self._wall_clock = wall_clock
+        self._image_format = image_format
+        self._jpeg_quality = jpeg_quality
+        self._depth_encoding = depth_encoding
+        self._fsync_interval_s = fsync_interval_s
+        self._last_fsync = time.monotonic()
+        self._handle_signals = handle_signals
+        self.base_frame = base_frame
+        self.tool_frame = tool_frame
+        self._joint_names = list(joint_names)
+        self._nodes = NodeDiffer()
+        self._blackboard = BlackboardDiffer(max_array_elements)
+        self._guard = SignalGuard()
+        self._last_structure: dict[str, Any] | None = None
+        self._last_tick: int | None = None
+        self._last_stamp_ns = 0
+        self._sequence: dict[int, int] = {}
+        self._closed = False
+
+        self._file: BinaryIO = open(self.path, "wb")  # noqa: SIM115 - closed in close()
+        self._writer = Writer(self._file, chunk_size=chunk_size, compression=_COMPRESSION[compression])
+        self._writer.start(profile="", library=_library_id())
+        meta = {str(k): str(v) for k, v in metadata.items()}
+        meta.setdefault("log_format", topics.LOG_FORMAT_VERSION)
+        meta.setdefault("start_unix_ns", str(self._wall_clock()))
+        self._writer.add_metadata(topics.RUN_METADATA_NAME, meta)
+        now = self._wall_clock()
+        for name, data in (attachments or {}).items():
+            self._writer.add_attachment(now, 0, name, _media_type(name, bytes(data)), bytes(data))
+        self._channels: dict[str, int] = {}
+        self._register_channels()
+        self._file.flush()
+
+    # -- set-up ------------------------------------------------------------------------------------------
+
+    def _register_channels(self) -> None:
+        for topic in topics.JSON_TOPICS:
+            schema_id = self._writer.register_schema(
+                name=str(topics.JSON_SCHEMAS[topic]["title"]),
+                encoding=SchemaEncoding.JSONSchema,
+                data=topics.json_schema_bytes(topic),
+            )
+            self._channels[topic] = self._writer.register_channel(topic, MessageEncoding.JSON, schema_id)
+        schema_ids: dict[str, int] = {}
+        for topic, schema_name in topics.PROTOBUF_TOPICS.items():
+            if schema_name not in schema_ids:
+                fds = build_file_descriptor_set(schemas.PROTOBUF_CLASSES[schema_name])
+                schema_ids[schema_name] = self._writer.register_schema(
+                    name=schema_name, encoding=SchemaEncoding.Protobuf, data=fds.SerializeToString()
+                )
+            self._channels[topic] = self._writer.register_channel(
+                topic, MessageEncoding.Protobuf, schema_ids[schema_name]
+            )
+
+    def __enter__(self) -> RunRecorder:
+        if self._handle_signals:
+            self._guard.install()
+        return self
+
+    def __exit__(
+        self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        if exc is not None and not self._closed:
+            try:
+                stamp = self._last_stamp_ns
+                self.write_event(stamp, "aborted", {"exception": exc_type.__name__ if exc_type else "",
+                                                    "message": str(exc)})
+            except Exception:  # the file must still be finished
+                log.exception("could not record the abort event")
+        self.close()
+
+    # -- low level ---------------------------------------------------------------------------------------
+
+    def _write(self, topic: str, stamp_ns: int, data: bytes) -> None:
+        if self._closed:
+            raise ValueError(f"{self.path}: the recorder is closed")
+        channel = self._channels[topic]
+        seq = self._sequence.get(channel, 0) + 1
+        self._sequence[channel] = seq
+        stamp_ns = int(stamp_ns)
+        self._last_stamp_ns = max(self._last_stamp_ns, stamp_ns)
+        with self._guard.busy():
+            self._writer.add_message(channel, log_time=stamp_ns, data=data,
+                                     publish_time=self._wall_clock(), sequence=seq)
+
+    def _write_json(self, topic: str, stamp_ns: int, obj: Any) -> None:
+        self._write(topic, stamp_ns, _dumps(obj))
+
+    # -- the tree ----------------------------------------------------------------------------------------
+
+    def write_tree_structure(self, stamp_ns: int, structure: Mapping[str, Any]) -> bool:
+        """Write the tree's structure on /bt/tree unless it equals the last one written; True if written.
+
+        ``structure``: the root node as nested dicts with ``uid``, ``type``, ``name``, ``path``, ``kind``
+        ("control", "decorator", "action", "condition", "subtree"), ``attributes`` and ``children``.
+        """
+        converted = to_jsonable(structure, max_array_elements=1 << 30)
+        if converted == self._last_structure:
+            return False
+        self._last_structure = converted
+        self._write_json(topics.TREE, stamp_ns, {"tick": self._last_tick, "structure": converted})
+        return True
+
+    def write_tick(
+        self,
+        tick: int,
+        stamp_ns: int,
+        nodes: Sequence[Mapping[str, Any]],
+        blackboard: Mapping[str, Any],
+        robot: Mapping[str, Any] | None = None,
+    ) -> None:
+        """Record one tick: the nodes ticked or changed, the blackboard entries changed, the arm state.
+
+        ``nodes``: every node of the tree as ``{"uid", "path", "type", "name", "status", "feedback",
+        "failure_reason", "ticked"}``. ``blackboard``: the full current blackboard. ``robot``:
+        ``{"q_rad": [6], "qd_rad_s": [6], "gripper_width_m": float, "T_base_tcp": 4x4}`` or None.
+        """
+        changed_nodes = self._nodes.diff(nodes)
+        bb_changed, bb_removed = self._blackboard.diff(blackboard)
+        msg: dict[str, Any] = {"tick": int(tick), "stamp_ns": int(stamp_ns), "nodes": changed_nodes}
+        if bb_changed:
+            msg["bb"] = bb_changed
+        if bb_removed:
+            msg["bb_removed"] = bb_removed
+        self._last_tick = int(tick)
+        self._write_json(topics.TICK, stamp_ns, msg)
+        if robot is not None:
+            self.write_robot_state(stamp_ns, robot)
+
+    def write_robot_state(self, stamp_ns: int, robot: Mapping[str, Any]) -> None:
+        """The arm state on /robot/joint_state (JSON, for plots) and base->tool on /tf (for the 3D view)."""
+        q = np.asarray(robot["q_rad"], dtype=np.float64).ravel()
+        qd = robot.get("qd_rad_s")
+        state: dict[str, Any] = {
+            "tick": self._last_tick,
+            "name": self._joint_names[: q.size],
+            "position": q.tolist(),
+            "velocity": [] if qd is None else np.asarray(qd, dtype=np.float64).ravel().tolist(),
+        }
+        width = robot.get("gripper_width_m")
+        state["gripper_width_m"] = None if width is None else float(width)
+        T = robot.get("T_base_tcp")
+        if T is not None:
+            M = schemas.as_matrix(T)
+            state["tcp_xyz_m"] = M[:3, 3].tolist()
+            state["tcp_quat_xyzw"] = list(schemas.quat_xyzw(M))
+        self._write_json(topics.JOINT_STATE, stamp_ns, to_jsonable(state))
+        if T is not None:
+            self.write_transforms(stamp_ns, [(self.base_frame, self.tool_frame, M)])
+
+    # -- sensors and perception ----------------------------------------------------------------------------
+
+    def write_color_image(self, stamp_ns: int, rgb: NDArray[np.uint8], frame_id: str) -> None:
+        msg = schemas.compressed_image(stamp_ns, rgb, frame_id, self._image_format, self._jpeg_quality)
+        self._write(topics.COLOR, stamp_ns, msg.SerializeToString())
+
+    def write_depth(self, stamp_ns: int, depth_m: NDArray[np.floating], frame_id: str) -> None:
+        msg = schemas.depth_image(stamp_ns, depth_m, frame_id, self._depth_encoding)
+        self._write(topics.DEPTH, stamp_ns, msg.SerializeToString())
+
+    def write_points(
+        self, stamp_ns: int, xyz: ArrayLike, rgb: ArrayLike | None = None, frame_id: str = "base"
+    ) -> None:
+        msg = schemas.point_cloud(stamp_ns, xyz, rgb, frame_id)
+        self._write(topics.POINTS, stamp_ns, msg.SerializeToString())
+
+    def write_transforms(self, stamp_ns: int, transforms: Sequence[tuple[str, str, ArrayLike]]) -> None:
+        """(parent, child, T_parent_child) triples on /tf, e.g. ("base", "camera", T_base_camera)."""
+        self._write(topics.TF, stamp_ns, schemas.frame_transforms(stamp_ns, transforms).SerializeToString())
+
+    def write_markers(
+        self,
+        stamp_ns: int,
+        entities: Sequence[schemas.BoxMarker | schemas.PoseMarker],
+        *,
+        topic: str | None = None,
+        frame_id: str | None = None,
+    ) -> None:
+        """Boxes go to /perception/detections and poses to /perception/grasps, each update replacing the
+        markers shown before on its topic. With ``topic`` given, everything goes there (an empty list clears
+        it)."""
+        frame = frame_id or self.base_frame
+        by_topic: dict[str, list[Any]] = {topic: []} if topic else {}
+        for marker in entities:
+            if isinstance(marker, schemas.BoxMarker):
+                entity, default = schemas.box_entity(stamp_ns, marker, frame), topics.DETECTIONS
+            elif isinstance(marker, schemas.PoseMarker):
+                entity, default = schemas.pose_entity(stamp_ns, marker, frame), topics.GRASPS
+            else:
+                raise TypeError(f"a marker must be a BoxMarker or a PoseMarker, got {type(marker).__name__}")
+            by_topic.setdefault(topic or default, []).append(entity)
+        for name, group in by_topic.items():
+            if name not in (topics.DETECTIONS, topics.GRASPS):
+                raise ValueError(f"markers go to {topics.DETECTIONS} or {topics.GRASPS}, not {name!r}")
+            self._write(name, stamp_ns, schemas.scene_update(stamp_ns, group).SerializeToString())
+
+    # -- motion, logs, events ------------------------------------------------------------------------------
+
+    def write_trajectory(
+        self, stamp_ns: int, name: str, times_s: ArrayLike, q_rad: ArrayLike,
+        kind: Literal["planned", "executed"] = "planned",
+    ) -> None:
+        times = np.asarray(times_s, dtype=np.float64).ravel()
+        q = np.asarray(q_rad, dtype=np.float64).reshape(times.size, -1)
+        msg = {"name": name, "kind": kind, "times_s": times.tolist(), "q_rad": q.tolist()}
+        self._write_json(topics.TRAJECTORY, stamp_ns, to_jsonable(msg, max_array_elements=1 << 30))
+
+    def write_log(self, stamp_ns: int, level: str | int, name: str, message: str) -> None:
+        self._write(topics.LOG, stamp_ns, schemas.log(stamp_ns, level, name, message).SerializeToString())
+
+    def write_event(self, stamp_ns: int, kind: str, payload: Mapping[str, Any]) -> None:
+        """An event on /bt/events (a failure, a retry, an abort); tagged with the last tick written."""
+        self._write_json(topics.EVENTS, stamp_ns,
+                         {"tick": self._last_tick, "kind": kind, "payload": to_jsonable(payload)})
+
+    def write_fault(self, stamp_ns: int, tick: int, fault: Mapping[str, Any]) -> None:
+        """One firing of an injected fault on /faults."""
+        self._write_json(topics.FAULTS, stamp_ns, {"tick": int(tick), "fault": to_jsonable(fault)})
+
+    def write_result(self, stamp_ns: int, result: Mapping[str, Any]) -> None:
+        """The run's outcome on /run/result: success, reason, failed_leaf, ticks, sim_time_s, wall_time_s,
+        retries, object_lift_m, ..."""
+        self._write_json(topics.RESULT, stamp_ns, to_jsonable(result))
+
+    # -- durability ------------------------------------------------------------------------------------------
+
+    def flush_tick(self) -> None:
+        """End the open chunk and hand it to the OS: a process killed after this loses nothing before it.
+        Also fsyncs when ``fsync_interval_s`` has passed since the last fsync."""
+        if self._closed:
+            return
+        with self._guard.busy():
+            self._writer.flush()
+        if self._fsync_interval_s is not None:
+            now = time.monotonic()
+            if now - self._last_fsync >= self._fsync_interval_s:
+                os.fsync(self._file.fileno())
+                self._last_fsync = now
+
+    def close(self) -> None:
+        """Write the summary (indexes, statistics) and footer, fsync and close. Safe to call twice."""
+        if self._closed:
+            return
+        self._closed = True
+        try:
+            with self._guard.busy():
+                self._writer.finish()
+                self._file.flush()
+                os.fsync(self._file.fileno())
+        finally:
+            self._file.close()
+            self._guard.uninstall()
+        log.debug("closed %s", self.path)
+
+    @property
+    def closed(self) -> bool:
+        return self._closed
