@@ -261,8 +261,8 @@ def open_log(path: str | Path) -> RunLog:
         try:
             by_topic.setdefault(raw.topic, []).append((raw, decode(raw)))
         except Exception as exc:
-            problem = f"has an undecodable message on {raw.topic} at {raw.log_time_ns} ns"
-            raise LogFileError(p, problem) from exc
+            where = f"on {raw.topic} at {raw.log_time_ns} ns"
+            raise LogFileError(p, f"has an undecodable message {where}") from exc
     robots: dict[int, dict[str, Any]] = {}
     learned: dict[int, NodeInfo] = {}
     for _, msg in by_topic.get(topics.JOINT_STATE, []):

@@ -1,0 +1,99 @@
+"""`bt-grasp replay LOG`: read a recorded run back (summary, one tick, failures, a leaf, a topic, exports).
+
+A log that cannot be read raises ``LogFileError`` (exit code 2, one sentence); replaying a run that failed
+is a success (exit code 0).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+import typer
+from rich.console import Console
+
+from bt_grasp.recording import render, replay
+from bt_grasp.recording.btlog import write_btlog
+from bt_grasp.recording.export import export_frames
+from bt_grasp.recording.reader import RunLog, open_log
+
+
+def _json(console: Console, value: Any) -> None:
+    console.out(json.dumps(value, indent=2, default=str), highlight=False)
+
+
+def replay_command(
+    log: Path = typer.Argument(..., help="The run's .mcap log file."),
+    tick: int | None = typer.Option(None, "--tick", help="Show the tree, blackboard and arm at tick N."),
+    failures: bool = typer.Option(False, "--failures", help="List every FAILURE and what ran next."),
+    leaf: str | None = typer.Option(None, "--leaf", help="Status history of the node with this name."),
+    topic: str | None = typer.Option(None, "--topic", help="Print a topic's messages as JSON lines."),
+    as_json: bool = typer.Option(False, "--json", help="Machine-readable output."),
+    frames_dir: Path | None = typer.Option(None, "--export-frames", help="Write images as PNG here."),
+    btlog: Path | None = typer.Option(None, "--export-btlog", help="Write a Groot2 .btlog file."),
+    max_rows: int = typer.Option(200, "--max-rows", min=1, help="Rows shown in the timeline and histories."),
+) -> None:
+    """Replay a recorded run: summary and timeline by default, or the views asked for."""
+    console = Console(highlight=False)
+    run = open_log(log)
+    views: dict[str, Any] = {}
+    if tick is not None:
+        views["tick"] = replay.tick_view(run, tick)
+    if failures:
+        views["failures"] = [
+            {**_asdict(f), "recovery": [_asdict(c) for c in f.recovery]} for f in replay.failures(run)
+        ]
+    if leaf is not None:
+        views["leaf"] = replay.leaf_history(run, leaf)
+    exports: dict[str, Any] = {}
+    if frames_dir is not None:
+        exports["frames"] = [str(p) for p in export_frames(run, frames_dir)]
+    if btlog is not None:
+        written = write_btlog(run, btlog)
+        exports["btlog"] = {"path": str(btlog), "transitions": len(written.transitions)}
+
+    if topic is not None:
+        for message in replay.topic_messages(run, topic):
+            console.out(json.dumps(message, separators=(",", ":"), default=str), highlight=False)
+    if as_json:
+        if not views and topic is None:
+            _json(console, {**replay.summary(run), **({"exports": exports} if exports else {})})
+        elif len(views) == 1 and not exports:
+            _json(console, next(iter(views.values())))
+        elif views or exports:
+            _json(console, {**views, **({"exports": exports} if exports else {})})
+        return
+    if not views and topic is None and not exports:
+        console.print(render.summary_table(replay.summary(run)))
+        console.print()
+        console.print(render.timeline_table(replay.timeline(run), max_rows))
+    _print_views(console, run.path.name, views, leaf, max_rows, run)
+    if "frames" in exports:
+        console.print(f"wrote {len(exports['frames'])} frames to {frames_dir}")
+    if "btlog" in exports:
+        console.print(f"wrote {exports['btlog']['transitions']} transitions to {btlog}")
+
+
+def _asdict(obj: Any) -> dict[str, Any]:
+    return {k: v for k, v in asdict(obj).items() if k != "recovery"}
+
+
+def _print_views(
+    console: Console, name: str, views: dict[str, Any], leaf: str | None, max_rows: int, run: RunLog
+) -> None:
+    if "tick" in views:
+        view = views["tick"]
+        stamp = view["stamp_ns"] * 1e-9 if view["stamp_ns"] is not None else float("nan")
+        console.print(render.tree_render(view["tree"], f"{name} at tick {view['tick']} ({stamp:.3f} s)"))
+        console.print(render.mapping_table("blackboard", view["blackboard"]))
+        console.print(render.robot_table(view["robot"]))
+    if "failures" in views:
+        console.print(render.failures_table(replay.failures(run)))
+    if "leaf" in views and leaf is not None:
+        console.print(render.leaf_table(leaf, views["leaf"], max_rows))
+
+
+def register(app: typer.Typer) -> None:
+    app.command("replay")(replay_command)

@@ -1,0 +1,180 @@
+"""Export a recorded run as a BehaviorTree.CPP 4 ``FileLogger2`` file (.btlog, for Groot2), and read one.
+
+Layout (little-endian), as BT.CPP 4's ``FileLogger2`` writes it:
+
+- the 18 ASCII bytes ``BTCPP4-FileLogger2``, then one protocol byte (1);
+- int32: length N of the tree XML, then the N bytes of XML (``<root BTCPP_format="4">`` with one
+  ``<BehaviorTree>`` per (sub)tree, every node carrying ``_uid`` and ``_fullpath``, and a
+  ``<TreeNodesModel>`` describing the non-built-in node types);
+- int64: the start time, microseconds since the Unix epoch;
+- then 9-byte transitions: 6 bytes time since the start (µs, unsigned), 2 bytes node uid, 1 byte status
+  (IDLE 0, RUNNING 1, SUCCESS 2, FAILURE 3, SKIPPED 4).
+
+Transition times are simulated time since the first recorded tick.
+"""
+
+from __future__ import annotations
+
+import struct
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import defusedxml.ElementTree as SafeET
+
+from bt_grasp.errors import InputError, LogFileError
+from bt_grasp.recording.reader import RunLog
+from bt_grasp.recording.replay import status_changes
+
+MAGIC = b"BTCPP4-FileLogger2"
+PROTOCOL = 1
+STATUS_CODES = {"IDLE": 0, "RUNNING": 1, "SUCCESS": 2, "FAILURE": 3, "SKIPPED": 4}
+STATUS_NAMES = {code: name for name, code in STATUS_CODES.items()}
+_MAX_TIME_US = (1 << 48) - 1
+_LEAF_TAGS = {"action": "Action", "condition": "Condition"}
+
+
+@dataclass(frozen=True)
+class Transition:
+    timestamp_us: int  # since the start time
+    uid: int
+    status: str
+
+
+@dataclass(frozen=True)
+class BtLog:
+    protocol: int
+    xml: str
+    start_time_us: int
+    transitions: tuple[Transition, ...]
+    nodes: dict[int, dict[str, str]]  # uid -> {"tag", "name", "fullpath"}
+
+
+def _attr(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return str(value)
+
+
+def tree_xml(structure: dict[str, Any], main_tree_id: str = "MainTree") -> str:
+    """The BT.CPP 4 XML of a recorded structure, every node with ``_uid`` and ``_fullpath``."""
+    root = ET.Element("root", {"BTCPP_format": "4", "main_tree_to_execute": main_tree_id})
+    models: dict[str, tuple[str, list[str]]] = {}
+    pending: list[tuple[str, str, dict[str, Any]]] = [(main_tree_id, "", structure)]
+    while pending:
+        tree_id, fullpath, top = pending.pop(0)
+        tree_elem = ET.SubElement(root, "BehaviorTree", {"ID": tree_id, "_fullpath": fullpath})
+        _add_node(tree_elem, top, models, pending)
+    model_root = ET.SubElement(root, "TreeNodesModel")
+    for type_name, (tag, ports) in sorted(models.items()):
+        model = ET.SubElement(model_root, tag, {"ID": type_name})
+        for port in ports:
+            ET.SubElement(model, "input_port", {"name": port})
+    ET.indent(root)
+    return ET.tostring(root, encoding="unicode")
+
+
+def _add_node(
+    parent: ET.Element, node: dict[str, Any], models: dict[str, tuple[str, list[str]]],
+    pending: list[tuple[str, str, dict[str, Any]]],
+) -> None:
+    attributes = {k: v for k, v in (node.get("attributes") or {}).items() if k not in ("name", "ID")}
+    kind = str(node.get("kind", ""))
+    uid, path = int(node["uid"]), str(node.get("path", ""))
+    if not 0 <= uid <= 0xFFFF:
+        raise InputError("--export-btlog", f"node uid {uid} does not fit the .btlog format's 16 bits")
+    if kind == "subtree":
+        subtree_id = str((node.get("attributes") or {}).get("ID") or node.get("name") or "SubTree")
+        attrs = {"ID": subtree_id, "_uid": str(uid), "_fullpath": path}
+        ET.SubElement(parent, "SubTree", {**attrs, **{k: _attr(v) for k, v in attributes.items()}})
+        for child in node.get("children", []):
+            pending.append((subtree_id, path, child))
+        return
+    type_name = str(node.get("type", "")) or "Action"
+    attrs = {"name": str(node.get("name", "")), "_uid": str(uid), "_fullpath": path}
+    elem = ET.SubElement(parent, type_name, {**attrs, **{k: _attr(v) for k, v in attributes.items()}})
+    if kind in _LEAF_TAGS:
+        ports = sorted(k for k in attributes if not k.startswith("_"))
+        models.setdefault(type_name, (_LEAF_TAGS[kind], ports))
+    for child in node.get("children", []):
+        _add_node(elem, child, models, pending)
+
+
+def transitions(run: RunLog) -> list[Transition]:
+    """Every status change of the run, timed in simulated µs since the first tick."""
+    if not run.ticks:
+        return []
+    first = run.ticks[0].stamp_ns
+    out = []
+    for change in status_changes(run):
+        ts = (change.stamp_ns - first) // 1000
+        if not 0 <= ts <= _MAX_TIME_US:
+            raise InputError("--export-btlog", f"tick {change.tick} lies outside the .btlog time range")
+        out.append(Transition(ts, change.uid, change.new))
+    return out
+
+
+def write_btlog(run: RunLog, path: str | Path) -> BtLog:
+    """Write ``run`` as a .btlog file; returns what was written."""
+    target = Path(path)
+    if target.suffix != ".btlog":
+        raise InputError("--export-btlog", f"{target} must end in .btlog (Groot2 opens only that)")
+    if not run.structures:
+        raise InputError("--export-btlog", f"{run.path.name} holds no tree structure to export")
+    xml = tree_xml(run.structures[-1].root, run.metadata.get("main_tree", "MainTree"))
+    start_us = int(run.metadata.get("start_unix_ns", "0") or 0) // 1000
+    moves = transitions(run)
+    body = bytearray(MAGIC)
+    body += struct.pack("<B", PROTOCOL)
+    xml_bytes = xml.encode("utf-8")
+    body += struct.pack("<i", len(xml_bytes)) + xml_bytes
+    body += struct.pack("<q", start_us)
+    for t in moves:
+        body += t.timestamp_us.to_bytes(6, "little") + struct.pack("<HB", t.uid, STATUS_CODES[t.status])
+    target.write_bytes(bytes(body))
+    return BtLog(PROTOCOL, xml, start_us, tuple(moves), _xml_nodes(xml, target))
+
+
+def _xml_nodes(xml: str, path: Path) -> dict[int, dict[str, str]]:
+    try:
+        root = SafeET.fromstring(xml)
+    except Exception as exc:
+        raise LogFileError(path, "holds tree XML that does not parse") from exc
+    return {
+        int(elem.get("_uid")): {"tag": elem.tag, "name": elem.get("name", elem.get("ID", "")),
+                                "fullpath": elem.get("_fullpath", "")}
+        for elem in root.iter() if elem.get("_uid") is not None
+    }
+
+
+def read_btlog(path: str | Path) -> BtLog:
+    """Parse a BT.CPP 4 FileLogger2 file; raises ``LogFileError`` for anything else."""
+    p = Path(path)
+    try:
+        data = p.read_bytes()
+    except OSError as exc:
+        raise LogFileError(p, f"cannot be read: {exc.strerror or exc}") from exc
+    if not data.startswith(MAGIC):
+        raise LogFileError(p, "is not a BT.CPP FileLogger2 file (no BTCPP4-FileLogger2 header)")
+    offset = len(MAGIC)
+    header = offset + 1 + 4
+    if len(data) < header:
+        raise LogFileError(p, "is cut off inside its header")
+    protocol = data[offset]
+    (xml_len,) = struct.unpack_from("<i", data, offset + 1)
+    if xml_len < 0 or len(data) < header + xml_len + 8:
+        raise LogFileError(p, "is cut off inside its tree XML or start time")
+    xml = data[header: header + xml_len].decode("utf-8")
+    (start_us,) = struct.unpack_from("<q", data, header + xml_len)
+    rest = data[header + xml_len + 8:]
+    if len(rest) % 9:
+        raise LogFileError(p, f"ends in a partial transition ({len(rest) % 9} stray bytes)")
+    moves = []
+    for i in range(0, len(rest), 9):
+        ts = int.from_bytes(rest[i: i + 6], "little")
+        uid, code = struct.unpack_from("<HB", rest, i + 6)
+        if code not in STATUS_NAMES:
+            raise LogFileError(p, f"has an unknown status code {code} in transition {i // 9}")
+        moves.append(Transition(ts, uid, STATUS_NAMES[code]))
+    return BtLog(protocol, xml, start_us, tuple(moves), _xml_nodes(xml, p))

@@ -1,0 +1,180 @@
+"""Rich renderables for `bt-grasp replay`: built here, printed by the command (which owns the console).
+
+Names and feedback come from files, so they are always wrapped in ``Text`` (never parsed as markup).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Sequence
+from typing import Any
+
+from rich.console import Group, RenderableType
+from rich.table import Table
+from rich.text import Text
+from rich.tree import Tree
+
+from bt_grasp.recording.replay import FailureReport, StatusChange
+
+STATUS_STYLES = {"SUCCESS": "green", "FAILURE": "bold red", "RUNNING": "yellow", "IDLE": "dim",
+                 "SKIPPED": "blue"}
+_SHORT = {"SUCCESS": "OK", "FAILURE": "FAIL", "RUNNING": "RUN", "IDLE": "idle", "SKIPPED": "skip"}
+
+
+def status_text(status: str, short: bool = False) -> Text:
+    return Text(_SHORT.get(status, status) if short else status, style=STATUS_STYLES.get(status, ""))
+
+
+def _seconds(stamp_ns: int) -> str:
+    return f"{stamp_ns * 1e-9:.3f}s"
+
+
+def _value(value: Any, limit: int = 80) -> str:
+    text = value if isinstance(value, str) else json.dumps(value, separators=(",", ":"))
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
+def summary_table(s: dict[str, Any]) -> Table:
+    table = Table(show_header=False, box=None, pad_edge=False)
+    table.add_column(style="bold")
+    table.add_column()
+    outcome: Text
+    if s["success"] is None:
+        outcome = Text("no result recorded", style="yellow")
+    else:
+        ok = bool(s["success"])
+        outcome = Text("SUCCESS" if ok else "FAILURE", style="green" if ok else "bold red")
+    rows: list[tuple[str, str | Text]] = [
+        ("log", s["file"]),
+        ("tree", s["tree"] or "-"),
+        ("scene", s["scene"] or "-"),
+        ("seed", str(s["seed"]) or "-"),
+        ("fault plan", s["fault_plan"] or "-"),
+        ("result", outcome),
+        ("reason", str(s["reason"]) if s["reason"] else "-"),
+        ("failed leaf", str(s["failed_leaf"]) if s["failed_leaf"] else "-"),
+        ("ticks", f"{s['ticks']} (ticks {s['first_tick']}..{s['last_tick']})" if s["ticks"] else "0"),
+        ("sim duration", f"{s['sim_duration_s']:.3f} s"),
+        ("retries", str(s["retries"])),
+    ]
+    for name, count in s["retries_per_leaf"].items():
+        rows.append(("  retries of", f"{name}: {count}"))
+    for name, count in s["failures_per_leaf"].items():
+        rows.append(("  failures of", f"{name}: {count}"))
+    if s["faults"]:
+        rows.append(("faults fired", str(len(s["faults"]))))
+    truncated = Text(f"yes: file not finished, {s['ticks_recovered']} ticks recovered", style="yellow") \
+        if s["truncated"] else Text("no")
+    rows.append(("truncated", truncated))
+    for key, value in rows:
+        table.add_row(key, value if isinstance(value, Text) else Text(value))
+    return table
+
+
+def timeline_table(rows: Sequence[tuple[int, int, list[StatusChange]]], max_rows: int) -> RenderableType:
+    table = Table(title="status changes", title_justify="left", box=None, pad_edge=False)
+    table.add_column("tick", justify="right", style="cyan")
+    table.add_column("sim time", justify="right")
+    table.add_column("changes")
+    for tick, stamp, changes in rows[:max_rows]:
+        line = Text()
+        for i, ch in enumerate(changes):
+            if i:
+                line.append("  ")
+            line.append(ch.name)
+            line.append(" ")
+            line.append_text(status_text(ch.new, short=True))
+        table.add_row(str(tick), _seconds(stamp), line)
+    if len(rows) > max_rows:
+        hidden = len(rows) - max_rows
+        more = Text(f"… {hidden} more ticks with changes (--max-rows to show more)", style="dim")
+        return Group(table, more)
+    return table
+
+
+def _node_label(node: dict[str, Any]) -> Text:
+    label = Text()
+    name, type_name = node["name"], node["type"]
+    label.append(name, style="bold" if node.get("ticked") else "")
+    if type_name and type_name != name:
+        label.append(f" ({type_name})", style="dim")
+    label.append(" ")
+    label.append_text(status_text(node["status"]))
+    if node.get("ticked"):
+        label.append(" ●", style="cyan")
+    if node.get("feedback"):
+        label.append(f"  {node['feedback']}", style="italic")
+    if node.get("failure_reason"):
+        label.append(f"  reason: {node['failure_reason']}", style="red")
+    return label
+
+
+def tree_render(tree: dict[str, Any], title: str) -> Tree:
+    root = Tree(Text(title, style="bold"))
+    stack: list[tuple[Tree, dict[str, Any]]] = [(root, tree)]
+    while stack:
+        parent, node = stack.pop()
+        branch = parent.add(_node_label(node))
+        stack.extend((branch, child) for child in reversed(node.get("children", [])))
+    return root
+
+
+def mapping_table(title: str, values: dict[str, Any]) -> Table:
+    table = Table(title=title, title_justify="left", box=None, pad_edge=False, show_header=False)
+    table.add_column(style="bold")
+    table.add_column()
+    for key in sorted(values):
+        table.add_row(Text(key), Text(_value(values[key])))
+    if not values:
+        table.add_row(Text("(empty)", style="dim"), Text(""))
+    return table
+
+
+def robot_table(robot: dict[str, Any] | None) -> Table:
+    if robot is None:
+        return mapping_table("arm", {})
+    q = robot.get("position", [])
+    rows: dict[str, Any] = {
+        "q (rad)": " ".join(f"{v:+.4f}" for v in q),
+        "q (deg)": " ".join(f"{math.degrees(v):+.2f}" for v in q),
+        "qd (rad/s)": " ".join(f"{v:+.4f}" for v in robot.get("velocity", [])),
+    }
+    width = robot.get("gripper_width_m")
+    rows["gripper width (m)"] = "-" if width is None else f"{width:.4f}"
+    if "tcp_xyz_m" in robot:
+        rows["tcp xyz (m)"] = " ".join(f"{v:+.4f}" for v in robot["tcp_xyz_m"])
+        rows["tcp quat xyzw"] = " ".join(f"{v:+.4f}" for v in robot["tcp_quat_xyzw"])
+    return mapping_table("arm", rows)
+
+
+def failures_table(reports: Sequence[FailureReport]) -> RenderableType:
+    if not reports:
+        return Text("no failures recorded", style="green")
+    table = Table(title="failures", title_justify="left", box=None, pad_edge=False)
+    for column in ("tick", "sim time", "leaf", "reason", "propagated to", "what ran next"):
+        table.add_column(column)
+    for f in reports:
+        nxt = Text()
+        for i, ch in enumerate(f.recovery):
+            if i:
+                nxt.append(", ")
+            nxt.append(f"{ch.name}@{ch.tick} ")
+            nxt.append_text(status_text(ch.new, short=True))
+        table.add_row(Text(str(f.tick), style="cyan"), Text(_seconds(f.stamp_ns)), Text(f.name, style="bold"),
+                      Text(f.reason or "-", style="red"), Text(" > ".join(f.propagated_to) or "-"),
+                      nxt if f.recovery else Text("nothing (the run ended)", style="dim"))
+    return table
+
+
+def leaf_table(name: str, history: Sequence[dict[str, Any]], max_rows: int) -> RenderableType:
+    table = Table(title=f"history of {name}", title_justify="left", box=None, pad_edge=False)
+    for column in ("tick", "sim time", "status", "ticked", "feedback", "reason"):
+        table.add_column(column)
+    for row in history[:max_rows]:
+        table.add_row(Text(str(row["tick"]), style="cyan"), Text(_seconds(row["stamp_ns"])),
+                      status_text(row["status"]), Text("yes" if row["ticked"] else ""),
+                      Text(row["feedback"] or ""), Text(row["failure_reason"] or "", style="red"))
+    if len(history) > max_rows:
+        return Group(table, Text(f"… {len(history) - max_rows} more rows (--max-rows)", style="dim"))
+    return table

@@ -1,0 +1,265 @@
+"""What `bt-grasp replay` shows, as data: summary, status changes, failures and recoveries, one tick's tree.
+
+Everything here reads a `RunLog` and returns plain values (dataclasses, dicts) that the command renders
+with rich or prints as JSON. Retries are derived from the tick stream: an attempt of a node starts when it
+is ticked while not RUNNING; it is a retry when that node's previous attempt ended in FAILURE. A retry
+loop that completes inside one tick (BT.CPP's RetryUntilSuccessful with a synchronous child) is invisible
+to a per-tick record.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Iterator
+from dataclasses import asdict, dataclass
+from typing import Any
+
+from bt_grasp.errors import InputError
+from bt_grasp.recording.reader import NodeInfo, NodeUpdate, RunLog, message_to_jsonable
+
+_RECOVERY_LIMIT = 6
+
+
+@dataclass(frozen=True)
+class StatusChange:
+    tick: int
+    stamp_ns: int
+    uid: int
+    name: str
+    path: str
+    old: str
+    new: str
+    feedback: str
+    failure_reason: str | None
+
+
+@dataclass(frozen=True)
+class FailureReport:
+    tick: int
+    stamp_ns: int
+    uid: int
+    name: str
+    path: str
+    reason: str | None
+    propagated_to: tuple[str, ...]
+    recovery: tuple[StatusChange, ...]
+
+
+def _info(run: RunLog, uid: int) -> NodeInfo:
+    return run.nodes.get(uid) or NodeInfo(uid, f"#{uid}", "", f"#{uid}")
+
+
+def status_changes(run: RunLog) -> list[StatusChange]:
+    """Every change of a node's status, in tick order and, within a tick, in the order written."""
+    nodes = run.nodes
+    last: dict[int, str] = {}
+    out: list[StatusChange] = []
+    for record in run.ticks:
+        for node in record.nodes:
+            old = last.get(node.uid, "IDLE")
+            if node.status != old:
+                info = nodes.get(node.uid) or NodeInfo(node.uid, f"#{node.uid}", "", f"#{node.uid}")
+                out.append(StatusChange(record.tick, record.stamp_ns, node.uid, info.name, info.path, old,
+                                        node.status, node.feedback, node.failure_reason))
+            last[node.uid] = node.status
+    return out
+
+
+def attempts(run: RunLog) -> dict[int, tuple[int, int, int]]:
+    """uid -> (attempts, failures, retries) derived from the tick stream (see the module docstring)."""
+    status: dict[int, str] = {}
+    outcome: dict[int, str] = {}
+    counts: dict[int, list[int]] = {}
+    for record in run.ticks:
+        for node in record.nodes:
+            c = counts.setdefault(node.uid, [0, 0, 0])
+            previous = status.get(node.uid, "IDLE")
+            if node.ticked and previous != "RUNNING":
+                c[0] += 1
+                if outcome.get(node.uid) == "FAILURE":
+                    c[2] += 1
+            if node.status in ("SUCCESS", "FAILURE") and (node.ticked or previous != node.status):
+                outcome[node.uid] = node.status
+                if node.status == "FAILURE":
+                    c[1] += 1
+            status[node.uid] = node.status
+    return {uid: (c[0], c[1], c[2]) for uid, c in counts.items()}
+
+
+def _ancestors(nodes: dict[int, NodeInfo], uid: int) -> list[int]:
+    chain = []
+    parent = nodes[uid].parent if uid in nodes else None
+    while parent is not None:
+        chain.append(parent)
+        parent = nodes[parent].parent if parent in nodes else None
+    return chain
+
+
+def failures(run: RunLog) -> list[FailureReport]:
+    """Every leaf FAILURE (or a non-leaf one whose children did not fail that tick), with what ran next."""
+    nodes = run.nodes
+    changes = status_changes(run)
+    failed_at: dict[int, set[int]] = {}
+    for ch in changes:
+        if ch.new == "FAILURE":
+            failed_at.setdefault(ch.tick, set()).add(ch.uid)
+    reports = []
+    for index, ch in enumerate(changes):
+        if ch.new != "FAILURE":
+            continue
+        same_tick = failed_at[ch.tick]
+        info = nodes.get(ch.uid)
+        children_failed = any(nodes[u].parent == ch.uid for u in same_tick if u in nodes)
+        if info is not None and not info.is_leaf and children_failed:
+            continue  # a parent that failed because its child did: reported with the child
+        ancestors = _ancestors(nodes, ch.uid)
+        propagated = tuple(_info(run, u).name for u in ancestors if u in same_tick)
+        excluded = {ch.uid, *ancestors}
+        recovery = tuple(
+            later for later in changes[index + 1:]
+            if later.new in ("RUNNING", "SUCCESS") and later.uid not in excluded
+        )[:_RECOVERY_LIMIT]
+        reports.append(FailureReport(ch.tick, ch.stamp_ns, ch.uid, ch.name, ch.path, ch.failure_reason,
+                                     propagated, recovery))
+    return reports
+
+
+def _result_field(run: RunLog, key: str) -> Any:
+    return run.result.get(key) if run.result else None
+
+
+def summary(run: RunLog) -> dict[str, Any]:
+    """The replay summary as JSON-able data."""
+    meta = run.metadata
+    counts = attempts(run)
+    nodes = run.nodes
+    per_leaf = {_info(run, uid).name: c[2] for uid, c in counts.items()
+                if c[2] and (uid not in nodes or nodes[uid].is_leaf or not nodes[uid].kind)}
+    failures_per_leaf = Counter(f.name for f in failures(run))
+    first, last = (run.ticks[0], run.ticks[-1]) if run.ticks else (None, None)
+    sim_s = (last.stamp_ns - first.stamp_ns) * 1e-9 if first and last else 0.0
+    retries = _result_field(run, "retries")
+    return {
+        "file": str(run.path),
+        "tree": meta.get("tree_file", ""),
+        "scene": meta.get("scene_file", ""),
+        "seed": meta.get("seed", ""),
+        "fault_plan": meta.get("fault_plan", ""),
+        "success": _result_field(run, "success"),
+        "reason": _result_field(run, "reason"),
+        "failed_leaf": _result_field(run, "failed_leaf"),
+        "ticks": len(run.ticks),
+        "first_tick": first.tick if first else None,
+        "last_tick": last.tick if last else None,
+        "sim_duration_s": round(sim_s, 6),
+        "retries": retries if retries is not None else sum(per_leaf.values()),
+        "retries_per_leaf": dict(sorted(per_leaf.items())),
+        "failures_per_leaf": dict(sorted(failures_per_leaf.items())),
+        "truncated": run.truncated,
+        "ticks_recovered": run.ticks_recovered,
+        "result": run.result,
+        "topics": run.topics,
+        "faults": [{k: v for k, v in f.items()} for f in run.faults],
+        "events": len(run.events),
+        "metadata": meta,
+        "attachments": sorted(run.attachments),
+    }
+
+
+def timeline(run: RunLog) -> list[tuple[int, int, list[StatusChange]]]:
+    """(tick, stamp_ns, changes) for every tick in which some node changed status."""
+    rows: list[tuple[int, int, list[StatusChange]]] = []
+    for ch in status_changes(run):
+        if not rows or rows[-1][0] != ch.tick:
+            rows.append((ch.tick, ch.stamp_ns, []))
+        rows[-1][2].append(ch)
+    return rows
+
+
+def find_nodes(run: RunLog, name: str) -> list[NodeInfo]:
+    """Nodes whose name, path or uid is ``name``; raises InputError naming the choices when none is."""
+    nodes = run.nodes
+    found = [n for n in nodes.values() if name in (n.name, n.path, str(n.uid))]
+    if not found:
+        leaves = sorted({n.name for n in nodes.values() if n.is_leaf} or {n.name for n in nodes.values()})
+        raise InputError("--leaf", f"no node named {name!r} in {run.path.name}; nodes: {', '.join(leaves)}")
+    return sorted(found, key=lambda n: n.uid)
+
+
+def leaf_history(run: RunLog, name: str) -> list[dict[str, Any]]:
+    """Every written state of the named node(s): tick, status, feedback, reason, ticked."""
+    uids = {n.uid for n in find_nodes(run, name)}
+    out = []
+    for record in run.ticks:
+        for node in record.nodes:
+            if node.uid in uids:
+                out.append({"tick": record.tick, "stamp_ns": record.stamp_ns, **asdict(node),
+                            "name": _info(run, node.uid).name})
+    return out
+
+
+def check_tick(run: RunLog, tick: int) -> None:
+    if not run.ticks:
+        raise InputError("--tick", f"{run.path.name} holds no ticks")
+    if run.tick_record(tick) is None:
+        raise InputError("--tick", f"tick {tick} is not in {run.path.name} "
+                                   f"(ticks {run.ticks[0].tick}..{run.ticks[-1].tick})")
+
+
+def tree_at(run: RunLog, tick: int) -> dict[str, Any]:
+    """The recorded structure at ``tick`` with each node's status, feedback and reason, as nested dicts."""
+    check_tick(run, tick)
+    states = run.states_at(tick)
+    record = run.tick_record(tick)
+    ticked_now = {n.uid for n in record.nodes if n.ticked} if record else set()
+    snapshot = run.structure_at(tick)
+
+    def annotate(node: dict[str, Any]) -> dict[str, Any]:
+        state = states.get(int(node["uid"]), NodeUpdate(int(node["uid"]), "IDLE"))
+        return {
+            "uid": state.uid, "name": node.get("name", ""), "type": node.get("type", ""),
+            "kind": node.get("kind", ""), "path": node.get("path", ""), "status": state.status,
+            "feedback": state.feedback, "failure_reason": state.failure_reason,
+            "ticked": state.uid in ticked_now,
+            "children": [annotate(child) for child in node.get("children", [])],
+        }
+
+    if snapshot is not None:
+        return annotate(snapshot.root)
+    # no structure recorded: a flat list under a synthetic root
+    flat = [{"uid": uid, "name": info.name, "type": info.type, "path": info.path, "children": []}
+            for uid, info in sorted(run.nodes.items())]
+    return annotate({"uid": -1, "name": "(no tree structure recorded)", "type": "", "children": flat})
+
+
+def tick_view(run: RunLog, tick: int) -> dict[str, Any]:
+    record = run.tick_record(tick)
+    tree = tree_at(run, tick)
+    return {"tick": tick, "stamp_ns": record.stamp_ns if record else None, "tree": tree,
+            "blackboard": run.blackboard_at(tick), "robot": run.robot_at(tick)}
+
+
+def topic_messages(run: RunLog, topic: str) -> Iterator[dict[str, Any]]:
+    """Messages of one topic as JSON-able dicts; InputError when the log has no such topic."""
+    if topic not in run.topics:
+        choices = ", ".join(run.topics)
+        raise InputError("--topic", f"{run.path.name} has no topic {topic!r}; topics: {choices}")
+    for msg in run.iter_messages(topic):
+        yield {"topic": topic, "log_time_ns": msg.log_time_ns, "publish_time_ns": msg.publish_time_ns,
+               "message": message_to_jsonable(msg.message)}
+
+
+__all__ = [
+    "FailureReport",
+    "StatusChange",
+    "attempts",
+    "failures",
+    "find_nodes",
+    "leaf_history",
+    "status_changes",
+    "summary",
+    "tick_view",
+    "timeline",
+    "topic_messages",
+    "tree_at",
+]
