@@ -1,0 +1,273 @@
+"""Forward and inverse kinematics of the UR5 + gripper in the robot base frame (pinocchio).
+
+The merged URDF has eight joints: six arm joints and two finger joints (one mimics the other). The
+arm model here is pinocchio's *reduced* model with both finger joints locked at a given opening, so it
+has exactly 6 DoF in ``ARM_JOINTS`` order and its finger frames sit where the fingers are at that
+opening. Every pose is ``T_base_<frame>`` with ``base`` = ``base_link`` (the URDF root); the world to
+base transform is ``Scene.T_world_base()``.
+
+IK is damped least squares on the SE(3) log error of the tcp (the classic CLIK iteration), projected
+on the joint limits, from several seeds: ``q_current`` first, then random seeds from a caller-given
+generator. An unreachable pose is a result value, never an exception.
+"""
+
+from __future__ import annotations
+
+import enum
+import logging
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+from numpy.typing import NDArray
+
+from bt_grasp.geometry import Mat4
+from bt_grasp.robot_description import (
+    ARM_JOINTS,
+    FINGER_JOINT,
+    MAX_OPENING_M,
+    MIMIC_FINGER_JOINT,
+    TCP_LINK,
+    robot_urdf_path,
+)
+
+log = logging.getLogger(__name__)
+
+Vec = NDArray[np.float64]
+
+#: IK convergence tolerances
+IK_POSITION_TOL_M = 1e-5
+IK_ROTATION_TOL_RAD = 1e-4
+
+
+class IKStatus(enum.Enum):
+    OK = "ok"
+    UNREACHABLE = "unreachable"  # no seed converged within the tolerances and the joint limits
+    INVALID_INPUT = "invalid_input"  # not a finite rigid transform, or a bad q_current
+
+
+@dataclass(frozen=True)
+class IKResult:
+    """Outcome of an IK query. ``q`` is the best configuration found (the seed's end point when not OK)."""
+
+    status: IKStatus
+    q: Vec
+    position_error_m: float
+    rotation_error_rad: float
+    iterations: int  # total DLS iterations over all seeds tried
+
+    @property
+    def ok(self) -> bool:
+        return self.status is IKStatus.OK
+
+
+@dataclass(frozen=True)
+class IKOptions:
+    """Tuning of the damped-least-squares iteration."""
+
+    max_iterations: int = 60  # per seed (a converging seed needs ~10-30; about half of random seeds converge)
+    damping: float = 1e-6  # Levenberg damping added to J J^T
+    max_step_rad: float = 1.0  # largest joint change per iteration (max norm)
+    position_tol_m: float = IK_POSITION_TOL_M
+    rotation_tol_rad: float = IK_ROTATION_TOL_RAD
+    distinct_tol_rad: float = 1e-3  # two solutions closer than this (max norm) are the same
+
+
+def is_rigid_transform(T: NDArray[np.float64], tol: float = 1e-6) -> bool:
+    """A finite 4x4 homogeneous transform with an orthonormal, right-handed rotation."""
+    T = np.asarray(T, dtype=float)
+    if T.shape != (4, 4) or not np.all(np.isfinite(T)):
+        return False
+    R = T[:3, :3]
+    return bool(
+        np.allclose(R.T @ R, np.eye(3), atol=tol * 100)
+        and abs(np.linalg.det(R) - 1.0) < tol * 100
+        and np.allclose(T[3], [0, 0, 0, 1], atol=tol)
+    )
+
+
+class ArmKinematics:
+    """The 6-DoF arm model (fingers locked at ``opening_m``) with FK and multi-seed DLS IK."""
+
+    def __init__(self, opening_m: float = MAX_OPENING_M, urdf_path: Path | None = None) -> None:
+        if not 0.0 <= opening_m <= MAX_OPENING_M:
+            raise ValueError(f"gripper opening must be within [0, {MAX_OPENING_M}] m, got {opening_m}")
+        self.opening_m = float(opening_m)
+        self.urdf_path = Path(urdf_path) if urdf_path is not None else robot_urdf_path()
+        full = pin.buildModelFromUrdf(str(self.urdf_path))
+        self.full_model = full
+        q_ref = pin.neutral(full)
+        lock = []
+        for name in (FINGER_JOINT, MIMIC_FINGER_JOINT):
+            jid = full.getJointId(name)
+            q_ref[full.joints[jid].idx_q] = self.opening_m / 2
+            lock.append(jid)
+        self.q_reference_full = q_ref
+        self.locked_joint_ids = tuple(lock)
+        self.model: pin.Model = pin.buildReducedModel(full, lock, q_ref)
+        names = tuple(self.model.names[1:])
+        if names != ARM_JOINTS:
+            raise RuntimeError(f"reduced model joints {names} are not the arm joints {ARM_JOINTS}")
+        self.data = self.model.createData()
+        self.lower_rad: Vec = np.array(self.model.lowerPositionLimit, dtype=float)
+        self.upper_rad: Vec = np.array(self.model.upperPositionLimit, dtype=float)
+        self._tcp_id = self.model.getFrameId(TCP_LINK)
+        self.link_names: tuple[str, ...] = tuple(
+            f.name for f in self.model.frames if f.type == pin.FrameType.BODY
+        )
+        # an upper bound of the tcp's distance from the first joint's origin (fixed in the base frame)
+        self._shoulder_xyz_m: Vec = np.array(self.model.jointPlacements[1].translation)
+        chain = sum(float(np.linalg.norm(self.model.jointPlacements[j].translation)) for j in range(2, 7))
+        tcp_offset = float(np.linalg.norm(self.model.frames[self._tcp_id].placement.translation))
+        self.reach_bound_m = chain + tcp_offset
+
+    # --- forward kinematics -------------------------------------------------------------------------
+    def _check_q(self, q: NDArray[np.float64]) -> Vec:
+        q = np.asarray(q, dtype=float).reshape(-1)
+        if q.shape != (6,) or not np.all(np.isfinite(q)):
+            raise ValueError(f"a configuration is 6 finite joint angles, got {q!r}")
+        return q
+
+    def frame_id(self, link: str) -> int:
+        if not self.model.existFrame(link):
+            raise KeyError(f"no link '{link}' in the robot model; links: {', '.join(self.link_names)}")
+        return int(self.model.getFrameId(link))
+
+    def fk(self, q: NDArray[np.float64]) -> Mat4:
+        """``T_base_tcp`` for the arm configuration ``q`` (rad, ``ARM_JOINTS`` order)."""
+        return self.fk_link(q, TCP_LINK)
+
+    def fk_link(self, q: NDArray[np.float64], link: str) -> Mat4:
+        """``T_base_<link>`` for any link (or frame) of the model."""
+        fid = self.frame_id(link)
+        q = self._check_q(q)
+        pin.framesForwardKinematics(self.model, self.data, q)
+        return np.array(self.data.oMf[fid].homogeneous)
+
+    def fk_all(self, q: NDArray[np.float64]) -> dict[str, Mat4]:
+        """``T_base_<link>`` of every link, from one FK pass."""
+        q = self._check_q(q)
+        pin.framesForwardKinematics(self.model, self.data, q)
+        return {n: np.array(self.data.oMf[self.model.getFrameId(n)].homogeneous) for n in self.link_names}
+
+    def within_limits(self, q: NDArray[np.float64]) -> bool:
+        q = np.asarray(q, dtype=float)
+        return bool(np.all(q >= self.lower_rad - 1e-9) and np.all(q <= self.upper_rad + 1e-9))
+
+    # --- inverse kinematics -------------------------------------------------------------------------
+    def _solve_from(self, oMdes: pin.SE3, q0: Vec, opts: IKOptions) -> tuple[Vec, float, float, int, bool]:
+        model, data, fid = self.model, self.data, self._tcp_id
+        q = np.clip(q0, self.lower_rad, self.upper_rad)
+        pos_err = rot_err = float("inf")
+        for it in range(1, opts.max_iterations + 1):
+            pin.forwardKinematics(model, data, q)
+            oMf = pin.updateFramePlacement(model, data, fid)
+            fMdes = oMf.actInv(oMdes)
+            err = pin.log6(fMdes).vector  # error twist in the tcp frame
+            pos_err = float(np.linalg.norm(oMdes.translation - oMf.translation))
+            rot_err = float(np.linalg.norm(err[3:]))
+            if pos_err < opts.position_tol_m and rot_err < opts.rotation_tol_rad:
+                return q, pos_err, rot_err, it - 1, True
+            J = pin.computeFrameJacobian(model, data, q, fid, pin.ReferenceFrame.LOCAL)
+            J = pin.Jlog6(fMdes) @ J
+            dq = J.T @ np.linalg.solve(J @ J.T + opts.damping * np.eye(6), err)
+            step = float(np.max(np.abs(dq)))
+            if step > opts.max_step_rad:
+                dq *= opts.max_step_rad / step
+            q = np.clip(q + dq, self.lower_rad, self.upper_rad)
+        return q, pos_err, rot_err, opts.max_iterations, False
+
+    def _unwrap_towards(self, q: Vec, q_ref: Vec) -> Vec:
+        """Shift each joint by whole turns towards ``q_ref`` while staying within the limits."""
+        q = q.copy()
+        for j in range(6):
+            turns = np.round((q_ref[j] - q[j]) / (2 * np.pi))
+            if turns:
+                candidate = q[j] + turns * 2 * np.pi
+                if self.lower_rad[j] <= candidate <= self.upper_rad[j]:
+                    q[j] = candidate
+        return q
+
+    def ik_solutions(
+        self,
+        T_base_tcp_goal: Mat4,
+        q_current: NDArray[np.float64],
+        *,
+        seeds: int = 8,
+        rng: np.random.Generator | None = None,
+        options: IKOptions | None = None,
+        max_solutions: int | None = None,
+        stop_if_current_converges: bool = False,
+    ) -> tuple[list[Vec], IKResult]:
+        """All distinct solutions found from ``seeds`` starts, closest to ``q_current`` first.
+
+        Returns (solutions, best) where ``best`` is the :class:`IKResult` of the closest solution (or the
+        best failed attempt). ``rng`` draws the random seeds; None uses a generator seeded with 0 so that a
+        call is always reproducible. ``max_solutions`` stops early once that many distinct solutions exist;
+        ``stop_if_current_converges`` stops when the first seed (``q_current``) converges: that solution is
+        reached continuously from ``q_current`` and is, in practice, the closest one.
+        """
+        opts = options or IKOptions()
+        q_cur = np.asarray(q_current, dtype=float).reshape(-1)
+        if q_cur.shape != (6,) or not np.all(np.isfinite(q_cur)) or not is_rigid_transform(T_base_tcp_goal):
+            bad = IKResult(IKStatus.INVALID_INPUT, np.full(6, np.nan), float("inf"), float("inf"), 0)
+            return [], bad
+        if seeds < 1:
+            raise ValueError("ik needs at least one seed")
+        rng = rng if rng is not None else np.random.default_rng(0)
+        reach = float(np.linalg.norm(np.asarray(T_base_tcp_goal)[:3, 3] - self._shoulder_xyz_m))
+        if reach > self.reach_bound_m:
+            beyond_m = reach - self.reach_bound_m
+            return [], IKResult(IKStatus.UNREACHABLE, q_cur.copy(), beyond_m, float("inf"), 0)
+        oMdes = pin.SE3(np.asarray(T_base_tcp_goal, dtype=float))
+        solutions: list[tuple[Vec, float, float]] = []
+        best_fail: tuple[Vec, float, float] | None = None
+        total_iters = 0
+        for k in range(seeds):
+            q0 = q_cur if k == 0 else rng.uniform(self.lower_rad, self.upper_rad)
+            q, pe, re, iters, ok = self._solve_from(oMdes, q0, opts)
+            total_iters += iters
+            if ok:
+                q = self._unwrap_towards(q, q_cur)
+                if all(np.max(np.abs(q - s[0])) > opts.distinct_tol_rad for s in solutions):
+                    solutions.append((q, pe, re))
+                if max_solutions is not None and len(solutions) >= max_solutions:
+                    break
+                if k == 0 and stop_if_current_converges:
+                    break
+            elif best_fail is None or pe + re < best_fail[1] + best_fail[2]:
+                best_fail = (q, pe, re)
+        if not solutions:
+            assert best_fail is not None
+            q, pe, re = best_fail
+            return [], IKResult(IKStatus.UNREACHABLE, q, pe, re, total_iters)
+        solutions.sort(key=lambda s: float(np.linalg.norm(s[0] - q_cur)))
+        q, pe, re = solutions[0]
+        return [s[0] for s in solutions], IKResult(IKStatus.OK, q, pe, re, total_iters)
+
+    def ik(
+        self,
+        T_base_tcp_goal: Mat4,
+        q_current: NDArray[np.float64],
+        *,
+        seeds: int = 8,
+        rng: np.random.Generator | None = None,
+        options: IKOptions | None = None,
+    ) -> IKResult:
+        """The IK solution closest to ``q_current`` (joint-space Euclidean distance).
+
+        The first seed is ``q_current``; when it converges its solution is returned at once. Otherwise
+        up to ``seeds - 1`` random seeds from ``rng`` run and the closest of their solutions wins.
+        """
+        _, best = self.ik_solutions(
+            T_base_tcp_goal, q_current, seeds=seeds, rng=rng, options=options, stop_if_current_converges=True
+        )
+        return best
+
+
+@cache
+def default_kinematics(opening_m: float = MAX_OPENING_M) -> ArmKinematics:
+    """A shared model per gripper opening (building one parses the URDF: ~10 ms)."""
+    return ArmKinematics(opening_m)
