@@ -7,6 +7,7 @@ the line, the key path and what was expected.
 
 from __future__ import annotations
 
+import difflib
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -93,7 +94,9 @@ def validate(model: type[M], data: Any, source: str | Path, lines: dict[KeyPath,
     try:
         return model.model_validate(data)
     except ValidationError as exc:
-        err = exc.errors()[0]
+        # an unknown key usually explains a "missing" one next to it (a typo): report it first
+        errors = sorted(exc.errors(), key=lambda e: 0 if e["type"] == "extra_forbidden" else 1)
+        err = errors[0]
         loc: KeyPath = tuple(p for p in err["loc"] if isinstance(p, str | int))
         # pydantic appends the union/tag member name to loc for tagged unions; keep only real keys
         key = format_key_path(loc) or "top level"
@@ -101,7 +104,9 @@ def validate(model: type[M], data: Any, source: str | Path, lines: dict[KeyPath,
         if kind == "extra_forbidden":
             parent = model
             allowed = _allowed_keys(parent, loc[:-1])
-            hint = f"; expected one of: {', '.join(allowed)}" if allowed else ""
+            close = difflib.get_close_matches(str(loc[-1]), allowed, n=1)
+            hint = f"; did you mean '{close[0]}'?" if close else ""
+            hint += f" (expected one of: {', '.join(allowed)})" if allowed else ""
             problem = f"unknown key '{loc[-1]}'{hint}"
         elif kind == "missing":
             problem = f"missing required key '{key}'"

@@ -12,7 +12,9 @@ from scipy.spatial.transform import Rotation
 Mat4 = NDArray[np.float64]
 
 
-def make_T(rotation: NDArray[np.float64] | None = None, translation: NDArray[np.float64] | list[float] | None = None) -> Mat4:
+def make_T(
+    rotation: NDArray[np.float64] | None = None, translation: NDArray[np.float64] | list[float] | None = None
+) -> Mat4:
     """A homogeneous transform from a 3x3 rotation and a translation in metres."""
     T = np.eye(4)
     if rotation is not None:

@@ -103,11 +103,12 @@ def robot_urdf_text() -> str:
     share = ur_description_dir()
     robot = SafeET.fromstring((share / "urdf/ur5_robot.urdf").read_text())
     for child in list(robot):
-        if child.tag == "transmission" or child.tag == "gazebo":
-            robot.remove(child)
-        elif child.tag == "link" and child.get("name") == "world":
-            robot.remove(child)
-        elif child.tag == "joint" and child.get("name") == "world_joint":
+        if (
+            child.tag == "transmission"
+            or child.tag == "gazebo"
+            or (child.tag == "link" and child.get("name") == "world")
+            or (child.tag == "joint" and child.get("name") == "world_joint")
+        ):
             robot.remove(child)
     for mesh in robot.iter("mesh"):
         mesh.set("filename", _resolve_mesh(mesh.get("filename", ""), share))

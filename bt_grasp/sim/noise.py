@@ -14,9 +14,9 @@ from numpy.typing import NDArray
 from bt_grasp.scene_config import DepthNoise
 
 
-def depth_rms_m(z_m: NDArray[np.float32] | float, noise: DepthNoise) -> NDArray[np.float32] | float:
+def depth_rms_m(z_m: NDArray[np.floating] | float, noise: DepthNoise) -> NDArray[np.float64]:
     """Standard deviation of the depth error at distance z."""
-    return np.asarray(z_m) ** 2 * noise.subpixel / (noise.focal_px * noise.baseline_m)
+    return np.asarray(z_m, dtype=np.float64) ** 2 * noise.subpixel / (noise.focal_px * noise.baseline_m)
 
 
 def _edge_far_side(depth_m: NDArray[np.float32], jump_m: float) -> NDArray[np.bool_]:
@@ -35,9 +35,7 @@ def _edge_far_side(depth_m: NDArray[np.float32], jump_m: float) -> NDArray[np.bo
     return far
 
 
-def apply_depth_noise(
-    depth_m: NDArray[np.float32], noise: DepthNoise, rng: np.random.Generator
-) -> NDArray[np.float32]:
+def apply_depth_noise(depth_m: NDArray[np.float32], noise: DepthNoise, rng: np.random.Generator) -> NDArray[np.float32]:
     """Noisy depth (0 = invalid) from true depth (0 = nothing rendered)."""
     depth = depth_m.astype(np.float32, copy=True)
     valid = depth > 0

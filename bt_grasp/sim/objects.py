@@ -28,8 +28,9 @@ def footprint_radius_m(obj: SceneObject) -> float:
     return float(obj.size_m[0])
 
 
-def draw_poses(objects: tuple[SceneObject, ...], rng: np.random.Generator, table_top_z_m: float,
-               source: str = "scene") -> list[PlacedObject]:
+def draw_poses(
+    objects: tuple[SceneObject, ...], rng: np.random.Generator, table_top_z_m: float, source: str = "scene"
+) -> list[PlacedObject]:
     """Draw each object's pose within its randomisation ranges, rejecting overlaps (up to 200 tries)."""
     placed: list[PlacedObject] = []
     for obj in objects:
@@ -39,8 +40,7 @@ def draw_poses(objects: tuple[SceneObject, ...], rng: np.random.Generator, table
             y = obj.pose.xy_m[1] + rng.uniform(*obj.randomize.y_m)
             yaw = np.deg2rad(obj.pose.yaw_deg + rng.uniform(*obj.randomize.yaw_deg))
             clear = all(
-                np.hypot(x - p.T_world_object[0, 3], y - p.T_world_object[1, 3])
-                > r + footprint_radius_m(p.spec) + 0.01
+                np.hypot(x - p.T_world_object[0, 3], y - p.T_world_object[1, 3]) > r + footprint_radius_m(p.spec) + 0.01
                 for p in placed
             )
             if clear:

@@ -41,7 +41,7 @@ class GroundTruthOracle:
         return np.linalg.inv(self._world.config.T_world_base()) @ self.T_world_camera_cv()
 
     def T_world_link(self, link_name: str) -> Mat4:
-        return to_T(self._world.robot.links[link_name].get_pose())
+        return to_T(self._world.robot.links[link_name].get_entity_pose())
 
     def T_world_tcp(self) -> Mat4:
         return self.T_world_link(TCP_LINK)
@@ -50,9 +50,7 @@ class GroundTruthOracle:
         """True when both finger pads touch the object (from the physics contacts)."""
         robot = self._world.robot
         left, right = robot.links["left_finger"], robot.links["right_finger"]
-        body = self._world.objects[name].find_component_by_type(
-            __import__("sapien").physx.PhysxRigidDynamicComponent
-        )
+        body = self._world.objects[name].find_component_by_type(__import__("sapien").physx.PhysxRigidDynamicComponent)
         touching = set()
         for contact in self._world.scene.get_contacts():
             bodies = {contact.bodies[0], contact.bodies[1]}

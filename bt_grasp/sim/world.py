@@ -28,8 +28,9 @@ class World:
     :class:`bt_grasp.sim.oracle.GroundTruthOracle`.
     """
 
-    def __init__(self, scene_config: Scene, seed: int, *, camera_mount: str | None = None,
-                 source: str | Path = "scene") -> None:
+    def __init__(
+        self, scene_config: Scene, seed: int, *, camera_mount: str | None = None, source: str | Path = "scene"
+    ) -> None:
         self.config = scene_config
         self.seed = int(seed)
         seeds = np.random.SeedSequence(self.seed).spawn(3)
