@@ -1,0 +1,185 @@
+"""Turn a checked :class:`Document` into py_trees nodes, as BT.CPP's ``XMLParser::instantiateTree`` does.
+
+* uids are given depth-first from 1 over the fully expanded tree (a SubTree node before its content);
+* paths follow BT.CPP ``fullPath``: SubTree instance paths joined by ``/``, a node named by its ``name``,
+  or ``ID::uid`` when it has none (or its name equals its ID);
+* each SubTree instance gets its own :class:`Blackboard`, remapped to its parent's as its attributes say.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass, field
+
+from bt_grasp.clock import Clock
+from bt_grasp.errors import TreeFileError
+from bt_grasp.tree.blackboard import Blackboard
+from bt_grasp.tree.builtins.decorators import SubTreeNode
+from bt_grasp.tree.context import NodeContext
+from bt_grasp.tree.document import Document, NodeDecl
+from bt_grasp.tree.exceptions import PortValueError, ScriptSyntaxError
+from bt_grasp.tree.node import BtNode
+from bt_grasp.tree.ports import PortAccessor, blackboard_key
+from bt_grasp.tree.registry import NodeKind, NodeRegistry, NodeSpec
+from bt_grasp.tree.substitution import SubstitutionRule, substitute
+from bt_grasp.tree.validate import check_models, resolve_node, resolve_subtree
+
+SUBTREE_SPEC = NodeSpec(
+    "SubTree", NodeKind.SUBTREE, (), lambda ctx: SubTreeNode(ctx, ""), "Runs a BehaviorTree on its own blackboard."
+)
+
+
+def main_tree_id(document: Document) -> str:
+    """``main_tree_to_execute``, or the only tree; otherwise a :class:`TreeFileError`."""
+    trees = list(document.trees)
+    if document.main_tree is not None:
+        if document.main_tree not in document.trees:
+            listing = ", ".join(trees) or "none"
+            raise TreeFileError(
+                document.source,
+                f'main_tree_to_execute="{document.main_tree}" names no BehaviorTree (trees: {listing})',
+                where=document.root_line,
+            )
+        return document.main_tree
+    if len(trees) == 1:
+        return trees[0]
+    if not trees:
+        raise TreeFileError(document.source, "the file defines no <BehaviorTree>", where=document.root_line)
+    raise TreeFileError(
+        document.source,
+        f"the file defines {len(trees)} BehaviorTrees ({', '.join(trees)}); "
+        f'say which one runs with main_tree_to_execute="{trees[0]}" on <root>',
+        where=document.root_line,
+    )
+
+
+def validate_document(document: Document, registry: NodeRegistry) -> str:
+    """Check every tree of ``document`` (not only the main one) and its models; returns the main tree ID."""
+    check_models(document, registry)
+
+    def walk(decl: NodeDecl) -> None:
+        if decl.type_id == "SubTree":
+            resolve_subtree(decl, document, SUBTREE_SPEC)
+            return
+        resolve_node(decl, registry, document)
+        for child in decl.children:
+            walk(child)
+
+    for tree in document.trees.values():
+        walk(tree.root)
+    main = main_tree_id(document)
+    _check_cycles(document, main)
+    return main
+
+
+def _check_cycles(document: Document, main: str) -> None:
+    def refs(decl: NodeDecl) -> list[NodeDecl]:
+        found = [decl] if decl.type_id == "SubTree" else []
+        for child in decl.children:
+            found.extend(refs(child))
+        return found
+
+    def visit(tree_id: str, stack: tuple[str, ...]) -> None:
+        for ref in refs(document.trees[tree_id].root):
+            target = ref.subtree_id or ""
+            if target in stack or target == tree_id:
+                chain = " -> ".join((*stack, tree_id, target))
+                raise ref.error(f"cyclic SubTree: {chain}")
+            visit(target, (*stack, tree_id))
+
+    visit(main, ())
+
+
+@dataclass
+class TreeBuilder:
+    document: Document
+    registry: NodeRegistry
+    clock: Clock
+    rules: tuple[SubstitutionRule, ...] = ()
+    _uids: itertools.count = field(default_factory=lambda: itertools.count(1))
+
+    def build(self, main: str, root_blackboard: Blackboard) -> BtNode:
+        return self._node(self.document.trees[main].root, root_blackboard, "", "", (main,))
+
+    def _context(self, decl: NodeDecl, **kwargs: object) -> NodeContext:
+        return NodeContext(
+            clock=self.clock,
+            attributes=dict(decl.attributes),
+            enums=self.registry.enums,
+            source=decl.source,
+            line=decl.line,
+            **kwargs,  # type: ignore[arg-type]
+        )
+
+    def _node(self, decl: NodeDecl, bb: Blackboard, prefix: str, instance: str, stack: tuple[str, ...]) -> BtNode:
+        uid = next(self._uids)
+        if decl.type_id == "SubTree":
+            return self._subtree(decl, uid, bb, prefix, instance, stack)
+        resolved = resolve_node(decl, self.registry, self.document)
+        spec, name, ports = resolved.spec, resolved.name, resolved.ports
+        path = prefix + name + (f"::{uid}" if name == decl.type_id else "")
+        children = tuple(self._node(c, bb, prefix, instance, stack) for c in decl.children)
+        replacement = substitute(self.rules, spec, decl.type_id, name, path)
+        if replacement is not None:
+            spec, ports = replacement, {}
+        for value in ports.values():
+            if value.key is not None:
+                bb.declare(value.key)
+        ctx = self._context(
+            decl,
+            name=name,
+            type_id=spec.name,
+            uid=uid,
+            path=path,
+            kind=spec.kind,
+            spec=spec,
+            ports=PortAccessor({p.name: p for p in spec.ports}, ports, bb, path),
+            blackboard=bb,
+            children=children,
+            conditions=resolved.conditions,
+        )
+        assert spec.factory is not None
+        try:
+            node = spec.factory(ctx)
+        except (ScriptSyntaxError, PortValueError) as exc:
+            raise decl.error(f"{spec.name}: {exc}") from None
+        if not isinstance(node, BtNode):
+            raise TypeError(f"the factory of {spec.name} returned {type(node).__name__}, not a bt_grasp Leaf/BtNode")
+        return node
+
+    def _subtree(
+        self, decl: NodeDecl, uid: int, bb: Blackboard, prefix: str, instance: str, stack: tuple[str, ...]
+    ) -> BtNode:
+        resolved = resolve_subtree(decl, self.document, SUBTREE_SPEC)
+        subtree_id = decl.subtree_id or ""
+        if subtree_id in stack:
+            raise decl.error(f"cyclic SubTree: {' -> '.join((*stack, subtree_id))}")
+        name = resolved.name
+        path = prefix + name + (f"::{uid}" if name == subtree_id else "")
+        inner = Blackboard(bb, autoremap=resolved.autoremap)
+        for port, value in resolved.remaps:
+            key = blackboard_key(value, port)
+            if key is not None:
+                inner.add_remapping(port, key)
+            else:
+                inner.set_local(port, value)
+        sub_instance = (instance + "/" if instance else "") + (decl.name or f"{subtree_id}::{uid}")
+        tree = self.document.trees[subtree_id]
+        child = self._node(tree.root, inner, sub_instance + "/", sub_instance, (*stack, subtree_id))
+        ctx = self._context(
+            decl,
+            name=name,
+            type_id="SubTree",
+            uid=uid,
+            path=path,
+            kind=NodeKind.SUBTREE,
+            spec=SUBTREE_SPEC,
+            ports=PortAccessor({}, {}, bb, path),
+            blackboard=bb,
+            children=(child,),
+            conditions=resolved.conditions,
+        )
+        node = SubTreeNode(ctx, subtree_id)
+        node.subtree_blackboard = inner
+        node.subtree_path = sub_instance
+        return node

@@ -1,0 +1,29 @@
+"""Errors raised while a tree runs (load errors are :class:`bt_grasp.errors.TreeFileError`)."""
+
+from __future__ import annotations
+
+from bt_grasp.errors import BtGraspError
+
+
+class TreeRuntimeError(BtGraspError):
+    """A tree broke an invariant while ticking: a script read a missing variable, a port had no value.
+
+    The tree file is what needs fixing, so the command line exits with code 2.
+    """
+
+    exit_code = 2
+
+
+class ScriptSyntaxError(ValueError):
+    """A BT.CPP script does not parse. ``column`` is 1-based within the script text."""
+
+    def __init__(self, script: str, problem: str, column: int | None = None) -> None:
+        self.script = script
+        self.problem = problem
+        self.column = column
+        where = f" at column {column}" if column else ""
+        super().__init__(f"script {script!r}: {problem}{where}")
+
+
+class PortValueError(ValueError):
+    """A literal port value cannot be converted to the port's type (a load error once located)."""

@@ -1,0 +1,228 @@
+"""BT.CPP's node execution (``TreeNode::executeTick``, ``haltNode``) on top of py_trees behaviours.
+
+Every node a tree file builds is a :class:`BtNode`: a py_trees behaviour (a ``Composite``, ``Decorator`` or
+plain ``Behaviour``) that parents tick through :meth:`BtNode.execute_tick`, so BT.CPP's statuses and rules
+hold exactly:
+
+* the BT.CPP status lives in ``bt_state`` (IDLE, RUNNING, SUCCESS, FAILURE); py_trees' ``status`` mirrors it,
+  with IDLE shown as ``Status.INVALID``;
+* SKIPPED is returned to the parent but never stored (BT.CPP keeps the node IDLE). A consumer reads it as
+  ``node.bt_status_extra == "SKIPPED"``: the node's most recent tick was skipped and it was not ticked since.
+  ``bt_status_extra`` is ``"IDLE"`` for a node reset to IDLE, and None while ``status`` says it all;
+* pre-conditions (``_failureIf``, ``_successIf``, ``_skipIf``, ``_while``) are checked only while the node is
+  IDLE, except ``_while``, which halts a RUNNING node when it turns false (the node returns SKIPPED);
+  post-conditions run when the node completes (``_onSuccess``/``_onFailure`` then ``_post``), and
+  ``_onHalted`` after a halt;
+* halting (BT.CPP ``haltChild``) calls ``halt_node`` on RUNNING children, which reaches a leaf's
+  ``terminate(Status.INVALID)``.
+
+``tick()`` (the py_trees generator) ticks the node as a tree root: it resets a completed root to IDLE first,
+then ticks once and yields every node, so ``py_trees.trees.BehaviourTree`` with visitors works unchanged.
+"""
+
+from __future__ import annotations
+
+import enum
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import py_trees
+from py_trees.common import Status
+
+from bt_grasp.tree.registry import NodeKind
+
+if TYPE_CHECKING:
+    from bt_grasp.tree.blackboard import Blackboard
+    from bt_grasp.tree.context import NodeContext
+    from bt_grasp.tree.registry import NodeSpec
+    from bt_grasp.tree.script_ast import Program
+
+
+class BtStatus(enum.Enum):
+    """BT.CPP's ``NodeStatus``."""
+
+    IDLE = "IDLE"
+    RUNNING = "RUNNING"
+    SUCCESS = "SUCCESS"
+    FAILURE = "FAILURE"
+    SKIPPED = "SKIPPED"
+
+    @property
+    def completed(self) -> bool:
+        return self is BtStatus.SUCCESS or self is BtStatus.FAILURE
+
+
+TO_PY: dict[BtStatus, Status] = {
+    BtStatus.IDLE: Status.INVALID,
+    BtStatus.RUNNING: Status.RUNNING,
+    BtStatus.SUCCESS: Status.SUCCESS,
+    BtStatus.FAILURE: Status.FAILURE,
+}
+FROM_PY: dict[Status, BtStatus] = {
+    Status.RUNNING: BtStatus.RUNNING,
+    Status.SUCCESS: BtStatus.SUCCESS,
+    Status.FAILURE: BtStatus.FAILURE,
+}
+
+#: BT.CPP's evaluation order of pre-conditions and post-conditions
+PRE_CONDITIONS: tuple[str, ...] = ("_failureIf", "_successIf", "_skipIf", "_while")
+POST_CONDITIONS: tuple[str, ...] = ("_onHalted", "_onFailure", "_onSuccess", "_post")
+
+
+@dataclass(frozen=True)
+class Conditions:
+    """A node's parsed pre/post-condition scripts, keyed by attribute name (``_skipIf``)."""
+
+    scripts: Mapping[str, Program] = field(default_factory=dict)
+
+    @property
+    def pre(self) -> tuple[tuple[str, Program], ...]:
+        return tuple((k, self.scripts[k]) for k in PRE_CONDITIONS if k in self.scripts)
+
+    def get(self, key: str) -> Program | None:
+        return self.scripts.get(key)
+
+
+NO_CONDITIONS = Conditions()
+
+
+class BtNode(py_trees.behaviour.Behaviour):
+    """Base of every node built from a tree file. Subclasses implement :meth:`bt_tick` (and ``halt``)."""
+
+    bt_uid: int = 0
+    bt_type: str = ""
+    bt_path: str = ""
+    bt_kind: NodeKind = NodeKind.ACTION
+    bt_status_extra: str | None = "IDLE"
+    bt_state: BtStatus = BtStatus.IDLE
+
+    def _bt_bind(self, ctx: NodeContext) -> None:
+        """Copy identity and conditions from the build context (called by every ``__init__``)."""
+        self.bt_uid = ctx.uid
+        self.bt_type = ctx.type_id
+        self.bt_path = ctx.path
+        self.bt_kind = ctx.kind
+        self.bt_spec: NodeSpec = ctx.spec
+        #: the attributes exactly as written in the tree file (ports, name, pre/post conditions)
+        self.bt_attributes: dict[str, str] = dict(ctx.attributes)
+        self.bt_state = BtStatus.IDLE
+        self.bt_status_extra = "IDLE"
+        self._bt_blackboard: Blackboard = ctx.blackboard
+        self._bt_enums: Mapping[str, int] = ctx.enums
+        self._bt_conditions: Conditions = ctx.conditions
+        self._bt_pre = ctx.conditions.pre
+        self._bt_has_post = any(k in ctx.conditions.scripts for k in POST_CONDITIONS[1:])
+
+    # ---- what subclasses provide ------------------------------------------------------------------
+    def bt_tick(self) -> BtStatus:
+        """One tick of the node's own logic (BT.CPP ``tick()``)."""
+        raise NotImplementedError
+
+    def halt(self) -> None:
+        """Stop the node's activity and return to IDLE (BT.CPP ``halt()``)."""
+        self.reset_status()
+
+    # ---- BT.CPP's TreeNode machinery --------------------------------------------------------------
+    def execute_tick(self) -> BtStatus:
+        """BT.CPP ``executeTick``: pre-conditions, ``bt_tick``, post-conditions, store the status."""
+        result: BtStatus | None = self._check_preconditions() if self._bt_pre else None
+        if result is None:
+            result = self.bt_tick()
+        if self._bt_has_post and result.completed:
+            self._run_postconditions(result)
+        if result is BtStatus.SKIPPED:
+            self.bt_status_extra = "SKIPPED"
+        else:
+            self.set_bt_status(result)
+        return result
+
+    def set_bt_status(self, status: BtStatus) -> None:
+        if status is BtStatus.IDLE or status is BtStatus.SKIPPED:
+            raise ValueError("use reset_status() to make a node IDLE; SKIPPED is never stored")
+        self.bt_state = status
+        self.status = TO_PY[status]
+        self.bt_status_extra = None
+
+    def reset_status(self) -> None:
+        """BT.CPP ``resetStatus``: back to IDLE without halting (a SKIPPED marker survives)."""
+        if self.bt_state is not BtStatus.IDLE:
+            self.bt_status_extra = "IDLE"
+        self.bt_state = BtStatus.IDLE
+        self.status = Status.INVALID
+
+    def halt_node(self) -> None:
+        """BT.CPP ``haltNode``: ``halt()`` then the ``_onHalted`` script."""
+        self.halt()
+        script = self._bt_conditions.get("_onHalted")
+        if script is not None:
+            script.run(self._bt_blackboard, self._bt_enums)
+
+    def _check_preconditions(self) -> BtStatus | None:
+        state = self.bt_state
+        for key, script in self._bt_pre:
+            if state is BtStatus.IDLE:
+                if script.truth(self._bt_blackboard, self._bt_enums):
+                    if key == "_failureIf":
+                        return BtStatus.FAILURE
+                    if key == "_successIf":
+                        return BtStatus.SUCCESS
+                    if key == "_skipIf":
+                        return BtStatus.SKIPPED
+                elif key == "_while":
+                    return BtStatus.SKIPPED
+            elif (
+                state is BtStatus.RUNNING and key == "_while" and not script.truth(self._bt_blackboard, self._bt_enums)
+            ):
+                self.halt_node()
+                return BtStatus.SKIPPED
+        return None
+
+    def _run_postconditions(self, status: BtStatus) -> None:
+        scripts = self._bt_conditions
+        key = "_onSuccess" if status is BtStatus.SUCCESS else "_onFailure"
+        for name in (key, "_post"):
+            script = scripts.get(name)
+            if script is not None:
+                script.run(self._bt_blackboard, self._bt_enums)
+
+    # ---- helpers for controls and decorators (BT.CPP ControlNode / DecoratorNode) -----------------
+    def bt_children(self) -> list[BtNode]:
+        return self.children  # type: ignore[return-value]
+
+    def halt_child(self, index: int) -> None:
+        child: BtNode = self.children[index]  # type: ignore[assignment]
+        if child.bt_state is BtStatus.RUNNING:
+            child.halt_node()
+        child.reset_status()
+
+    def halt_children(self, first: int = 0) -> None:
+        for index in range(first, len(self.children)):
+            self.halt_child(index)
+
+    reset_children = halt_children
+
+    # ---- py_trees integration ---------------------------------------------------------------------
+    def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
+        """Tick this node as the root of a tree, then yield every node (for py_trees visitors)."""
+        if self.bt_state.completed:
+            self.reset_status()
+        self.bt_last_root_status = self.execute_tick()
+        yield from self.iterate()
+
+    def stop(self, new_status: Status = Status.INVALID) -> None:
+        """py_trees' interrupt (``BehaviourTree.interrupt``/``shutdown``): halt like BT.CPP."""
+        if new_status == Status.INVALID:
+            if self.bt_state is BtStatus.RUNNING:
+                self.halt_node()
+            self.reset_status()
+        else:
+            self.set_bt_status(FROM_PY[new_status])
+
+    def __repr__(self) -> str:
+        return f"<{self.bt_type} {self.bt_path!r} uid={self.bt_uid} {self.bt_state.value}>"
+
+
+def describe(node: Any) -> str:
+    """``Type 'path'`` for messages."""
+    return f"{getattr(node, 'bt_type', type(node).__name__)} {getattr(node, 'bt_path', node.name)!r}"

@@ -1,0 +1,153 @@
+"""Port values: literals typed at load time, ``{key}`` blackboard references resolved at tick time."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from bt_grasp.tree.blackboard import EMPTY, Blackboard
+from bt_grasp.tree.exceptions import PortValueError, TreeRuntimeError
+from bt_grasp.tree.registry import NO_DEFAULT, PortDirection, PortSpec
+
+_TRUE = ("true", "True", "TRUE", "1")
+_FALSE = ("false", "False", "FALSE", "0")
+_TYPE_NAMES = {str: "text", int: "an integer", float: "a number", bool: "true or false", object: "any value"}
+
+
+def convert_text(text: str, port: PortSpec) -> Any:
+    """Convert a literal as written in a tree file to the port's type (BT.CPP ``convertFromString``)."""
+    kind = port.type
+    value: Any
+    if kind is str or kind is object:
+        value = text
+    elif kind is bool:
+        if text.strip() in _TRUE:
+            value = True
+        elif text.strip() in _FALSE:
+            value = False
+        else:
+            raise PortValueError(f"port '{port.name}' needs true or false, got {text!r}")
+    elif kind is int:
+        try:
+            value = int(text.strip(), 0) if text.strip().lower().startswith(("0x", "-0x")) else int(text)
+        except ValueError:
+            raise PortValueError(f"port '{port.name}' needs an integer, got {text!r}") from None
+    else:
+        try:
+            value = float(text)
+        except ValueError:
+            raise PortValueError(f"port '{port.name}' needs a number, got {text!r}") from None
+    if port.choices and value not in port.choices:
+        raise PortValueError(f"port '{port.name}' must be one of {', '.join(port.choices)}; got {text!r}")
+    return value
+
+
+def blackboard_key(text: str, port_name: str) -> str | None:
+    """The key of a blackboard reference (``{key}``, ``{=}`` meaning the port's own name), else None."""
+    stripped = text.strip()
+    if stripped in ("{=}", "="):
+        return port_name
+    if len(stripped) >= 3 and stripped[0] == "{" and stripped[-1] == "}":
+        return stripped[1:-1].strip()
+    if len(stripped) >= 4 and stripped.startswith("${") and stripped[-1] == "}":
+        return stripped[2:-1].strip()
+    return None
+
+
+@dataclass(frozen=True)
+class PortValue:
+    """A resolved port: either a typed ``literal`` or a blackboard ``key``."""
+
+    port: PortSpec
+    literal: Any = NO_DEFAULT
+    key: str | None = None
+
+    @staticmethod
+    def from_text(port: PortSpec, text: str) -> PortValue:
+        key = blackboard_key(text, port.name)
+        if key is not None:
+            if not key:
+                raise PortValueError(f"port '{port.name}' has an empty blackboard reference {text!r}")
+            return PortValue(port, key=key)
+        if port.direction is PortDirection.OUTPUT:
+            raise PortValueError(
+                f"output port '{port.name}' needs a blackboard key such as {{{port.name}}}, got {text!r}"
+            )
+        return PortValue(port, literal=convert_text(text, port))
+
+    @staticmethod
+    def from_default(port: PortSpec) -> PortValue:
+        if isinstance(port.default, str):
+            return PortValue.from_text(port, port.default)
+        return PortValue(port, literal=port.default)
+
+
+class PortAccessor:
+    """A node's ports: ``get`` reads (literal or blackboard), ``set`` writes an output port."""
+
+    __slots__ = ("_blackboard", "_owner", "_specs", "_values")
+
+    def __init__(
+        self,
+        specs: Mapping[str, PortSpec],
+        values: Mapping[str, PortValue],
+        blackboard: Blackboard,
+        owner: str,
+    ) -> None:
+        self._specs = dict(specs)
+        self._values = dict(values)
+        self._blackboard = blackboard
+        self._owner = owner
+
+    def _value(self, name: str) -> PortValue:
+        value = self._values.get(name)
+        if value is None:
+            if name not in self._specs:
+                raise TreeRuntimeError(f"{self._owner}: node has no port '{name}'")
+            raise TreeRuntimeError(f"{self._owner}: port '{name}' was not set in the tree file")
+        return value
+
+    def has(self, name: str) -> bool:
+        """True when the port was given (or has a default) and, if it names an entry, that entry has a value."""
+        value = self._values.get(name)
+        if value is None:
+            return False
+        return value.key is None or self._blackboard.has(value.key)
+
+    def key(self, name: str) -> str | None:
+        """The blackboard key a port points to, None for a literal."""
+        return self._value(name).key
+
+    def get(self, name: str) -> Any:
+        """The port's value: the typed literal, or the blackboard entry (converted when it holds text)."""
+        value = self._value(name)
+        if value.key is None:
+            return value.literal
+        entry = self._blackboard.entry(value.key)
+        if entry is None or entry.value is EMPTY:
+            raise TreeRuntimeError(
+                f"{self._owner}: port '{name}' reads blackboard entry '{value.key}', which has no value yet"
+            )
+        raw = entry.value
+        port = value.port
+        if isinstance(raw, str) and port.type not in (str, object):
+            try:
+                return convert_text(raw, port)
+            except PortValueError as exc:
+                raise TreeRuntimeError(f"{self._owner}: {exc} (from blackboard entry '{value.key}')") from None
+        if port.type is float and isinstance(raw, int) and not isinstance(raw, bool):
+            return float(raw)
+        return raw
+
+    def set(self, name: str, value: Any) -> None:
+        """Write an output (or inout) port's blackboard entry."""
+        port_value = self._value(name)
+        if port_value.port.direction is PortDirection.INPUT:
+            raise TreeRuntimeError(f"{self._owner}: port '{name}' is an input port; it cannot be written")
+        if port_value.key is None:
+            raise TreeRuntimeError(f"{self._owner}: port '{name}' is a literal, not a blackboard key")
+        self._blackboard.set(port_value.key, value)
+
+    def names(self) -> tuple[str, ...]:
+        return tuple(self._values)

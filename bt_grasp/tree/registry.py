@@ -1,0 +1,261 @@
+"""The node registry: which node types a tree file may name, their ports, and how to build them.
+
+This is the contract robot leaves are written against::
+
+    registry = builtin_registry()
+
+    @leaf(registry, name="Approach", ports=[PortSpec("target", PortDirection.INPUT, str)], needs_robot=True)
+    class Approach(Leaf):
+        ...
+
+Node types come only from a registry, never from dotted paths or ``eval`` of tree-file text. There is no
+process-global registry: every caller builds (or copies) its own.
+"""
+
+from __future__ import annotations
+
+import difflib
+import enum
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, TypeVar
+
+if TYPE_CHECKING:
+    import py_trees
+
+    from bt_grasp.tree.context import NodeContext
+
+
+class PortDirection(enum.Enum):
+    """Which way a port moves data between a node and its blackboard (BT.CPP ``PortDirection``)."""
+
+    INPUT = "input"
+    OUTPUT = "output"
+    INOUT = "inout"
+
+
+class NodeKind(enum.Enum):
+    """The BT.CPP node category; the value is the explicit XML tag (``<Action ID=...>``)."""
+
+    ACTION = "Action"
+    CONDITION = "Condition"
+    CONTROL = "Control"
+    DECORATOR = "Decorator"
+    SUBTREE = "SubTree"
+
+
+class _NoDefault:
+    """Marker type of :data:`NO_DEFAULT`: the port has no default and must be given in the tree file."""
+
+    _instance: _NoDefault | None = None
+
+    def __new__(cls) -> _NoDefault:
+        if cls._instance is None:
+            cls._instance = super().__new__(cls)
+        return cls._instance
+
+    def __repr__(self) -> str:
+        return "NO_DEFAULT"
+
+
+NO_DEFAULT: Any = _NoDefault()
+
+#: the Python types a port may carry; ``object`` means "any blackboard value"
+PORT_TYPES: tuple[type, ...] = (str, int, float, bool, object)
+
+#: attribute names a port may not use (BT.CPP reserves the same ones)
+RESERVED_ATTRIBUTES: frozenset[str] = frozenset(
+    {"ID", "name", "_description", "_autoremap", "_uid", "_fullpath"}
+    | {"_failureIf", "_successIf", "_skipIf", "_while"}
+    | {"_onSuccess", "_onFailure", "_onHalted", "_post"}
+)
+
+
+@dataclass(frozen=True)
+class PortSpec:
+    """One port of a node type.
+
+    Attributes:
+        name: the XML attribute name (``target``)
+        direction: INPUT, OUTPUT or INOUT
+        type: ``str``, ``int``, ``float``, ``bool`` or ``object`` (any blackboard value, not checked)
+        default: used when the tree file does not give the port; :data:`NO_DEFAULT` makes the port required.
+            A string default may be a blackboard reference such as ``"{target}"``.
+        description: one sentence shown by ``bt-grasp tree show`` and written to TreeNodesModel
+        choices: when not empty, the only literal values the port accepts (``else`` of Precondition)
+    """
+
+    name: str
+    direction: PortDirection
+    type: type = str
+    default: Any = NO_DEFAULT
+    description: str = ""
+    choices: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        if self.type not in PORT_TYPES:
+            raise ValueError(f"port {self.name!r}: type must be one of str, int, float, bool, object")
+        if not self.name or not (self.name[0].isalpha()) or self.name in RESERVED_ATTRIBUTES:
+            raise ValueError(f"port name {self.name!r} is empty, reserved or does not start with a letter")
+
+    @property
+    def required(self) -> bool:
+        return self.default is NO_DEFAULT
+
+
+Factory = Callable[["NodeContext"], "py_trees.behaviour.Behaviour"]
+
+_DEFAULT_CHILDREN: dict[NodeKind, tuple[int, int | None]] = {
+    NodeKind.ACTION: (0, 0),
+    NodeKind.CONDITION: (0, 0),
+    NodeKind.CONTROL: (1, None),
+    NodeKind.DECORATOR: (1, 1),
+    NodeKind.SUBTREE: (0, 0),
+}
+
+
+@dataclass(frozen=True)
+class NodeSpec:
+    """A registered node type.
+
+    Attributes:
+        name: the registration ID used in tree files (``RetryUntilSuccessful``)
+        kind: ACTION, CONDITION, CONTROL, DECORATOR or SUBTREE
+        ports: the ports the node accepts; any other attribute in a tree file is a load error
+        factory: ``factory(ctx)`` returns the py_trees behaviour (a :class:`bt_grasp.tree.node.BtNode`)
+        description: one sentence for ``tree show`` and TreeNodesModel
+        needs_robot: the node talks to the robot or camera; ``tree run --dry`` requires it substituted
+        children: ``(min, max)`` number of children, ``max`` None for unbounded; defaults from ``kind``
+    """
+
+    name: str
+    kind: NodeKind
+    ports: tuple[PortSpec, ...] = ()
+    factory: Factory | None = None
+    description: str = ""
+    needs_robot: bool = False
+    children: tuple[int, int | None] | None = None
+
+    def __post_init__(self) -> None:
+        if not self.name or not self.name.replace("_", "a").isalnum():
+            raise ValueError(f"node name {self.name!r} must be letters, digits and underscores")
+        if self.children is None:
+            object.__setattr__(self, "children", _DEFAULT_CHILDREN[self.kind])
+        object.__setattr__(self, "ports", tuple(self.ports))
+        names = [p.name for p in self.ports]
+        if len(set(names)) != len(names):
+            raise ValueError(f"node {self.name!r} declares a port twice: {names}")
+
+    def port(self, name: str) -> PortSpec | None:
+        for p in self.ports:
+            if p.name == name:
+                return p
+        return None
+
+    @property
+    def min_children(self) -> int:
+        assert self.children is not None
+        return self.children[0]
+
+    @property
+    def max_children(self) -> int | None:
+        assert self.children is not None
+        return self.children[1]
+
+
+class NodeRegistry:
+    """Node types by registration ID. A duplicate name raises ``ValueError``."""
+
+    def __init__(self, specs: Iterable[NodeSpec] = (), enums: Mapping[str, int] | None = None) -> None:
+        self._specs: dict[str, NodeSpec] = {}
+        #: scripting enums (BT.CPP ``registerScriptingEnum``): identifiers scripts read as integers
+        self.enums: dict[str, int] = dict(enums or {})
+        for spec in specs:
+            self.register(spec)
+
+    def register(self, spec: NodeSpec) -> NodeSpec:
+        if spec.name in self._specs:
+            raise ValueError(f"a node named {spec.name!r} is already registered")
+        if spec.factory is None:
+            raise ValueError(f"node {spec.name!r} has no factory")
+        self._specs[spec.name] = spec
+        return spec
+
+    def register_enums(self, values: Mapping[str, int]) -> None:
+        for key, value in values.items():
+            if key in self.enums and self.enums[key] != value:
+                raise ValueError(f"scripting enum {key!r} is already registered with value {self.enums[key]}")
+            self.enums[key] = int(value)
+
+    def get(self, name: str) -> NodeSpec | None:
+        return self._specs.get(name)
+
+    def __getitem__(self, name: str) -> NodeSpec:
+        return self._specs[name]
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._specs
+
+    def __len__(self) -> int:
+        return len(self._specs)
+
+    def names(self) -> tuple[str, ...]:
+        return tuple(sorted(self._specs))
+
+    def specs(self) -> tuple[NodeSpec, ...]:
+        return tuple(self._specs[n] for n in self.names())
+
+    def nearest(self, name: str, n: int = 3) -> list[str]:
+        """Known names closest to ``name`` (for "did you mean ...?"), best first."""
+        by_lower = {k.lower(): k for k in self._specs}
+        if name.lower() in by_lower:
+            return [by_lower[name.lower()]]
+        return difflib.get_close_matches(name, list(self._specs), n=n, cutoff=0.6)
+
+    def copy(self) -> NodeRegistry:
+        return NodeRegistry(self._specs.values(), self.enums)
+
+
+T = TypeVar("T")
+
+
+def leaf(
+    registry: NodeRegistry | None,
+    *,
+    name: str | None = None,
+    kind: NodeKind = NodeKind.ACTION,
+    ports: Iterable[PortSpec] = (),
+    needs_robot: bool = False,
+    description: str | None = None,
+) -> Callable[[T], T]:
+    """Class decorator: describe a :class:`bt_grasp.tree.leaf.Leaf` subclass as a node type.
+
+    The spec is stored on the class as ``bt_spec``; with a registry it is also registered there. With
+    ``None`` the caller registers later: ``registry.register(Approach.bt_spec)``.
+    """
+
+    def decorate(cls: T) -> T:
+        doc = (getattr(cls, "__doc__", None) or "").strip().splitlines()
+        spec = NodeSpec(
+            name=name or cls.__name__,  # type: ignore[attr-defined]
+            kind=kind,
+            ports=tuple(ports),
+            factory=cls,  # type: ignore[arg-type]
+            description=description if description is not None else (doc[0] if doc else ""),
+            needs_robot=needs_robot,
+        )
+        cls.bt_spec = spec  # type: ignore[attr-defined]
+        if registry is not None:
+            registry.register(spec)
+        return cls
+
+    return decorate
+
+
+def builtin_registry() -> NodeRegistry:
+    """A fresh registry holding every built-in node (BT.CPP's and bt_grasp's own)."""
+    from bt_grasp.tree.builtins import register_builtins
+
+    registry = NodeRegistry()
+    register_builtins(registry)
+    return registry

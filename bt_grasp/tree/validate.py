@@ -1,0 +1,185 @@
+"""Check declarations against the registry: node types, ports, attributes, child counts, scripts, models.
+
+Every problem raises :class:`bt_grasp.errors.TreeFileError` naming the file and line; nothing here builds
+or runs a node.
+"""
+
+from __future__ import annotations
+
+import difflib
+from dataclasses import dataclass, field
+
+from bt_grasp.errors import TreeFileError
+from bt_grasp.tree.builtins import REMOVED_V3_NAMES
+from bt_grasp.tree.document import Document, ModelDecl, NodeDecl
+from bt_grasp.tree.exceptions import PortValueError, ScriptSyntaxError
+from bt_grasp.tree.node import POST_CONDITIONS, PRE_CONDITIONS, Conditions
+from bt_grasp.tree.ports import PortValue, convert_text
+from bt_grasp.tree.registry import NodeKind, NodeRegistry, NodeSpec, PortDirection, PortSpec
+from bt_grasp.tree.script import parse_script
+
+CONDITION_ATTRIBUTES = frozenset(PRE_CONDITIONS + POST_CONDITIONS)
+SPECIAL_ATTRIBUTES = frozenset({"name", "_description", "_autoremap", "_uid", "_fullpath"})
+
+_MODEL_TYPES: dict[str, type] = {
+    **dict.fromkeys(
+        ("int", "unsigned", "unsigned int", "long", "unsigned long", "short", "size_t", "int64_t", "uint64_t"),
+        int,
+    ),
+    **dict.fromkeys(("double", "float"), float),
+    "bool": bool,
+    **dict.fromkeys(("std::string", "string", "str"), str),
+}
+
+
+@dataclass(frozen=True)
+class ResolvedNode:
+    """A declaration checked against its spec."""
+
+    spec: NodeSpec
+    name: str
+    ports: dict[str, PortValue] = field(default_factory=dict)
+    conditions: Conditions = field(default_factory=Conditions)
+    remaps: tuple[tuple[str, str], ...] = ()  # SubTree only: port -> "{key}" or literal
+    autoremap: bool = False
+
+
+def did_you_mean(name: str, candidates: list[str] | tuple[str, ...]) -> str:
+    lowered = {c.lower(): c for c in candidates}
+    close = [lowered[name.lower()]] if name.lower() in lowered else difflib.get_close_matches(name, candidates, n=1)
+    return f"; did you mean '{close[0]}'?" if close else ""
+
+
+def parse_conditions(decl: NodeDecl) -> Conditions:
+    scripts = {}
+    for key, value in decl.attributes:
+        if key in CONDITION_ATTRIBUTES:
+            try:
+                scripts[key] = parse_script(value)
+            except ScriptSyntaxError as exc:
+                raise decl.error(f"{key}: {exc}") from None
+    return Conditions(scripts)
+
+
+def _unknown_node(decl: NodeDecl, registry: NodeRegistry, document: Document) -> TreeFileError:
+    type_id = decl.type_id
+    if type_id in REMOVED_V3_NAMES:
+        return decl.error(f"'{type_id}' is a BehaviorTree.CPP 3.x node; version 4 calls it {REMOVED_V3_NAMES[type_id]}")
+    if type_id in document.trees:
+        return decl.error(f"'{type_id}' is a BehaviorTree; use it as <SubTree ID=\"{type_id}\"/>")
+    hint = did_you_mean(type_id, list(registry.names()))
+    return decl.error(f"unknown node '{type_id}'{hint}")
+
+
+def resolve_node(decl: NodeDecl, registry: NodeRegistry, document: Document) -> ResolvedNode:
+    """Check a (non-SubTree) declaration and type its ports."""
+    spec = registry.get(decl.type_id)
+    if spec is None or spec.kind is NodeKind.SUBTREE:
+        raise _unknown_node(decl, registry, document)
+    if decl.explicit_tag and decl.explicit_tag != spec.kind.value:
+        raise decl.error(f"{spec.name} is a {spec.kind.value}, not a {decl.explicit_tag}")
+    count, low, high = len(decl.children), spec.min_children, spec.max_children
+    if count < low or (high is not None and count > high):
+        if high == low:
+            wanted = "no children" if low == 0 else f"exactly {low} child" + ("ren" if low > 1 else "")
+        elif high is None:
+            wanted = f"at least {low} child" + ("ren" if low > 1 else "")
+        else:
+            wanted = f"{low} to {high} children"
+        raise decl.error(f"{spec.name} must have {wanted}, found {count}")
+    ports: dict[str, PortValue] = {}
+    for key, value in decl.attributes:
+        if key in SPECIAL_ATTRIBUTES or key in CONDITION_ATTRIBUTES:
+            continue
+        port = spec.port(key)
+        if port is None:
+            known = [p.name for p in spec.ports]
+            listing = f"its ports are {', '.join(known)}" if known else f"{spec.name} has no ports"
+            hint = did_you_mean(key, known + sorted(CONDITION_ATTRIBUTES | SPECIAL_ATTRIBUTES))
+            raise decl.error(f"unknown attribute '{key}' for {spec.name} ({listing}){hint}")
+        try:
+            ports[key] = PortValue.from_text(port, value)
+        except PortValueError as exc:
+            raise decl.error(f"{spec.name}: {exc}") from None
+    for port in spec.ports:
+        if port.name in ports:
+            continue
+        if port.required:
+            raise decl.error(f"{spec.name} needs the port '{port.name}' ({port.description or port.type.__name__})")
+        ports[port.name] = PortValue.from_default(port)
+    name = decl.name if decl.name is not None else spec.name
+    return ResolvedNode(spec, name, ports, parse_conditions(decl))
+
+
+def resolve_subtree(decl: NodeDecl, document: Document, spec: NodeSpec) -> ResolvedNode:
+    """Check a ``<SubTree>`` reference: the tree exists, remapped ports agree with its model."""
+    subtree_id = decl.subtree_id or ""
+    if subtree_id not in document.trees:
+        hint = did_you_mean(subtree_id, list(document.trees))
+        raise decl.error(f"<SubTree> refers to an unknown BehaviorTree '{subtree_id}'{hint}")
+    autoremap = False
+    remaps: list[tuple[str, str]] = []
+    for key, value in decl.attributes:
+        if key == "_autoremap":
+            try:
+                autoremap = bool(convert_text(value, PortSpec("autoremap", PortDirection.INPUT, bool)))
+            except PortValueError:
+                raise decl.error(f"_autoremap must be true or false, got {value!r}") from None
+        elif key in SPECIAL_ATTRIBUTES or key in CONDITION_ATTRIBUTES:
+            continue
+        elif key.startswith("_") or not key[:1].isalpha():
+            raise decl.error(f"unknown attribute '{key}' for SubTree")
+        else:
+            remaps.append((key, value))
+    model = next((m for m in document.models if m.kind == "SubTree" and m.node_id == subtree_id), None)
+    if model is not None:
+        known = {p.name: p for p in model.ports}
+        for key, _ in remaps:
+            if key not in known:
+                raise decl.error(
+                    f"SubTree {subtree_id} has no port '{key}' in its TreeNodesModel{did_you_mean(key, list(known))}"
+                )
+        given = {k for k, _ in remaps}
+        for port in model.ports:
+            if port.name in given or autoremap:
+                continue
+            if port.default is None:
+                raise decl.error(f"SubTree {subtree_id} needs the port '{port.name}' (its TreeNodesModel says so)")
+            remaps.append((port.name, port.default))
+    name = decl.name if decl.name is not None else subtree_id
+    return ResolvedNode(spec, name, {}, parse_conditions(decl), tuple(remaps), autoremap)
+
+
+def check_models(document: Document, registry: NodeRegistry) -> None:
+    """TreeNodesModel entries of registered nodes must agree with the registry."""
+    for model in document.models:
+        if model.kind == "SubTree":
+            continue
+        spec = registry.get(model.node_id)
+        if spec is None:
+            continue  # Groot2 describes nodes this tree may not use; an unknown node in a tree is caught there
+        _check_model(model, spec)
+
+
+def _check_model(model: ModelDecl, spec: NodeSpec) -> None:
+    def error(problem: str, line: int) -> TreeFileError:
+        return TreeFileError(model.source, f"TreeNodesModel: {problem}", where=line or model.line or None)
+
+    if spec.kind.value != model.kind:
+        raise error(f"{spec.name} is registered as a {spec.kind.value}, the model says {model.kind}", model.line)
+    for mport in model.ports:
+        port = spec.port(mport.name)
+        if port is None:
+            known = ", ".join(p.name for p in spec.ports) or "none"
+            raise error(f"{spec.name} has no port '{mport.name}' (its ports: {known})", mport.line)
+        if port.direction.value != mport.direction:
+            raise error(
+                f"port '{mport.name}' of {spec.name} is {port.direction.value}, the model says {mport.direction}",
+                mport.line,
+            )
+        wanted = _MODEL_TYPES.get((mport.type_name or "").strip())
+        if wanted is not None and port.type is not object and wanted is not port.type:
+            raise error(
+                f"port '{mport.name}' of {spec.name} has type {port.type.__name__}, the model says {mport.type_name}",
+                mport.line,
+            )
