@@ -151,6 +151,7 @@ def _linear_records(
     """Feed every readable record to ``on_record``; stop quietly where the data ends or breaks."""
     f.seek(0)
     reader = StreamReader(f, emit_chunks=True, record_size_limit=size)
+    footer_seen = False
     try:
         for record in reader.records:
             if isinstance(record, Header):
@@ -165,9 +166,10 @@ def _linear_records(
                 for inner in breakup_chunk(record, validate_crc=True):
                     on_record(inner)
             elif isinstance(record, Footer):
-                scan.complete = True
+                footer_seen = True  # complete only once the closing magic has been read too
             else:
                 on_record(record)
+        scan.complete = footer_seen
     except Exception as exc:  # the end of a crashed or cut file shows up as any of many parse errors
         scan.stop_reason = f"{type(exc).__name__}: {exc}"
         log.debug("linear read stopped: %s", scan.stop_reason)

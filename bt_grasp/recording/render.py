@@ -120,11 +120,11 @@ def tree_render(tree: dict[str, Any], title: str) -> Tree:
     return root
 
 
-def mapping_table(title: str, values: dict[str, Any]) -> Table:
+def mapping_table(title: str, values: dict[str, Any], sort: bool = True) -> Table:
     table = Table(title=title, title_justify="left", box=None, pad_edge=False, show_header=False)
     table.add_column(style="bold")
     table.add_column()
-    for key in sorted(values):
+    for key in sorted(values) if sort else values:
         table.add_row(Text(key), Text(_value(values[key])))
     if not values:
         table.add_row(Text("(empty)", style="dim"), Text(""))
@@ -145,7 +145,7 @@ def robot_table(robot: dict[str, Any] | None) -> Table:
     if "tcp_xyz_m" in robot:
         rows["tcp xyz (m)"] = " ".join(f"{v:+.4f}" for v in robot["tcp_xyz_m"])
         rows["tcp quat xyzw"] = " ".join(f"{v:+.4f}" for v in robot["tcp_quat_xyzw"])
-    return mapping_table("arm", rows)
+    return mapping_table("arm", rows, sort=False)
 
 
 def failures_table(reports: Sequence[FailureReport]) -> RenderableType:

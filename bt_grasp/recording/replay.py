@@ -114,7 +114,7 @@ def failures(run: RunLog) -> list[FailureReport]:
             continue  # a parent that failed because its child did: reported with the child
         ancestors = _ancestors(nodes, ch.uid)
         propagated = tuple(_info(run, u).name for u in ancestors if u in same_tick)
-        excluded = {ch.uid, *ancestors}
+        excluded = set(ancestors)  # parents going RUNNING again are not news; the failed leaf re-running is
         recovery = tuple(
             later for later in changes[index + 1:]
             if later.new in ("RUNNING", "SUCCESS") and later.uid not in excluded
