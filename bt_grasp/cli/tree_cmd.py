@@ -1,0 +1,196 @@
+"""`bt-grasp tree ...`: validate, show, convert and dry-run behaviour-tree files.
+
+Every problem with a file or argument prints one line on stderr (``file:line: problem``) and exits 2.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+from pathlib import Path
+from typing import Any
+
+import typer
+
+from bt_grasp.clock import ManualClock
+from bt_grasp.errors import InputError
+from bt_grasp.tree.node import BtStatus
+from bt_grasp.tree.registry import NodeRegistry, builtin_registry
+
+tree_app = typer.Typer(
+    name="tree",
+    help="Validate, show, convert and dry-run BehaviorTree.CPP v4 XML / YAML tree files.",
+    no_args_is_help=True,
+    add_completion=False,
+)
+
+
+def tree_registry() -> NodeRegistry:
+    """The built-in nodes plus the robot leaves, when ``bt_grasp.behaviours`` provides ``register(registry)``."""
+    registry = builtin_registry()
+    try:
+        import bt_grasp.behaviours as behaviours
+    except ImportError:  # pragma: no cover - the package always exists
+        return registry
+    register = getattr(behaviours, "register", None)
+    if callable(register):
+        register(registry)
+    return registry
+
+
+def _fail(exc: InputError) -> typer.Exit:
+    typer.echo(exc.message, err=True)
+    return typer.Exit(exc.exit_code)
+
+
+def _quiet_library_logs() -> None:
+    logging.getLogger("bt_grasp.tree").setLevel(logging.ERROR)
+
+
+@tree_app.command("validate")
+def validate_cmd(file: Path = typer.Argument(..., help="XML or YAML tree file.")) -> None:
+    """Check a tree file completely (nodes, ports, scripts, includes, subtrees) without running it."""
+    from bt_grasp.tree.loader import load_tree
+
+    _quiet_library_logs()
+    try:
+        tree = load_tree(file, tree_registry())
+    except InputError as exc:
+        raise _fail(exc) from None
+    count = sum(1 for _ in tree.nodes())
+    typer.echo(f"{file}: OK ({count} nodes, main tree {tree.main_tree})")
+
+
+@tree_app.command("show")
+def show_cmd(
+    file: Path = typer.Argument(..., help="XML or YAML tree file."),
+    fmt: str = typer.Option("text", "--format", "-f", help="text, dot, png or svg."),
+    out: Path | None = typer.Option(None, "--out", "-o", help="Write here instead of the terminal."),
+) -> None:
+    """Draw the expanded tree (subtrees inlined) as text, Graphviz dot, png or svg."""
+    from rich.console import Console
+
+    from bt_grasp.tree import render
+    from bt_grasp.tree.loader import load_tree
+
+    _quiet_library_logs()
+    try:
+        if fmt not in ("text", "dot", "png", "svg"):
+            raise InputError("--format", f"unknown format '{fmt}'; use text, dot, png or svg")
+        if fmt in ("png", "svg") and out is None:
+            raise InputError("--out", f"--format {fmt} needs --out FILE")
+        tree = load_tree(file, tree_registry())
+        if fmt == "text":
+            if out is None:
+                Console().print(render.rich_tree(tree.root))
+            else:
+                with out.open("w", encoding="utf-8") as handle:
+                    Console(file=handle, width=120, color_system=None).print(render.rich_tree(tree.root))
+            return
+        dot_text = render.to_dot(tree.root, tree.main_tree)
+        if fmt == "dot":
+            if out is None:
+                typer.echo(dot_text, nl=False)
+            else:
+                out.write_text(dot_text, encoding="utf-8")
+            return
+        assert out is not None
+        render.render_image(dot_text, fmt, out)
+        typer.echo(f"wrote {out}")
+    except InputError as exc:
+        raise _fail(exc) from None
+
+
+@tree_app.command("convert")
+def convert_cmd(
+    source: Path = typer.Argument(..., help="Input tree file (.xml, .yaml, .yml)."),
+    target: Path = typer.Argument(..., help="Output file; its extension chooses the format."),
+) -> None:
+    """Convert between BT.CPP v4 XML and the YAML twin format."""
+    from bt_grasp.tree.convert import convert_file, format_of
+
+    _quiet_library_logs()
+    try:
+        format_of(target)
+        convert_file(source, target)
+    except InputError as exc:
+        raise _fail(exc) from None
+    typer.echo(f"wrote {target}")
+
+
+def _parse_substitutions(values: list[str]) -> dict[str, str]:
+    rules: dict[str, str] = {}
+    for value in values:
+        node, sep, replacement = value.partition("=")
+        if not sep or not node.strip() or not replacement.strip():
+            raise InputError("--substitute", f"'{value}' is not NODE=REPLACEMENT (e.g. Perceive=AlwaysSuccess)")
+        rules[node.strip()] = replacement.strip()
+    return rules
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, bool | int | str) or value is None:
+        return value
+    if isinstance(value, float):
+        return value if math.isfinite(value) else str(value)
+    if isinstance(value, list | tuple):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    return repr(value)
+
+
+@tree_app.command("run")
+def run_cmd(
+    file: Path = typer.Argument(..., help="XML or YAML tree file."),
+    dry: bool = typer.Option(False, "--dry", help="Run without robot or simulator (required for now)."),
+    max_ticks: int = typer.Option(1000, "--max-ticks", min=1, help="Stop after this many ticks."),
+    substitute: list[str] = typer.Option(
+        [], "--substitute", "-s", help="NODE=REPLACEMENT, e.g. Perceive=AlwaysSuccess or Approach=Running:3."
+    ),
+    tick_hz: float = typer.Option(100.0, "--tick-hz", help="Simulated ticks per second."),
+    as_json: bool = typer.Option(False, "--json", help="Print one JSON object: status, ticks, blackboard."),
+) -> None:
+    """Tick a tree with a simulated clock until it finishes; exit 0 on SUCCESS, 1 otherwise."""
+    from bt_grasp.tree.loader import load_tree
+
+    _quiet_library_logs()
+    try:
+        if not dry:
+            raise InputError("--dry", "only dry runs exist here; `bt-grasp run` runs trees with the robot")
+        if not tick_hz > 0:
+            raise InputError("--tick-hz", f"must be positive, got {tick_hz}")
+        clock = ManualClock()
+        tree = load_tree(file, tree_registry(), substitutions=_parse_substitutions(substitute), clock=clock)
+        robots = tree.robot_nodes()
+        if robots:
+            node = robots[0]
+            raise InputError(
+                file,
+                f"{node.bt_type} '{node.bt_path}' needs the robot; run it with "
+                f"--substitute {node.bt_type}=AlwaysSuccess (or Running:N, Failure:REASON)",
+            )
+        status = BtStatus.IDLE
+        dt_s = 1.0 / tick_hz
+        for _ in range(max_ticks):
+            status = tree.tick()
+            if status in (BtStatus.SUCCESS, BtStatus.FAILURE, BtStatus.SKIPPED):
+                break
+            clock.advance_s(dt_s)
+    except InputError as exc:
+        raise _fail(exc) from None
+    blackboard = {k: _jsonable(v) for k, v in tree.blackboard_values().items()}
+    if as_json:
+        typer.echo(json.dumps({"status": status.value, "ticks": tree.ticks, "blackboard": blackboard}))
+    else:
+        finished = "" if status.completed else f" (not finished after {tree.ticks} ticks)"
+        typer.echo(f"{status.value} after {tree.ticks} ticks{finished}")
+        for key, value in blackboard.items():
+            typer.echo(f"  {key} = {value!r}")
+    raise typer.Exit(0 if status is BtStatus.SUCCESS else 1)
+
+
+def register(app: typer.Typer) -> None:
+    """Add the ``tree`` command group to ``app``."""
+    app.add_typer(tree_app, name="tree")

@@ -1,0 +1,160 @@
+"""Ticking a loaded tree in simulated time: tick, record, step the world one control period, repeat.
+
+The runner owns no robot or simulator: it receives a :class:`bt_grasp.interfaces.Stepper` (the world),
+an optional recorder and a callable that reads the arm state. One tick per control period; the physics
+steps between ticks; timeouts inside the tree read the same simulated clock.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections import Counter
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+from bt_grasp.interfaces import Stepper
+from bt_grasp.tree.introspect import node_records
+from bt_grasp.tree.loader import LoadedTree
+from bt_grasp.tree.node import BtNode, BtStatus
+
+log = logging.getLogger(__name__)
+
+
+class TickRecorder(Protocol):
+    def write_tick(
+        self,
+        tick: int,
+        stamp_ns: int,
+        nodes: list[dict[str, Any]],
+        blackboard: Mapping[str, Any],
+        robot: Mapping[str, Any] | None = None,
+    ) -> None: ...
+
+    def write_event(self, stamp_ns: int, kind: str, payload: Mapping[str, Any]) -> None: ...
+
+    def flush_tick(self) -> None: ...
+
+
+@dataclass
+class FailureEvent:
+    tick: int
+    stamp_ns: int
+    leaf: str
+    path: str
+    reason: str | None
+    message: str
+
+
+@dataclass
+class RunOutcome:
+    """How a run ended, as the tree saw it (the physics judge is separate)."""
+
+    status: str  # SUCCESS, FAILURE, or RUNNING when max_ticks ran out
+    ticks: int
+    sim_time_s: float
+    wall_time_s: float
+    failures: list[FailureEvent] = field(default_factory=list)
+    attempts: dict[str, int] = field(default_factory=dict)  # leaf path -> attempts started
+
+    @property
+    def retries(self) -> dict[str, int]:
+        """Leaf name -> attempts beyond the first."""
+        out: dict[str, int] = {}
+        for path, n in self.attempts.items():
+            if n > 1:
+                name = path.rsplit("/", 1)[-1]
+                out[name] = out.get(name, 0) + n - 1
+        return out
+
+    @property
+    def last_failure(self) -> FailureEvent | None:
+        return self.failures[-1] if self.failures else None
+
+
+class TreeRunner:
+    """Runs one tree to completion (or ``max_ticks``) against a stepper."""
+
+    def __init__(
+        self,
+        tree: LoadedTree,
+        stepper: Stepper,
+        *,
+        steps_per_tick: int,
+        recorder: TickRecorder | None = None,
+        robot_state: Callable[[], Mapping[str, Any]] | None = None,
+        on_tick: Callable[[int, LoadedTree], None] | None = None,
+    ) -> None:
+        self.tree = tree
+        self.stepper = stepper
+        self.steps_per_tick = steps_per_tick
+        self.recorder = recorder
+        self.robot_state = robot_state
+        self.on_tick = on_tick
+        self._nodes: list[BtNode] = list(tree.nodes())
+        self._counts: dict[int, int] = {}
+        _instrument(self._nodes, self._counts)
+
+    def run(self, max_ticks: int) -> RunOutcome:
+        start_ns = self.stepper.now_ns()
+        wall0 = time.perf_counter()
+        attempts: Counter[str] = Counter()
+        failures: list[FailureEvent] = []
+        previous: dict[int, str] = {n.bt_uid: "IDLE" for n in self._nodes}
+        status = BtStatus.RUNNING
+        tick = 0
+        while tick < max_ticks:
+            tick += 1
+            before = dict(self._counts)
+            status = self.tree.tick()
+            stamp = self.stepper.now_ns()
+            records = node_records(self.tree.root)
+            for rec in records:
+                uid = rec["uid"]
+                ticked = self._counts.get(uid, 0) != before.get(uid, 0)
+                rec["ticked"] = ticked
+                rec["status"] = rec.pop("bt_status")
+                rec["feedback"] = rec.pop("feedback_message")
+                if ticked and rec["kind"] in ("Action", "Condition") and previous[uid] != "RUNNING":
+                    attempts[rec["path"]] += 1
+                if ticked and rec["status"] == "FAILURE" and rec["kind"] in ("Action", "Condition"):
+                    event = FailureEvent(tick, stamp, rec["name"], rec["path"], rec["failure_reason"], rec["feedback"])
+                    if rec["failure_reason"] is not None:
+                        failures.append(event)
+                    if self.recorder is not None:
+                        self.recorder.write_event(stamp, "failure", event.__dict__)
+                previous[uid] = rec["status"]
+            if self.recorder is not None:
+                robot = dict(self.robot_state()) if self.robot_state is not None else None
+                self.recorder.write_tick(tick, stamp, records, self.tree.blackboard_values(), robot)
+                self.recorder.flush_tick()
+            if self.on_tick is not None:
+                self.on_tick(tick, self.tree)
+            if status.completed:
+                break
+            self.stepper.step(self.steps_per_tick)
+        if not status.completed:
+            self.tree.halt()  # cancel motion of RUNNING leaves
+        sim_s = (self.stepper.now_ns() - start_ns) * 1e-9
+        return RunOutcome(
+            status=status.value if status.completed else "RUNNING",
+            ticks=tick,
+            sim_time_s=sim_s,
+            wall_time_s=time.perf_counter() - wall0,
+            failures=failures,
+            attempts=dict(attempts),
+        )
+
+
+def _instrument(nodes: list[BtNode], counts: dict[int, int]) -> None:
+    """Count each node's ticks (BT.CPP ``executeTick`` calls) so the recorder knows what was ticked."""
+    for node in nodes:
+        inner = node.execute_tick
+        uid = node.bt_uid
+
+        def counted(inner: Callable[[], BtStatus] = inner, uid: int = uid) -> BtStatus:
+            counts[uid] = counts.get(uid, 0) + 1
+            return inner()
+
+        node.execute_tick = counted  # type: ignore[method-assign]
