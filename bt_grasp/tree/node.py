@@ -146,7 +146,7 @@ class BtNode(py_trees.behaviour.Behaviour):
 
     def reset_status(self) -> None:
         """BT.CPP ``resetStatus``: back to IDLE without halting (a SKIPPED marker survives)."""
-        if self.bt_state is not BtStatus.IDLE:
+        if self.bt_state is not BtStatus.IDLE and self.bt_status_extra != "SKIPPED":
             self.bt_status_extra = "IDLE"
         self.bt_state = BtStatus.IDLE
         self.status = Status.INVALID

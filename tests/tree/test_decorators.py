@@ -1,0 +1,167 @@
+"""Decorators and built-in leaves, tick by tick, as BT.CPP 4.x's decorators/*.h behave."""
+
+from __future__ import annotations
+
+import pytest
+
+from .harness import F, Harness, R, S
+
+
+@pytest.mark.parametrize(
+    ("decorator", "child", "expected"),
+    [
+        ("Inverter", S, F),
+        ("Inverter", F, S),
+        ("Inverter", R, R),
+        ("ForceSuccess", F, S),
+        ("ForceSuccess", R, R),
+        ("ForceFailure", S, F),
+        ("ForceFailure", R, R),
+    ],
+)
+def test_status_rewriting_decorators(decorator: str, child: str, expected: str) -> None:
+    h = Harness(f'<{decorator}><Stub name="A"/></{decorator}>')
+    h["A"].returns(child)
+    assert h.tick() == expected
+
+
+def test_retry_loops_within_one_tick_while_child_fails_synchronously() -> None:
+    h = Harness('<RetryUntilSuccessful num_attempts="3"><Stub name="A"/></RetryUntilSuccessful>')
+    h["A"].returns(F, F, S)
+    # tick 1: A FAILURE, FAILURE, SUCCESS, all in the same tick -> SUCCESS
+    assert h.tick() == S and h["A"].ticks == 3 and h["A"].initialised == 3
+
+
+def test_retry_gives_up_after_num_attempts_and_resumes_running_child() -> None:
+    h = Harness('<RetryUntilSuccessful num_attempts="2"><Stub name="A"/></RetryUntilSuccessful>')
+    h["A"].returns(F, F)
+    # tick 1: two synchronous failures -> FAILURE
+    assert h.tick() == F and h["A"].ticks == 2
+    h["A"].returns(F, R, S)
+    # tick 2: FAILURE then RUNNING -> RUNNING; tick 3: SUCCESS (the count survived the RUNNING tick)
+    assert h.tick() == R and h.tick() == S
+
+
+def test_retry_forever_does_not_hang_a_tick() -> None:
+    h = Harness('<RetryUntilSuccessful num_attempts="-1"><AlwaysFailure/></RetryUntilSuccessful>')
+    assert h.tick() == R  # gives the tick back after SYNC_LOOP_LIMIT synchronous failures
+
+
+def test_repeat_loops_within_one_tick_and_fails_on_child_failure() -> None:
+    h = Harness('<Repeat num_cycles="3"><Stub name="A"/></Repeat>')
+    # tick 1: A SUCCESS x3 in one tick -> SUCCESS
+    assert h.tick() == S and h["A"].ticks == 3
+    h["A"].returns(S, R, F)
+    # tick 2: SUCCESS, RUNNING -> RUNNING; tick 3: FAILURE -> FAILURE
+    assert h.tick() == R and h.tick() == F
+
+
+def test_keep_running_until_failure_returns_running_after_success() -> None:
+    h = Harness('<KeepRunningUntilFailure><Stub name="A"/></KeepRunningUntilFailure>')
+    h["A"].returns(S, S, F)
+    # tick 1: SUCCESS -> RUNNING; tick 2: SUCCESS -> RUNNING; tick 3: FAILURE -> FAILURE
+    assert [h.tick(), h.tick(), h.tick()] == [R, R, F]
+    assert h["A"].initialised == 3
+
+
+def test_timeout_halts_running_child_after_simulated_time() -> None:
+    h = Harness('<Timeout msec="100"><Stub name="Move"/></Timeout>')
+    h["Move"].returns(R)
+    # t=0: RUNNING; t=60ms: RUNNING; t=120ms: 100ms passed -> Move halted -> FAILURE
+    assert h.tick() == R
+    h.clock.advance_s(0.06)
+    assert h.tick() == R
+    h.clock.advance_s(0.06)
+    assert h.tick() == F
+    assert h["Move"].terminated == ["INVALID"] and h["Move"].ticks == 2
+    # the next activation starts a new timer
+    assert h.tick() == R
+
+
+def test_timeout_passes_child_result_before_deadline() -> None:
+    h = Harness('<Timeout msec="100"><Stub name="A"/></Timeout>')
+    h["A"].returns(R, S)
+    assert h.tick() == R
+    h.clock.advance_s(0.05)
+    assert h.tick() == S
+
+
+def test_delay_waits_then_ticks_child() -> None:
+    h = Harness('<Delay delay_msec="50"><Stub name="A"/></Delay>')
+    # t=0: RUNNING, child untouched; t=30ms: RUNNING; t=60ms: child ticked -> SUCCESS
+    assert h.tick() == R and h["A"].ticks == 0
+    h.clock.advance_s(0.03)
+    assert h.tick() == R and h["A"].ticks == 0
+    h.clock.advance_s(0.03)
+    assert h.tick() == S and h["A"].ticks == 1
+
+
+def test_sleep_reads_simulated_clock() -> None:
+    h = Harness('<Sleep msec="20"/>')
+    # t=0 RUNNING, t=10ms RUNNING, t=20ms SUCCESS
+    statuses = []
+    for _ in range(3):
+        statuses.append(h.tick())
+        h.clock.advance_s(0.01)
+    assert statuses == [R, R, S]
+
+
+def test_run_once_skips_afterwards_or_repeats_status() -> None:
+    h = Harness('<Sequence><RunOnce><Stub name="A"/></RunOnce><Stub name="B"/></Sequence>')
+    assert h.tick() == S and h.tick() == S
+    # the second time RunOnce is SKIPPED: A is not ticked again
+    assert h["A"].ticks == 1 and h["B"].ticks == 2
+    h2 = Harness('<RunOnce then_skip="false"><AlwaysFailure/></RunOnce>')
+    assert [h2.tick(), h2.tick()] == [F, F]
+
+
+def test_precondition_if_else() -> None:
+    xml = """<Sequence><Script code="A:=1; B:=1; C:=3"/>
+             <Precondition if="A==B" else="FAILURE"><Stub name="X"/></Precondition>
+             <Precondition if="A==C" else="SUCCESS"><Stub name="Y"/></Precondition></Sequence>"""
+    h = Harness(xml)
+    assert h.tick() == S and h["X"].ticks == 1 and h["Y"].ticks == 0
+
+
+def test_precondition_is_checked_only_before_the_child_runs() -> None:
+    h = Harness('<Sequence><Script code="go := true"/><Precondition if="go"><Stub name="X"/></Precondition></Sequence>')
+    h["X"].returns(R, S)
+    assert h.tick() == R
+    h.tree.root_blackboard.set("go", False)
+    # the child is already running: the condition is not re-evaluated
+    assert h.tick() == S
+
+
+def test_set_blackboard_and_scripts() -> None:
+    xml = """<Sequence>
+      <SetBlackboard value="42" output_key="answer"/>
+      <SetBlackboard value="{answer}" output_key="copy"/>
+      <Script code="msg := 'answer=' .. answer"/>
+      <ScriptCondition code="answer == 42 &amp;&amp; copy == '42'"/>
+    </Sequence>"""
+    h = Harness(xml)
+    assert h.tick() == S
+    # like BT.CPP, SetBlackboard stores the literal text; scripts convert it where a number is needed
+    assert h.bb == {"answer": "42", "copy": "42", "msg": "answer=42"}
+
+
+def test_script_condition_false_fails() -> None:
+    h = Harness('<ScriptCondition code="1 &gt; 2"/>')
+    assert h.tick() == F
+
+
+def test_failure_is_reads_the_reason_a_leaf_reported() -> None:
+    xml = """<Fallback>
+      <Stub name="Perceive"/>
+      <Sequence><FailureIs reason="NO_DETECTION"/><Script code="recovered := true"/></Sequence>
+    </Fallback>"""
+    h = Harness(xml)
+
+    def failing_update() -> object:
+        return h.node("Perceive").fail("NO_DETECTION", "no object in view")  # type: ignore[attr-defined]
+
+    h.node("Perceive").update = failing_update  # type: ignore[method-assign]
+    assert h.tick() == S
+    assert h.bb["recovered"] is True
+    assert h.bb["failure_reason"] == "NO_DETECTION" and h.bb["failed_leaf"] == "Perceive"
+    assert h.node("Perceive").failure_reason == "NO_DETECTION"  # type: ignore[attr-defined]
