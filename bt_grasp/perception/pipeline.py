@@ -1,0 +1,219 @@
+"""``perceive``: one RGB-D frame + the camera's pose in the robot base frame -> objects on the table.
+
+Stages (each timed into ``PerceptionResult.timings_ms``): back-projection, transform to the base frame and
+region-of-interest crop, voxel downsampling, statistical outlier removal, RANSAC table plane, DBSCAN
+clustering of what stands on the plane, per-object geometry from the full-resolution points, and colour
+evidence (HSV mask + morphology + minimum-area rectangles) matched to the clusters through the pixels their
+points came from. Nothing here reads simulator ground truth: the only pose used is ``T_base_camera``, from
+the hand-eye calibration (for an eye-in-hand camera, the caller composes it with the tool pose at capture).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+import numpy as np
+from numpy.typing import NDArray
+
+from bt_grasp.geometry import Mat4
+from bt_grasp.interfaces import RGBDFrame
+from bt_grasp.perception import cloud as pc
+from bt_grasp.perception.color import blobs, classify, color_mask, pixel_matches, to_hsv
+from bt_grasp.perception.config import PerceptionConfig
+from bt_grasp.perception.results import Detection, PerceptionResult, PerceptionStatus
+from bt_grasp.perception.segment import (
+    Plane,
+    assign_full_resolution,
+    cluster,
+    fit_table_plane,
+    object_geometry,
+)
+
+log = logging.getLogger(__name__)
+
+#: points on an object at which the detection confidence saturates
+_FULL_CONFIDENCE_POINTS = 150
+
+
+class _Timer:
+    def __init__(self) -> None:
+        self.ms: dict[str, float] = {}
+        self._start = time.perf_counter()
+
+    @contextmanager
+    def stage(self, name: str) -> Iterator[None]:
+        t0 = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.ms[name] = self.ms.get(name, 0.0) + (time.perf_counter() - t0) * 1e3
+
+    def total(self) -> dict[str, float]:
+        out = dict(self.ms)
+        out["total"] = (time.perf_counter() - self._start) * 1e3
+        return out
+
+
+def _status(status: PerceptionStatus, timer: _Timer, message: str, **kw: object) -> PerceptionResult:
+    log.info("perception: %s (%s)", status.value, message)
+    return PerceptionResult(status=status, timings_ms=timer.total(), message=message, **kw)  # type: ignore[arg-type]
+
+
+def _check_inputs(frame: RGBDFrame | None, T_base_camera: Mat4) -> str | None:
+    if frame is None:
+        return "no frame arrived from the camera"
+    depth = np.asarray(frame.depth_m)
+    if depth.ndim != 2 or depth.size == 0:
+        return f"the depth image is empty (shape {depth.shape})"
+    T = np.asarray(T_base_camera, dtype=float)
+    if T.shape != (4, 4) or not np.all(np.isfinite(T)):
+        raise ValueError(f"T_base_camera must be a finite 4x4 transform, got shape {T.shape}")
+    return None
+
+
+def perceive(
+    frame: RGBDFrame | None,
+    T_base_camera: Mat4,
+    config: PerceptionConfig | None = None,
+    color: str | None = None,
+    *,
+    size_hint_m: tuple[float, float, float] | None = None,
+) -> PerceptionResult:
+    """Find the objects standing on the table in one frame; ranked for the request (colour or size hint).
+
+    ``T_base_camera`` maps points from the camera's optical frame (OpenCV axes) into the robot base frame.
+    ``color`` names a colour of ``config.color.ranges``; None ranks by size similarity to ``size_hint_m``
+    (length, width, height) when given, else by graspable size (narrow side) and point support.
+    Expected failures are statuses with a message, never exceptions; an unknown colour name is a
+    ValueError (a programming or configuration error).
+    """
+    config = config or PerceptionConfig()
+    timer = _Timer()
+    if color is not None and color not in config.color.ranges:
+        raise ValueError(f"unknown colour {color!r}; known: {', '.join(config.color.ranges)}")
+    problem = _check_inputs(frame, T_base_camera)
+    if problem is not None or frame is None:
+        return _status(PerceptionStatus.NO_DEPTH, timer, problem or "no frame")
+    depth = np.asarray(frame.depth_m, dtype=np.float32)
+    T_base_camera = np.asarray(T_base_camera, dtype=float)
+    seg = config.segmentation
+    with timer.stage("cloud"):
+        valid = pc.valid_depth_mask(depth, config.cloud)
+        n_valid = int(valid.sum())
+        if n_valid == 0:
+            return _status(PerceptionStatus.NO_DEPTH, timer, "no valid depth reading in the frame")
+        window = pc.roi_pixel_window(config.roi, T_base_camera, frame.intrinsics)
+        if window is not None:
+            u0, v0, u1, v1 = window
+            in_window = np.zeros_like(valid)
+            in_window[v0:v1, u0:u1] = True
+            valid &= in_window
+        cam = pc.depth_to_cloud(depth, frame.intrinsics, valid)
+    with timer.stage("roi"):
+        roi = pc.crop_roi(pc.to_base(cam, T_base_camera), config.roi)
+    if len(roi) < 100:
+        return _status(PerceptionStatus.NO_POINTS, timer,
+                       f"{len(roi)} of {n_valid} valid points lie in the region of interest")
+    with timer.stage("voxel"):
+        sparse = pc.downsample(roi.points, config.cloud.voxel_m)
+    with timer.stage("plane"):
+        plane = fit_table_plane(sparse, seg)
+    if plane is None:
+        return _status(PerceptionStatus.NO_POINTS, timer, "no near-horizontal table plane in the region of interest")
+    with timer.stage("outliers"):
+        sparse_pts = np.asarray(sparse.points)
+        off_plane = pc.remove_outliers(pc.to_o3d(sparse_pts[plane.height(sparse_pts) > seg.min_height_m]),
+                                       config.cloud)
+        off_plane_pts = np.asarray(off_plane.points)
+    with timer.stage("cluster"):
+        clusters = cluster(off_plane_pts, seg)
+        labels = np.full(len(off_plane_pts), -1, dtype=np.intp)
+        for k, idx in enumerate(clusters):
+            labels[idx] = k
+        keep = labels >= 0
+        full_clusters = assign_full_resolution(
+            roi, plane.height(roi.points), off_plane_pts[keep], labels[keep], 1.5 * config.cloud.voxel_m,
+            seg.min_height_m,
+        )
+    if not full_clusters:
+        return _status(PerceptionStatus.NO_OBJECTS, timer, "the table is empty (no cluster above the plane)",
+                       table_plane_base=plane.as_tuple())
+    hsv = None
+    with timer.stage("color"):
+        hsv = to_hsv(frame.color)
+        mask = None
+        if color is not None:
+            mask = color_mask(hsv, config.color.ranges[color], config.color)
+    with timer.stage("geometry"):
+        detections = [
+            d for d in (_describe(c, plane, hsv, mask, config) for c in full_clusters) if d is not None
+        ]
+    if not detections:
+        return _status(PerceptionStatus.NO_OBJECTS, timer, "no cluster large enough to be an object",
+                       table_plane_base=plane.as_tuple())
+    ranked = _rank(detections, color, size_hint_m, config)
+    n_colour_blobs = len(blobs(mask, config.color)) if mask is not None else 0
+    if color is not None and not ranked:
+        return _status(
+            PerceptionStatus.NO_MATCH, timer,
+            f"{len(detections)} object(s) on the table, none {color} ({n_colour_blobs} {color} blob(s) in the image)",
+            table_plane_base=plane.as_tuple(), others=tuple(detections),
+        )
+    result = PerceptionResult(
+        status=PerceptionStatus.OK,
+        detections=tuple(ranked),
+        timings_ms=timer.total(),
+        message=f"{len(detections)} object(s); best: {ranked[0].label} at "
+        + ", ".join(f"{v:.3f}" for v in ranked[0].centroid_base_m),
+        table_plane_base=plane.as_tuple(),
+        others=tuple(detections),
+    )
+    log.debug("perception: %s in %.1f ms", result.message, result.timings_ms["total"])
+    return result
+
+
+def _describe(
+    obj: pc.PixelCloud, plane: Plane, hsv: NDArray[np.uint8], mask: NDArray[np.uint8] | None,
+    config: PerceptionConfig,
+) -> Detection | None:
+    if len(obj) < config.segmentation.min_cluster_points:
+        return None
+    geo = object_geometry(obj.points, plane, config.segmentation)
+    u, v = obj.pixels[:, 0], obj.pixels[:, 1]
+    label, label_fraction = classify(hsv[v, u], config.color)
+    match = float((mask[v, u] > 0).mean()) if mask is not None else label_fraction
+    support = min(1.0, len(obj) / _FULL_CONFIDENCE_POINTS)
+    return Detection(
+        label=label or "object",
+        pixel_box=(int(u.min()), int(v.min()), int(u.max()), int(v.max())),
+        centroid_base_m=tuple(float(x) for x in geo.centre_base_m),  # type: ignore[arg-type]
+        size_m=(geo.length_m, geo.width_m, geo.height_m),
+        yaw_rad=geo.yaw_rad,
+        point_count=len(obj),
+        confidence=support * (0.5 + 0.5 * match),
+        color_fraction=match if mask is not None else 0.0,
+        principal_axes_base=tuple(tuple(float(x) for x in row) for row in geo.principal_axes),  # type: ignore[misc]
+        footprint_base_m=tuple((float(x), float(y)) for x, y in geo.footprint_base_m),
+        shape="round" if geo.round else "box",
+    )
+
+
+def _rank(
+    detections: list[Detection], color: str | None, size_hint_m: tuple[float, float, float] | None,
+    config: PerceptionConfig,
+) -> list[Detection]:
+    if color is not None:
+        matched = [d for d in detections if d.color_fraction >= config.color.min_match_fraction]
+        return sorted(matched, key=lambda d: (-d.color_fraction * d.confidence, d.centroid_base_m))
+    if size_hint_m is not None:
+        hint = np.asarray(size_hint_m, dtype=float)
+        return sorted(detections, key=lambda d: float(np.abs(np.asarray(d.size_m) - hint).sum()))
+    return sorted(detections, key=lambda d: (-d.confidence, d.size_m[1]))
+
+
+def pixel_color_fraction(hsv_values: NDArray[np.uint8], config: PerceptionConfig, color: str) -> float:
+    """Fraction of the given HSV pixels inside a named colour's boxes (for diagnostics and tests)."""
+    return float(pixel_matches(hsv_values, config.color.ranges[color]).mean()) if len(hsv_values) else 0.0
