@@ -20,6 +20,7 @@ from mcap.stream_reader import MAGIC_SIZE, StreamReader, breakup_chunk
 from mcap.summary import Summary
 
 from bt_grasp.errors import LogFileError
+from bt_grasp.recording import chunks
 
 log = logging.getLogger(__name__)
 
@@ -74,7 +75,7 @@ def check_path(path: Path) -> int:
     return size
 
 
-def _summary(f: io.BufferedReader, size: int) -> Summary | None:
+def _summary(f: io.BufferedReader, size: int) -> tuple[SeekingReader, Summary] | None:
     """The summary of a finished file, or None when the file has no valid footer or no chunk index."""
     if size < 2 * MAGIC_SIZE + 30:
         return None
@@ -83,13 +84,14 @@ def _summary(f: io.BufferedReader, size: int) -> Summary | None:
         return None
     try:
         f.seek(0)
-        summary = SeekingReader(f).get_summary()
+        reader = SeekingReader(f)
+        summary = reader.get_summary()
     except Exception as exc:  # a footer that does not parse: treat the file as unfinished
         log.debug("no usable summary: %s", exc)
         return None
     if summary is None or not summary.chunk_indexes:
         return None
-    return summary
+    return reader, summary
 
 
 def _schema_name(schemas: dict[int, Schema], channel: Channel) -> str:
@@ -97,10 +99,10 @@ def _schema_name(schemas: dict[int, Schema], channel: Channel) -> str:
     return schema.name if schema is not None else ""
 
 
-def _scan_indexed(f: io.BufferedReader, summary: Summary, wanted: Collection[str] | None) -> Scan:
+def _scan_indexed(
+    f: io.BufferedReader, reader: SeekingReader, summary: Summary, wanted: Collection[str] | None
+) -> Scan:
     scan = Scan(indexed=True, complete=True, header_seen=True)
-    f.seek(0)
-    reader = SeekingReader(f)
     scan.library = reader.get_header().library
     for record in reader.iter_metadata():
         scan.metadata[record.name] = dict(record.metadata)
@@ -109,14 +111,21 @@ def _scan_indexed(f: io.BufferedReader, summary: Summary, wanted: Collection[str
     counts = summary.statistics.channel_message_counts if summary.statistics else {}
     for channel in summary.channels.values():
         scan.topic_counts[channel.topic] = scan.topic_counts.get(channel.topic, 0) + counts.get(channel.id, 0)
-    topics = list(wanted) if wanted is not None else None
-    if topics is None or topics:
-        for schema, channel, message in reader.iter_messages(topics=topics, log_time_order=False):
-            scan.messages.append(RawMessage(
-                channel.topic, schema.name if schema else "", channel.message_encoding,
-                message.log_time, message.publish_time, message.data,
-            ))
+    scan.messages.extend(_indexed_messages(f, summary, wanted))
     return scan
+
+
+def _indexed_messages(
+    f: io.BufferedReader, summary: Summary, wanted: Collection[str] | None
+) -> Iterator[RawMessage]:
+    channels = summary.channels
+    ids = None if wanted is None else {c.id for c in channels.values() if c.topic in wanted}
+    if ids is not None and not ids:
+        return
+    for channel_id, log_time, publish_time, data in chunks.iter_indexed(f, summary, ids):
+        channel = channels[channel_id]
+        yield RawMessage(channel.topic, _schema_name(summary.schemas, channel), channel.message_encoding,
+                         log_time, publish_time, data)
 
 
 def _scan_linear(f: io.BufferedReader, size: int, wanted: Collection[str] | None) -> Scan:
@@ -179,10 +188,10 @@ def scan_file(path: Path, wanted: Collection[str] | None) -> Scan:
     """Metadata, attachments, per-topic counts and the messages of the ``wanted`` topics (all if None)."""
     size = check_path(path)
     with path.open("rb") as f:
-        summary = _summary(f, size)
-        if summary is not None:
+        found = _summary(f, size)
+        if found is not None:
             try:
-                return _scan_indexed(f, summary, wanted)
+                return _scan_indexed(f, *found, wanted)
             except Exception as exc:  # an index that lies: fall back to reading every record
                 log.warning("%s: the index could not be used (%s); reading linearly", path, exc)
         return _scan_linear(f, size, wanted)
@@ -192,12 +201,9 @@ def iter_topic(path: Path, topics: Collection[str], indexed: bool) -> Iterator[R
     """Messages of the given topics in file order, read the same way the log was opened."""
     check_path(path)
     with path.open("rb") as f:
-        if indexed:
-            reader = SeekingReader(f)
-            for schema, channel, message in reader.iter_messages(topics=list(topics), log_time_order=False):
-                yield RawMessage(channel.topic, schema.name if schema else "", channel.message_encoding,
-                                 message.log_time, message.publish_time, message.data)
-            return
         size = path.stat().st_size
-        scan = _scan_linear(f, size, topics)
-    yield from scan.messages
+        found = _summary(f, size) if indexed else None
+        if found is not None:
+            yield from _indexed_messages(f, found[1], topics)
+        else:
+            yield from _scan_linear(f, size, topics).messages

@@ -13,7 +13,7 @@ import logging
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import cv2
 import numpy as np
@@ -29,9 +29,11 @@ log = logging.getLogger(__name__)
 LEAF_KINDS = frozenset({"action", "condition"})
 
 
-@dataclass(frozen=True)
-class NodeUpdate:
-    """A node's state as written for one tick (only nodes ticked or changed that tick are written)."""
+class NodeUpdate(NamedTuple):
+    """A node's state as written for one tick (only nodes ticked or changed that tick are written).
+
+    A NamedTuple, not a dataclass: a long log holds hundreds of thousands and they are built at open.
+    """
 
     uid: int
     status: str
@@ -47,7 +49,6 @@ class TickRecord:
     nodes: tuple[NodeUpdate, ...]
     bb: dict[str, Any]
     bb_removed: tuple[str, ...] = ()
-    robot: dict[str, Any] | None = None
 
 
 @dataclass(frozen=True)
@@ -128,6 +129,7 @@ class RunLog:
     library: str = ""
     stop_reason: str = ""
     _learned: dict[int, NodeInfo] = field(default_factory=dict, repr=False)
+    _robot_raw: dict[int, bytes] = field(default_factory=dict, repr=False)  # stamp_ns -> JSON, decoded lazily
 
     @property
     def ticks_recovered(self) -> int:
@@ -175,13 +177,12 @@ class RunLog:
         return board
 
     def robot_at(self, tick: int) -> dict[str, Any] | None:
-        state = None
-        for record in self.ticks:
-            if record.tick > tick:
-                break
-            if record.robot is not None:
-                state = record.robot
-        return state
+        """The last arm state (/robot/joint_state) written at or before ``tick``."""
+        for record in reversed(self.ticks):
+            if record.tick <= tick and record.stamp_ns in self._robot_raw:
+                state: dict[str, Any] = json.loads(self._robot_raw[record.stamp_ns])
+                return state
+        return None
 
     def iter_messages(self, topic: str) -> Iterator[TopicMessage]:
         """Every message on ``topic``, decoded (JSON -> dict, Foxglove -> protobuf message)."""
@@ -227,7 +228,7 @@ def message_to_jsonable(message: Any) -> Any:
     return out
 
 
-def _tick_record(msg: dict[str, Any], robots: dict[int, dict[str, Any]]) -> TickRecord:
+def _tick_record(msg: dict[str, Any]) -> TickRecord:
     nodes = tuple(
         NodeUpdate(int(n["uid"]), str(n["status"]), str(n.get("feedback") or ""), n.get("failure_reason"),
                    bool(n.get("ticked", False)))
@@ -235,7 +236,7 @@ def _tick_record(msg: dict[str, Any], robots: dict[int, dict[str, Any]]) -> Tick
     )
     tick = int(msg["tick"])
     return TickRecord(tick, int(msg["stamp_ns"]), nodes, dict(msg.get("bb", {})),
-                      tuple(msg.get("bb_removed", [])), robots.get(tick))
+                      tuple(msg.get("bb_removed", [])))
 
 
 def _not_bt_grasp(path: Path, scan: mcap_io.Scan, size: int) -> LogFileError | None:
@@ -257,20 +258,20 @@ def open_log(path: str | Path) -> RunLog:
     if problem is not None:
         raise problem
     by_topic: dict[str, list[tuple[mcap_io.RawMessage, Any]]] = {}
+    robot_raw: dict[int, bytes] = {}
     for raw in scan.messages:
+        if raw.topic == topics.JOINT_STATE:
+            robot_raw[raw.log_time_ns] = raw.data
+            continue
         try:
             by_topic.setdefault(raw.topic, []).append((raw, decode(raw)))
         except Exception as exc:
             where = f"on {raw.topic} at {raw.log_time_ns} ns"
             raise LogFileError(p, f"has an undecodable message {where}") from exc
-    robots: dict[int, dict[str, Any]] = {}
     learned: dict[int, NodeInfo] = {}
-    for _, msg in by_topic.get(topics.JOINT_STATE, []):
-        if msg.get("tick") is not None:
-            robots[int(msg["tick"])] = msg
     ticks = []
     for _, msg in by_topic.get(topics.TICK, []):
-        ticks.append(_tick_record(msg, robots))
+        ticks.append(_tick_record(msg))
         for n in msg.get("nodes", []):
             uid = int(n["uid"])
             if "path" in n and uid not in learned:
@@ -302,4 +303,5 @@ def open_log(path: str | Path) -> RunLog:
         library=scan.library,
         stop_reason=scan.stop_reason,
         _learned=learned,
+        _robot_raw=robot_raw,
     )

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Iterator
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from typing import Any
 
 from bt_grasp.errors import InputError
@@ -193,7 +193,7 @@ def leaf_history(run: RunLog, name: str) -> list[dict[str, Any]]:
     for record in run.ticks:
         for node in record.nodes:
             if node.uid in uids:
-                out.append({"tick": record.tick, "stamp_ns": record.stamp_ns, **asdict(node),
+                out.append({"tick": record.tick, "stamp_ns": record.stamp_ns, **node._asdict(),
                             "name": _info(run, node.uid).name})
     return out
 
