@@ -9,31 +9,9 @@ from pathlib import Path
 
 import cv2
 import pytest
-import typer
-
-from bt_grasp.cli import replay_cmd
-from bt_grasp.errors import BtGraspError
+from recording_helpers import run_cli
 
 BAD_LOGS = Path(__file__).parents[1] / "data" / "bad_logs"
-
-
-def run_cli(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
-    """The replay command on a fresh app, with the error handling of bt_grasp.cli.main."""
-    app = typer.Typer(pretty_exceptions_enable=False)
-    replay_cmd.register(app)
-
-    @app.callback()
-    def _root() -> None:  # keep "replay" a sub-command, as in the real CLI
-        pass
-
-    try:
-        app(args=args, standalone_mode=False)
-        code = 0
-    except BtGraspError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        code = exc.exit_code
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
 
 
 def test_summary_of_a_failed_run_exits_0(failed_run, capsys):
