@@ -109,11 +109,14 @@ class PortAccessor:
         return value
 
     def has(self, name: str) -> bool:
-        """True when the port was given (or has a default) and, if it names an entry, that entry has a value."""
+        """True when the port was given (or has a default). For an input port naming an entry, that entry
+        must also hold a value; an output port only needs to be connected to a key."""
         value = self._values.get(name)
         if value is None:
             return False
-        return value.key is None or self._blackboard.has(value.key)
+        if value.key is None or value.port.direction is PortDirection.OUTPUT:
+            return True
+        return self._blackboard.has(value.key)
 
     def key(self, name: str) -> str | None:
         """The blackboard key a port points to, None for a literal."""

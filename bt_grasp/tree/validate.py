@@ -44,6 +44,10 @@ class ResolvedNode:
     autoremap: bool = False
 
 
+def article(kind: str) -> str:
+    return ("an " if kind[:1] in "AEIOU" else "a ") + kind
+
+
 def did_you_mean(name: str, candidates: list[str] | tuple[str, ...]) -> str:
     lowered = {c.lower(): c for c in candidates}
     close = [lowered[name.lower()]] if name.lower() in lowered else difflib.get_close_matches(name, candidates, n=1)
@@ -77,7 +81,7 @@ def resolve_node(decl: NodeDecl, registry: NodeRegistry, document: Document) -> 
     if spec is None or spec.kind is NodeKind.SUBTREE:
         raise _unknown_node(decl, registry, document)
     if decl.explicit_tag and decl.explicit_tag != spec.kind.value:
-        raise decl.error(f"{spec.name} is a {spec.kind.value}, not a {decl.explicit_tag}")
+        raise decl.error(f"{spec.name} is {article(spec.kind.value)}, not {article(decl.explicit_tag)}")
     count, low, high = len(decl.children), spec.min_children, spec.max_children
     if count < low or (high is not None and count > high):
         if high == low:
@@ -166,7 +170,7 @@ def _check_model(model: ModelDecl, spec: NodeSpec) -> None:
         return TreeFileError(model.source, f"TreeNodesModel: {problem}", where=line or model.line or None)
 
     if spec.kind.value != model.kind:
-        raise error(f"{spec.name} is registered as a {spec.kind.value}, the model says {model.kind}", model.line)
+        raise error(f"{spec.name} is registered as {article(spec.kind.value)}, the model says {model.kind}", model.line)
     for mport in model.ports:
         port = spec.port(mport.name)
         if port is None:

@@ -40,6 +40,7 @@ class _Reader:
     def __init__(self, source: str) -> None:
         self.source = source
         self.seen: set[int] = set()
+        self.key_nodes: dict[int, yaml.Node] = {}
         self.constructor = yaml.constructor.SafeConstructor()
 
     def error(self, node: yaml.Node | None, problem: str) -> TreeFileError:
@@ -59,14 +60,17 @@ class _Reader:
             raise self.error(node, f"{what} must be a mapping")
         items: list[tuple[str, yaml.Node]] = []
         for key_node, value_node in node.value:
-            self.check(key_node)
             key = self.scalar(key_node, f"a key of {what}")
             if not isinstance(key, str):
                 raise self.error(key_node, f"keys of {what} must be text, got {key!r}")
             if any(k == key for k, _ in items):
                 raise self.error(key_node, f"{what} has the key '{key}' twice")
+            self.key_nodes[id(value_node)] = key_node
             items.append((key, value_node))
         return items
+
+    def key_node(self, value_node: yaml.Node) -> yaml.Node:
+        return self.key_nodes.get(id(value_node), value_node)
 
     def sequence(self, node: yaml.Node, what: str) -> list[yaml.Node]:
         self.check(node)
@@ -75,10 +79,9 @@ class _Reader:
         return list(node.value)
 
     def scalar(self, node: yaml.Node, what: str) -> Any:
+        self.check(node)
         if not isinstance(node, yaml.ScalarNode):
             raise self.error(node, f"{what} must be a single value, not a {type(node).__name__[:-4].lower()}")
-        if id(node) not in self.seen:
-            self.check(node)
         return self.constructor.construct_object(node, deep=True)
 
     def text(self, node: yaml.Node, what: str) -> str:
@@ -106,7 +109,10 @@ class _Reader:
         attributes: list[tuple[str, str]] = []
         children: list[NodeDecl] = []
         subtree_id: str | None = None
-        if not (isinstance(body, yaml.ScalarNode) and self.scalar(body, type_id) is None):
+        empty_body = isinstance(body, yaml.ScalarNode) and body.tag.endswith(":null")
+        if empty_body:
+            self.check(body)
+        else:
             for key, value in self.mapping(body, f"the attributes of {type_id}"):
                 if key == "children":
                     children = [self.node(c) for c in self.sequence(value, f"the children of {type_id}")]
@@ -129,7 +135,9 @@ class _Reader:
         fields = dict(self.mapping(node, "a model"))
         for key in fields:
             if key not in _MODEL_KEYS:
-                raise self.error(node, f"unknown key '{key}' in a model; expected {', '.join(_MODEL_KEYS)}")
+                raise self.error(
+                    self.key_node(fields[key]), f"unknown key '{key}' in a model; expected {', '.join(_MODEL_KEYS)}"
+                )
         if "kind" not in fields or "ID" not in fields:
             raise self.error(node, "a model needs kind and ID")
         ports = []
@@ -137,7 +145,9 @@ class _Reader:
             pf = dict(self.mapping(port_node, "a model port"))
             for key in pf:
                 if key not in _PORT_KEYS:
-                    raise self.error(port_node, f"unknown key '{key}' in a port; expected {', '.join(_PORT_KEYS)}")
+                    raise self.error(
+                        self.key_node(pf[key]), f"unknown key '{key}' in a port; expected {', '.join(_PORT_KEYS)}"
+                    )
             if "name" not in pf:
                 raise self.error(port_node, "a model port needs a name")
             ports.append(
@@ -178,12 +188,16 @@ def read_yaml(data: bytes, source: str) -> Document:
         loader.dispose()
     if root is None:
         raise TreeFileError(source, "the file is empty; expected a mapping with 'trees'", where=1)
+    for event in yaml.parse(text, Loader=yaml.SafeLoader):
+        if isinstance(event, yaml.AliasEvent):
+            line = event.start_mark.line + 1 if event.start_mark else None
+            raise TreeFileError(source, "YAML aliases (*name) are not supported in tree files", where=line)
     reader = _Reader(source)
     top = reader.mapping(root, "the file")
     fields = dict(top)
     for key, _ in top:
         if key not in _TOP_KEYS:
-            raise reader.error(fields[key], f"unknown key '{key}'; expected {', '.join(_TOP_KEYS)}")
+            raise reader.error(reader.key_node(fields[key]), f"unknown key '{key}'; expected {', '.join(_TOP_KEYS)}")
     version = reader.text(fields["btcpp_format"], "btcpp_format") if "btcpp_format" in fields else "4"
     if version != "4":
         raise reader.error(fields["btcpp_format"], f"btcpp_format {version} is not supported; use 4")

@@ -8,8 +8,18 @@ from dataclasses import dataclass, field
 from py_trees.common import Status
 
 from bt_grasp.clock import ManualClock
-from bt_grasp.tree import BtNode, Leaf, LoadedTree, NodeContext, NodeKind, NodeSpec, PortDirection, PortSpec
-from bt_grasp.tree import builtin_registry, load_tree_from_string
+from bt_grasp.tree import (
+    BtNode,
+    Leaf,
+    LoadedTree,
+    NodeContext,
+    NodeKind,
+    NodeSpec,
+    PortDirection,
+    PortSpec,
+    builtin_registry,
+    load_tree_from_string,
+)
 from bt_grasp.tree.introspect import bt_status_name
 
 S, F, R = "SUCCESS", "FAILURE", "RUNNING"
@@ -93,5 +103,3 @@ class Harness:
 
     def nodes(self) -> Iterator[BtNode]:
         return self.tree.nodes()
-
-

@@ -79,9 +79,7 @@ def test_post_conditions() -> None:
 
 
 def test_on_halted_runs_when_reactive_parent_halts() -> None:
-    h = Harness(
-        '<ReactiveSequence><Check name="c"/><Stub name="Move" _onHalted="stopped := 1"/></ReactiveSequence>'
-    )
+    h = Harness('<ReactiveSequence><Check name="c"/><Stub name="Move" _onHalted="stopped := 1"/></ReactiveSequence>')
     h["c"].returns(S, F)
     h["Move"].returns(R)
     assert h.tick() == R and h.tick() == F

@@ -68,7 +68,7 @@ def test_fallback_and_reactive_fallback() -> None:
 
 
 def test_fallback_all_fail() -> None:
-    h = Harness('<Fallback><AlwaysFailure/><AlwaysFailure/></Fallback>')
+    h = Harness("<Fallback><AlwaysFailure/><AlwaysFailure/></Fallback>")
     assert h.tick() == F
 
 
