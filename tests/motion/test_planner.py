@@ -1,0 +1,119 @@
+"""Planning: collision-free paths, detours around obstacles, determinism, bad requests as values."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from bt_grasp.geometry import make_T, pose_error
+from bt_grasp.motion.collision import collision_checker
+from bt_grasp.motion.kinematics import ArmKinematics
+from bt_grasp.motion.planner import PlannerOptions, PlanStatus, plan_to_joints, plan_to_pose
+from bt_grasp.motion.planning_scene import Box, PlanningScene
+from tests.motion.conftest import HOME_Q, TOP_DOWN_R
+
+PILLAR = Box("pillar", (0.08, 0.08, 0.25), (0.47, 0.0, 0.125))
+
+
+@pytest.fixture(scope="module")
+def detour(kin: ArmKinematics, table_scene: PlanningScene) -> tuple[np.ndarray, np.ndarray, PlanningScene]:
+    qa = kin.ik(make_T(TOP_DOWN_R, [0.45, -0.2, 0.08]), HOME_Q).q
+    qb = kin.ik(make_T(TOP_DOWN_R, [0.45, 0.2, 0.08]), HOME_Q).q
+    return qa, qb, table_scene.with_obstacles(PILLAR)
+
+
+def test_plan_to_pose_reaches_the_pose(kin: ArmKinematics, table_scene: PlanningScene) -> None:
+    T_goal = make_T(TOP_DOWN_R, [0.5, 0.15, 0.12])
+    result = plan_to_pose(HOME_Q, T_goal, table_scene)
+    assert result.status is PlanStatus.OK, result.message
+    np.testing.assert_array_equal(result.path[0], HOME_Q)
+    dp, dr = pose_error(kin.fk(result.path[-1]), T_goal)
+    assert dp < 1e-4 and dr < 1e-3
+    assert result.ik_time_s > 0
+    assert collision_checker(table_scene, 0.01).check_path(result.path, 0.005).ok
+
+
+def test_obstacle_between_start_and_goal_forces_a_detour(detour: tuple) -> None:
+    qa, qb, scene = detour
+    checker = collision_checker(scene, 0.01)
+    assert checker.is_valid(qa) and checker.is_valid(qb)
+    assert not checker.check_path(np.stack([qa, qb]), 0.01).ok  # the straight line hits the pillar
+    result = plan_to_joints(qa, qb, scene)
+    assert result.status is PlanStatus.OK, result.message
+    assert len(result.path) > 2
+    np.testing.assert_allclose(result.path[-1], qb)
+    assert checker.check_path(result.path, 0.005).ok  # re-checked finer than the planner's 0.01 rad
+
+
+@pytest.mark.parametrize("planner", ["PRM", "BITstar"])
+def test_other_planners_by_name(detour: tuple, planner: str) -> None:
+    qa, qb, scene = detour
+    result = plan_to_joints(qa, qb, scene, PlannerOptions(planner=planner, time_limit_s=1.0))
+    assert result.status is PlanStatus.OK, result.message
+    assert result.planner == planner
+    assert collision_checker(scene, 0.01).check_path(result.path, 0.01).ok
+
+
+def test_same_seed_same_path_other_seed_other_path(detour: tuple) -> None:
+    qa, qb, scene = detour
+    a = plan_to_joints(qa, qb, scene, PlannerOptions(seed=5))
+    b = plan_to_joints(qa, qb, scene, PlannerOptions(seed=5))
+    c = plan_to_joints(qa, qb, scene, PlannerOptions(seed=6))
+    assert a.ok and b.ok and c.ok
+    np.testing.assert_array_equal(a.path, b.path)
+    assert a.path.shape != c.path.shape or not np.array_equal(a.path, c.path)
+
+
+def test_nan_pose_is_invalid_input(table_scene: PlanningScene) -> None:
+    T = make_T(TOP_DOWN_R, [0.5, 0.0, 0.1])
+    T[0, 3] = np.nan
+    assert plan_to_pose(HOME_Q, T, table_scene).status is PlanStatus.INVALID_INPUT
+
+
+def test_nan_start_is_invalid_input(table_scene: PlanningScene) -> None:
+    result = plan_to_joints(np.full(6, np.nan), HOME_Q, table_scene)
+    assert result.status is PlanStatus.INVALID_INPUT
+
+
+@pytest.mark.parametrize("limit", [0.0, -1.0, float("nan")])
+def test_bad_time_limit_is_invalid_input(table_scene: PlanningScene, limit: float) -> None:
+    result = plan_to_pose(HOME_Q, make_T(TOP_DOWN_R, [0.5, 0.0, 0.1]), table_scene,
+                          PlannerOptions(time_limit_s=limit))
+    assert result.status is PlanStatus.INVALID_INPUT
+    assert "time_limit_s" in result.message
+
+
+def test_unknown_planner_is_invalid_input(table_scene: PlanningScene) -> None:
+    result = plan_to_joints(HOME_Q, HOME_Q + 0.1, table_scene, PlannerOptions(planner="FancyRRT"))
+    assert result.status is PlanStatus.INVALID_INPUT
+    assert "FancyRRT" in result.message and "RRTConnect" in result.message
+
+
+def test_goal_pose_inside_the_table_is_goal_in_collision(table_scene: PlanningScene) -> None:
+    result = plan_to_pose(HOME_Q, make_T(TOP_DOWN_R, [0.5, 0.0, -0.01]), table_scene)
+    assert result.status is PlanStatus.GOAL_IN_COLLISION
+
+
+def test_goal_configuration_in_collision(table_scene: PlanningScene) -> None:
+    q_goal = HOME_Q.copy()
+    q_goal[1] = -0.3
+    assert plan_to_joints(HOME_Q, q_goal, table_scene).status is PlanStatus.GOAL_IN_COLLISION
+
+
+def test_start_in_collision(table_scene: PlanningScene) -> None:
+    q_start = HOME_Q.copy()
+    q_start[1] = -0.3
+    result = plan_to_pose(q_start, make_T(TOP_DOWN_R, [0.5, 0.0, 0.1]), table_scene)
+    assert result.status is PlanStatus.START_IN_COLLISION
+    assert "table" in result.message
+
+
+def test_far_pose_is_ik_unreachable(table_scene: PlanningScene) -> None:
+    result = plan_to_pose(HOME_Q, make_T(TOP_DOWN_R, [2.0, 0.0, 0.1]), table_scene)
+    assert result.status is PlanStatus.IK_UNREACHABLE
+
+
+def test_too_short_time_limit_is_timeout(detour: tuple) -> None:
+    qa, qb, scene = detour
+    result = plan_to_joints(qa, qb, scene, PlannerOptions(time_limit_s=1e-4))
+    assert result.status is PlanStatus.TIMEOUT, result.message
