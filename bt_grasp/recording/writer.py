@@ -138,6 +138,14 @@ class RunRecorder:
         self._closed = False
 
         self._file: BinaryIO = open(self.path, "wb")  # noqa: SIM115 - closed in close()
+        try:
+            self._start(metadata, attachments or {}, chunk_size, compression)
+        except BaseException:
+            self._file.close()
+            raise
+
+    def _start(self, metadata: Mapping[str, str], attachments: Mapping[str, bytes], chunk_size: int,
+               compression: str) -> None:
         self._writer = Writer(self._file, chunk_size=chunk_size, compression=_COMPRESSION[compression])
         self._writer.start(profile="", library=_library_id())
         meta = {str(k): str(v) for k, v in metadata.items()}
@@ -145,7 +153,7 @@ class RunRecorder:
         meta.setdefault("start_unix_ns", str(self._wall_clock()))
         self._writer.add_metadata(topics.RUN_METADATA_NAME, meta)
         now = self._wall_clock()
-        for name, data in (attachments or {}).items():
+        for name, data in attachments.items():
             self._writer.add_attachment(now, 0, name, _media_type(name, bytes(data)), bytes(data))
         self._channels: dict[str, int] = {}
         self._register_channels()
