@@ -131,5 +131,12 @@ class Document:
         return (
             self.main_tree,
             tuple((k, t.root.structure()) for k, t in self.trees.items()),
-            tuple((m.kind, m.node_id, m.ports) for m in self.models),
+            tuple(
+                (
+                    m.kind,
+                    m.node_id,
+                    tuple((p.name, p.direction, p.type_name, p.default, p.description) for p in m.ports),
+                )
+                for m in self.models
+            ),
         )

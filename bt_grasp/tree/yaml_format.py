@@ -190,8 +190,8 @@ def read_yaml(data: bytes, source: str) -> Document:
         raise TreeFileError(source, "the file is empty; expected a mapping with 'trees'", where=1)
     for event in yaml.parse(text, Loader=yaml.SafeLoader):
         if isinstance(event, yaml.AliasEvent):
-            line = event.start_mark.line + 1 if event.start_mark else None
-            raise TreeFileError(source, "YAML aliases (*name) are not supported in tree files", where=line)
+            alias_line = event.start_mark.line + 1 if event.start_mark else None
+            raise TreeFileError(source, "YAML aliases (*name) are not supported in tree files", where=alias_line)
     reader = _Reader(source)
     top = reader.mapping(root, "the file")
     fields = dict(top)

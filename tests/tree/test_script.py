@@ -97,7 +97,10 @@ def test_syntax_errors(code: str) -> None:
 
 
 def test_script_syntax_error_is_a_load_error_with_the_line() -> None:
-    xml = '<root BTCPP_format="4">\n<BehaviorTree ID="M">\n<Sequence>\n<Script code="x := := 1"/>\n</Sequence>\n</BehaviorTree>\n</root>'
+    xml = (
+        '<root BTCPP_format="4">\n<BehaviorTree ID="M">\n<Sequence>\n'
+        '<Script code="x := := 1"/>\n</Sequence>\n</BehaviorTree>\n</root>'
+    )
     with pytest.raises(TreeFileError) as info:
         load_tree_from_string(xml, builtin_registry(), source="t.xml")
     assert str(info.value).startswith("t.xml:4: Script: script 'x := := 1'")

@@ -1,0 +1,128 @@
+"""`bt-grasp tree validate/show/convert/run` through the CLI entry point."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from bt_grasp.cli.main import main
+from bt_grasp.tree.bench import tick_overhead
+
+TREE = """<root BTCPP_format="4" main_tree_to_execute="Main">
+  <BehaviorTree ID="Main">
+    <Sequence>
+      <Script code="attempts := 0"/>
+      <RetryUntilSuccessful num_attempts="5">
+        <Sequence>
+          <Script code="attempts += 1"/>
+          <ScriptCondition code="attempts &gt;= 3"/>
+        </Sequence>
+      </RetryUntilSuccessful>
+      <Sleep msec="30"/>
+      <SubTree ID="Report" result="{message}"/>
+    </Sequence>
+  </BehaviorTree>
+  <BehaviorTree ID="Report">
+    <Script code="result := 'done'"/>
+  </BehaviorTree>
+</root>
+"""
+
+
+@pytest.fixture
+def tree_file(tmp_path: Path) -> Path:
+    path = tmp_path / "pick.xml"
+    path.write_text(TREE)
+    return path
+
+
+def run_cli(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str, str]:
+    code = main(list(args))
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
+
+
+def test_validate_ok(tree_file: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, err = run_cli(capsys, "tree", "validate", str(tree_file))
+    assert code == 0 and "OK (9 nodes, main tree Main)" in out and err == ""
+
+
+def test_run_dry_json(tree_file: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, _ = run_cli(capsys, "tree", "run", str(tree_file), "--dry", "--json")
+    result = json.loads(out)
+    # tick 1: retry loops 3 times in one tick, Sleep starts (RUNNING); ticks at 10 ms: Sleep ends at tick 4
+    assert code == 0
+    assert result == {"status": "SUCCESS", "ticks": 4, "blackboard": {"attempts": 3, "message": "done"}}
+
+
+def test_run_not_finished_and_tick_hz(tree_file: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, _ = run_cli(capsys, "tree", "run", str(tree_file), "--dry", "--max-ticks", "2", "--json")
+    assert code == 1 and json.loads(out)["status"] == "RUNNING"
+    code, out, _ = run_cli(capsys, "tree", "run", str(tree_file), "--dry", "--tick-hz", "20", "--json")
+    assert code == 0 and json.loads(out)["ticks"] == 2
+
+
+def test_run_failure_exit_code(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = tmp_path / "fail.yaml"
+    path.write_text("trees:\n  Main: AlwaysFailure\n")
+    code, out, _ = run_cli(capsys, "tree", "run", str(path), "--dry")
+    assert code == 1 and out.startswith("FAILURE after 1 ticks")
+
+
+def test_run_substitute(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = tmp_path / "t.xml"
+    path.write_text('<root BTCPP_format="4"><BehaviorTree><Sequence><AlwaysFailure name="Perceive"/>'
+                    "</Sequence></BehaviorTree></root>")  # fmt: skip
+    code, out, _ = run_cli(capsys, "tree", "run", str(path), "--dry", "--substitute", "Perceive=Running:2", "--json")
+    assert code == 0 and json.loads(out)["ticks"] == 3
+    code, _, err = run_cli(capsys, "tree", "run", str(path), "--dry", "--substitute", "Perceive")
+    assert code == 2 and err.strip().splitlines() == [
+        "--substitute: 'Perceive' is not NODE=REPLACEMENT (e.g. Perceive=AlwaysSuccess)"
+    ]
+
+
+def test_run_requires_dry(tree_file: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    code, _, err = run_cli(capsys, "tree", "run", str(tree_file))
+    assert code == 2 and err.startswith("--dry:")
+
+
+def test_show_text_and_dot(tree_file: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, _ = run_cli(capsys, "tree", "show", str(tree_file))
+    assert code == 0 and "RetryUntilSuccessful (num_attempts=5)" in out and "SubTree Report" in out
+    code, out, _ = run_cli(capsys, "tree", "show", str(tree_file), "--format", "dot")
+    assert code == 0 and out.startswith('digraph "Main" {') and "n1 -> n2;" in out
+    target = tmp_path / "tree.txt"
+    assert run_cli(capsys, "tree", "show", str(tree_file), "--out", str(target))[0] == 0
+    assert "Sleep (msec=30)" in target.read_text()
+
+
+def test_show_image(tree_file: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    target = tmp_path / "tree.svg"
+    code, out, err = run_cli(capsys, "tree", "show", str(tree_file), "--format", "svg", "--out", str(target))
+    if shutil.which("dot") is None:
+        assert code == 2 and "Graphviz 'dot' is not installed" in err
+    else:
+        assert code == 0 and target.read_text().lstrip().startswith("<?xml")
+
+
+def test_convert_round_trip(tree_file: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    yaml_path = tmp_path / "pick.yaml"
+    assert run_cli(capsys, "tree", "convert", str(tree_file), str(yaml_path))[0] == 0
+    code, out, _ = run_cli(capsys, "tree", "run", str(yaml_path), "--dry", "--json")
+    assert code == 0 and json.loads(out)["blackboard"] == {"attempts": 3, "message": "done"}
+    code, _, err = run_cli(capsys, "tree", "convert", str(tree_file), str(tmp_path / "x.json"))
+    assert code == 2 and "unknown tree file extension" in err
+
+
+def test_missing_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    missing = tmp_path / "nope.xml"
+    code, _, err = run_cli(capsys, "tree", "validate", str(missing))
+    assert code == 2 and err == f"{missing}: no such file\n"
+
+
+def test_tick_overhead_reports_microseconds() -> None:
+    result = tick_overhead(20, 50)
+    assert result["n_nodes"] == 20 and 0 < result["us_per_node_tick"] < 1000
