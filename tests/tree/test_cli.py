@@ -101,7 +101,7 @@ def test_show_text_and_dot(tree_file: Path, tmp_path: Path, capsys: pytest.Captu
 
 def test_show_image(tree_file: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     target = tmp_path / "tree.svg"
-    code, out, err = run_cli(capsys, "tree", "show", str(tree_file), "--format", "svg", "--out", str(target))
+    code, _out, err = run_cli(capsys, "tree", "show", str(tree_file), "--format", "svg", "--out", str(target))
     if shutil.which("dot") is None:
         assert code == 2 and "Graphviz 'dot' is not installed" in err
     else:
@@ -126,3 +126,12 @@ def test_missing_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> Non
 def test_tick_overhead_reports_microseconds() -> None:
     result = tick_overhead(20, 50)
     assert result["n_nodes"] == 20 and 0 < result["us_per_node_tick"] < 1000
+
+
+EXAMPLES = sorted((Path(__file__).resolve().parents[2] / "trees" / "builtin_examples").glob("*.*"))
+
+
+@pytest.mark.parametrize("example", EXAMPLES, ids=lambda p: p.name)
+def test_builtin_examples_run(example: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, _ = run_cli(capsys, "tree", "run", str(example), "--dry", "--json")
+    assert code == 0 and json.loads(out)["status"] == "SUCCESS"
