@@ -1,0 +1,83 @@
+"""LoadCalibration and Calibrate: where the camera is, from a file or from a hand-eye calibration run."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from py_trees.common import Status
+
+from bt_grasp.behaviours.base import RobotLeaf
+from bt_grasp.behaviours.reasons import FailureReason
+from bt_grasp.errors import ConfigError
+from bt_grasp.tree.registry import PortDirection, PortSpec, leaf
+
+
+@leaf(
+    None,
+    name="LoadCalibration",
+    ports=[
+        PortSpec("file", PortDirection.INPUT, str, description="calibration YAML written by `bt-grasp calibrate`"),
+        PortSpec("calibration", PortDirection.OUTPUT, object, "{calibration}", "the loaded calibration"),
+    ],
+    needs_robot=True,
+)
+class LoadCalibration(RobotLeaf):
+    """Load the camera calibration from a file; FAILURE (CALIBRATION_MISSING) when it cannot be used."""
+
+    def update(self) -> Status:
+        from bt_grasp.perception.calibration_file import load_calibration
+
+        file = self.input("file")
+        if not file:
+            return self.failed(
+                FailureReason.CALIBRATION_MISSING, "no calibration file given (run with --calibration FILE)"
+            )
+        try:
+            calibration = load_calibration(Path(str(file)), mount=self.cell.camera.mount)
+        except ConfigError as exc:
+            return self.failed(FailureReason.CALIBRATION_MISSING, str(exc))
+        self.cell.calibration = calibration
+        self.ports.set("calibration", calibration)
+        self.feedback_message = f"{calibration.mount} calibration from {file} ({calibration.method})"
+        return Status.SUCCESS
+
+
+@leaf(
+    None,
+    name="Calibrate",
+    ports=[
+        PortSpec("poses", PortDirection.INPUT, int, 20, "number of board views to collect (15 to 25)"),
+        PortSpec("file", PortDirection.INPUT, str, "", "where to write the calibration YAML (empty: nowhere)"),
+        PortSpec("calibration", PortDirection.OUTPUT, object, "{calibration}", "the solved calibration"),
+    ],
+    needs_robot=True,
+)
+class Calibrate(RobotLeaf):
+    """Hand-eye calibration: move the ChArUco board through diverse views, capture, solve; one view per step."""
+
+    def initialise(self) -> None:
+        from bt_grasp.behaviours.calibration_job import CalibrationJob
+
+        self.job: Any = CalibrationJob(self.cell, int(self.input("poses")))
+
+    def update(self) -> Status:
+        outcome = self.job.update()
+        self.feedback_message = self.job.progress
+        if outcome is None:
+            return Status.RUNNING
+        if isinstance(outcome, str):
+            return self.failed(FailureReason.CALIBRATION_FAILED, outcome)
+        self.cell.calibration = outcome
+        self.ports.set("calibration", outcome)
+        file = self.input("file")
+        if file:
+            from bt_grasp.perception.calibration_file import save_calibration
+
+            save_calibration(outcome, Path(str(file)))
+        return Status.SUCCESS
+
+    def terminate(self, new_status: Status) -> None:
+        job = getattr(self, "job", None)
+        if job is not None and new_status == Status.INVALID:
+            job.cancel()

@@ -1,0 +1,98 @@
+"""OpenGripper, Grasp and IsGrasped: the gripper, judged by its measured finger width only."""
+
+from __future__ import annotations
+
+from py_trees.common import Status
+
+from bt_grasp.behaviours.base import RobotLeaf
+from bt_grasp.behaviours.reasons import FailureReason
+from bt_grasp.robot_description import MAX_OPENING_M
+from bt_grasp.tree.registry import NodeKind, PortDirection, PortSpec, leaf
+
+#: the fingers count as closed on nothing below this width
+EMPTY_WIDTH_M = 0.004
+#: the width must change less than this per tick to count as settled
+SETTLED_M = 2e-5
+
+
+class _GripperMove(RobotLeaf):
+    """Command the fingers, then wait (across ticks) until their width settles or a timeout passes."""
+
+    timeout_s = 1.5
+
+    def command(self) -> None:
+        raise NotImplementedError
+
+    def initialise(self) -> None:
+        self.command()
+        self._t0 = self.now_s()
+        self._last = self.cell.robot.gripper_width_m()
+        self._still_ticks = 0
+
+    def settled(self) -> bool:
+        width = self.cell.robot.gripper_width_m()
+        self._still_ticks = self._still_ticks + 1 if abs(width - self._last) < SETTLED_M else 0
+        self._last = width
+        return self._still_ticks >= 5
+
+    def timed_out(self) -> bool:
+        return self.now_s() - self._t0 > self.timeout_s
+
+
+@leaf(None, name="OpenGripper", needs_robot=True)
+class OpenGripper(_GripperMove):
+    """Open the fingers fully."""
+
+    def command(self) -> None:
+        self.cell.robot.open_gripper()
+
+    def update(self) -> Status:
+        width = self.cell.robot.gripper_width_m()
+        self.feedback_message = f"opening: {width * 1e3:.1f} mm"
+        if width > MAX_OPENING_M - 0.002:
+            return Status.SUCCESS
+        if self.timed_out():
+            return self.failed(FailureReason.TIMEOUT, f"the gripper opened only to {width * 1e3:.1f} mm")
+        return Status.RUNNING
+
+
+@leaf(
+    None,
+    name="Grasp",
+    ports=[
+        PortSpec("force", PortDirection.INPUT, float, 40.0, "grip force per finger, N"),
+        PortSpec("width", PortDirection.OUTPUT, object, "{grasp_width_m}", "measured width once closed, m"),
+    ],
+    needs_robot=True,
+)
+class Grasp(_GripperMove):
+    """Close the fingers with a bounded force; FAILURE (GRASP_EMPTY) when they close on nothing."""
+
+    def command(self) -> None:
+        self.cell.robot.close_gripper(float(self.input("force")))
+
+    def update(self) -> Status:
+        width = self.cell.robot.gripper_width_m()
+        self.feedback_message = f"closing: {width * 1e3:.1f} mm"
+        if not (self.settled() or self.timed_out()):
+            return Status.RUNNING
+        self.ports.set("width", width)
+        if width < EMPTY_WIDTH_M:
+            return self.failed(FailureReason.GRASP_EMPTY, f"the fingers closed to {width * 1e3:.1f} mm: nothing held")
+        self.feedback_message = f"holding an object {width * 1e3:.1f} mm wide"
+        return Status.SUCCESS
+
+
+@leaf(None, name="IsGrasped", kind=NodeKind.CONDITION, needs_robot=True)
+class IsGrasped(RobotLeaf):
+    """SUCCESS while the gripper is commanded closed and its fingers rest on something."""
+
+    def update(self) -> Status:
+        robot = self.cell.robot
+        width = robot.gripper_width_m()
+        if robot.gripper_target_width_m() > 0.0:
+            return self.failed(FailureReason.GRASP_EMPTY, "the gripper is open")
+        if width < EMPTY_WIDTH_M:
+            return self.failed(FailureReason.SLIPPED, f"the fingers are closed ({width * 1e3:.1f} mm): nothing held")
+        self.feedback_message = f"holding {width * 1e3:.1f} mm"
+        return Status.SUCCESS

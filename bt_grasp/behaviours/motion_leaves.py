@@ -1,0 +1,312 @@
+"""PlanGrasp, Approach, Lift, Retreat, MoveHome, MoveAbove: leaves that move the arm.
+
+The planning scene is what the robot knows: the table from the scene file's installation data and the
+objects perception reported (as boxes); never the simulator's true poses.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from py_trees.common import Status
+
+from bt_grasp.behaviours.base import RobotLeaf
+from bt_grasp.behaviours.gripper import EMPTY_WIDTH_M
+from bt_grasp.behaviours.motion_job import MotionJob, PathFailure, Segment
+from bt_grasp.behaviours.reasons import FailureReason
+from bt_grasp.tree.registry import PortDirection, PortSpec, leaf
+
+_PLAN_REASONS = {
+    "ik_unreachable": FailureReason.IK_UNREACHABLE,
+    "start_in_collision": FailureReason.COLLISION,
+    "goal_in_collision": FailureReason.COLLISION,
+}
+
+
+def detection_box(detection: Any, name: str, margin_m: float = 0.005) -> Any:
+    from bt_grasp.geometry import make_T, rot_z
+    from bt_grasp.motion.planning_scene import Box
+
+    length, width, height = detection.size_m
+    T = make_T(rot_z(detection.yaw_rad), detection.centroid_base_m)
+    return Box.at(name, (length + margin_m, width + margin_m, height + margin_m), T)
+
+
+def planning_scene(leaf: RobotLeaf, target: Any = None, objects: Sequence[Any] = (), allow_target: bool = False) -> Any:
+    from bt_grasp.motion.planning_scene import PlanningScene
+
+    obstacles = []
+    for i, det in enumerate(objects or ()):
+        if target is not None and det.centroid_base_m == target.centroid_base_m:
+            continue
+        obstacles.append(detection_box(det, f"object_{i}"))
+    scene = PlanningScene.from_scene(leaf.cell.scene, tuple(obstacles))
+    if target is not None:
+        box = detection_box(target, "target", margin_m=0.0)
+        scene = scene.with_allowed_object(box) if allow_target else scene.with_obstacles(box)
+    return scene
+
+
+def plan_to_pose_fn(leaf: RobotLeaf, T_goal: NDArray[np.float64], scene: Any) -> Any:
+    def compute(q: NDArray[np.float64]) -> NDArray[np.float64] | PathFailure:
+        planner = leaf.cell.service("planner")
+        result = planner.plan_to_pose(q, T_goal, scene, leaf.cell.service("planner_options"))
+        if not result.ok:
+            reason = _PLAN_REASONS.get(result.status.value, FailureReason.PLAN_FAILED)
+            return PathFailure(reason, f"planning failed ({result.status.value}): {result.message}")
+        return np.asarray(result.path)
+
+    return compute
+
+
+def plan_to_joints_fn(leaf: RobotLeaf, q_goal: NDArray[np.float64], scene: Any) -> Any:
+    def compute(q: NDArray[np.float64]) -> NDArray[np.float64] | PathFailure:
+        planner = leaf.cell.service("planner")
+        result = planner.plan_to_joints(q, q_goal, scene, leaf.cell.service("planner_options"))
+        if not result.ok:
+            reason = _PLAN_REASONS.get(result.status.value, FailureReason.PLAN_FAILED)
+            return PathFailure(reason, f"planning failed ({result.status.value}): {result.message}")
+        return np.asarray(result.path)
+
+    return compute
+
+
+def cartesian_fn(leaf: RobotLeaf, T_goal_fn: Any, scene: Any) -> Any:
+    """A straight tool line from the current pose to ``T_goal_fn(T_now)``."""
+
+    def compute(q: NDArray[np.float64]) -> NDArray[np.float64] | PathFailure:
+        from bt_grasp.motion.cartesian import cartesian_path
+
+        kin = leaf.cell.service("kinematics")
+        T_now = kin.fk(q)
+        result = cartesian_path(q, T_goal_fn(T_now), scene, kin=kin)
+        if not result.ok:
+            reason = {
+                "unreachable": FailureReason.IK_UNREACHABLE,
+                "collision": FailureReason.COLLISION,
+            }.get(result.status.value, FailureReason.PLAN_FAILED)
+            return PathFailure(reason, f"straight-line segment failed ({result.status.value}): {result.message}")
+        return np.asarray(result.path)
+
+    return compute
+
+
+class _MovingLeaf(RobotLeaf):
+    """Runs a MotionJob across ticks; halting cancels the motion (the arm holds where it is)."""
+
+    def segments(self) -> list[Segment] | Status:
+        raise NotImplementedError
+
+    def initialise(self) -> None:
+        self.job: MotionJob | None = None
+        self._early: Status | None = None
+        segments = self.segments()
+        if isinstance(segments, Status):
+            self._early = segments
+        else:
+            self.job = MotionJob(self.cell, segments)
+
+    def check_during(self) -> Status | None:
+        return None
+
+    def finished(self) -> Status:
+        return Status.SUCCESS
+
+    def update(self) -> Status:
+        if self._early is not None:
+            return self._early
+        assert self.job is not None
+        early = self.check_during()
+        if early is not None:
+            self.job.cancel()
+            return early
+        outcome = self.job.update()
+        if outcome is None:
+            self.feedback_message = f"{self.job.current}"
+            return Status.RUNNING
+        if isinstance(outcome, PathFailure):
+            self.job.cancel()
+            return self.failed(outcome.reason, outcome.sentence)
+        return self.finished()
+
+    def terminate(self, new_status: Status) -> None:
+        job = getattr(self, "job", None)
+        if job is not None and new_status == Status.INVALID:
+            job.cancel()
+
+
+_GRASP = PortSpec("grasp", PortDirection.INPUT, object, "{grasp}", "the grasp to approach (from PlanGrasp)")
+
+
+@leaf(
+    None,
+    name="PlanGrasp",
+    ports=[
+        PortSpec("target", PortDirection.INPUT, object, "{target}", "the detection to grasp"),
+        PortSpec("objects", PortDirection.INPUT, object, "{objects}", "every object seen (obstacles)"),
+        PortSpec("grasp", PortDirection.OUTPUT, object, "{grasp}", "the first reachable ranked candidate"),
+        PortSpec("skip", PortDirection.INPUT, int, 0, "skip this many of the best candidates"),
+    ],
+    needs_robot=True,
+)
+class PlanGrasp(RobotLeaf):
+    """Rank top-down grasps of the target and keep the first whose approach can be planned."""
+
+    def update(self) -> Status:
+        from bt_grasp.perception.grasps import synthesize_grasps
+
+        target = self.input("target")
+        if target is None:
+            return self.failed(FailureReason.NO_DETECTION, "no target on the blackboard: run Perceive first")
+        objects = self.input("objects") or ()
+        result = synthesize_grasps(target, objects, self.cell.service("grasp_settings"))
+        if not result.ok:
+            return self.failed(FailureReason.NOTHING_TO_GRASP, f"{result.status.value}: {result.message}")
+        self.cell.media.grasps(result.candidates)
+        kin = self.cell.service("kinematics")
+        planner = self.cell.service("planner")
+        q = self.cell.robot.joint_positions()
+        scene = planning_scene(self, target, objects)
+        last = "no candidate"
+        for rank, candidate in enumerate(result.candidates[int(self.input("skip") or 0) :]):
+            pre = kin.ik(candidate.T_base_tcp_pregrasp, q)
+            if not pre.ok:
+                last = f"candidate {rank}: pre-grasp unreachable"
+                continue
+            at = kin.ik(candidate.T_base_tcp_grasp, pre.q)
+            if not at.ok:
+                last = f"candidate {rank}: grasp pose unreachable"
+                continue
+            plan = planner.plan_to_pose(q, candidate.T_base_tcp_pregrasp, scene, self.cell.service("planner_options"))
+            if not plan.ok:
+                last = f"candidate {rank}: {plan.status.value} ({plan.message})"
+                continue
+            self.ports.set("grasp", candidate)
+            self.feedback_message = f"candidate {rank} of {len(result.candidates)}: {candidate.reason}"
+            return Status.SUCCESS
+        reason = FailureReason.IK_UNREACHABLE if "unreachable" in last else FailureReason.PLAN_FAILED
+        return self.failed(reason, f"none of {len(result.candidates)} grasps is reachable; last: {last}")
+
+
+@leaf(
+    None,
+    name="Approach",
+    ports=[
+        _GRASP,
+        PortSpec("target", PortDirection.INPUT, object, "{target}", "the detection being grasped"),
+        PortSpec("objects", PortDirection.INPUT, object, "{objects}", "every object seen (obstacles)"),
+    ],
+    needs_robot=True,
+)
+class Approach(_MovingLeaf):
+    """Plan and move to the pre-grasp pose, then descend in a straight line to the grasp pose."""
+
+    def segments(self) -> list[Segment] | Status:
+        grasp = self.input("grasp")
+        if grasp is None:
+            return self.failed(FailureReason.BAD_INPUT, "no grasp on the blackboard: run PlanGrasp first")
+        target, objects = self.input("target"), self.input("objects") or ()
+        free = planning_scene(self, target, objects)
+        touching = planning_scene(self, target, objects, allow_target=True)
+        T_grasp = grasp.T_base_tcp_grasp
+        return [
+            Segment("to pre-grasp", plan_to_pose_fn(self, grasp.T_base_tcp_pregrasp, free)),
+            Segment("descend", cartesian_fn(self, lambda _T: T_grasp, touching)),
+        ]
+
+
+@leaf(
+    None,
+    name="Lift",
+    ports=[PortSpec("height", PortDirection.INPUT, float, 0.15, "how far to lift, m")],
+    needs_robot=True,
+)
+class Lift(_MovingLeaf):
+    """Lift straight up; FAILURE (SLIPPED) when the fingers lose the object on the way."""
+
+    def segments(self) -> list[Segment] | Status:
+        height = float(self.input("height"))
+        if not 0.0 < height < 0.6:
+            return self.failed(FailureReason.BAD_INPUT, f"lift height {height} m is outside (0, 0.6)")
+        self.feedback_message = f"lifting {height * 100:.0f} cm"
+
+        def up(T_now: NDArray[np.float64]) -> NDArray[np.float64]:
+            T = T_now.copy()
+            T[2, 3] += height
+            return T
+
+        from bt_grasp.motion.planning_scene import PlanningScene
+
+        return [Segment("lift", cartesian_fn(self, up, PlanningScene.from_scene(self.cell.scene)))]
+
+    def check_during(self) -> Status | None:
+        width = self.cell.robot.gripper_width_m()
+        if width < EMPTY_WIDTH_M:
+            return self.failed(FailureReason.SLIPPED, f"the object slipped out: fingers at {width * 1e3:.1f} mm")
+        return None
+
+    def finished(self) -> Status:
+        width = self.cell.robot.gripper_width_m()
+        if width < EMPTY_WIDTH_M:
+            return self.failed(FailureReason.SLIPPED, f"the object slipped out: fingers at {width * 1e3:.1f} mm")
+        self.feedback_message = f"lifted, holding {width * 1e3:.1f} mm"
+        return Status.SUCCESS
+
+
+@leaf(
+    None,
+    name="Retreat",
+    ports=[PortSpec("height", PortDirection.INPUT, float, 0.10, "how far to back off upwards, m")],
+    needs_robot=True,
+)
+class Retreat(_MovingLeaf):
+    """Back off straight up from wherever the tool is."""
+
+    def segments(self) -> list[Segment] | Status:
+        height = float(self.input("height"))
+
+        def up(T_now: NDArray[np.float64]) -> NDArray[np.float64]:
+            T = T_now.copy()
+            T[2, 3] += height
+            return T
+
+        from bt_grasp.motion.planning_scene import PlanningScene
+
+        return [Segment("retreat", cartesian_fn(self, up, PlanningScene.from_scene(self.cell.scene)))]
+
+
+@leaf(None, name="MoveHome", needs_robot=True)
+class MoveHome(_MovingLeaf):
+    """Plan and move to the scene's home configuration."""
+
+    def segments(self) -> list[Segment] | Status:
+        from bt_grasp.motion.planning_scene import PlanningScene
+
+        home = np.asarray(self.cell.scene.robot.home_q_rad, dtype=float)
+        return [Segment("home", plan_to_joints_fn(self, home, PlanningScene.from_scene(self.cell.scene)))]
+
+
+@leaf(
+    None,
+    name="MoveAbove",
+    ports=[
+        PortSpec("x", PortDirection.INPUT, float, description="tool x in the base frame, m"),
+        PortSpec("y", PortDirection.INPUT, float, description="tool y in the base frame, m"),
+        PortSpec("height", PortDirection.INPUT, float, 0.15, "tool height above the table, m"),
+    ],
+    needs_robot=True,
+)
+class MoveAbove(_MovingLeaf):
+    """Plan and move the tool, pointing down, above a point of the table (e.g. to set an object aside)."""
+
+    def segments(self) -> list[Segment] | Status:
+        from bt_grasp.motion.planning_scene import PlanningScene
+
+        T = np.eye(4)
+        T[:3, :3] = np.diag([1.0, -1.0, -1.0])
+        T[:3, 3] = [float(self.input("x")), float(self.input("y")), float(self.input("height"))]
+        T = np.linalg.inv(self.cell.scene.T_world_base()) @ T
+        return [Segment("move above", plan_to_pose_fn(self, T, PlanningScene.from_scene(self.cell.scene)))]

@@ -1,0 +1,67 @@
+"""The MediaSink that sends what leaves saw and computed to the run's MCAP recorder."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from bt_grasp.interfaces import RGBDFrame
+from bt_grasp.recording.schemas import BoxMarker, PoseMarker
+from bt_grasp.recording.writer import RunRecorder
+
+_POINTS_MAX = 20000
+
+
+class RecorderSink:
+    """Implements :class:`bt_grasp.behaviours.cell.MediaSink` on a :class:`RunRecorder`."""
+
+    def __init__(self, recorder: RunRecorder, now_ns: Callable[[], int]) -> None:
+        self.recorder = recorder
+        self.now_ns = now_ns
+        self._last_cloud: NDArray[np.float64] | None = None
+
+    def frame(self, frame: RGBDFrame, T_base_camera: NDArray[np.float64] | None) -> None:
+        stamp = self.now_ns()
+        self.recorder.write_color_image(stamp, frame.color, "camera")
+        self.recorder.write_depth(stamp, frame.depth_m, "camera")
+        if T_base_camera is not None:
+            self.recorder.write_transforms(stamp, [("base", "camera", T_base_camera)])
+            self._write_cloud(stamp, frame, T_base_camera)
+
+    def _write_cloud(self, stamp: int, frame: RGBDFrame, T_base_camera: NDArray[np.float64]) -> None:
+        K = frame.intrinsics
+        v, u = np.nonzero(frame.depth_m > 0)
+        if len(u) == 0:
+            return
+        step = max(1, len(u) // _POINTS_MAX)
+        u, v = u[::step], v[::step]
+        z = frame.depth_m[v, u].astype(np.float64)
+        pts = np.stack([(u - K.cx_px) / K.fx_px * z, (v - K.cy_px) / K.fy_px * z, z], axis=1)
+        pts_base = pts @ T_base_camera[:3, :3].T + T_base_camera[:3, 3]
+        rgb = frame.color[v, u]
+        self.recorder.write_points(stamp, pts_base.astype(np.float32), rgb, "base")
+
+    def perception(self, result: Any, T_base_camera: NDArray[np.float64]) -> None:
+        from bt_grasp.geometry import make_T, rot_z
+
+        markers = []
+        for i, det in enumerate(result.detections):
+            T = make_T(rot_z(det.yaw_rad), det.centroid_base_m)
+            markers.append(BoxMarker(f"det{i}", T, tuple(det.size_m), label=f"{det.label} {det.confidence:.2f}"))
+        self.recorder.write_markers(self.now_ns(), markers, topic="/perception/detections")
+        self.recorder.write_log(self.now_ns(), "INFO", "perception", f"{result.status.value}: {result.message}")
+
+    def grasps(self, candidates: Sequence[Any]) -> None:
+        markers = [
+            PoseMarker(f"grasp{i}", c.T_base_tcp_grasp, label=f"#{i} {c.score:.2f}") for i, c in enumerate(candidates)
+        ]
+        self.recorder.write_markers(self.now_ns(), markers, topic="/perception/grasps")
+
+    def trajectory(self, name: str, times_s: NDArray[np.float64], q: NDArray[np.float64], kind: str) -> None:
+        self.recorder.write_trajectory(self.now_ns(), name, times_s, q, "executed" if kind == "executed" else "planned")
+
+    def log(self, level: str, name: str, message: str) -> None:
+        self.recorder.write_log(self.now_ns(), level, name, message)
