@@ -96,6 +96,8 @@ class BtNode(py_trees.behaviour.Behaviour):
     bt_kind: NodeKind = NodeKind.ACTION
     bt_status_extra: str | None = "IDLE"
     bt_state: BtStatus = BtStatus.IDLE
+    #: the spec the node was built from (also set on a Leaf class by the ``@leaf`` decorator)
+    bt_spec: NodeSpec
 
     def _bt_bind(self, ctx: NodeContext) -> None:
         """Copy identity and conditions from the build context (called by every ``__init__``)."""
@@ -103,7 +105,7 @@ class BtNode(py_trees.behaviour.Behaviour):
         self.bt_type = ctx.type_id
         self.bt_path = ctx.path
         self.bt_kind = ctx.kind
-        self.bt_spec: NodeSpec = ctx.spec
+        self.bt_spec = ctx.spec
         #: the attributes exactly as written in the tree file (ports, name, pre/post conditions)
         self.bt_attributes: dict[str, str] = dict(ctx.attributes)
         self.bt_state = BtStatus.IDLE
