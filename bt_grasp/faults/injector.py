@@ -1,0 +1,213 @@
+"""Installing a fault plan on a prepared run: wrap the interfaces, watch leaf entries and ticks, arm faults.
+
+The injector never touches tree results or blackboard entries. It wraps ``cell.camera``, ``cell.robot``,
+``cell.services["planner"]`` and ``cell.services["kinematics"]`` (and, when an offset fires,
+``cell.calibration``), and it changes physics through the world. Leaf entries are seen by wrapping each
+leaf's ``initialise``: the wrapper only arms a fault; the fault then acts on the interfaces.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+import numpy as np
+
+from bt_grasp.errors import InputError
+from bt_grasp.faults.camera import FaultyCamera
+from bt_grasp.faults.effects import SERVICE_KINDS, START, Wrapped
+from bt_grasp.faults.episode import Episode
+from bt_grasp.faults.model import FaultKind
+from bt_grasp.faults.plan import Fault, FaultPlan
+from bt_grasp.faults.robot import FaultyRobot
+from bt_grasp.faults.services import FaultyKinematics, FaultyPlanner
+
+log = logging.getLogger(__name__)
+
+LEAF_KINDS = ("Action", "Condition")
+
+
+class FaultRecorder(Protocol):
+    def write_fault(self, stamp_ns: int, tick: int, fault: dict[str, Any]) -> None: ...
+
+
+@dataclass
+class _Armed:
+    """A fault of the plan and its trigger's state."""
+
+    fault: Fault
+    index: int
+    entries: int = 0  # entries of the trigger's leaf seen so far
+    armed: int = 0  # episodes started (at most fault.count)
+    current: Episode | None = None
+
+    def may_arm(self) -> bool:
+        return self.armed < self.fault.count and (self.current is None or self.current.done)
+
+
+def _matches(node: Any, name: str) -> bool:
+    return name in (node.name, getattr(node, "bt_type", None), getattr(node, "bt_path", None))
+
+
+def _is_leaf(node: Any) -> bool:
+    kind = getattr(node, "bt_kind", None)
+    return getattr(kind, "value", kind) in LEAF_KINDS
+
+
+class Injector:
+    """Arms the plan's faults as their triggers come and records every firing."""
+
+    def __init__(self, plan: FaultPlan, wrapped: Wrapped, leaves: list[Any], recorder: FaultRecorder | None) -> None:
+        self.plan = plan
+        self.wrapped = wrapped
+        self.recorder = recorder
+        self.leaves = leaves
+        self.fired = 0
+        self.firings: list[dict[str, Any]] = []
+        self._tick = 0  # the last tick finished
+        self._in_after_tick = False
+        self._faults = [_Armed(f, i) for i, f in enumerate(plan.faults)]
+        self._check_leaf_names()
+        for node in leaves:
+            self._hook(node)
+
+    def _check_leaf_names(self) -> None:
+        names = sorted({n.name for n in self.leaves})
+        for armed in self._faults:
+            wanted = armed.fault.trigger.on_leaf
+            if wanted is not None and not any(_matches(n, wanted) for n in self.leaves):
+                raise InputError(
+                    armed.fault.source,
+                    f"on_leaf '{wanted}' names no leaf of the tree; leaves: {', '.join(names)}",
+                    armed.fault.where,
+                )
+
+    def _hook(self, node: Any) -> None:
+        original: Callable[[], None] = node.initialise
+
+        def initialise(_node: Any = node, _original: Callable[[], None] = original) -> None:
+            self._entered(_node)
+            _original()
+
+        node.initialise = initialise
+
+    # --- triggers ---------------------------------------------------------------------------------------
+    def _entered(self, node: Any) -> None:
+        self.wrapped.apply_calibration_offsets()
+        for armed in self._faults:
+            trigger = armed.fault.trigger
+            if trigger.at_tick is not None:
+                continue
+            if trigger.on_leaf is not None and not _matches(node, trigger.on_leaf):
+                continue
+            armed.entries += 1
+            if not armed.may_arm():
+                continue
+            if trigger.probability is not None:
+                if self.wrapped.rngs[armed.index].random() >= trigger.probability:
+                    continue
+            elif armed.entries < (trigger.nth or 1):
+                continue
+            self._arm(armed, node)
+
+    def before_run(self) -> None:
+        """Called once before the first tick."""
+        self.wrapped.apply_calibration_offsets()
+
+    def after_tick(self, tick: int) -> None:
+        """Called after every tick: tick triggers, timers, episodes that end with their leaf's attempt."""
+        self._tick = tick
+        self._in_after_tick = True
+        try:
+            self._after_tick(tick)
+        finally:
+            self._in_after_tick = False
+
+    def _current_tick(self) -> int:
+        """The tick a firing belongs to: the one running, or the one just finished (in after_tick)."""
+        return self._tick if self._in_after_tick else self._tick + 1
+
+    def _after_tick(self, tick: int) -> None:
+        now = self.wrapped.now_ns()
+        due = [t for t in self.wrapped.timers if t.at_ns <= now]
+        self.wrapped.timers = [t for t in self.wrapped.timers if t.at_ns > now]
+        for timer in due:
+            timer.action()
+        self.wrapped.robot.expire()
+        for armed in self._faults:
+            ep = armed.current
+            if ep is not None and not ep.done and self._attempt_over(ep):
+                ep.finish()
+            trigger = armed.fault.trigger
+            if trigger.at_tick is not None and tick >= trigger.at_tick and armed.may_arm():
+                self._arm(armed, None)
+        self.wrapped.apply_calibration_offsets()
+
+    @staticmethod
+    def _attempt_over(ep: Episode) -> bool:
+        """A ``within_attempt`` service fault armed by a leaf whose attempt has ended."""
+        if ep.node is None or ep.fault.kind not in SERVICE_KINDS or not ep.params.within_attempt:
+            return False
+        return getattr(ep.node.bt_state, "value", "") != "RUNNING"
+
+    # --- arming and recording --------------------------------------------------------------------------
+    def _arm(self, armed: _Armed, node: Any) -> None:
+        leaf = None if node is None else node.name
+        tick = self._current_tick()
+        episode = Episode(armed.fault, tick, leaf, node, self._record)
+        armed.current = episode
+        armed.armed += 1
+        log.info("fault %s armed (tick %d%s)", armed.fault.label, tick, f", entering {leaf}" if leaf else "")
+        START[armed.fault.kind](episode, self.wrapped, armed.index)
+
+    def _record(self, episode: Episode, details: dict[str, Any]) -> None:
+        self.fired += 1
+        fault = episode.fault
+        tick = self._current_tick()
+        record = {
+            **fault.to_dict(),
+            "leaf": episode.leaf,
+            "armed_tick": episode.tick,
+            "firing": self.fired,
+            "details": details,
+        }
+        self.firings.append({"tick": tick, **record})
+        log.warning("fault %s fired at tick %d: %s", fault.label, tick, details.get("effect", ""))
+        if self.recorder is not None:
+            self.recorder.write_fault(self.wrapped.now_ns(), tick, record)
+
+
+def _fault_rngs(world: Any, plan: FaultPlan) -> dict[int, np.random.Generator]:
+    """One generator per fault, derived from the world's fault stream (independent of the plan's length)."""
+    seq: np.random.SeedSequence = world.fault_seed_sequence
+    return {
+        i: np.random.default_rng(np.random.SeedSequence(seq.entropy, spawn_key=(*seq.spawn_key, i)))
+        for i in range(len(plan.faults))
+    }
+
+
+def install_faults(plan: FaultPlan, prepared: Any, recorder: FaultRecorder | None) -> Injector:
+    """Wrap the prepared run's cell and tree for ``plan``; call before the leaves' ``setup``."""
+    cell, world = prepared.cell, prepared.world
+    camera = FaultyCamera(cell.camera)
+    robot = FaultyRobot(cell.robot, cell.clock)
+    planner = FaultyPlanner(cell.services["planner"])
+    kinematics = FaultyKinematics(cell.services["kinematics"])
+    cell.camera, cell.robot = camera, robot
+    cell.services["planner"], cell.services["kinematics"] = planner, kinematics
+    color = None
+    root_blackboard = getattr(prepared.tree, "root_blackboard", None)
+    if root_blackboard is not None and root_blackboard.has("color"):
+        color = root_blackboard.get("color")
+    wrapped = Wrapped(cell, world, camera, robot, planner, kinematics, _fault_rngs(world, plan), color=color)
+    for fault in plan.faults:
+        name = fault.params.object if fault.kind is FaultKind.OBJECT_NUDGE else None
+        if name is not None and name not in world.objects:
+            known = ", ".join(world.objects)
+            raise InputError(fault.source, f"no object '{name}' in the scene; objects: {known}", fault.where)
+    leaves = [n for n in prepared.tree.nodes() if _is_leaf(n)]
+    injector = Injector(plan, wrapped, leaves, recorder)
+    log.info("installed %d fault(s) on %d leaves", len(plan.faults), len(leaves))
+    return injector
