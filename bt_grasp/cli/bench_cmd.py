@@ -1,0 +1,70 @@
+"""`bt-grasp bench ...`: benchmarks. `plan` runs the motion-planning benchmark (bt_grasp.motion.bench).
+
+The group lives here; each benchmark's logic lives in its own package.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+from pathlib import Path
+
+import typer
+
+bench_app = typer.Typer(help="Benchmarks (planning; perception).", no_args_is_help=True)
+
+
+@bench_app.command("plan")
+def plan(
+    problems: int = typer.Option(60, "--problems", min=1, help="Number of tabletop problems."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the problem set (same seed, same problems)."),
+    planner: str = typer.Option("RRTConnect", "--planner", help="OMPL planner name."),
+    time_limit_s: float = typer.Option(1.0, "--time-limit", help="Planner time limit per problem, s."),
+    scene: Path = typer.Option(Path("scenes/tabletop.yaml"), "--scene", help="Scene file (table, mount)."),
+    as_json: bool = typer.Option(False, "--json", help="Print exactly one JSON object."),
+    export: Path = typer.Option(None, "--export", help="Also write the problems as JSON (for tools/)."),
+) -> None:
+    """Plan a fixed seeded set of tabletop problems: success rate, planning/IK/trajectory times."""
+    from bt_grasp.errors import InputError
+    from bt_grasp.motion.bench import make_problems, run_plan_bench
+    from bt_grasp.motion.planner import PLANNERS, PlannerOptions
+    from bt_grasp.scene_config import load_scene
+
+    if planner not in PLANNERS:
+        raise InputError("--planner", f"unknown planner '{planner}'; known: {', '.join(PLANNERS)}")
+    config = load_scene(scene)
+    options = PlannerOptions(planner=planner, time_limit_s=time_limit_s)
+    if export is not None:
+        export.write_text(json.dumps([p.to_json() for p in make_problems(config, problems, seed)], indent=1))
+    report = run_plan_bench(config, problems, seed, options)
+    summary = report.summary()
+    summary["machine"] = f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}"
+    if as_json:
+        typer.echo(json.dumps(summary))
+        return
+    from rich.console import Console
+    from rich.table import Table
+
+    table = Table(title=f"bt-grasp bench plan: {problems} problems, seed {seed}, {planner}")
+    table.add_column("metric")
+    table.add_column("value", justify="right")
+    rows = [
+        ("success rate", f"{summary['success_rate']:.1%}"),
+        ("plan time median (IK + search + re-check)", f"{summary['plan_ms_median']:.1f} ms"),
+        ("plan time p95", f"{summary['plan_ms_p95']:.1f} ms"),
+        ("IK time median", f"{summary['ik_ms_median']:.2f} ms"),
+        ("trajectory (ruckig) time median", f"{summary['traj_ms_median']:.2f} ms"),
+        ("joint path length median", f"{summary['path_length_rad_median']:.2f} rad"),
+        ("trajectory duration median", f"{summary['traj_duration_s_median']:.2f} s"),
+        ("straight line free (no search)", f"{summary['direct_fraction']:.0%}"),
+        ("statuses", ", ".join(f"{k} {v}" for k, v in summary["statuses"].items())),  # type: ignore[attr-defined]
+        ("machine", str(summary["machine"])),
+    ]
+    for name, value in rows:
+        table.add_row(name, value)
+    Console().print(table)
+
+
+def register(app: typer.Typer) -> None:
+    app.add_typer(bench_app, name="bench")
