@@ -161,18 +161,19 @@ class ArmKinematics:
         model, data, fid = self.model, self.data, self._tcp_id
         q = np.clip(q0, self.lower_rad, self.upper_rad)
         pos_err = rot_err = float("inf")
+        damping = opts.damping * np.eye(6)
+        target = oMdes.translation
         for it in range(1, opts.max_iterations + 1):
-            pin.forwardKinematics(model, data, q)
+            pin.computeJointJacobians(model, data, q)  # forward kinematics + joint Jacobians, one pass
             oMf = pin.updateFramePlacement(model, data, fid)
             fMdes = oMf.actInv(oMdes)
             err = pin.log6(fMdes).vector  # error twist in the tcp frame
-            pos_err = float(np.linalg.norm(oMdes.translation - oMf.translation))
+            pos_err = float(np.linalg.norm(target - oMf.translation))
             rot_err = float(np.linalg.norm(err[3:]))
             if pos_err < opts.position_tol_m and rot_err < opts.rotation_tol_rad:
                 return q, pos_err, rot_err, it - 1, True
-            J = pin.computeFrameJacobian(model, data, q, fid, pin.ReferenceFrame.LOCAL)
-            J = pin.Jlog6(fMdes) @ J
-            dq = J.T @ np.linalg.solve(J @ J.T + opts.damping * np.eye(6), err)
+            J = pin.Jlog6(fMdes) @ pin.getFrameJacobian(model, data, fid, pin.ReferenceFrame.LOCAL)
+            dq = J.T @ np.linalg.solve(J @ J.T + damping, err)
             step = float(np.max(np.abs(dq)))
             if step > opts.max_step_rad:
                 dq *= opts.max_step_rad / step

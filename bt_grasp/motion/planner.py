@@ -77,8 +77,8 @@ class PlannerOptions:
     margin_m: float = 0.01  # minimum clearance to scene shapes (not applied to self-collision)
     range_rad: float | None = 1.0  # the tree planners' step size; None lets OMPL choose (~6 rad here)
     joint_window_rad: float | None = math.pi  # search only within this of the start/goal span per joint
-    ik_seeds: int = 12  # IK starts for plan_to_pose (q_start first)
-    max_goal_configs: int = 4  # distinct collision-free IK solutions handed to the planner
+    ik_seeds: int = 10  # IK starts for plan_to_pose (q_start first)
+    max_goal_configs: int = 3  # distinct collision-free IK solutions handed to the planner
 
     def problem(self) -> str | None:
         """Why these options are unusable, or None."""
@@ -167,7 +167,9 @@ class MotionPlanner:
             return _fail(PlanStatus.INVALID_INPUT, problem or f"bad start configuration {q_start!r}")
         t0 = time.perf_counter()
         rng = np.random.default_rng(opts.seed)
-        solutions, best = self.kin.ik_solutions(T_base_tcp_goal, q0, seeds=opts.ik_seeds, rng=rng)
+        # a few more solutions than goals: some may collide (IK stops once it has that many)
+        solutions, best = self.kin.ik_solutions(T_base_tcp_goal, q0, seeds=opts.ik_seeds, rng=rng,
+                                                max_solutions=2 * opts.max_goal_configs)
         ik_time = time.perf_counter() - t0
         if best.status is IKStatus.INVALID_INPUT:
             return _fail(PlanStatus.INVALID_INPUT, "the goal pose is not a finite rigid transform",
