@@ -1,0 +1,163 @@
+"""The hand-eye calibration file: written by ``bt-grasp calibrate``, read strictly by everything else.
+
+Format (YAML, metres, quaternion w x y z)::
+
+    version: 1
+    mount: eye-to-hand              # or eye-in-hand
+    parent_frame: base_link         # eye-to-hand: base_link; eye-in-hand: the tool link (tool0)
+    child_frame: camera_color_optical_frame
+    transform: {xyz_m: [..], quat_wxyz: [..], matrix: [[4 rows of 4]]}
+    method: tsai+lm
+    samples: 18
+    residuals: {tsai: {residual_mm: .., residual_deg: .., scatter_mm: .., reprojection_px: ..}, ...}
+    date: '2025-01-01T12:00:00+00:00'
+    camera_intrinsics: {width_px: 640, height_px: 480, fx_px: .., fy_px: .., cx_px: .., cy_px: ..}
+    board: {dictionary: DICT_5X5_100, squares_x: 5, squares_y: 7, square_m: 0.035, marker_m: 0.026}
+
+``xyz_m`` + ``quat_wxyz`` and ``matrix`` must describe the same rigid transform (a hand-edited file where
+they disagree is rejected). Any problem is a ConfigError naming the file and line.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+from pathlib import Path
+from typing import Annotated, Literal
+
+import numpy as np
+import yaml
+from pydantic import Field, model_validator
+
+from bt_grasp.config import StrictModel, read_yaml, validate
+from bt_grasp.errors import ConfigError
+from bt_grasp.geometry import Mat4, T_from_pos_quat_wxyz, quat_wxyz
+from bt_grasp.interfaces import CameraIntrinsics
+from bt_grasp.perception.charuco import BoardSpec
+
+Vec3 = tuple[float, float, float]
+Row4 = tuple[float, float, float, float]
+
+
+class TransformModel(StrictModel):
+    xyz_m: Vec3
+    quat_wxyz: Row4
+    matrix: tuple[Row4, Row4, Row4, Row4]
+
+    @model_validator(mode="after")
+    def _consistent(self) -> TransformModel:
+        q = np.asarray(self.quat_wxyz, dtype=float)
+        if not np.all(np.isfinite(q)) or abs(np.linalg.norm(q) - 1.0) > 1e-3:
+            raise ValueError("quat_wxyz must be a unit quaternion (w, x, y, z)")
+        M = np.asarray(self.matrix, dtype=float)
+        if not np.all(np.isfinite(M)) or not np.allclose(M[3], [0, 0, 0, 1]):
+            raise ValueError("matrix must be a finite 4x4 homogeneous transform with last row [0, 0, 0, 1]")
+        R = M[:3, :3]
+        if not np.allclose(R.T @ R, np.eye(3), atol=1e-5) or np.linalg.det(R) < 0:
+            raise ValueError("matrix's rotation part is not a rotation (orthonormal, determinant +1)")
+        T = T_from_pos_quat_wxyz(list(self.xyz_m), q / np.linalg.norm(q))
+        if not np.allclose(T, M, atol=1e-5):
+            raise ValueError("xyz_m + quat_wxyz and matrix describe different transforms")
+        return self
+
+    @property
+    def T(self) -> Mat4:
+        return np.asarray(self.matrix, dtype=float)
+
+
+class IntrinsicsModel(StrictModel):
+    width_px: Annotated[int, Field(gt=0)]
+    height_px: Annotated[int, Field(gt=0)]
+    fx_px: Annotated[float, Field(gt=0)]
+    fy_px: Annotated[float, Field(gt=0)]
+    cx_px: float
+    cy_px: float
+
+
+class MethodResiduals(StrictModel):
+    residual_mm: Annotated[float, Field(ge=0)]
+    residual_deg: Annotated[float, Field(ge=0)]
+    scatter_mm: Annotated[float, Field(ge=0)]
+    reprojection_px: Annotated[float, Field(ge=0)]
+
+
+class CalibrationFile(StrictModel):
+    version: Literal[1] = 1
+    mount: Literal["eye-to-hand", "eye-in-hand"]
+    parent_frame: Annotated[str, Field(min_length=1)]
+    child_frame: Annotated[str, Field(min_length=1)] = "camera_color_optical_frame"
+    transform: TransformModel
+    method: Annotated[str, Field(min_length=1)]
+    samples: Annotated[int, Field(ge=3)]
+    residuals: dict[str, MethodResiduals] = Field(default_factory=dict)
+    date: str
+    camera_intrinsics: IntrinsicsModel
+    board: BoardSpec
+
+    @property
+    def T_parent_camera(self) -> Mat4:
+        """``T_base_camera`` (eye-to-hand) or ``T_tool_camera`` (eye-in-hand, tool = ``parent_frame``)."""
+        return self.transform.T
+
+    def T_base_camera(self, T_base_tool: Mat4 | None = None) -> Mat4:
+        """The camera pose in the base frame; eye-in-hand needs the tool pose at capture time."""
+        if self.mount == "eye-to-hand":
+            return self.transform.T
+        if T_base_tool is None:
+            raise ValueError("an eye-in-hand calibration needs T_base_tool at capture time")
+        return np.asarray(T_base_tool, dtype=float) @ self.transform.T
+
+    @property
+    def intrinsics(self) -> CameraIntrinsics:
+        return CameraIntrinsics(**self.camera_intrinsics.model_dump())
+
+
+def make_calibration(
+    mount: str, T_parent_camera: Mat4, parent_frame: str, method: str, samples: int,
+    residuals: dict[str, dict[str, float]], intrinsics: CameraIntrinsics, board: BoardSpec,
+    date: str | None = None,
+) -> CalibrationFile:
+    T = np.asarray(T_parent_camera, dtype=float)
+    q = quat_wxyz(T)
+    if q[0] < 0:
+        q = -q
+    data = {
+        "mount": mount,
+        "parent_frame": parent_frame,
+        "transform": {
+            "xyz_m": [float(v) for v in T[:3, 3]],
+            "quat_wxyz": [float(v) for v in q],
+            "matrix": [[float(v) for v in row] for row in T],
+        },
+        "method": method,
+        "samples": samples,
+        "residuals": residuals,
+        "date": date or _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
+        "camera_intrinsics": intrinsics.to_dict(),
+        "board": board.model_dump(),
+    }
+    return CalibrationFile.model_validate(data)
+
+
+def save_calibration(calibration: CalibrationFile, path: str | Path) -> Path:
+    """Write the file (parents created); returns its path."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    data = calibration.model_dump(mode="json")
+    header = (f"# bt_grasp hand-eye calibration ({calibration.mount}): maps camera_color_optical_frame "
+              f"points into {calibration.parent_frame}\n")
+    path.write_text(header + yaml.safe_dump(data, sort_keys=False, default_flow_style=None), encoding="utf-8")
+    return path
+
+
+def load_calibration(path: str | Path, expected_mount: str | None = None) -> CalibrationFile:
+    """Read and validate a calibration file; ConfigError (file:line: problem) on any problem, including a
+    calibration made for another camera mount than ``expected_mount``."""
+    data, lines = read_yaml(path)
+    calibration = validate(CalibrationFile, data, path, lines)
+    if expected_mount is not None and calibration.mount != expected_mount:
+        raise ConfigError(
+            path,
+            f"this calibration is for an {calibration.mount} camera, but the camera is mounted {expected_mount}",
+            where=lines.get(("mount",)),
+        )
+    return calibration
