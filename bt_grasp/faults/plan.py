@@ -79,10 +79,11 @@ def _build(entry: FaultEntry, index: int, source: str, lines: dict[KeyPath, int]
     key: KeyPath = ("faults", index, "params")
     raw = entry.params or {}
     try:
-        params = validate(model, raw, source, _sub_lines(lines, key)) if raw else model()
+        params = validate(model, raw, source, _sub_lines(lines, key))
     except ConfigError as exc:
         line = exc.where if exc.where.startswith("line ") else lines.get(key, lines.get(key[:2]))
-        raise ConfigError(source, f"faults[{index}].params ({entry.kind.value}): {exc.problem}", line) from None
+        problem = _tidy(exc.problem.removeprefix("top level: "))
+        raise ConfigError(source, f"faults[{index}].params ({entry.kind.value}): {problem}", line) from None
     trigger = Trigger(
         at_tick=entry.at_tick,
         on_leaf=entry.on_leaf,
@@ -93,9 +94,16 @@ def _build(entry: FaultEntry, index: int, source: str, lines: dict[KeyPath, int]
     return Fault(entry.kind, trigger, entry.count, params, label, source, where)
 
 
+def _tidy(problem: str) -> str:
+    return problem.replace("Value error, ", "")
+
+
 def _from_file(path: Path) -> list[Fault]:
     data, lines = read_yaml(path)
-    parsed = validate(FaultPlanFile, data, path, lines)
+    try:
+        parsed = validate(FaultPlanFile, data, path, lines)
+    except ConfigError as exc:
+        raise ConfigError(exc.source, _tidy(exc.problem), exc.where or None) from None
     return [_build(e, i, str(path), lines, f"faults[{i}]") for i, e in enumerate(parsed.faults)]
 
 
@@ -105,7 +113,7 @@ def _from_inject(text: str) -> Fault:
         entry = validate(FaultEntry, data, INJECT_SOURCE)
         return _build(entry, 0, INJECT_SOURCE, {}, text)
     except ConfigError as exc:
-        problem = exc.problem.removeprefix("faults[0].")
+        problem = _tidy(exc.problem.removeprefix("faults[0]."))
         raise InputError(INJECT_SOURCE, f"'{text}': {problem}") from None
 
 

@@ -1,0 +1,246 @@
+"""Stand-ins for the cell, world and tree that the injectors wrap (no simulator, no planner)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from types import SimpleNamespace
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from bt_grasp.clock import ManualClock
+from bt_grasp.interfaces import CameraIntrinsics, RGBDFrame
+from bt_grasp.motion.kinematics import IKResult, IKStatus
+from bt_grasp.motion.planner import PlanResult, PlanStatus
+from bt_grasp.tree.node import BtStatus
+
+INTRINSICS = CameraIntrinsics(64, 48, 50.0, 50.0, 31.5, 23.5)
+
+
+class FakeCamera:
+    def __init__(self, clock: ManualClock) -> None:
+        self.clock = clock
+        self.captures = 0
+
+    @property
+    def intrinsics(self) -> CameraIntrinsics:
+        return INTRINSICS
+
+    @property
+    def mount(self) -> str:
+        return "eye-to-hand"
+
+    def capture(self) -> RGBDFrame | None:
+        self.captures += 1
+        depth = np.full((48, 64), 0.8, dtype=np.float32)
+        depth[:, :4] = 0.0  # a strip with no depth
+        color = np.zeros((48, 64, 3), dtype=np.uint8)
+        return RGBDFrame(color, depth, INTRINSICS, self.clock.now_ns(), "eye-to-hand")
+
+
+class FakeRobot:
+    def __init__(self) -> None:
+        self.targets: list[NDArray[np.float64]] = []
+        self.gripper: list[str] = []
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        return tuple(f"j{i}" for i in range(6))
+
+    def joint_positions(self) -> NDArray[np.float64]:
+        return np.zeros(6)
+
+    def joint_velocities(self) -> NDArray[np.float64]:
+        return np.zeros(6)
+
+    def set_joint_targets(self, q_rad: NDArray[np.float64], qd_rad_s: NDArray[np.float64] | None = None) -> None:
+        self.targets.append(np.asarray(q_rad))
+
+    def open_gripper(self) -> None:
+        self.gripper.append("open")
+
+    def close_gripper(self, force_n: float | None = None) -> None:
+        self.gripper.append(f"close {force_n}")
+
+    def gripper_width_m(self) -> float:
+        return 0.05
+
+    def gripper_target_width_m(self) -> float:
+        return 0.0
+
+
+class FakePlanner:
+    def __init__(self) -> None:
+        self.calls = 0
+
+    def plan_to_pose(self, q: Any, T: Any, scene: Any, options: Any) -> PlanResult:
+        self.calls += 1
+        return PlanResult(PlanStatus.OK, path=np.zeros((2, 6)))
+
+    def plan_to_joints(self, q: Any, q_goal: Any, scene: Any, options: Any) -> PlanResult:
+        self.calls += 1
+        return PlanResult(PlanStatus.OK, path=np.zeros((2, 6)))
+
+    def checker(self, scene: Any, margin_m: float) -> str:
+        return "checker"
+
+
+class FakeKinematics:
+    def ik(self, T: Any, q: NDArray[np.float64], **kwargs: Any) -> IKResult:
+        return IKResult(IKStatus.OK, np.ones(6), 0.0, 0.0, 3)
+
+    def ik_solutions(self, T: Any, q: NDArray[np.float64], **kwargs: Any) -> tuple[list[Any], IKResult]:
+        return [np.ones(6)], self.ik(T, q)
+
+    def fk(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
+        return np.eye(4)
+
+
+@dataclass
+class FakeCalibration:
+    T_base_camera: NDArray[np.float64]
+    mount: str = "eye-to-hand"
+
+
+@dataclass
+class FakeCell:
+    camera: Any
+    robot: Any
+    clock: ManualClock
+    services: dict[str, Any]
+    calibration: Any = None
+
+
+class FakeNode:
+    """A leaf as the injector sees it: name, type, path, kind, state and an ``initialise`` to wrap."""
+
+    def __init__(self, name: str, kind: str = "Action") -> None:
+        self.name = name
+        self.bt_type = name
+        self.bt_path = f"Main/{name}"
+        self.bt_kind = SimpleNamespace(value=kind)
+        self.bt_state = BtStatus.IDLE
+        self.initialised = 0
+
+    def initialise(self) -> None:
+        self.initialised += 1
+
+    def enter(self) -> None:
+        """What a tick does to a leaf that was not RUNNING: ``initialise`` (then ``update``)."""
+        self.initialise()
+
+
+class FakeMaterial:
+    def __init__(self, friction: float) -> None:
+        self.static_friction = friction
+        self.dynamic_friction = friction
+
+    def set_static_friction(self, value: float) -> None:
+        self.static_friction = value
+
+    def set_dynamic_friction(self, value: float) -> None:
+        self.dynamic_friction = value
+
+
+class FakeJoint:
+    def __init__(self, name: str) -> None:
+        self.name, self.stiffness, self.damping, self.force_limit = name, 4000.0, 150.0, 40.0
+
+    def set_drive_properties(self, stiffness: float, damping: float, force_limit: float) -> None:
+        self.stiffness, self.damping, self.force_limit = stiffness, damping, force_limit
+
+
+class FakeBody:
+    def __init__(self) -> None:
+        self.velocity: list[float] | None = None
+        self.woken = False
+
+    def wake_up(self) -> None:
+        self.woken = True
+
+    def get_linear_velocity(self) -> list[float]:
+        return self.velocity or [0.0, 0.0, 0.0]
+
+    def set_linear_velocity(self, v: list[float]) -> None:
+        self.velocity = list(v)
+
+
+class FakeEntity:
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self.body = FakeBody()
+
+    def get_name(self) -> str:
+        return self.name
+
+    def get_components(self) -> list[Any]:
+        return [object(), self.body]
+
+
+@dataclass
+class FakeWorld:
+    fault_seed_sequence: np.random.SeedSequence
+    objects: dict[str, FakeEntity]
+    config: Any
+    robot: Any
+
+
+def fake_world(seed: int = 0) -> FakeWorld:
+    pads = {n: FakeMaterial(1.0) for n in ("left_finger", "right_finger")}
+    links = {n: SimpleNamespace(get_collision_shapes=lambda m=m: [SimpleNamespace(physical_material=m)])
+             for n, m in pads.items()}
+    joints = [FakeJoint("left_finger_joint"), FakeJoint("right_finger_joint")]
+    robot = SimpleNamespace(links=links, articulation=SimpleNamespace(get_active_joints=lambda: joints), pads=pads,
+                            joints=joints)
+    config = SimpleNamespace(
+        objects=[SimpleNamespace(name="red_box", color="red", friction=0.8),
+                 SimpleNamespace(name="blue_box", color="blue", friction=0.4)],
+        table=SimpleNamespace(friction=0.6),
+    )
+    objects = {"red_box": FakeEntity("red_box"), "blue_box": FakeEntity("blue_box")}
+    return FakeWorld(np.random.SeedSequence(seed).spawn(3)[2], objects, config, robot)
+
+
+class FakeTree:
+    def __init__(self, nodes: list[FakeNode], color: str | None = None) -> None:
+        self._nodes = nodes
+        values = {"color": color} if color else {}
+        self.root_blackboard = SimpleNamespace(has=values.__contains__, get=values.get)
+
+    def nodes(self) -> list[FakeNode]:
+        return self._nodes
+
+
+@dataclass
+class FakeRecorder:
+    faults: list[tuple[int, int, dict[str, Any]]] = field(default_factory=list)
+
+    def write_fault(self, stamp_ns: int, tick: int, fault: dict[str, Any]) -> None:
+        self.faults.append((stamp_ns, tick, fault))
+
+
+@dataclass
+class Rig:
+    """A prepared run made of fakes, plus handles on the originals."""
+
+    cell: FakeCell
+    world: FakeWorld
+    tree: FakeTree
+    camera: FakeCamera
+    robot: FakeRobot
+    planner: FakePlanner
+    kinematics: FakeKinematics
+    clock: ManualClock
+    nodes: dict[str, FakeNode]
+
+
+def rig(leaves: tuple[str, ...] = ("Perceive", "PlanGrasp", "Approach", "Grasp", "Lift"), seed: int = 0,
+        color: str | None = "red") -> Rig:
+    clock = ManualClock()
+    camera, robot, planner, kin = FakeCamera(clock), FakeRobot(), FakePlanner(), FakeKinematics()
+    cell = FakeCell(camera, robot, clock, {"planner": planner, "kinematics": kin})
+    nodes = {n: FakeNode(n) for n in leaves}
+    control = FakeNode("pick", kind="Control")
+    tree = FakeTree([control, *nodes.values()], color)
+    return Rig(cell, fake_world(seed), tree, camera, robot, planner, kin, clock, nodes)
