@@ -259,3 +259,25 @@ def test_without_a_recorder_firings_are_still_counted() -> None:
     r.nodes["Perceive"].enter()
     assert r.cell.camera.capture() is None
     assert injector.fired == 1 and injector.firings[0]["tick"] == 1
+
+
+class _MethodCalibration:
+    """A calibration whose camera pose is a method (eye-to-hand: fixed; eye-in-hand: tool pose first)."""
+
+    def __init__(self, mount: str, T: np.ndarray) -> None:
+        self.mount, self.T = mount, T
+
+    def T_base_camera(self, T_base_tool: np.ndarray | None = None) -> np.ndarray:
+        return self.T if T_base_tool is None else T_base_tool @ self.T
+
+
+@pytest.mark.parametrize("mount", ["eye-to-hand", "eye-in-hand"])
+def test_calibration_offset_of_a_method_pose(mount: str) -> None:
+    from bt_grasp.faults.calibration import offset_transform
+
+    offset = OffsetCalibration(_MethodCalibration(mount, np.eye(4)), offset_transform((10.0, 0.0, 0.0), (0, 0, 0)))
+    T_tool = np.eye(4)
+    T_tool[:3, :3] = [[0, -1, 0], [1, 0, 0], [0, 0, 1]]  # the tool turned 90 degrees about z
+    T = offset.T_base_camera(T_tool) if mount == "eye-in-hand" else offset.T_base_camera()
+    expected = [0.0, 0.01, 0.0] if mount == "eye-in-hand" else [0.01, 0.0, 0.0]  # tool x is base y
+    assert np.allclose(T[:3, 3], expected)
