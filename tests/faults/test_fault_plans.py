@@ -78,7 +78,7 @@ def test_plan_defaults_and_round_trip() -> None:
         ("frame_drop@Perceive", {"kind": "frame_drop", "trigger": {"on_leaf": "Perceive", "nth": 1}}),
         ("planner_fail@tick:50", {"kind": "planner_fail", "trigger": {"at_tick": 50}}),
         ("planner_fail@tick:50:calls=2", {"params": {"calls": 2, "within_attempt": False, "status": "no_path"}}),
-        ("slip@Lift#1:friction=0.05", {"kind": "gripper_slip", "params": {"friction": 0.05, "force_n": None,
+        ("slip@Lift#1:friction=0.05", {"kind": "gripper_slip", "params": {"friction": 0.05, "force_n": 2.0,
                                                                           "duration_s": 2.0}}),
         ("nudge@Approach#2:dx_m=0.03,dy_m=0,count=2", {"kind": "object_nudge", "count": 2,
                                                        "trigger": {"on_leaf": "Approach", "nth": 2}}),
