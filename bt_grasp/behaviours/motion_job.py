@@ -88,6 +88,7 @@ class MotionJob:
         rate_hz = self.cell.scene.physics.control_rate_hz
         trajectory = time_parametrize(np.asarray(path, dtype=float), limits, rate_hz=rate_hz, blend=True)
         self.cell.media.trajectory(name, trajectory.times_s, trajectory.q, "planned")
-        executor = TrajectoryExecutor(self.cell.robot, trajectory, self.cell.clock)
+        options = self.cell.services.get("executor_options")
+        executor = TrajectoryExecutor(self.cell.robot, trajectory, self.cell.clock, options)
         executor.start()
         return executor

@@ -155,6 +155,7 @@ class Prepared:
 
 def build_cell(prepared: Prepared) -> Any:
     from bt_grasp.behaviours.cell import Cell
+    from bt_grasp.motion.executor import ExecutorOptions
     from bt_grasp.motion.kinematics import default_kinematics
     from bt_grasp.motion.planner import PlannerOptions, default_planner
     from bt_grasp.motion.trajectory import MotionLimits
@@ -167,6 +168,8 @@ def build_cell(prepared: Prepared) -> Any:
         "planner": default_planner(),
         "planner_options": PlannerOptions(seed=prepared.request.seed + 1, time_limit_s=2.0),
         "motion_limits": MotionLimits(),
+        # a grasped object makes the wrist jitter by ~0.01 rad/s at rest: settle on position, not stillness
+        "executor_options": ExecutorOptions(settle_velocity_rad_s=0.03),
         "perception_config": PerceptionConfig.for_scene(prepared.scene)
         if hasattr(PerceptionConfig, "for_scene")
         else PerceptionConfig(),

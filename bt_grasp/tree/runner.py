@@ -94,7 +94,8 @@ class TreeRunner:
         self.on_tick = on_tick
         self._nodes: list[BtNode] = list(tree.nodes())
         self._counts: dict[int, int] = {}
-        _instrument(self._nodes, self._counts)
+        self._returned: dict[int, str] = {}
+        _instrument(self._nodes, self._counts, self._returned)
 
     def run(self, max_ticks: int) -> RunOutcome:
         start_ns = self.stepper.now_ns()
@@ -114,7 +115,9 @@ class TreeRunner:
                 uid = rec["uid"]
                 ticked = self._counts.get(uid, 0) != before.get(uid, 0)
                 rec["ticked"] = ticked
-                rec["status"] = rec.pop("bt_status")
+                # what the node returned this tick (a Sequence resets a failed child to IDLE afterwards)
+                rec["status"] = self._returned[uid] if ticked else rec["bt_status"]
+                del rec["bt_status"]
                 rec["feedback"] = rec.pop("feedback_message")
                 if ticked and rec["kind"] in ("Action", "Condition") and previous[uid] != "RUNNING":
                     attempts[rec["path"]] += 1
@@ -147,14 +150,17 @@ class TreeRunner:
         )
 
 
-def _instrument(nodes: list[BtNode], counts: dict[int, int]) -> None:
-    """Count each node's ticks (BT.CPP ``executeTick`` calls) so the recorder knows what was ticked."""
+def _instrument(nodes: list[BtNode], counts: dict[int, int], returned: dict[int, str]) -> None:
+    """Count each node's ticks (BT.CPP ``executeTick`` calls) and keep what it returned, so the recorder
+    knows what was ticked and with which result."""
     for node in nodes:
         inner = node.execute_tick
         uid = node.bt_uid
 
         def counted(inner: Callable[[], BtStatus] = inner, uid: int = uid) -> BtStatus:
             counts[uid] = counts.get(uid, 0) + 1
-            return inner()
+            result = inner()
+            returned[uid] = result.value
+            return result
 
         node.execute_tick = counted  # type: ignore[method-assign]
