@@ -5,8 +5,19 @@ calibration. The behaviour-tree leaves call:
 
 * :func:`perceive` (frame, ``T_base_camera``, config, colour) -> :class:`PerceptionResult`
 * :func:`synthesize_grasps` (detection, neighbours, settings) -> :class:`GraspResult`
+* :func:`load_calibration` (path, mount) / :func:`save_calibration` (calibration, path)
+* :func:`plan_calibration_poses` + :func:`run_calibration` (plan, poses, move_to, capture, joint_positions, ...)
 """
 
+from bt_grasp.perception.calibration import (
+    CalibrationRun,
+    CalibrationSettings,
+    ViewPlan,
+    nominal_plan,
+    plan_calibration_poses,
+    run_calibration,
+)
+from bt_grasp.perception.calibration_file import CalibrationFile, load_calibration, save_calibration
 from bt_grasp.perception.config import GraspSettings, PerceptionConfig, load_perception_config
 from bt_grasp.perception.grasps import synthesize_grasps
 from bt_grasp.perception.pipeline import perceive
@@ -20,6 +31,9 @@ from bt_grasp.perception.results import (
 )
 
 __all__ = [
+    "CalibrationFile",
+    "CalibrationRun",
+    "CalibrationSettings",
     "Detection",
     "GraspCandidate",
     "GraspResult",
@@ -28,7 +42,13 @@ __all__ = [
     "PerceptionConfig",
     "PerceptionResult",
     "PerceptionStatus",
+    "ViewPlan",
+    "load_calibration",
     "load_perception_config",
+    "nominal_plan",
     "perceive",
+    "plan_calibration_poses",
+    "run_calibration",
+    "save_calibration",
     "synthesize_grasps",
 ]

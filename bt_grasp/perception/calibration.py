@@ -24,7 +24,7 @@ from scipy.spatial.transform import Rotation
 from bt_grasp.config import StrictModel
 from bt_grasp.geometry import Mat4, T_from_xyz_rpy, inv, make_T, rotation_angle_rad, transform_points
 from bt_grasp.interfaces import CameraIntrinsics, RGBDFrame
-from bt_grasp.perception.calibration_io import CalibrationFile, make_calibration
+from bt_grasp.perception.calibration_file import CalibrationFile, make_calibration
 from bt_grasp.perception.charuco import BoardSpec, corner_object_points, detect_board
 from bt_grasp.perception.handeye import EYE_TO_HAND, HandEyeSolution, View, solve_hand_eye
 from bt_grasp.scene_config import Scene

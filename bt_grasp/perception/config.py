@@ -122,6 +122,11 @@ class PerceptionConfig(StrictModel):
     color: ColorSettings = ColorSettings()
     grasp: GraspSettings = GraspSettings()
 
+    @classmethod
+    def for_scene(cls, scene: Scene, margin_m: float = 0.02) -> PerceptionConfig:
+        """Default settings with the region of interest taken from a scene's workspace."""
+        return cls().with_scene(scene, margin_m)
+
     def with_scene(self, scene: Scene, margin_m: float = 0.02) -> PerceptionConfig:
         """This configuration with its region of interest set from a scene's workspace (world -> base)."""
         roi = roi_from_scene(scene, margin_m)

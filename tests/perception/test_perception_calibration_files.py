@@ -10,7 +10,7 @@ import pytest
 from bt_grasp.errors import ConfigError
 from bt_grasp.geometry import T_from_xyz_rpy
 from bt_grasp.interfaces import CameraIntrinsics
-from bt_grasp.perception.calibration_io import load_calibration, make_calibration, save_calibration
+from bt_grasp.perception.calibration_file import load_calibration, make_calibration, save_calibration
 from bt_grasp.perception.charuco import BoardSpec
 
 HERE = Path(__file__).parent
@@ -41,7 +41,7 @@ def test_corpus_is_complete() -> None:
 def test_bad_calibration_file(name: str) -> None:
     line, fragment = EXPECTED[name]
     with pytest.raises(ConfigError) as info:
-        load_calibration(BAD / name, expected_mount="eye-to-hand")
+        load_calibration(BAD / name, mount="eye-to-hand")
     message = str(info.value)
     prefix = f"{BAD / name}:{line}: " if line is not None else f"{BAD / name}: "
     assert message.startswith(prefix), message
@@ -54,15 +54,16 @@ def test_missing_file() -> None:
 
 
 def test_good_file_and_round_trip(tmp_path: Path) -> None:
-    good = load_calibration(HERE / "good_calibration.yaml", expected_mount="eye-to-hand")
-    assert good.T_base_camera()[:3, 3] == pytest.approx([1.05, 0.0, 0.75])
+    good = load_calibration(HERE / "good_calibration.yaml", mount="eye-to-hand")
+    assert good.T_base_camera[:3, 3] == pytest.approx([1.05, 0.0, 0.75])
     T = T_from_xyz_rpy([-0.07, 0.0, 0.01], np.deg2rad([1.0, 12.0, -2.0]))
     intrinsics = CameraIntrinsics(640, 480, 600, 600, 319.5, 239.5)
     calib = make_calibration("eye-in-hand", T, "tool0", "park", 18, {}, intrinsics, BoardSpec())
     path = save_calibration(calib, tmp_path / "sub" / "calib.yaml")
-    loaded = load_calibration(path, expected_mount="eye-in-hand")
+    loaded = load_calibration(path, mount="eye-in-hand")
     assert np.allclose(loaded.T_parent_camera, T, atol=1e-12)
     T_base_tool = T_from_xyz_rpy([0.4, 0.1, 0.5], [np.pi, 0.0, 0.3])
-    assert np.allclose(loaded.T_base_camera(T_base_tool), T_base_tool @ T)
+    assert np.allclose(loaded.T_base_camera_at(T_base_tool), T_base_tool @ T)
+    assert np.allclose(loaded.T_tool_camera, T) and loaded.tool_link == "tool0"
     with pytest.raises(ValueError, match="needs T_base_tool"):
-        loaded.T_base_camera()
+        loaded.T_base_camera_at()

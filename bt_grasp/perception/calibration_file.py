@@ -98,8 +98,27 @@ class CalibrationFile(StrictModel):
         """``T_base_camera`` (eye-to-hand) or ``T_tool_camera`` (eye-in-hand, tool = ``parent_frame``)."""
         return self.transform.T
 
-    def T_base_camera(self, T_base_tool: Mat4 | None = None) -> Mat4:
-        """The camera pose in the base frame; eye-in-hand needs the tool pose at capture time."""
+    @property
+    def tool_link(self) -> str:
+        """The link whose pose an eye-in-hand camera's pose is composed with (``tool0`` for eye-to-hand)."""
+        return self.parent_frame if self.mount == "eye-in-hand" else "tool0"
+
+    @property
+    def T_base_camera(self) -> Mat4:
+        """Eye-to-hand: the camera pose in the base frame. (Eye-in-hand: use :meth:`T_base_camera_at`.)"""
+        if self.mount != "eye-to-hand":
+            raise ValueError("an eye-in-hand camera moves: use T_base_camera_at(T_base_tool) or T_tool_camera")
+        return self.transform.T
+
+    @property
+    def T_tool_camera(self) -> Mat4:
+        """Eye-in-hand: the camera pose in the ``tool_link`` frame."""
+        if self.mount != "eye-in-hand":
+            raise ValueError("an eye-to-hand camera is not on the tool: use T_base_camera")
+        return self.transform.T
+
+    def T_base_camera_at(self, T_base_tool: Mat4 | None = None) -> Mat4:
+        """The camera pose in the base frame at capture time (eye-in-hand needs ``T_base_tool`` then)."""
         if self.mount == "eye-to-hand":
             return self.transform.T
         if T_base_tool is None:
@@ -149,9 +168,10 @@ def save_calibration(calibration: CalibrationFile, path: str | Path) -> Path:
     return path
 
 
-def load_calibration(path: str | Path, expected_mount: str | None = None) -> CalibrationFile:
+def load_calibration(path: str | Path, mount: str | None = None) -> CalibrationFile:
     """Read and validate a calibration file; ConfigError (file:line: problem) on any problem, including a
-    calibration made for another camera mount than ``expected_mount``."""
+    calibration made for another camera mount than ``mount`` (when given)."""
+    expected_mount = mount
     data, lines = read_yaml(path)
     calibration = validate(CalibrationFile, data, path, lines)
     if expected_mount is not None and calibration.mount != expected_mount:
