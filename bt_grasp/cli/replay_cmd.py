@@ -34,10 +34,16 @@ def replay_command(
     frames_dir: Path | None = typer.Option(None, "--export-frames", help="Write images as PNG here."),
     btlog: Path | None = typer.Option(None, "--export-btlog", help="Write a Groot2 .btlog file."),
     max_rows: int = typer.Option(200, "--max-rows", min=1, help="Rows shown in the timeline and histories."),
+    resim: bool = typer.Option(
+        False, "--resim", help="Re-run the recorded tree, scene, seed, calibration and faults; compare every tick."
+    ),
 ) -> None:
     """Replay a recorded run: summary and timeline by default, or the views asked for."""
     console = Console(highlight=False)
     run = open_log(log)
+    if resim:
+        _resim(console, log, as_json)
+        return
     views: dict[str, Any] = {}
     if tick is not None:
         views["tick"] = replay.tick_view(run, tick)
@@ -74,6 +80,27 @@ def replay_command(
         console.print(f"wrote {len(exports['frames'])} frames to {frames_dir}")
     if "btlog" in exports:
         console.print(f"wrote {exports['btlog']['transitions']} transitions to {btlog}")
+
+
+def _resim(console: Console, log: Path, as_json: bool) -> None:
+    from bt_grasp.cli.resim import resimulate
+
+    report = resimulate(log)
+    if as_json:
+        _json(console, report.to_json())
+    elif report.reproduced:
+        console.print(
+            f"[green]reproduced[/]: {report.ticks_new} ticks, the same status for every node at every tick "
+            f"(success {report.success_new}); new log {report.new_log}"
+        )
+    else:
+        d = report.divergence
+        console.print(f"[red]diverged[/] at tick {d.tick} ({d.kind}); recorded {report.ticks_recorded} ticks, "
+                      f"new {report.ticks_new}")
+        for diff in d.differences[:20]:
+            console.print(f"  {diff}")
+    if not report.reproduced:
+        raise typer.Exit(1)
 
 
 def _asdict(obj: Any) -> dict[str, Any]:

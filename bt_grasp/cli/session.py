@@ -6,6 +6,7 @@ where the simulator, the pipeline services, the tree and the recorder meet.
 
 from __future__ import annotations
 
+import json
 import logging
 import subprocess
 import sys
@@ -143,7 +144,7 @@ class Prepared:
             "calibration_file": str(r.calibration or ""),
             "fault_plan": str(r.faults or ""),
             "inject": ";".join(r.inject),
-            "blackboard": repr(dict(r.blackboard)),
+            "blackboard": json.dumps(dict(r.blackboard), sort_keys=True, default=str),
             "max_ticks": str(r.max_ticks),
             "command_line": " ".join(r.argv or sys.argv),
             "tick_rate_hz": str(self.scene.physics.control_rate_hz),

@@ -1,0 +1,140 @@
+"""More `bt-grasp bench` commands: pick success over seeds, the simulated cell, tree ticks, logging."""
+
+from __future__ import annotations
+
+import json
+import platform
+import statistics
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from bt_grasp.cli.bench_cmd import bench_app
+
+
+def _machine() -> str:
+    import os
+
+    return f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}"
+
+
+def run_pick_bench(
+    trees: list[Path], scene: Path, seeds: int, first_seed: int, calibration: Path | None, log_dir: Path | None
+) -> dict[str, Any]:
+    from bt_grasp.cli.calibrate_cmd import run_sim_calibration
+    from bt_grasp.cli.session import Prepared, RunRequest, execute
+    from bt_grasp.perception.calibration_file import save_calibration
+
+    work = Path(tempfile.mkdtemp(prefix="bt_grasp_bench_"))
+    if calibration is None:
+        calibration = save_calibration(
+            run_sim_calibration(scene, "eye-to-hand", first_seed).run.calibration, work / "calibration.yaml"
+        )
+    report: dict[str, Any] = {"machine": _machine(), "scene": str(scene), "calibration": str(calibration), "trees": {}}
+    for tree in trees:
+        runs = []
+        for seed in range(first_seed, first_seed + seeds):
+            log = (log_dir / f"{tree.stem}_seed{seed}.mcap") if log_dir is not None else None
+            request = RunRequest(
+                tree=tree,
+                scene=scene,
+                seed=seed,
+                calibration=calibration,
+                log=log,
+                blackboard={"color": "red", "lift_height": 0.15},
+            )
+            summary, _ = execute(Prepared(request))
+            runs.append(summary.to_json())
+        ok = [r for r in runs if r["success"]]
+        report["trees"][str(tree)] = {
+            "runs": len(runs),
+            "successes": len(ok),
+            "success_rate": len(ok) / len(runs),
+            "failures": {r["seed"]: f"{r['reason']} ({r['failed_leaf']})" for r in runs if not r["success"]},
+            "sim_time_s_median": statistics.median(r["sim_time_s"] for r in runs),
+            "wall_time_s_median": statistics.median(r["wall_time_s"] for r in runs),
+            "ticks_median": statistics.median(r["ticks"] for r in runs),
+            "retries_total": sum(sum(r["retries"].values()) for r in runs),
+        }
+    return report
+
+
+@bench_app.command("pick")
+def pick(
+    trees: list[Path] = typer.Option(
+        [Path("trees/pick.xml"), Path("trees/pick_with_recovery.xml")], "--tree", help="Tree(s) to run."
+    ),
+    scene: Path = typer.Option(Path("scenes/tabletop.yaml"), "--scene"),
+    seeds: int = typer.Option(20, "--seeds", min=1, help="Number of seeded episodes per tree."),
+    first_seed: int = typer.Option(0, "--first-seed"),
+    calibration: Path | None = typer.Option(None, "--calibration", help="Default: calibrate once first."),
+    log_dir: Path | None = typer.Option(None, "--log-dir", help="Keep every run's MCAP log here."),
+    as_json: bool = typer.Option(False, "--json"),
+) -> None:
+    """Pick success over seeded episodes, judged by physics (object held 15 cm up at the end)."""
+    report = run_pick_bench(trees, scene, seeds, first_seed, calibration, log_dir)
+    if as_json:
+        typer.echo(json.dumps(report))
+        return
+    table = Table(title=f"pick over {seeds} seeds ({report['machine']})")
+    for col in ("tree", "success", "median sim s", "median wall s", "retries", "failures"):
+        table.add_column(col)
+    for tree, r in report["trees"].items():
+        table.add_row(
+            tree,
+            f"{r['successes']}/{r['runs']}",
+            f"{r['sim_time_s_median']:.2f}",
+            f"{r['wall_time_s_median']:.2f}",
+            str(r["retries_total"]),
+            json.dumps(r["failures"]),
+        )
+    Console().print(table)
+
+
+@bench_app.command("sim")
+def sim(
+    scene: Path = typer.Option(Path("scenes/tabletop.yaml"), "--scene"),
+    as_json: bool = typer.Option(False, "--json"),
+) -> None:
+    """Scene build time, RGB-D capture time on this renderer, physics speed with no rendering."""
+    from bt_grasp.sim.bench import run_sim_bench
+
+    report = run_sim_bench(scene)
+    typer.echo(json.dumps(report) if as_json else "\n".join(f"{k:24s} {v}" for k, v in report.items()))
+
+
+@bench_app.command("tree")
+def tree(
+    nodes: int = typer.Option(100, "--nodes"),
+    ticks: int = typer.Option(2000, "--ticks"),
+    as_json: bool = typer.Option(False, "--json"),
+) -> None:
+    """Tick overhead of the tree runtime itself (no physics, no rendering), per node per tick."""
+    from bt_grasp.tree.bench import tick_overhead
+
+    report = {"machine": _machine(), **tick_overhead(nodes, ticks)}
+    typer.echo(json.dumps(report) if as_json else "\n".join(f"{k:24s} {v}" for k, v in report.items()))
+
+
+@bench_app.command("logging")
+def logging_bench(
+    ticks: int = typer.Option(6000, "--ticks"),
+    nodes: int = typer.Option(40, "--nodes"),
+    as_json: bool = typer.Option(False, "--json"),
+) -> None:
+    """MCAP logging cost per tick and file size per simulated minute; summary time of a 10,000-tick log."""
+    from bt_grasp.recording.bench import bench_logging, bench_reading
+
+    t0 = time.perf_counter()
+    report = {"machine": _machine(), "write": bench_logging(ticks, nodes), "read": bench_reading(10000)}
+    report["elapsed_s"] = round(time.perf_counter() - t0, 2)
+    typer.echo(json.dumps(report) if as_json else json.dumps(report, indent=2))
+
+
+def register(app: typer.Typer) -> None:
+    """The commands above attach themselves to bench_cmd's group when this module is imported."""

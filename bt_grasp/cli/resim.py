@@ -1,0 +1,100 @@
+"""Re-simulating a recorded run: rebuild it from the log's own attachments and compare tick by tick.
+
+The tree, scene, calibration and fault plan are taken from the log's attachments (the exact bytes the run
+used), the seed, blackboard, injections and tick limit from its metadata; the new run is recorded to a
+temporary MCAP file and its tick stream compared with the recorded one.
+"""
+
+from __future__ import annotations
+
+import json
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from bt_grasp.errors import LogFileError
+
+
+@dataclass
+class ResimReport:
+    ticks_recorded: int
+    ticks_new: int
+    divergence: Any  # bt_grasp.recording.compare.Divergence | None
+    success_recorded: bool | None
+    success_new: bool
+    new_log: str
+
+    @property
+    def reproduced(self) -> bool:
+        return self.divergence is None
+
+    def to_json(self) -> dict[str, Any]:
+        from dataclasses import asdict
+
+        return {
+            "reproduced": self.reproduced,
+            "ticks_recorded": self.ticks_recorded,
+            "ticks_new": self.ticks_new,
+            "success_recorded": self.success_recorded,
+            "success_new": self.success_new,
+            "first_divergence": asdict(self.divergence) if self.divergence is not None else None,
+            "new_log": self.new_log,
+        }
+
+
+def _attachment(run: Any, folder: str, workdir: Path) -> Path | None:
+    for name, data in run.attachments.items():
+        if name.startswith(folder + "/"):
+            path = workdir / name
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_bytes(data)
+            return path
+    return None
+
+
+def resimulate(log_path: Path, workdir: Path | None = None) -> ResimReport:
+    from bt_grasp.cli.session import Prepared, RunRequest, execute
+    from bt_grasp.recording.compare import compare_tick_streams
+    from bt_grasp.recording.reader import open_log
+
+    run = open_log(log_path)
+    meta = run.metadata
+    workdir = workdir or Path(tempfile.mkdtemp(prefix="bt_grasp_resim_"))
+    tree_files = [n for n in run.attachments if n.startswith("tree/")]
+    if not tree_files or "seed" not in meta:
+        raise LogFileError(log_path, "the log has no recorded tree or seed, so the run cannot be re-simulated")
+    for name in tree_files:  # every tree file (includes too), in one folder as they were named
+        target = workdir / name
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.write_bytes(run.attachments[name])
+    main_name = Path(meta.get("tree_file", tree_files[0])).name
+    tree = workdir / "tree" / main_name
+    scene = _attachment(run, "scene", workdir)
+    if scene is None:
+        raise LogFileError(log_path, "the log has no recorded scene file, so the run cannot be re-simulated")
+    calibration = _attachment(run, "calibration", workdir)
+    faults = _attachment(run, "faults", workdir)
+    inject = tuple(i for i in meta.get("inject", "").split(";") if i)
+    try:
+        blackboard = json.loads(meta.get("blackboard", "{}"))
+    except json.JSONDecodeError:
+        blackboard = {}
+    new_log = workdir / "resim.mcap"
+    request = RunRequest(
+        tree=tree,
+        scene=scene,
+        seed=int(meta["seed"]),
+        calibration=calibration,
+        log=new_log,
+        max_ticks=int(meta.get("max_ticks", "12000")),
+        faults=faults,
+        inject=inject,
+        blackboard=blackboard,
+        argv=("bt-grasp", "replay", str(log_path), "--resim"),
+    )
+    summary, _ = execute(Prepared(request))
+    new_run = open_log(new_log)
+    divergence = compare_tick_streams(run.ticks, new_run.ticks, stop_at_shorter=run.truncated)
+    recorded_success = run.result.get("success") if isinstance(run.result, dict) else None
+    return ResimReport(len(run.ticks), len(new_run.ticks), divergence, recorded_success, summary.success, str(new_log))
