@@ -66,5 +66,28 @@ def plan(
     Console().print(table)
 
 
+@bench_app.command("perception")
+def perception(
+    scenes: int = typer.Option(100, "--scenes", min=1, help="Number of random tabletop scenes."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the scene set (same seed, same scenes)."),
+    scene: Path = typer.Option(Path("scenes/tabletop.yaml"), "--scene", help="Base scene (table, camera)."),
+    calibration: bool = typer.Option(True, "--calibration/--no-calibration",
+                                     help="Also judge hand-eye calibration (both mounts, noise on/off)."),
+    as_json: bool = typer.Option(False, "--json", help="Print exactly one JSON object."),
+) -> None:
+    """Perception accuracy against the simulator's truth: detection rate, centroid/yaw error, timings."""
+    from bt_grasp.cli.calibrate_cmd import SimBenchBackend
+    from bt_grasp.perception.bench import run_perception_bench
+
+    summary = run_perception_bench(scenes, seed, backend=SimBenchBackend(scene), calibrate=calibration)
+    summary["machine"] = f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}"
+    if as_json:
+        typer.echo(json.dumps(summary))
+        return
+    from rich.console import Console
+
+    Console().print_json(json.dumps(summary))
+
+
 def register(app: typer.Typer) -> None:
     app.add_typer(bench_app, name="bench")

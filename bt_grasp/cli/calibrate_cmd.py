@@ -28,7 +28,7 @@ class SimCalibration:
     elapsed_s: float
 
 
-def run_sim_calibration(scene: Path, mount: str, seed: int = 0, poses: int = 20,
+def run_sim_calibration(scene: Path | Any, mount: str, seed: int = 0, poses: int = 20,
                         progress: Any = None) -> SimCalibration:
     """Calibrate in a fresh simulated world; returns the run and its judgement against ground truth."""
     from bt_grasp.geometry import inv, pose_error
@@ -46,7 +46,10 @@ def run_sim_calibration(scene: Path, mount: str, seed: int = 0, poses: int = 20,
     from bt_grasp.sim.world import World
 
     t0 = time.perf_counter()
-    world = World.from_file(scene, seed, camera_mount=mount)
+    if isinstance(scene, Path | str):
+        world = World.from_file(scene, seed, camera_mount=mount)
+    else:
+        world = World(scene, seed, camera_mount=mount)
     settings = CalibrationSettings(poses=poses)
     T_base_world = inv(world.config.T_world_base())
     if mount == "eye-to-hand":
@@ -83,7 +86,7 @@ def calibrate(
 ) -> None:
     """Hand-eye calibrate the simulated camera with a ChArUco board and write the calibration file."""
     from bt_grasp.errors import InputError
-    from bt_grasp.perception.calibration_io import save_calibration
+    from bt_grasp.perception.calibration_file import save_calibration
     from bt_grasp.scene_config import load_scene
 
     if mount not in MOUNTS:
@@ -144,6 +147,32 @@ def calibrate(
     console.print("* simulator ground truth (judge only): the error against the true camera pose, which the "
                   "calibration never reads.")
     console.print(f"wrote {out} (method {run.solution.method}, {len(run.views)} samples) in {result.elapsed_s:.1f} s")
+
+
+class SimBenchBackend:
+    """The simulator side of ``bt_grasp.perception.bench`` (a fresh World per scene; truth from the oracle)."""
+
+    def __init__(self, scene_path: Path) -> None:
+        from bt_grasp.scene_config import load_scene
+
+        self._base = load_scene(scene_path)
+
+    def base_scene(self) -> Any:
+        return self._base
+
+    def capture(self, scene: Any, seed: int) -> tuple[Any, dict[str, np.ndarray]]:
+        from bt_grasp.sim.oracle import GroundTruthOracle
+        from bt_grasp.sim.world import World
+
+        world = World(scene, seed, camera_mount="eye-to-hand")
+        world.step(world.steps_per_tick * 10)
+        oracle = GroundTruthOracle(world)
+        return world.camera.capture(), {name: oracle.T_base_object(name) for name in oracle.object_names()}
+
+    def calibrate(self, scene: Any, mount: str, seed: int, poses: int
+                  ) -> tuple[np.ndarray, dict[str, tuple[float, float]]]:
+        result = run_sim_calibration(scene, mount, seed, poses)
+        return result.run.solution.X, result.true_error_per_method
 
 
 def register(app: typer.Typer) -> None:
