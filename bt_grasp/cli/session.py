@@ -107,7 +107,8 @@ class Prepared:
         if request.calibration is not None:
             from bt_grasp.perception.calibration_file import load_calibration
 
-            self.calibration = load_calibration(request.calibration)
+            # the scene says where the camera is mounted; a calibration made for the other mount is bad input
+            self.calibration = load_calibration(request.calibration, mount=self.scene.camera.mount)
         self.fault_plan = None
         if request.faults is not None or request.inject:
             from bt_grasp.faults.plan import load_fault_plan
@@ -115,8 +116,7 @@ class Prepared:
             self.fault_plan = load_fault_plan(request.faults, request.inject)
         from bt_grasp.sim.world import World
 
-        mount = self.calibration.mount if self.calibration is not None else None
-        self.world = World(self.scene, request.seed, camera_mount=mount, source=request.scene)
+        self.world = World(self.scene, request.seed, source=request.scene)
         self.tree = load_tree(request.tree, robot_registry(), clock=self.world.clock)
         for key, value in request.blackboard.items():
             self.tree.root_blackboard.set(key, value)
