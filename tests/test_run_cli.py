@@ -144,3 +144,21 @@ def test_sigkill_mid_run_leaves_a_readable_log(tmp_path: Path) -> None:
     assert info["truncated"] is True
     # every tick flushed before the kill is recovered
     assert info["ticks"] >= seen, info
+
+
+@pytest.mark.sim
+@pytest.mark.slow
+def test_xml_and_yaml_twins_tick_identically_on_the_same_seed() -> None:
+    from bt_grasp.cli.session import Prepared, RunRequest, execute
+
+    streams = []
+    for tree in ("trees/pick.xml", "trees/pick.yaml"):
+        request = RunRequest(
+            tree=REPO / tree, scene=SCENE, seed=5, calibration=CALIB, blackboard={"color": "red", "lift_height": 0.15}
+        )
+        summary, stream = execute(Prepared(request))
+        assert summary.success, summary
+        streams.append([tick["status"] for tick in stream])
+    assert len(streams[0]) == len(streams[1])
+    for tick, (a, b) in enumerate(zip(*streams, strict=True), start=1):
+        assert a == b, f"tick {tick} differs"

@@ -131,7 +131,7 @@ def logging_bench(
     from bt_grasp.recording.bench import bench_logging, bench_reading
 
     t0 = time.perf_counter()
-    report = {"machine": _machine(), "write": bench_logging(ticks, nodes), "read": bench_reading(10000)}
+    report: dict[str, Any] = {"machine": _machine(), "write": bench_logging(ticks, nodes), "read": bench_reading(10000)}
     report["elapsed_s"] = round(time.perf_counter() - t0, 2)
     typer.echo(json.dumps(report) if as_json else json.dumps(report, indent=2))
 

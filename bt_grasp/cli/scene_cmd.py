@@ -25,7 +25,7 @@ def render(
     scene: Path = typer.Argument(..., help="Scene YAML file."),
     seed: int = typer.Option(0, "--seed", help="Seed for object poses and camera noise."),
     out: Path = typer.Option(Path("out"), "--out", help="Folder to write color.png, depth.png, camera.json."),
-    mount: str = typer.Option(None, "--mount", help="eye-to-hand or eye-in-hand (default: the scene's)."),
+    mount: str | None = typer.Option(None, "--mount", help="eye-to-hand or eye-in-hand (default: the scene's)."),
 ) -> None:
     """Render one RGB-D capture: color.png, a colour-mapped depth.png and camera.json."""
     import cv2
