@@ -77,6 +77,8 @@ class Grasp(_GripperMove):
         if not (self.settled() or self.timed_out()):
             return Status.RUNNING
         self.ports.set("width", width)
+        if width > MAX_OPENING_M - 0.003:
+            return self.failed(FailureReason.TIMEOUT, f"the fingers did not close (still {width * 1e3:.1f} mm open)")
         if width < EMPTY_WIDTH_M:
             return self.failed(FailureReason.GRASP_EMPTY, f"the fingers closed to {width * 1e3:.1f} mm: nothing held")
         self.feedback_message = f"holding an object {width * 1e3:.1f} mm wide"

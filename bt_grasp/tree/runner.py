@@ -95,7 +95,8 @@ class TreeRunner:
         self._nodes: list[BtNode] = list(tree.nodes())
         self._counts: dict[int, int] = {}
         self._returned: dict[int, str] = {}
-        _instrument(self._nodes, self._counts, self._returned)
+        self._failed_in_tick: list[BtNode] = []
+        _instrument(self._nodes, self._counts, self._returned, self._failed_in_tick)
 
     def run(self, max_ticks: int) -> RunOutcome:
         start_ns = self.stepper.now_ns()
@@ -108,6 +109,7 @@ class TreeRunner:
         while tick < max_ticks:
             tick += 1
             before = dict(self._counts)
+            self._failed_in_tick.clear()
             status = self.tree.tick()
             stamp = self.stepper.now_ns()
             records = node_records(self.tree.root)
@@ -119,15 +121,19 @@ class TreeRunner:
                 rec["status"] = self._returned[uid] if ticked else rec["bt_status"]
                 del rec["bt_status"]
                 rec["feedback"] = rec.pop("feedback_message")
-                if ticked and rec["kind"] in ("Action", "Condition") and previous[uid] != "RUNNING":
-                    attempts[rec["path"]] += 1
-                if ticked and rec["status"] == "FAILURE" and rec["kind"] in ("Action", "Condition"):
-                    event = FailureEvent(tick, stamp, rec["name"], rec["path"], rec["failure_reason"], rec["feedback"])
-                    if rec["failure_reason"] is not None:
-                        failures.append(event)
-                    if self.recorder is not None:
-                        self.recorder.write_event(stamp, "failure", event.__dict__)
+                if ticked and rec["kind"] in ("Action", "Condition"):
+                    # each executeTick starts an attempt, except the first one continuing a RUNNING leaf
+                    k = self._counts[uid] - before.get(uid, 0)
+                    attempts[rec["path"]] += k - 1 if previous[uid] == "RUNNING" else k
                 previous[uid] = rec["status"]
+            # every FAILURE a leaf returned during this tick, also those a retry inside the tick hid again
+            for node in self._failed_in_tick:
+                reason = getattr(node, "failure_reason", None)
+                event = FailureEvent(tick, stamp, node.name, node.bt_path, reason, node.feedback_message)
+                if reason is not None:
+                    failures.append(event)
+                if self.recorder is not None:
+                    self.recorder.write_event(stamp, "failure", event.__dict__)
             if self.recorder is not None:
                 robot = dict(self.robot_state()) if self.robot_state is not None else None
                 self.recorder.write_tick(tick, stamp, records, self.tree.blackboard_values(), robot)
@@ -150,17 +156,22 @@ class TreeRunner:
         )
 
 
-def _instrument(nodes: list[BtNode], counts: dict[int, int], returned: dict[int, str]) -> None:
+def _instrument(nodes: list[BtNode], counts: dict[int, int], returned: dict[int, str], failed: list[BtNode]) -> None:
     """Count each node's ticks (BT.CPP ``executeTick`` calls) and keep what it returned, so the recorder
     knows what was ticked and with which result."""
     for node in nodes:
         inner = node.execute_tick
         uid = node.bt_uid
+        is_leaf = not node.children
 
-        def counted(inner: Callable[[], BtStatus] = inner, uid: int = uid) -> BtStatus:
+        def counted(
+            inner: Callable[[], BtStatus] = inner, uid: int = uid, node: BtNode = node, is_leaf: bool = is_leaf
+        ) -> BtStatus:
             counts[uid] = counts.get(uid, 0) + 1
             result = inner()
             returned[uid] = result.value
+            if is_leaf and result is BtStatus.FAILURE:
+                failed.append(node)
             return result
 
         node.execute_tick = counted  # type: ignore[method-assign]
