@@ -15,10 +15,16 @@ from bt_grasp.cli.session import DEFAULT_MAX_TICKS, RunRequest, RunSummary, pars
 
 def print_summary(console: Console, summary: RunSummary) -> None:
     verdict = "[bold green]SUCCESS[/]" if summary.success else "[bold red]FAILURE[/]"
-    console.print(
-        f"\n{verdict}  (tree: {summary.tree_status}, judged by physics: lift {summary.object_lift_m * 100:.1f} cm"
-        f", in gripper: {summary.judge['in_gripper']})"
-    )
+    task = summary.judge.get("task", "pick")
+    if task == "pick":
+        held = summary.judge["in_gripper"]
+        judged = f"judged by physics: lift {summary.object_lift_m * 100:.1f} cm, in gripper: {held}"
+    elif task == "clear":
+        left = summary.judge["objects_in_workspace"] or "none"
+        judged = f"judged by physics: objects left in the work area: {left}"
+    else:
+        judged = "no physical goal: the tree's own result"
+    console.print(f"\n{verdict}  (tree: {summary.tree_status}, {judged})")
     if not summary.success:
         console.print(f"  reason: [red]{summary.reason}[/]  leaf: {summary.failed_leaf}")
     console.print(

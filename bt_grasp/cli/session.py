@@ -123,6 +123,19 @@ class Prepared:
         if request.calibration is not None:
             self.tree.root_blackboard.set("calibration_file", str(request.calibration))
         self.cell = build_cell(self)
+        if any(node.bt_type == "Calibrate" for node in self.tree.nodes()):
+            self.cell.extras = {"calibration_board": self._mount_board()}
+
+    def _mount_board(self) -> tuple[Any, Any]:
+        """Mount the ChArUco board for a tree that calibrates: on the gripper (eye-to-hand) or the table."""
+        from bt_grasp.geometry import inv
+        from bt_grasp.perception.charuco import BoardSpec
+        from bt_grasp.sim.charuco import attach_board_to_link, place_board_on_table
+
+        spec = BoardSpec()
+        if self.scene.camera.mount == "eye-to-hand":
+            return spec, attach_board_to_link(self.world, spec, "gripper_palm")
+        return spec, inv(self.scene.T_world_base()) @ place_board_on_table(self.world, spec)
 
     def attachments(self) -> dict[str, bytes]:
         files: dict[str, bytes] = {}
@@ -257,7 +270,15 @@ def execute(
         lift = float(prepared.tree.root_blackboard.get("lift_height", 0.15) or 0.15)
         verdict = judge.judge(lift)
         last = outcome.last_failure
-        success = verdict.success and outcome.status == "SUCCESS"
+        task = task_kind(prepared.tree)
+        left = judge.objects_in_workspace()
+        if task == "pick":  # the object is held above the table by the lift height, in the gripper
+            physics_ok = verdict.success
+        elif task == "clear":  # nothing is left in the work area
+            physics_ok = not left
+        else:  # no physical goal to judge: the tree's own result
+            physics_ok = True
+        success = physics_ok and outcome.status == "SUCCESS"
         summary = RunSummary(
             success=success,
             tree_status=outcome.status,
@@ -275,7 +296,9 @@ def execute(
                 "object": verdict.object_name,
                 "in_gripper": verdict.in_gripper,
                 "lifted_objects": list(verdict.lifted_objects),
-                "success": verdict.success,
+                "task": task,
+                "success": physics_ok,
+                "objects_in_workspace": list(left),
             },
             log=str(request.log) if request.log else None,
             seed=request.seed,
@@ -287,6 +310,16 @@ def execute(
         if recorder is not None:
             recorder.close()
     return summary, stream
+
+
+def task_kind(tree: Any) -> str:
+    """What the judge checks: "pick" (a tree that lifts), "clear" (one that sets objects aside), or "tree"."""
+    types = {node.bt_type for node in tree.nodes()}
+    if "MoveAbove" in types and "Lift" in types:
+        return "clear"
+    if "Lift" in types:
+        return "pick"
+    return "tree"
 
 
 def parse_assignments(items: Sequence[str], source: str = "--set") -> dict[str, Any]:

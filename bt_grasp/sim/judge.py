@@ -23,6 +23,7 @@ class Judge:
     """Scores a pick: the target is above the table by at least the lift height and between the fingers."""
 
     def __init__(self, world: World) -> None:
+        self._world = world
         self._oracle = GroundTruthOracle(world)
         self._start_z = {n: self._oracle.T_world_object(n)[2, 3] for n in self._oracle.object_names()}
 
@@ -35,3 +36,13 @@ class Judge:
         rise = rises[name]
         held = self._oracle.object_in_gripper(name)
         return Judgement(name, rise, held, lifted, bool(held and rise >= lift_height_m - 0.01))
+
+    def objects_in_workspace(self) -> tuple[str, ...]:
+        """Objects still standing in the scene's work area (for clear-the-table tasks)."""
+        ws = self._world.config.workspace
+        inside = []
+        for name in self._oracle.object_names():
+            x, y = self._oracle.T_world_object(name)[:2, 3]
+            if ws.x_m[0] <= x <= ws.x_m[1] and ws.y_m[0] <= y <= ws.y_m[1]:
+                inside.append(name)
+        return tuple(inside)
