@@ -96,6 +96,7 @@ class Injector:
     # --- triggers ---------------------------------------------------------------------------------------
     def _entered(self, node: Any) -> None:
         self.wrapped.apply_calibration_offsets()
+        self._end_finished_attempts()  # a tree may fail, recover and retry within one tick
         for armed in self._faults:
             trigger = armed.fault.trigger
             if trigger.at_tick is not None:
@@ -136,14 +137,18 @@ class Injector:
         for timer in due:
             timer.action()
         self.wrapped.robot.expire()
+        self._end_finished_attempts()
         for armed in self._faults:
-            ep = armed.current
-            if ep is not None and not ep.done and self._attempt_over(ep):
-                ep.finish()
             trigger = armed.fault.trigger
             if trigger.at_tick is not None and tick >= trigger.at_tick and armed.may_arm():
                 self._arm(armed, None)
         self.wrapped.apply_calibration_offsets()
+
+    def _end_finished_attempts(self) -> None:
+        for armed in self._faults:
+            ep = armed.current
+            if ep is not None and not ep.done and self._attempt_over(ep):
+                ep.finish()
 
     @staticmethod
     def _attempt_over(ep: Episode) -> bool:

@@ -281,3 +281,16 @@ def test_calibration_offset_of_a_method_pose(mount: str) -> None:
     T = offset.T_base_camera(T_tool) if mount == "eye-in-hand" else offset.T_base_camera()
     expected = [0.0, 0.01, 0.0] if mount == "eye-in-hand" else [0.01, 0.0, 0.0]  # tool x is base y
     assert np.allclose(T[:3, 3], expected)
+
+
+def test_within_attempt_ends_at_the_next_leaf_entry_in_the_same_tick() -> None:
+    # PlanGrasp fails, the recovery's leaf is entered, PlanGrasp is retried: all within one tick
+    r = rig()
+    install(r, "ik_fail@PlanGrasp:calls=100,within_attempt=true")
+    kin, node = r.cell.services["kinematics"], r.nodes["PlanGrasp"]
+    node.enter()
+    assert not kin.ik(np.eye(4), np.zeros(6)).ok
+    node.bt_state = BtStatus.FAILURE
+    r.nodes["Perceive"].enter()
+    node.enter()
+    assert kin.ik(np.eye(4), np.zeros(6)).ok
