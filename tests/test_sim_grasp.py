@@ -136,6 +136,11 @@ def test_no_product_code_moves_objects_by_hand(repo_root: Path) -> None:
         for token in forbidden:
             if token in text:
                 offenders.append(f"{path.relative_to(repo_root)}: {token}")
-    allowed = {"bt_grasp/sim/robot.py: set_qpos(", "bt_grasp/sim/camera.py: set_pose("}
+    allowed = {
+        "bt_grasp/sim/robot.py: set_qpos(",  # placing the arm when the world is built, before time starts
+        "bt_grasp/sim/camera.py: set_pose(",  # placing the camera body (no object)
+        "bt_grasp/sim/charuco.py: set_pose(",  # placing the calibration board's render body (no physics)
+        "bt_grasp/faults/physics.py: set_linear_velocity",  # the object_nudge fault: a push; friction stops it
+    }
     assert sorted(set(offenders) - allowed) == []
     _ = sapien  # the test module needs sapien installed
