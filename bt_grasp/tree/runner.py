@@ -57,16 +57,12 @@ class RunOutcome:
     wall_time_s: float
     failures: list[FailureEvent] = field(default_factory=list)
     attempts: dict[str, int] = field(default_factory=dict)  # leaf path -> attempts started
+    retried: dict[str, int] = field(default_factory=dict)  # leaf name -> attempts started after a FAILURE
 
     @property
     def retries(self) -> dict[str, int]:
-        """Leaf name -> attempts beyond the first."""
-        out: dict[str, int] = {}
-        for path, n in self.attempts.items():
-            if n > 1:
-                name = path.rsplit("/", 1)[-1]
-                out[name] = out.get(name, 0) + n - 1
-        return out
+        """Leaf name -> how many times it was tried again after it had failed."""
+        return dict(self.retried)
 
     @property
     def last_failure(self) -> FailureEvent | None:
@@ -95,8 +91,9 @@ class TreeRunner:
         self._nodes: list[BtNode] = list(tree.nodes())
         self._counts: dict[int, int] = {}
         self._returned: dict[int, str] = {}
-        self._failed_in_tick: list[BtNode] = []
-        _instrument(self._nodes, self._counts, self._returned, self._failed_in_tick)
+        self._failed_in_tick: list[tuple[BtNode, str | None, str]] = []
+        self._retries: Counter[str] = Counter()
+        _instrument(self._nodes, self._counts, self._returned, self._failed_in_tick, self._retries)
 
     def run(self, max_ticks: int) -> RunOutcome:
         start_ns = self.stepper.now_ns()
@@ -127,9 +124,8 @@ class TreeRunner:
                     attempts[rec["path"]] += k - 1 if previous[uid] == "RUNNING" else k
                 previous[uid] = rec["status"]
             # every FAILURE a leaf returned during this tick, also those a retry inside the tick hid again
-            for node in self._failed_in_tick:
-                reason = getattr(node, "failure_reason", None)
-                event = FailureEvent(tick, stamp, node.name, node.bt_path, reason, node.feedback_message)
+            for node, reason, message in self._failed_in_tick:
+                event = FailureEvent(tick, stamp, node.name, node.bt_path, reason, message)
                 if reason is not None:
                     failures.append(event)
                 if self.recorder is not None:
@@ -153,10 +149,17 @@ class TreeRunner:
             wall_time_s=time.perf_counter() - wall0,
             failures=failures,
             attempts=dict(attempts),
+            retried=dict(self._retries),
         )
 
 
-def _instrument(nodes: list[BtNode], counts: dict[int, int], returned: dict[int, str], failed: list[BtNode]) -> None:
+def _instrument(
+    nodes: list[BtNode],
+    counts: dict[int, int],
+    returned: dict[int, str],
+    failed: list[tuple[BtNode, str | None, str]],
+    retries: Counter[str],
+) -> None:
     """Count each node's ticks (BT.CPP ``executeTick`` calls) and keep what it returned, so the recorder
     knows what was ticked and with which result."""
     for node in nodes:
@@ -168,10 +171,12 @@ def _instrument(nodes: list[BtNode], counts: dict[int, int], returned: dict[int,
             inner: Callable[[], BtStatus] = inner, uid: int = uid, node: BtNode = node, is_leaf: bool = is_leaf
         ) -> BtStatus:
             counts[uid] = counts.get(uid, 0) + 1
+            if is_leaf and node.bt_state is not BtStatus.RUNNING and returned.get(uid) == "FAILURE":
+                retries[node.name] += 1  # a new attempt of a leaf whose last attempt failed
             result = inner()
             returned[uid] = result.value
-            if is_leaf and result is BtStatus.FAILURE:
-                failed.append(node)
+            if is_leaf and result is BtStatus.FAILURE:  # snapshot: a retry in this tick clears them
+                failed.append((node, getattr(node, "failure_reason", None), node.feedback_message))
             return result
 
         node.execute_tick = counted  # type: ignore[method-assign]
