@@ -162,3 +162,32 @@ def test_xml_and_yaml_twins_tick_identically_on_the_same_seed() -> None:
     assert len(streams[0]) == len(streams[1])
     for tick, (a, b) in enumerate(zip(*streams, strict=True), start=1):
         assert a == b, f"tick {tick} differs"
+
+
+@pytest.mark.sim
+def test_injected_fault_failure_resimulates_tick_for_tick(tmp_path: Path) -> None:
+    log = tmp_path / "dropped.mcap"
+    proc = _bt(
+        "run",
+        "trees/pick.xml",
+        "--scene",
+        str(SCENE),
+        "--seed",
+        "2",
+        "--calibration",
+        str(CALIB),
+        "--log",
+        str(log),
+        "--inject",
+        "frame_drop@Perceive#1",
+        "--quiet",
+    )
+    assert proc.returncode == 1, proc.stdout + proc.stderr  # pick.xml has no recovery: the dropped frame fails it
+    assert "NO_FRAME" in proc.stdout and "Perceive" in proc.stdout
+    info = json.loads(_bt("replay", str(log), "--json", timeout=120).stdout)
+    assert info["success"] is False and info["reason"] == "NO_FRAME" and info["failed_leaf"] == "Perceive"
+    assert len(info["faults"]) == 1
+    resim = _bt("replay", str(log), "--resim", "--json")
+    assert resim.returncode == 0, resim.stdout + resim.stderr
+    report = json.loads(resim.stdout)
+    assert report["reproduced"] is True and report["success_new"] is False
