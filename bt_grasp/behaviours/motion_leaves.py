@@ -50,28 +50,37 @@ def planning_scene(leaf: RobotLeaf, target: Any = None, objects: Sequence[Any] =
     return scene
 
 
-def plan_to_pose_fn(leaf: RobotLeaf, T_goal: NDArray[np.float64], scene: Any) -> Any:
+def _planned(leaf: RobotLeaf, method: str, goal: Any, scene: Any) -> Any:
+    """A PathFn that calls the planner's ``plan_to_pose`` or ``plan_to_joints`` from the measured q."""
+
     def compute(q: NDArray[np.float64]) -> NDArray[np.float64] | PathFailure:
         planner = leaf.cell.service("planner")
-        result = planner.plan_to_pose(q, T_goal, scene, leaf.cell.service("planner_options"))
+        result = getattr(planner, method)(q, goal, scene, leaf.cell.service("planner_options"))
         if not result.ok:
             reason = _PLAN_REASONS.get(result.status.value, FailureReason.PLAN_FAILED)
             return PathFailure(reason, f"planning failed ({result.status.value}): {result.message}")
         return np.asarray(result.path)
 
     return compute
+
+
+def plan_to_pose_fn(leaf: RobotLeaf, T_goal: NDArray[np.float64], scene: Any) -> Any:
+    return _planned(leaf, "plan_to_pose", T_goal, scene)
 
 
 def plan_to_joints_fn(leaf: RobotLeaf, q_goal: NDArray[np.float64], scene: Any) -> Any:
-    def compute(q: NDArray[np.float64]) -> NDArray[np.float64] | PathFailure:
-        planner = leaf.cell.service("planner")
-        result = planner.plan_to_joints(q, q_goal, scene, leaf.cell.service("planner_options"))
-        if not result.ok:
-            reason = _PLAN_REASONS.get(result.status.value, FailureReason.PLAN_FAILED)
-            return PathFailure(reason, f"planning failed ({result.status.value}): {result.message}")
-        return np.asarray(result.path)
+    return _planned(leaf, "plan_to_joints", q_goal, scene)
 
-    return compute
+
+def straight_up(height_m: float) -> Any:
+    """The goal of a vertical Cartesian segment: the current tool pose raised by height_m."""
+
+    def up(T_now: NDArray[np.float64]) -> NDArray[np.float64]:
+        T = T_now.copy()
+        T[2, 3] += height_m
+        return T
+
+    return up
 
 
 def cartesian_fn(leaf: RobotLeaf, T_goal_fn: Any, scene: Any) -> Any:
@@ -232,15 +241,9 @@ class Lift(_MovingLeaf):
         if not 0.0 < height < 0.6:
             return self.failed(FailureReason.BAD_INPUT, f"lift height {height} m is outside (0, 0.6)")
         self.feedback_message = f"lifting {height * 100:.0f} cm"
-
-        def up(T_now: NDArray[np.float64]) -> NDArray[np.float64]:
-            T = T_now.copy()
-            T[2, 3] += height
-            return T
-
         from bt_grasp.motion.planning_scene import PlanningScene
 
-        return [Segment("lift", cartesian_fn(self, up, PlanningScene.from_scene(self.cell.scene)))]
+        return [Segment("lift", cartesian_fn(self, straight_up(height), PlanningScene.from_scene(self.cell.scene)))]
 
     def check_during(self) -> Status | None:
         width = self.cell.robot.gripper_width_m()
@@ -267,15 +270,9 @@ class Retreat(_MovingLeaf):
 
     def segments(self) -> list[Segment] | Status:
         height = float(self.input("height"))
-
-        def up(T_now: NDArray[np.float64]) -> NDArray[np.float64]:
-            T = T_now.copy()
-            T[2, 3] += height
-            return T
-
         from bt_grasp.motion.planning_scene import PlanningScene
 
-        return [Segment("retreat", cartesian_fn(self, up, PlanningScene.from_scene(self.cell.scene)))]
+        return [Segment("retreat", cartesian_fn(self, straight_up(height), PlanningScene.from_scene(self.cell.scene)))]
 
 
 @leaf(None, name="MoveHome", needs_robot=True)
