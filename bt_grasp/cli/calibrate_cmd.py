@@ -136,7 +136,7 @@ def calibrate(
 
     table = Table(title=f"hand-eye calibration ({mount}): {len(run.views)} views of {run.visited} visited")
     for column in ("method", "scatter mm", "residual mm", "residual deg", "reproj px", "true err mm*", "true err deg*"):
-        table.add_column(column, justify="right" if column != "method" else "left")
+        table.add_column(column, justify="right" if column != "method" else "left", no_wrap=column == "method")
     for name, r in run.solution.per_method.items():
         mm, deg = result.true_error_per_method[name]
         mark = " (chosen)" if name == run.solution.method else ""
