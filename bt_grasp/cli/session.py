@@ -23,6 +23,8 @@ from bt_grasp.errors import InputError
 log = logging.getLogger(__name__)
 
 DEFAULT_MAX_TICKS = 12000  # 120 s of simulated time at 100 Hz
+#: the log is flushed at the first tick boundary after this much wall time: a killed run loses at most this
+LOG_FLUSH_INTERVAL_S = 0.05
 
 
 @dataclass(frozen=True)
@@ -233,7 +235,12 @@ def execute(
         from bt_grasp.tree.introspect import tree_structure
 
         request.log.parent.mkdir(parents=True, exist_ok=True)
-        recorder = RunRecorder(request.log, metadata=prepared.metadata(), attachments=prepared.attachments())
+        recorder = RunRecorder(
+            request.log,
+            metadata=prepared.metadata(),
+            attachments=prepared.attachments(),
+            flush_interval_s=LOG_FLUSH_INTERVAL_S,
+        )
         recorder.write_tree_structure(world.now_ns(), tree_structure(prepared.tree.root))
         cell.media = RecorderSink(recorder, world.now_ns)
     injector = None

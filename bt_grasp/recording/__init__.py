@@ -1,20 +1,30 @@
 """Recording runs to MCAP and reading them back: the writer, the reader, replay analyses, .btlog export.
 
-Not named ``logging``: that would shadow the standard library.
+Not named ``logging``: that would shadow the standard library. Names are imported lazily, so a run that
+only writes does not pay for importing the reader (and the reverse).
 """
 
-from bt_grasp.recording.reader import NodeInfo, NodeUpdate, RunLog, TickRecord, TreeSnapshot, open_log
-from bt_grasp.recording.schemas import BoxMarker, PoseMarker
-from bt_grasp.recording.writer import RunRecorder
+from __future__ import annotations
 
-__all__ = [
-    "BoxMarker",
-    "NodeInfo",
-    "NodeUpdate",
-    "PoseMarker",
-    "RunLog",
-    "RunRecorder",
-    "TickRecord",
-    "TreeSnapshot",
-    "open_log",
-]
+import importlib
+from typing import Any
+
+_WHERE = {
+    "NodeInfo": "reader",
+    "NodeUpdate": "reader",
+    "RunLog": "reader",
+    "TickRecord": "reader",
+    "TreeSnapshot": "reader",
+    "open_log": "reader",
+    "BoxMarker": "schemas",
+    "PoseMarker": "schemas",
+    "RunRecorder": "writer",
+}
+
+__all__ = sorted(_WHERE)
+
+
+def __getattr__(name: str) -> Any:
+    if name in _WHERE:
+        return getattr(importlib.import_module(f"bt_grasp.recording.{_WHERE[name]}"), name)
+    raise AttributeError(f"module 'bt_grasp.recording' has no attribute {name!r}")

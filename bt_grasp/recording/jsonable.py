@@ -87,6 +87,22 @@ def _is_immutable_leaf(value: Any) -> bool:
     return isinstance(value, (*_SCALARS, float, enum.Enum, PurePath, np.generic))
 
 
+def _is_frozen(value: Any, depth: int = 0) -> bool:
+    """Values that cannot change while they stay the same object: immutable scalars, frozen dataclasses
+    (the pipeline's results, whose arrays are never written after construction), tuples of those."""
+    if _is_immutable_leaf(value):
+        return True
+    params = getattr(type(value), "__dataclass_params__", None)
+    if params is not None:
+        return bool(params.frozen)
+    model_config = getattr(type(value), "model_config", None)  # pydantic models (the calibration file)
+    if isinstance(model_config, dict) and "model_fields" in dir(type(value)):
+        return bool(model_config.get("frozen", False))
+    if isinstance(value, tuple) and depth < 2:
+        return all(_is_frozen(v, depth + 1) for v in value)
+    return False
+
+
 class BlackboardDiffer:
     """Remembers the last value written per key; ``diff`` returns only the keys that changed."""
 
@@ -123,7 +139,7 @@ class BlackboardDiffer:
                 and last.dtype == value.dtype
                 and bool(np.array_equal(last, value, equal_nan=value.dtype.kind in "fc"))
             )
-        return last is value and _is_immutable_leaf(value)
+        return last is value and _is_frozen(value)
 
     @staticmethod
     def _remember(value: Any) -> Any:

@@ -89,6 +89,8 @@ class RunRecorder:
         depth_encoding: "16UC1" (millimetres) or "32FC1" (metres) for /camera/depth.
         fsync_interval_s: at a ``flush_tick`` at least this long after the last one, also fsync (survives a
             power loss, not only a killed process); None never fsyncs before ``close``.
+        flush_interval_s: 0 ends a chunk at every ``flush_tick``; > 0 only at the first tick boundary after
+            that much wall time (fewer, larger chunks; a killed process loses at most that much).
         handle_signals: while used as a context manager, turn SIGTERM/SIGINT into exceptions that unwind
             through ``__exit__`` (only where those signals still have their default handlers).
         base_frame, tool_frame: frame ids of the arm base and the tool (TCP) on /tf.
@@ -109,6 +111,7 @@ class RunRecorder:
         jpeg_quality: int = 90,
         depth_encoding: Literal["16UC1", "32FC1"] = "16UC1",
         fsync_interval_s: float | None = None,
+        flush_interval_s: float = 0.0,
         handle_signals: bool = True,
         base_frame: str = "base",
         tool_frame: str = "tool",
@@ -123,6 +126,8 @@ class RunRecorder:
         self._jpeg_quality = jpeg_quality
         self._depth_encoding = depth_encoding
         self._fsync_interval_s = fsync_interval_s
+        self._flush_interval_s = float(flush_interval_s)
+        self._last_flush = time.monotonic()
         self._last_fsync = time.monotonic()
         self._handle_signals = handle_signals
         self.base_frame = base_frame
@@ -353,10 +358,17 @@ class RunRecorder:
     # -- durability ------------------------------------------------------------------------------------------
 
     def flush_tick(self) -> None:
-        """End the open chunk and hand it to the OS: a process killed after this loses nothing before it.
-        Also fsyncs when ``fsync_interval_s`` has passed since the last fsync."""
+        """At a tick boundary: end the open chunk and hand it to the OS, so a process killed after this
+        loses nothing before it. With ``flush_interval_s`` > 0 this happens only when that much wall time
+        passed since the last flush (a kill then loses at most that much). Also fsyncs when
+        ``fsync_interval_s`` has passed since the last fsync."""
         if self._closed:
             return
+        if self._flush_interval_s > 0:
+            now = time.monotonic()
+            if now - self._last_flush < self._flush_interval_s:
+                return
+            self._last_flush = now
         with self._guard.busy():
             self._writer.flush()
         if self._fsync_interval_s is not None:
