@@ -166,13 +166,18 @@ def _instrument(
         inner = node.execute_tick
         uid = node.bt_uid
         is_leaf = not node.children
+        is_action = node.bt_kind.value == "Action"
 
         def counted(
-            inner: Callable[[], BtStatus] = inner, uid: int = uid, node: BtNode = node, is_leaf: bool = is_leaf
+            inner: Callable[[], BtStatus] = inner,
+            uid: int = uid,
+            node: BtNode = node,
+            is_leaf: bool = is_leaf,
+            is_action: bool = is_action,
         ) -> BtStatus:
             counts[uid] = counts.get(uid, 0) + 1
-            if is_leaf and node.bt_state is not BtStatus.RUNNING and returned.get(uid) == "FAILURE":
-                retries[node.name] += 1  # a new attempt of a leaf whose last attempt failed
+            if is_action and node.bt_state is not BtStatus.RUNNING and returned.get(uid) == "FAILURE":
+                retries[node.name] += 1  # a new attempt of an action whose last attempt failed
             result = inner()
             returned[uid] = result.value
             if is_leaf and result is BtStatus.FAILURE:  # snapshot: a retry in this tick clears them

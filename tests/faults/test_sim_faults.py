@@ -142,6 +142,17 @@ def test_object_nudged_after_perceive_empties_the_grasp_then_regrasps(tmp_path: 
     assert out.summary.success, out.summary.to_json()
 
 
+def test_finger_landing_on_a_nudged_box_backs_off_before_opening(tmp_path: Path, calibration: Path) -> None:
+    # regression: the rehome branch used to open the gripper first, which a finger pressed on the box
+    # prevents (OpenGripper TIMEOUT on every later attempt); it now retreats first
+    out = run(tmp_path, calibration, RECOVERY, "nudge@Approach#1:dx_m=0.045")
+    fault_record(out, "object_nudge")
+    first = out.first_failure_after_fault()
+    assert (first["leaf"], first["reason"]) == ("Approach", "TRACKING_ERROR")
+    assert out.ran("rehome", first["tick"])
+    assert out.summary.success, out.summary.to_json()
+
+
 def test_gripper_slip_during_lift_is_recovered_by_regrasping(tmp_path: Path, calibration: Path) -> None:
     out = run(tmp_path, calibration, RECOVERY, "slip@Lift#1:friction=0.02,force_n=2,duration_s=1.5")
     fault_record(out, "gripper_slip")
