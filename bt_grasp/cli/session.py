@@ -186,9 +186,7 @@ def build_cell(prepared: Prepared) -> Any:
         "motion_limits": MotionLimits(),
         # a grasped object makes the wrist jitter by ~0.01 rad/s at rest: settle on position, not stillness
         "executor_options": ExecutorOptions(settle_velocity_rad_s=0.03),
-        "perception_config": PerceptionConfig.for_scene(prepared.scene)
-        if hasattr(PerceptionConfig, "for_scene")
-        else PerceptionConfig(),
+        "perception_config": PerceptionConfig.for_scene(prepared.scene),
         "grasp_settings": GraspSettings(),
     }
     return Cell(
@@ -228,7 +226,6 @@ def execute(
     request, world, cell = prepared.request, prepared.world, prepared.cell
     judge = Judge(world)
     recorder = None
-    stream: list[dict[str, Any]] = []
     if request.log is not None:
         from bt_grasp.cli.media import RecorderSink
         from bt_grasp.recording.writer import RunRecorder
@@ -248,15 +245,10 @@ def execute(
         from bt_grasp.faults.injector import install_faults
 
         injector = install_faults(prepared.fault_plan, prepared, recorder)
-    prepared.tree.root.setup(cell=cell)
     for node in prepared.tree.nodes():
-        if node is not prepared.tree.root:
-            node.setup(cell=cell)
+        node.setup(cell=cell)
 
     def tick_hook(tick: int, tree: Any) -> None:
-        from bt_grasp.tree.introspect import node_records
-
-        stream.append({"tick": tick, "status": {r["path"]: r["bt_status"] for r in node_records(tree.root)}})
         if injector is not None:
             injector.after_tick(tick)
         if on_tick is not None:
@@ -316,7 +308,7 @@ def execute(
     finally:
         if recorder is not None:
             recorder.close()
-    return summary, stream
+    return summary, runner.stream
 
 
 def task_kind(tree: Any) -> str:

@@ -23,7 +23,7 @@ then ticks once and yields every node, so ``py_trees.trees.BehaviourTree`` with 
 from __future__ import annotations
 
 import enum
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -110,6 +110,8 @@ class BtNode(py_trees.behaviour.Behaviour):
         self.bt_attributes: dict[str, str] = dict(ctx.attributes)
         self.bt_state = BtStatus.IDLE
         self.bt_status_extra = "IDLE"
+        #: called after every executeTick as ``listener(node, status_before, result)`` (runners, recorders)
+        self.bt_listener: Callable[[BtNode, BtStatus, BtStatus], None] | None = None
         self._bt_blackboard: Blackboard = ctx.blackboard
         self._bt_enums: Mapping[str, int] = ctx.enums
         self._bt_conditions: Conditions = ctx.conditions
@@ -128,6 +130,7 @@ class BtNode(py_trees.behaviour.Behaviour):
     # ---- BT.CPP's TreeNode machinery --------------------------------------------------------------
     def execute_tick(self) -> BtStatus:
         """BT.CPP ``executeTick``: pre-conditions, ``bt_tick``, post-conditions, store the status."""
+        before = self.bt_state
         result: BtStatus | None = self._check_preconditions() if self._bt_pre else None
         if result is None:
             result = self.bt_tick()
@@ -137,6 +140,8 @@ class BtNode(py_trees.behaviour.Behaviour):
             self.bt_status_extra = "SKIPPED"
         else:
             self.set_bt_status(result)
+        if self.bt_listener is not None:
+            self.bt_listener(self, before, result)
         return result
 
     def set_bt_status(self, status: BtStatus) -> None:

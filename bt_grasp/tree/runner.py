@@ -18,6 +18,7 @@ from bt_grasp.interfaces import Stepper
 from bt_grasp.tree.introspect import node_records
 from bt_grasp.tree.loader import LoadedTree
 from bt_grasp.tree.node import BtNode, BtStatus
+from bt_grasp.tree.registry import NodeKind
 
 log = logging.getLogger(__name__)
 
@@ -56,7 +57,6 @@ class RunOutcome:
     sim_time_s: float
     wall_time_s: float
     failures: list[FailureEvent] = field(default_factory=list)
-    attempts: dict[str, int] = field(default_factory=dict)  # leaf path -> attempts started
     retried: dict[str, int] = field(default_factory=dict)  # leaf name -> attempts started after a FAILURE
 
     @property
@@ -88,43 +88,35 @@ class TreeRunner:
         self.recorder = recorder
         self.robot_state = robot_state
         self.on_tick = on_tick
-        self._nodes: list[BtNode] = list(tree.nodes())
-        self._counts: dict[int, int] = {}
-        self._returned: dict[int, str] = {}
-        self._failed_in_tick: list[tuple[BtNode, str | None, str]] = []
-        self._retries: Counter[str] = Counter()
-        _instrument(self._nodes, self._counts, self._returned, self._failed_in_tick, self._retries)
+        self._watch = _TickWatch()
+        for node in tree.nodes():
+            node.bt_listener = self._watch
+        #: per tick, every node's status as recorded (path -> status), for comparing runs
+        self.stream: list[dict[str, Any]] = []
 
     def run(self, max_ticks: int) -> RunOutcome:
         start_ns = self.stepper.now_ns()
         wall0 = time.perf_counter()
-        attempts: Counter[str] = Counter()
         failures: list[FailureEvent] = []
-        previous: dict[int, str] = {n.bt_uid: "IDLE" for n in self._nodes}
+        watch = self._watch
         status = BtStatus.RUNNING
         tick = 0
         while tick < max_ticks:
             tick += 1
-            before = dict(self._counts)
-            self._failed_in_tick.clear()
+            watch.new_tick()
             status = self.tree.tick()
             stamp = self.stepper.now_ns()
             records = node_records(self.tree.root)
             for rec in records:
-                uid = rec["uid"]
-                ticked = self._counts.get(uid, 0) != before.get(uid, 0)
+                ticked = rec["uid"] in watch.ticked
                 rec["ticked"] = ticked
                 # what the node returned this tick (a Sequence resets a failed child to IDLE afterwards)
-                rec["status"] = self._returned[uid] if ticked else rec["bt_status"]
+                rec["status"] = watch.returned[rec["uid"]] if ticked else rec["bt_status"]
                 del rec["bt_status"]
                 rec["feedback"] = rec.pop("feedback_message")
-                if ticked and rec["kind"] in ("Action", "Condition"):
-                    # each executeTick starts an attempt, except the first one continuing a RUNNING leaf
-                    k = self._counts[uid] - before.get(uid, 0)
-                    attempts[rec["path"]] += k - 1 if previous[uid] == "RUNNING" else k
-                previous[uid] = rec["status"]
+            self.stream.append({"tick": tick, "status": {rec["path"]: rec["status"] for rec in records}})
             # every FAILURE a leaf returned during this tick, also those a retry inside the tick hid again
-            for node, reason, message in self._failed_in_tick:
+            for node, reason, message in watch.failed:
                 event = FailureEvent(tick, stamp, node.name, node.bt_path, reason, message)
                 if reason is not None:
                     failures.append(event)
@@ -148,40 +140,29 @@ class TreeRunner:
             sim_time_s=sim_s,
             wall_time_s=time.perf_counter() - wall0,
             failures=failures,
-            attempts=dict(attempts),
-            retried=dict(self._retries),
+            retried=dict(watch.retries),
         )
 
 
-def _instrument(
-    nodes: list[BtNode],
-    counts: dict[int, int],
-    returned: dict[int, str],
-    failed: list[tuple[BtNode, str | None, str]],
-    retries: Counter[str],
-) -> None:
-    """Count each node's ticks (BT.CPP ``executeTick`` calls) and keep what it returned, so the recorder
-    knows what was ticked and with which result."""
-    for node in nodes:
-        inner = node.execute_tick
+class _TickWatch:
+    """The nodes' ``bt_listener``: which nodes were ticked this tick, what each returned, every FAILURE a
+    leaf returned (with its reason, snapshotted: a retry in the same tick clears it), and retries."""
+
+    def __init__(self) -> None:
+        self.ticked: set[int] = set()
+        self.returned: dict[int, str] = {}
+        self.failed: list[tuple[BtNode, str | None, str]] = []
+        self.retries: Counter[str] = Counter()
+
+    def new_tick(self) -> None:
+        self.ticked.clear()
+        self.failed.clear()
+
+    def __call__(self, node: BtNode, before: BtStatus, result: BtStatus) -> None:
         uid = node.bt_uid
-        is_leaf = not node.children
-        is_action = node.bt_kind.value == "Action"
-
-        def counted(
-            inner: Callable[[], BtStatus] = inner,
-            uid: int = uid,
-            node: BtNode = node,
-            is_leaf: bool = is_leaf,
-            is_action: bool = is_action,
-        ) -> BtStatus:
-            counts[uid] = counts.get(uid, 0) + 1
-            if is_action and node.bt_state is not BtStatus.RUNNING and returned.get(uid) == "FAILURE":
-                retries[node.name] += 1  # a new attempt of an action whose last attempt failed
-            result = inner()
-            returned[uid] = result.value
-            if is_leaf and result is BtStatus.FAILURE:  # snapshot: a retry in this tick clears them
-                failed.append((node, getattr(node, "failure_reason", None), node.feedback_message))
-            return result
-
-        node.execute_tick = counted  # type: ignore[method-assign]
+        if node.bt_kind is NodeKind.ACTION and before is not BtStatus.RUNNING and self.returned.get(uid) == "FAILURE":
+            self.retries[node.name] += 1  # a new attempt of an action whose last attempt failed
+        self.ticked.add(uid)
+        self.returned[uid] = result.value
+        if not node.children and result is BtStatus.FAILURE:
+            self.failed.append((node, getattr(node, "failure_reason", None), node.feedback_message))
