@@ -21,7 +21,6 @@ class RecorderSink:
     def __init__(self, recorder: RunRecorder, now_ns: Callable[[], int]) -> None:
         self.recorder = recorder
         self.now_ns = now_ns
-        self._last_cloud: NDArray[np.float64] | None = None
 
     def frame(self, frame: RGBDFrame, T_base_camera: NDArray[np.float64] | None) -> None:
         stamp = self.now_ns()
@@ -32,17 +31,19 @@ class RecorderSink:
             self._write_cloud(stamp, frame, T_base_camera)
 
     def _write_cloud(self, stamp: int, frame: RGBDFrame, T_base_camera: NDArray[np.float64]) -> None:
-        K = frame.intrinsics
-        v, u = np.nonzero(frame.depth_m > 0)
-        if len(u) == 0:
+        from bt_grasp.perception.cloud import depth_to_cloud, to_base
+
+        valid = frame.depth_m > 0
+        step = max(1, int(valid.sum()) // _POINTS_MAX)
+        if step > 1:  # keep every step-th valid pixel: a preview cloud, not the pipeline's
+            keep = np.zeros(valid.size, dtype=bool)
+            keep[np.flatnonzero(valid)[::step]] = True
+            valid = keep.reshape(valid.shape)
+        if not valid.any():
             return
-        step = max(1, len(u) // _POINTS_MAX)
-        u, v = u[::step], v[::step]
-        z = frame.depth_m[v, u].astype(np.float64)
-        pts = np.stack([(u - K.cx_px) / K.fx_px * z, (v - K.cy_px) / K.fy_px * z, z], axis=1)
-        pts_base = pts @ T_base_camera[:3, :3].T + T_base_camera[:3, 3]
-        rgb = frame.color[v, u]
-        self.recorder.write_points(stamp, pts_base.astype(np.float32), rgb, "base")
+        cloud = to_base(depth_to_cloud(frame.depth_m, frame.intrinsics, valid), T_base_camera)
+        u, v = cloud.pixels[:, 0], cloud.pixels[:, 1]
+        self.recorder.write_points(stamp, cloud.points.astype(np.float32), frame.color[v, u], "base")
 
     def perception(self, result: Any, T_base_camera: NDArray[np.float64]) -> None:
         from bt_grasp.geometry import make_T, rot_z

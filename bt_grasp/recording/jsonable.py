@@ -22,6 +22,7 @@ from pathlib import PurePath
 from typing import Any
 
 import numpy as np
+from pydantic import BaseModel
 
 JsonValue = Any
 _SCALARS = (str, int, bool, type(None))
@@ -95,9 +96,8 @@ def _is_frozen(value: Any, depth: int = 0) -> bool:
     params = getattr(type(value), "__dataclass_params__", None)
     if params is not None:
         return bool(params.frozen)
-    model_config = getattr(type(value), "model_config", None)  # pydantic models (the calibration file)
-    if isinstance(model_config, dict) and "model_fields" in dir(type(value)):
-        return bool(model_config.get("frozen", False))
+    if isinstance(value, BaseModel):  # pydantic models (the calibration file)
+        return bool(value.model_config.get("frozen", False))
     if isinstance(value, tuple) and depth < 2:
         return all(_is_frozen(v, depth + 1) for v in value)
     return False
