@@ -3,7 +3,9 @@
 The handler turns SIGTERM into ``SystemExit(128 + 15)`` and SIGINT into ``KeyboardInterrupt``, so the stack
 unwinds through the recorder's ``__exit__``, which writes the summary. A signal that arrives while the
 recorder is in the middle of writing a record is held until that record is complete, so the file never ends
-in a half-written chunk.
+in a half-written chunk. A signal stays pending until the recorder acknowledges it on the way out: if the
+exception the handler raised is swallowed (a handler runs between any two bytecodes, finalizers included, and
+Python ignores exceptions raised in ``__del__``), the next record written raises it again.
 """
 
 from __future__ import annotations
@@ -56,10 +58,13 @@ class SignalGuard:
         self._previous.clear()
 
     def _handle(self, signum: int, frame: FrameType | None) -> None:
-        if self._busy:
-            self._pending = signum
-            return
-        raise _interrupt_for(signum)
+        self._pending = signum
+        if not self._busy:
+            raise _interrupt_for(signum)
+
+    def acknowledge(self) -> None:
+        """The interruption reached its destination (the recorder is closing): stop raising it."""
+        self._pending = None
 
     @contextmanager
     def busy(self) -> Iterator[None]:
@@ -69,5 +74,4 @@ class SignalGuard:
         finally:
             self._busy -= 1
             if not self._busy and self._pending is not None:
-                signum, self._pending = self._pending, None
-                raise _interrupt_for(signum)
+                raise _interrupt_for(self._pending)

@@ -193,6 +193,7 @@ class RunRecorder:
     def __exit__(
         self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
     ) -> None:
+        self._guard.acknowledge()
         if exc is not None and not self._closed:
             try:
                 stamp = self._last_stamp_ns

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import signal
 import subprocess
 import sys
@@ -97,3 +98,17 @@ def test_file_without_summary_reads_linearly(ok_run, tmp_path):
     assert run.ticks_recovered == written["n_ticks"]
     assert run.result == written["result"]
     assert len(list(run.images())) == 4
+
+
+def test_a_swallowed_interrupt_is_raised_again_at_the_next_record():
+    """A handler can run inside a finalizer, where Python ignores what it raises: the signal must not be lost."""
+    from bt_grasp.recording.signals import SignalGuard
+
+    guard = SignalGuard()
+    with contextlib.suppress(KeyboardInterrupt):  # what a finalizer does with the handler's exception
+        guard._handle(signal.SIGINT, None)
+    with pytest.raises(KeyboardInterrupt), guard.busy():
+        pass  # the next record written
+    guard.acknowledge()
+    with guard.busy():  # once the recorder is closing, records are written undisturbed
+        pass
