@@ -108,7 +108,7 @@ def convert_cmd(
     target: Path = typer.Argument(..., help="Output file; its extension chooses the format."),
 ) -> None:
     """Convert between BT.CPP v4 XML and the YAML twin format."""
-    from bt_grasp.tree.convert import convert_file, format_of
+    from bt_grasp.tree.formats.convert import convert_file, format_of
 
     _quiet_library_logs()
     try:

@@ -14,10 +14,10 @@ from dataclasses import dataclass, field
 from bt_grasp.clock import Clock
 from bt_grasp.errors import TreeFileError
 from bt_grasp.tree.blackboard import Blackboard
-from bt_grasp.tree.builtins.decorators import SubTreeNode
+from bt_grasp.tree.builtins.subtree import SubTreeNode
 from bt_grasp.tree.context import NodeContext
-from bt_grasp.tree.document import Document, NodeDecl
 from bt_grasp.tree.exceptions import PortValueError, ScriptSyntaxError
+from bt_grasp.tree.formats.document import Document, NodeDecl
 from bt_grasp.tree.node import BtNode
 from bt_grasp.tree.ports import PortAccessor, blackboard_key
 from bt_grasp.tree.registry import NodeKind, NodeRegistry, NodeSpec

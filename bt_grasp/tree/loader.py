@@ -19,12 +19,12 @@ from bt_grasp.clock import Clock, ManualClock
 from bt_grasp.errors import TreeFileError
 from bt_grasp.tree.blackboard import Blackboard
 from bt_grasp.tree.builder import TreeBuilder, validate_document
-from bt_grasp.tree.document import Document
+from bt_grasp.tree.formats.document import Document
+from bt_grasp.tree.formats.xml_format import read_xml
+from bt_grasp.tree.formats.yaml_format import read_yaml
 from bt_grasp.tree.node import BtNode, BtStatus
 from bt_grasp.tree.registry import NodeRegistry
 from bt_grasp.tree.substitution import parse_rules
-from bt_grasp.tree.xml_reader import read_xml
-from bt_grasp.tree.yaml_format import read_yaml
 
 logger = logging.getLogger(__name__)
 

@@ -36,7 +36,7 @@ if TYPE_CHECKING:
     from bt_grasp.tree.blackboard import Blackboard
     from bt_grasp.tree.context import NodeContext
     from bt_grasp.tree.registry import NodeSpec
-    from bt_grasp.tree.script_ast import Program
+    from bt_grasp.tree.scripting.operators import Program
 
 
 class BtStatus(enum.Enum):

@@ -19,11 +19,45 @@ from dataclasses import dataclass
 from py_trees.common import Status
 
 from bt_grasp.errors import InputError
-from bt_grasp.tree.builtins.actions import TestBehaviour, TestNode
 from bt_grasp.tree.context import NodeContext
+from bt_grasp.tree.leaf import Leaf
 from bt_grasp.tree.registry import NodeKind, NodeRegistry, NodeSpec
 
 _LEAF_KINDS = (NodeKind.ACTION, NodeKind.CONDITION)
+
+
+@dataclass(frozen=True)
+class TestBehaviour:
+    """What a TestNode does: RUNNING for ``running_ticks`` ticks, then ``result``; a FAILURE with a
+    ``reason`` is reported through :meth:`Leaf.fail` (so ``FailureIs`` sees it)."""
+
+    __test__ = False  # not a pytest test class
+
+    running_ticks: int = 0
+    result: Status = Status.SUCCESS
+    reason: str | None = None
+
+
+class TestNode(Leaf):
+    """A stand-in leaf built by substitution rules (``Approach=Running:3``)."""
+
+    __test__ = False
+
+    def __init__(self, ctx: NodeContext, behaviour: TestBehaviour) -> None:
+        super().__init__(ctx)
+        self.behaviour = behaviour
+        self.ticks = 0
+
+    def initialise(self) -> None:
+        self.ticks = 0
+
+    def update(self) -> Status:
+        if self.ticks < self.behaviour.running_ticks:
+            self.ticks += 1
+            return Status.RUNNING
+        if self.behaviour.result == Status.FAILURE and self.behaviour.reason:
+            return self.fail(self.behaviour.reason, f"stand-in for {self.name} was told to fail")
+        return self.behaviour.result
 
 
 @dataclass(frozen=True)

@@ -11,12 +11,12 @@ from dataclasses import dataclass, field
 
 from bt_grasp.errors import TreeFileError
 from bt_grasp.tree.builtins import REMOVED_V3_NAMES
-from bt_grasp.tree.document import Document, ModelDecl, NodeDecl
 from bt_grasp.tree.exceptions import PortValueError, ScriptSyntaxError
+from bt_grasp.tree.formats.document import Document, ModelDecl, NodeDecl
 from bt_grasp.tree.node import POST_CONDITIONS, PRE_CONDITIONS, Conditions
 from bt_grasp.tree.ports import PortValue, convert_text
 from bt_grasp.tree.registry import NodeKind, NodeRegistry, NodeSpec, PortDirection, PortSpec
-from bt_grasp.tree.script import parse_script
+from bt_grasp.tree.scripting import parse_script
 
 CONDITION_ATTRIBUTES = frozenset(PRE_CONDITIONS + POST_CONDITIONS)
 SPECIAL_ATTRIBUTES = frozenset({"name", "_description", "_autoremap", "_uid", "_fullpath"})

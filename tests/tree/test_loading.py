@@ -19,9 +19,9 @@ from bt_grasp.tree import (
     load_tree,
     load_tree_from_string,
 )
-from bt_grasp.tree.convert import convert_file, write_xml
+from bt_grasp.tree.formats.convert import convert_file, write_xml
+from bt_grasp.tree.formats.yaml_format import read_yaml, write_yaml
 from bt_grasp.tree.loader import read_document
-from bt_grasp.tree.yaml_format import read_yaml, write_yaml
 
 from .harness import F, Harness, R, S
 

@@ -9,7 +9,7 @@ import pytest
 from bt_grasp.errors import TreeFileError
 from bt_grasp.tree import Blackboard, builtin_registry, load_tree_from_string
 from bt_grasp.tree.exceptions import ScriptSyntaxError, TreeRuntimeError
-from bt_grasp.tree.script import parse_script
+from bt_grasp.tree.scripting import parse_script
 
 
 def run(code: str, bb: Blackboard | None = None, enums: dict[str, int] | None = None) -> Any:

@@ -1,20 +1,19 @@
-"""Built-in leaves: AlwaysSuccess, AlwaysFailure, SetBlackboard, Sleep, Script, ScriptCondition (BT.CPP's),
-FailureIs (bt_grasp's) and TestNode (the stand-in ``--substitute`` builds)."""
+"""BT.CPP v4 actions: AlwaysSuccess, AlwaysFailure, SetBlackboard, Sleep, Script. Sleep reads the injected
+simulated clock."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Any
 
 from py_trees.common import Status
 
+from bt_grasp.tree.builtins.manifest import IN, INOUT, action
 from bt_grasp.tree.context import NodeContext
 from bt_grasp.tree.exceptions import PortValueError, ScriptSyntaxError, TreeRuntimeError
-from bt_grasp.tree.leaf import FAILED_LEAF_KEY, FAILURE_REASON_KEY, Leaf
+from bt_grasp.tree.leaf import Leaf
 from bt_grasp.tree.ports import convert_text
 from bt_grasp.tree.registry import PortDirection, PortSpec
-from bt_grasp.tree.script import parse_script
-from bt_grasp.tree.script_ast import Program
+from bt_grasp.tree.scripting import Program, parse_script
 
 
 class AlwaysSuccess(Leaf):
@@ -59,7 +58,9 @@ class SetBlackboard(Leaf):
         return Status.SUCCESS
 
 
-class _ScriptLeaf(Leaf):
+class ScriptLeaf(Leaf):
+    """A leaf running the script of its ``code`` port (parsed at load time when it is a literal)."""
+
     def __init__(self, ctx: NodeContext) -> None:
         super().__init__(ctx)
         self._program: Program | None = None
@@ -75,7 +76,7 @@ class _ScriptLeaf(Leaf):
             raise TreeRuntimeError(f"{self.bt_path}: {exc}") from None
 
 
-class Script(_ScriptLeaf):
+class Script(ScriptLeaf):
     """Runs ``code``; always SUCCESS."""
 
     def update(self) -> Status:
@@ -83,57 +84,23 @@ class Script(_ScriptLeaf):
         return Status.SUCCESS
 
 
-class ScriptCondition(_ScriptLeaf):
-    """SUCCESS when ``code`` evaluates to true, FAILURE otherwise."""
+CODE_PORT = PortSpec("code", IN, str, description="the script to run")
 
-    def update(self) -> Status:
-        return Status.SUCCESS if self.program().truth(self.blackboard, self._bt_enums) else Status.FAILURE
-
-
-class FailureIs(Leaf):
-    """SUCCESS when the last :meth:`Leaf.fail` reason (root blackboard ``failure_reason``) is ``reason``
-    (and, when ``leaf`` is given, the failing leaf had that name)."""
-
-    def update(self) -> Status:
-        root = self.blackboard.root
-        reason = root.get(FAILURE_REASON_KEY, None)
-        wanted_leaf = str(self.ports.get("leaf"))
-        if reason != self.ports.get("reason"):
-            return Status.FAILURE
-        if wanted_leaf and root.get(FAILED_LEAF_KEY, None) != wanted_leaf:
-            return Status.FAILURE
-        return Status.SUCCESS
-
-
-@dataclass(frozen=True)
-class TestBehaviour:
-    """What a TestNode does: RUNNING for ``running_ticks`` ticks, then ``result``; a FAILURE with a
-    ``reason`` is reported through :meth:`Leaf.fail` (so ``FailureIs`` sees it)."""
-
-    __test__ = False  # not a pytest test class
-
-    running_ticks: int = 0
-    result: Status = Status.SUCCESS
-    reason: str | None = None
-
-
-class TestNode(Leaf):
-    """A stand-in leaf built by substitution rules (``Approach=Running:3``)."""
-
-    __test__ = False
-
-    def __init__(self, ctx: NodeContext, behaviour: TestBehaviour) -> None:
-        super().__init__(ctx)
-        self.behaviour = behaviour
-        self.ticks = 0
-
-    def initialise(self) -> None:
-        self.ticks = 0
-
-    def update(self) -> Status:
-        if self.ticks < self.behaviour.running_ticks:
-            self.ticks += 1
-            return Status.RUNNING
-        if self.behaviour.result == Status.FAILURE and self.behaviour.reason:
-            return self.fail(self.behaviour.reason, f"stand-in for {self.name} was told to fail")
-        return self.behaviour.result
+SPECS = (
+    action(AlwaysSuccess, "Returns SUCCESS."),
+    action(AlwaysFailure, "Returns FAILURE."),
+    action(
+        SetBlackboard,
+        "Writes a value into a blackboard entry.",
+        (
+            PortSpec("value", IN, object, description="the value, or {entry} to copy"),
+            PortSpec("output_key", INOUT, str, description="the entry to write"),
+        ),
+    ),
+    action(
+        Sleep,
+        "RUNNING until msec of simulated time passed.",
+        (PortSpec("msec", IN, int, description="duration in milliseconds of simulated time"),),
+    ),
+    action(Script, "Runs a script; SUCCESS.", (CODE_PORT,)),
+)

@@ -5,9 +5,11 @@ from __future__ import annotations
 
 import py_trees
 
+from bt_grasp.tree.builtins.manifest import IN, control
 from bt_grasp.tree.context import NodeContext
 from bt_grasp.tree.exceptions import TreeRuntimeError
 from bt_grasp.tree.node import BtNode, BtStatus
+from bt_grasp.tree.registry import PortSpec
 
 RUNNING, SUCCESS, FAILURE, SKIPPED, IDLE = (
     BtStatus.RUNNING,
@@ -279,3 +281,22 @@ class WhileDoElse(Control):
             return RUNNING
         self.reset_children()
         return status
+
+
+SPECS = (
+    control(Sequence, "Ticks children in order; resumes a RUNNING child; restarts after a FAILURE."),
+    control(SequenceWithMemory, "Like Sequence, but resumes at the failed child next time."),
+    control(ReactiveSequence, "Re-evaluates every child each tick; a FAILURE halts the RUNNING one."),
+    control(Fallback, "Ticks children in order until one succeeds."),
+    control(ReactiveFallback, "Re-evaluates every child each tick; a SUCCESS halts the RUNNING one."),
+    control(
+        Parallel,
+        "Ticks all children; succeeds/fails when enough of them did.",
+        (
+            PortSpec("success_count", IN, int, -1, "children that must succeed (-1: all)"),
+            PortSpec("failure_count", IN, int, 1, "children that must fail (-1: all)"),
+        ),
+    ),
+    control(IfThenElse, "If child 1 succeeds tick child 2, else child 3 (or FAILURE).", children=(2, 3)),
+    control(WhileDoElse, "Re-checks child 1 every tick; runs child 2 or child 3.", children=(2, 3)),
+)

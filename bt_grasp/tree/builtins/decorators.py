@@ -1,16 +1,17 @@
 """BT.CPP v4 decorators: Inverter, ForceSuccess, ForceFailure, RetryUntilSuccessful, Repeat, Timeout, Delay,
-KeepRunningUntilFailure, RunOnce, Precondition, and the SubTree node. Timeout and Delay read the injected
+KeepRunningUntilFailure, RunOnce, Precondition. Timeout and Delay read the injected
 simulated clock, never the wall clock."""
 
 from __future__ import annotations
 
 import py_trees
 
+from bt_grasp.tree.builtins.manifest import IN, STATUS_NAMES, decorator
 from bt_grasp.tree.context import NodeContext
 from bt_grasp.tree.exceptions import ScriptSyntaxError, TreeRuntimeError
 from bt_grasp.tree.node import BtNode, BtStatus
-from bt_grasp.tree.script import parse_script
-from bt_grasp.tree.script_ast import Program
+from bt_grasp.tree.registry import PortSpec
+from bt_grasp.tree.scripting import Program, parse_script
 
 RUNNING, SUCCESS, FAILURE, SKIPPED, IDLE = (
     BtStatus.RUNNING,
@@ -278,20 +279,42 @@ class Precondition(Decorator):
         super().halt()
 
 
-class SubTreeNode(Decorator):
-    """The node standing for a ``<SubTree>``: its child is the subtree's root, on its own blackboard."""
-
-    def __init__(self, ctx: NodeContext, subtree_id: str) -> None:
-        super().__init__(ctx)
-        self.subtree_id = subtree_id
-        #: the SubTree instance's own blackboard and instance path (set by the builder)
-        self.subtree_blackboard = ctx.blackboard
-        self.subtree_path = ctx.path
-
-    def bt_tick(self) -> BtStatus:
-        if self.bt_state is IDLE:
-            self.set_bt_status(RUNNING)
-        status = self.tick_child()
-        if status.completed:
-            self.reset_child()
-        return status
+SPECS = (
+    decorator(Inverter, "Swaps SUCCESS and FAILURE."),
+    decorator(ForceSuccess, "SUCCESS whenever the child completes."),
+    decorator(ForceFailure, "FAILURE whenever the child completes."),
+    decorator(
+        RetryUntilSuccessful,
+        "Ticks the child again after a FAILURE, up to num_attempts times.",
+        (PortSpec("num_attempts", IN, int, description="attempts before failing (-1: forever)"),),
+    ),
+    decorator(
+        Repeat,
+        "Ticks the child again after a SUCCESS, num_cycles times.",
+        (PortSpec("num_cycles", IN, int, description="repetitions (-1: forever)"),),
+    ),
+    decorator(
+        Timeout,
+        "Halts the child and fails after msec of simulated time.",
+        (PortSpec("msec", IN, int, description="time limit in milliseconds"),),
+    ),
+    decorator(
+        Delay,
+        "Waits delay_msec of simulated time before ticking the child.",
+        (PortSpec("delay_msec", IN, int, description="delay in milliseconds"),),
+    ),
+    decorator(KeepRunningUntilFailure, "RUNNING after each child SUCCESS; FAILURE when it fails."),
+    decorator(
+        RunOnce,
+        "Ticks the child until it completes once.",
+        (PortSpec("then_skip", IN, bool, True, "afterwards SKIPPED (true) or the same status (false)"),),
+    ),
+    decorator(
+        Precondition,
+        "Ticks the child only when the script `if` is true.",
+        (
+            PortSpec("if", IN, str, description="the condition script"),
+            PortSpec("else", IN, str, "FAILURE", "status when the condition is false", STATUS_NAMES),
+        ),
+    ),
+)

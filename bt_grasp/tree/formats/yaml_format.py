@@ -27,7 +27,7 @@ from typing import Any
 import yaml
 
 from bt_grasp.errors import TreeFileError
-from bt_grasp.tree.document import Document, IncludeDecl, ModelDecl, ModelPort, NodeDecl, TreeDecl
+from bt_grasp.tree.formats.document import Document, IncludeDecl, ModelDecl, ModelPort, NodeDecl, TreeDecl
 
 _PLAIN_TAGS = frozenset("tag:yaml.org,2002:" + t for t in ("map", "seq", "str", "int", "float", "bool", "null"))
 _TOP_KEYS = ("btcpp_format", "main_tree_to_execute", "include", "trees", "models")

@@ -10,8 +10,8 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from bt_grasp.errors import InputError
-from bt_grasp.tree.document import Document, NodeDecl
-from bt_grasp.tree.yaml_format import write_yaml
+from bt_grasp.tree.formats.document import Document, NodeDecl
+from bt_grasp.tree.formats.yaml_format import write_yaml
 
 _PORT_TAGS = {"input": "input_port", "output": "output_port", "inout": "inout_port"}
 

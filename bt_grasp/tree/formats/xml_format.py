@@ -16,7 +16,7 @@ import defusedxml
 from defusedxml.ElementTree import DefusedXMLParser, ParseError
 
 from bt_grasp.errors import TreeFileError
-from bt_grasp.tree.document import (
+from bt_grasp.tree.formats.document import (
     EXPLICIT_TAGS,
     Document,
     IncludeDecl,

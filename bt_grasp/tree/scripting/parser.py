@@ -25,7 +25,7 @@ import functools
 import lark
 
 from bt_grasp.tree.exceptions import ScriptSyntaxError
-from bt_grasp.tree.script_ast import (
+from bt_grasp.tree.scripting.operators import (
     Assign,
     Binary,
     Compare,

@@ -1,0 +1,2 @@
+"""Tree file formats: BT.CPP v4 XML, its YAML twin, the format-neutral :class:`Document` both produce, and
+conversion between them."""
