@@ -8,6 +8,7 @@ the line, the key path and what was expected.
 from __future__ import annotations
 
 import difflib
+import re
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -47,6 +48,20 @@ def format_key_path(path: KeyPath) -> str:
     return text
 
 
+class _Yaml12Loader(yaml.SafeLoader):
+    """SafeLoader with YAML 1.2 booleans: only true/false are booleans, so ``on: blue_box`` (a stack goal)
+    keeps its key ``on`` instead of YAML 1.1's ``True``; ``yes``/``no``/``on``/``off`` stay text."""
+
+
+_Yaml12Loader.yaml_implicit_resolvers = {
+    first: [(tag, regexp) for tag, regexp in resolvers if tag != "tag:yaml.org,2002:bool"]
+    for first, resolvers in yaml.SafeLoader.yaml_implicit_resolvers.items()
+}
+_Yaml12Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:bool", re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$"), list("tTfF")
+)
+
+
 def read_yaml(path: str | Path) -> tuple[Any, dict[KeyPath, int]]:
     """Parse a YAML file safely; returns the data and a map from key paths to line numbers."""
     path = Path(path)
@@ -59,8 +74,8 @@ def read_yaml(path: str | Path) -> tuple[Any, dict[KeyPath, int]]:
     except UnicodeDecodeError as exc:
         raise ConfigError(path, "is not UTF-8 text") from exc
     try:
-        node = yaml.compose(text, Loader=yaml.SafeLoader)
-        data = yaml.safe_load(text)
+        node = yaml.compose(text, Loader=_Yaml12Loader)
+        data = yaml.load(text, Loader=_Yaml12Loader)
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         line = mark.line + 1 if mark is not None else None
@@ -97,7 +112,7 @@ def validate(model: type[M], data: Any, source: str | Path, lines: dict[KeyPath,
         # an unknown key usually explains a "missing" one next to it (a typo): report it first
         errors = sorted(exc.errors(), key=lambda e: 0 if e["type"] == "extra_forbidden" else 1)
         err = errors[0]
-        loc: KeyPath = tuple(p for p in err["loc"] if isinstance(p, str | int))
+        loc: KeyPath = _data_path(data, err["loc"])
         # pydantic appends the union/tag member name to loc for tagged unions; keep only real keys
         key = format_key_path(loc) or "top level"
         kind = err["type"]
@@ -111,11 +126,28 @@ def validate(model: type[M], data: Any, source: str | Path, lines: dict[KeyPath,
         elif kind == "missing":
             problem = f"missing required key '{key}'"
         else:
-            problem = f"{key}: {err['msg']}"
+            problem = f"{key}: {err['msg'].removeprefix('Value error, ')}"
             if "input" in err and not isinstance(err["input"], dict | list):
                 problem += f" (got {err['input']!r})"
         line = _nearest_line(loc, lines or {})
         raise ConfigError(source, problem, where=line) from None
+
+
+def _data_path(data: Any, loc: tuple[Any, ...]) -> KeyPath:
+    """The error's location as keys of the data: tagged-union member names pydantic inserts (a fixture's
+    ``tray``) are not keys of the file and are dropped; the last part (an unknown or missing key) is kept."""
+    path: list[str | int] = []
+    node = data
+    for i, part in enumerate(loc):
+        if not isinstance(part, str | int):
+            continue
+        in_list = isinstance(node, list) and isinstance(part, int) and 0 <= part < len(node)
+        if (isinstance(node, dict) and part in node) or in_list:
+            node = node[part]
+        elif i < len(loc) - 1 or (isinstance(node, dict) and node.get("kind") == part):
+            continue  # a union member's name (a goal's or fixture's kind), not a key of the file
+        path.append(part)
+    return tuple(path)
 
 
 def _allowed_keys(model: type[BaseModel], loc: KeyPath) -> list[str]:

@@ -1,4 +1,5 @@
-"""The scene file (``scenes/*.yaml``): table, robot mount, camera, lights, objects, randomisation.
+"""The scene file (``scenes/*.yaml``): table, robot mount, camera, lights, objects, randomisation,
+and (schema version 2) the task's goal, static fixtures and the calibration file shipped beside it.
 
 Frames: the world frame has z up and its origin on the table top; the robot's ``base_link`` sits at
 ``robot.base_xyz_m``. Everything a robot would know from its installation drawing (the table, where the
@@ -13,27 +14,25 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import Field, field_validator, model_validator
 
-from bt_grasp.config import StrictModel, load_model
+from bt_grasp.colors import COLOR_NAMES, check_color, rgb_of
+from bt_grasp.config import KeyPath, StrictModel, read_yaml, validate
+from bt_grasp.errors import ConfigError
+from bt_grasp.scene_fixtures import CONTAINER_KINDS, Fixture
+from bt_grasp.scene_goals import Goal, PickGoal, PlaceGoal, SortGoal, StackGoal
+
+__all__ = ["COLOR_NAMES", "SCENE_VERSION", "Scene", "SceneObject", "load_scene"]
+
+#: the scene file format this bt_grasp writes and reads (a file without ``version`` is version 1)
+SCENE_VERSION = 2
+#: keys that need ``version: 2``
+_V2_KEYS = ("goal", "fixtures", "calibration", "object_gap_m")
+#: a top-down place is planned only this far (horizontally) from the robot base, m
+TOP_DOWN_REACH_M = 0.80
 
 PositiveFloat = Annotated[float, Field(gt=0)]
 NonNegFloat = Annotated[float, Field(ge=0)]
 Vec3 = tuple[float, float, float]
 Range = tuple[float, float]
-
-#: colour names a scene may use, as linear-ish sRGB in [0, 1]
-COLOR_NAMES: dict[str, tuple[float, float, float]] = {
-    "red": (0.85, 0.08, 0.08),
-    "green": (0.10, 0.70, 0.15),
-    "blue": (0.08, 0.20, 0.85),
-    "yellow": (0.90, 0.80, 0.05),
-    "orange": (0.95, 0.45, 0.05),
-    "purple": (0.50, 0.10, 0.70),
-    "white": (0.92, 0.92, 0.92),
-    "grey": (0.5, 0.5, 0.5),
-    "black": (0.05, 0.05, 0.05),
-    "wood": (0.62, 0.48, 0.33),
-}
-
 
 class Physics(StrictModel):
     timestep_s: Annotated[float, Field(gt=0, le=0.004)] = 0.002  # dt <= 1/250 s keeps fingers out of boxes
@@ -144,11 +143,7 @@ class SceneObject(StrictModel):
     @field_validator("color")
     @classmethod
     def _known_color(cls, value: str | tuple[float, float, float]) -> str | tuple[float, float, float]:
-        if isinstance(value, str) and value not in COLOR_NAMES:
-            raise ValueError(f"unknown colour '{value}'; known: {', '.join(COLOR_NAMES)} or [r, g, b] in 0..1")
-        if not isinstance(value, str) and not all(0.0 <= c <= 1.0 for c in value):
-            raise ValueError("an [r, g, b] colour has components in 0..1")
-        return value
+        return check_color(value)
 
     @property
     def height_m(self) -> float:
@@ -156,7 +151,7 @@ class SceneObject(StrictModel):
 
     @property
     def rgb(self) -> tuple[float, float, float]:
-        return COLOR_NAMES[self.color] if isinstance(self.color, str) else self.color
+        return rgb_of(self.color)
 
 
 class Workspace(StrictModel):
@@ -168,6 +163,7 @@ class Workspace(StrictModel):
 
 
 class Scene(StrictModel):
+    version: Annotated[int, Field(ge=1)] = 1
     name: str = "scene"
     physics: Physics = Physics()
     table: Table = Table()
@@ -179,14 +175,33 @@ class Scene(StrictModel):
     )
     workspace: Workspace = Workspace()
     objects: tuple[SceneObject, ...] = ()
+    #: (version 2) the smallest gap between drawn objects' footprints, m; 0 lets objects touch. Not given:
+    #: the first format's rule (circumscribed circles 1 cm apart), which draws the same poses per seed
+    object_gap_m: NonNegFloat | None = None
+    #: (version 2) static fixtures: trays, bins, markers, walls (see bt_grasp.scene_fixtures)
+    fixtures: tuple[Fixture, ...] = ()
+    #: (version 2) what a run on this scene is judged on; None: pick the object of the run's --color
+    goal: Goal | None = None
+    #: (version 2) the calibration file made by `bt-grasp calibrate` for this scene, relative to this file
+    calibration: str | None = None
 
     @model_validator(mode="after")
     def _unique_names(self) -> Scene:
-        names = [o.name for o in self.objects]
+        names = [o.name for o in self.objects] + [f.name for f in self.fixtures]
         dupes = sorted({n for n in names if names.count(n) > 1})
         if dupes:
-            raise ValueError(f"object names must be unique; repeated: {', '.join(dupes)}")
+            raise ValueError(f"object and fixture names must be unique; repeated: {', '.join(dupes)}")
         return self
+
+    def fixture(self, name: str) -> Fixture | None:
+        return next((f for f in self.fixtures if f.name == name), None)
+
+    def object_spec(self, name: str) -> SceneObject | None:
+        return next((o for o in self.objects if o.name == name), None)
+
+    def effective_goal(self, color: str | None = None) -> Goal:
+        """The declared goal, or today's default: pick the object of the run's colour."""
+        return self.goal if self.goal is not None else PickGoal(kind="pick", color=color or None)
 
     def T_world_base(self) -> np.ndarray:
         """Where the robot is bolted (installation data, known to the pipeline)."""
@@ -198,5 +213,99 @@ class Scene(StrictModel):
 
 
 def load_scene(path: str | Path) -> Scene:
-    """Load and validate a scene file; raises ConfigError naming the file, line and key."""
-    return load_model(Scene, path)
+    """Load and validate a scene file; raises ConfigError naming the file, line and key.
+
+    A file without ``version`` is version 1 (the first format) and loads as before; a version-1 file that
+    uses a version-2 key gets one sentence saying to add ``version: 2``.
+    """
+    data, lines = read_yaml(path)
+    if isinstance(data, dict):
+        _check_version(data, path, lines)
+    scene = validate(Scene, data, path, lines)
+    check_references(scene, path, lines)
+    return scene
+
+
+def _check_version(data: dict[str, object], path: str | Path, lines: dict[KeyPath, int]) -> None:
+    version = data.get("version", 1)
+    if not isinstance(version, int) or isinstance(version, bool):
+        return  # the model reports the type error with its line
+    if version > SCENE_VERSION:
+        raise ConfigError(path, f"scene format version {version} is newer than this bt_grasp reads "
+                          f"({SCENE_VERSION}); update bt_grasp or write a version-{SCENE_VERSION} scene",
+                          where=lines.get(("version",)))
+    if version < SCENE_VERSION:
+        for key in _V2_KEYS:
+            if key in data:
+                raise ConfigError(path, f"'{key}' needs scene format version {SCENE_VERSION}: add "
+                                  f"'version: {SCENE_VERSION}' at the top of the file", where=lines.get((key,)))
+
+
+def check_references(scene: Scene, path: str | Path, lines: dict[KeyPath, int] | None = None) -> None:
+    """Names a goal uses exist in the scene, containers are trays or bins, place targets can be reached."""
+    lines = lines or {}
+    goal = scene.goal
+    if goal is None:
+        return
+    objects = [o.name for o in scene.objects]
+    fixtures = [f.name for f in scene.fixtures]
+
+    def fail(key: KeyPath, problem: str) -> None:
+        line = next((lines[key[:i]] for i in range(len(key), 0, -1) if key[:i] in lines), None)
+        raise ConfigError(path, problem, where=line)
+
+    def need_object(name: str | None, key: KeyPath) -> None:
+        if name is not None and name not in objects:
+            known = ", ".join(objects) or "none"
+            fail(key, f"goal names object '{name}', which is not in the scene (objects: {known})")
+
+    def need_container(name: str | None, key: KeyPath) -> None:
+        if name is None:
+            return
+        fixture = scene.fixture(name)
+        if fixture is None:
+            known = ", ".join(fixtures) or "none"
+            fail(key, f"goal names fixture '{name}', which is not in the scene (fixtures: {known})")
+        elif fixture.kind not in CONTAINER_KINDS:
+            fail(key, f"goal puts objects into '{name}', a {fixture.kind}; only a tray or a bin holds objects")
+
+    if isinstance(goal, PickGoal):
+        need_object(goal.object, ("goal", "object"))
+    elif isinstance(goal, PlaceGoal):
+        need_object(goal.object, ("goal", "object"))
+        if goal.at is not None and scene.fixture(goal.at) is None:
+            fail(("goal", "at"), f"goal names fixture '{goal.at}', which is not in the scene "
+                 f"(fixtures: {', '.join(fixtures) or 'none'})")
+        fixture = scene.fixture(goal.at) if goal.at is not None else None
+        xy = goal.at_xy_m if goal.at_xy_m is not None else (fixture.center_xy_m if fixture else (0.0, 0.0))
+        problem = place_xy_problem(scene, xy)
+        if problem:
+            fail(("goal", "at_xy_m" if goal.at_xy_m is not None else "at"), f"the place target {problem}")
+    elif isinstance(goal, StackGoal):
+        need_object(goal.object, ("goal", "object"))
+        need_object(goal.on, ("goal", "on"))
+        if goal.object == goal.on:
+            fail(("goal", "on"), "an object cannot be stacked on itself")
+    elif isinstance(goal, SortGoal):
+        for i, rule in enumerate(goal.rules):
+            need_container(rule.into, ("goal", "rules", i, "into"))
+    else:
+        need_container(goal.into, ("goal", "into"))
+    for i, f in enumerate(scene.fixtures):
+        problem = place_xy_problem(scene, f.center_xy_m, reach=False)
+        if problem:
+            fail(("fixtures", i, "center_xy_m"), f"fixture '{f.name}' {problem}")
+
+
+def place_xy_problem(scene: Scene, xy: tuple[float, float], reach: bool = True) -> str | None:
+    """Why a world (x, y) cannot be a top-down place target (off the table, out of reach), or None."""
+    table = scene.table
+    dx, dy = xy[0] - table.center_xy_m[0], xy[1] - table.center_xy_m[1]
+    if abs(dx) > table.size_m[0] / 2 or abs(dy) > table.size_m[1] / 2:
+        return f"({xy[0]:.3f}, {xy[1]:.3f}) m is off the table"
+    base = scene.robot.base_xyz_m
+    distance = float(np.hypot(xy[0] - base[0], xy[1] - base[1]))
+    if reach and not 0.20 <= distance <= TOP_DOWN_REACH_M:
+        return (f"({xy[0]:.3f}, {xy[1]:.3f}) m is out of reach: {distance:.2f} m from the robot base "
+                f"(a top-down place needs 0.20 to {TOP_DOWN_REACH_M:.2f} m)")
+    return None

@@ -18,7 +18,10 @@ FORBIDDEN = {
     "recording": ("sapien", "bt_grasp.sim", "bt_grasp.cli"),
     "faults": ("bt_grasp.sim.oracle", "bt_grasp.cli"),
 }
-LEAF_MODULES = ("errors", "clock", "geometry", "interfaces", "config", "scene_config", "robot_description")
+LEAF_MODULES = (
+    "errors", "clock", "geometry", "interfaces", "config", "scene_config", "robot_description", "colors",
+    "scene_fixtures", "scene_goals",
+)
 
 
 def _imports(path: Path) -> set[str]:

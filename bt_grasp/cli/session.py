@@ -105,12 +105,12 @@ class Prepared:
 
         self.request = request
         self.scene = load_scene(request.scene)
-        self.calibration = None
-        if request.calibration is not None:
-            from bt_grasp.perception.calibration_file import load_calibration
+        from bt_grasp.perception.calibration_file import calibration_for_scene
 
-            # the scene says where the camera is mounted; a calibration made for the other mount is bad input
-            self.calibration = load_calibration(request.calibration, mount=self.scene.camera.mount)
+        # --calibration, else the file the scene names beside it; another mount or camera pose is bad input
+        self.calibration_path, self.calibration = calibration_for_scene(
+            self.scene, request.scene, request.calibration
+        )
         self.fault_plan = None
         if request.faults is not None or request.inject:
             from bt_grasp.faults.plan import load_fault_plan
@@ -122,8 +122,8 @@ class Prepared:
         self.tree = load_tree(request.tree, robot_registry(), clock=self.world.clock)
         for key, value in request.blackboard.items():
             self.tree.root_blackboard.set(key, value)
-        if request.calibration is not None:
-            self.tree.root_blackboard.set("calibration_file", str(request.calibration))
+        if self.calibration_path is not None:
+            self.tree.root_blackboard.set("calibration_file", str(self.calibration_path))
         self.cell = build_cell(self)
         if any(node.bt_type == "Calibrate" for node in self.tree.nodes()):
             self.cell.extras = {"calibration_board": self._mount_board()}
@@ -144,8 +144,8 @@ class Prepared:
         for name, text in self.tree.sources.items():
             files[f"tree/{Path(name).name}"] = text.encode()
         files[f"scene/{self.request.scene.name}"] = self.request.scene.read_bytes()
-        if self.request.calibration is not None:
-            files[f"calibration/{self.request.calibration.name}"] = self.request.calibration.read_bytes()
+        if self.calibration_path is not None:
+            files[f"calibration/{self.calibration_path.name}"] = self.calibration_path.read_bytes()
         if self.request.faults is not None:
             files[f"faults/{self.request.faults.name}"] = self.request.faults.read_bytes()
         return files
@@ -156,7 +156,7 @@ class Prepared:
             "seed": str(r.seed),
             "tree_file": str(r.tree),
             "scene_file": str(r.scene),
-            "calibration_file": str(r.calibration or ""),
+            "calibration_file": str(self.calibration_path or ""),
             "fault_plan": str(r.faults or ""),
             "inject": ";".join(r.inject),
             "blackboard": json.dumps(dict(r.blackboard), sort_keys=True, default=str),

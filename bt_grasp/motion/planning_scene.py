@@ -123,8 +123,9 @@ class PlanningScene:
     @classmethod
     def from_scene(cls, scene: Scene, obstacles: tuple[Shape, ...] = (),
                    allowed_object: Shape | None = None) -> PlanningScene:
-        """The table from the scene file's installation data, in the robot base frame."""
-        return cls(table=table_box(scene), obstacles=tuple(obstacles), allowed_object=allowed_object)
+        """The table and the fixtures' solid parts (the scene file's installation data), in the base frame."""
+        return cls(table=table_box(scene), obstacles=fixture_boxes(scene) + tuple(obstacles),
+                   allowed_object=allowed_object)
 
     def with_obstacles(self, *obstacles: Shape) -> PlanningScene:
         return replace(self, obstacles=self.obstacles + tuple(obstacles))
@@ -134,6 +135,17 @@ class PlanningScene:
         if shape is not None and not shape.touch_links:
             shape = replace(shape, touch_links=FINGER_LINKS)
         return replace(self, allowed_object=shape)
+
+
+def fixture_boxes(scene: Scene) -> tuple[Box, ...]:
+    """The solid parts of the scene's fixtures (tray floors and walls, walls) in the robot base frame."""
+    T_base_world = np.linalg.inv(scene.T_world_base())
+    return tuple(
+        Box.at(part.name, part.size_m, T_base_world @ part.T_world_part)
+        for fixture in scene.fixtures
+        for part in fixture.parts()
+        if part.solid
+    )
 
 
 def table_box(scene: Scene) -> Box:

@@ -33,6 +33,7 @@ from bt_grasp.errors import ConfigError
 from bt_grasp.geometry import Mat4, T_from_pos_quat_wxyz, quat_wxyz
 from bt_grasp.interfaces import CameraIntrinsics
 from bt_grasp.perception.charuco import BoardSpec
+from bt_grasp.scene_config import Scene
 
 Vec3 = tuple[float, float, float]
 Row4 = tuple[float, float, float, float]
@@ -181,3 +182,59 @@ def load_calibration(path: str | Path, mount: str | None = None) -> CalibrationF
             where=lines.get(("mount",)),
         )
     return calibration
+
+
+#: a calibration whose camera lies further than this from the scene's nominal mount was made for another pose
+NOMINAL_POSITION_TOLERANCE_M = 0.03
+NOMINAL_AXIS_TOLERANCE_DEG = 3.0
+
+
+def mismatch_with_mount(calibration: CalibrationFile, scene: Scene) -> str | None:
+    """Why a calibration cannot be for this scene's camera (another mount, or a camera pose more than a few
+    cm or degrees from the scene's nominal mount), or None. The nominal mount is installation data."""
+    camera = scene.camera
+    if calibration.mount != camera.mount:
+        return f"it is for an {calibration.mount} camera, but the scene's camera is mounted {camera.mount}"
+    if camera.mount == "eye-to-hand":
+        T_base_world = np.linalg.inv(scene.T_world_base())
+        position = (T_base_world @ [*camera.eye_to_hand.position_m, 1.0])[:3]
+        axis = (T_base_world @ [*camera.eye_to_hand.look_at_m, 1.0])[:3] - position
+        where = "base frame"
+    else:
+        from bt_grasp.geometry import T_from_xyz_rpy
+
+        T = T_from_xyz_rpy(np.array(camera.eye_in_hand.xyz_m), np.deg2rad(camera.eye_in_hand.rpy_deg))
+        position, axis, where = T[:3, 3], T[:3, 2], f"{camera.eye_in_hand.parent_link} frame"
+    T_cal = calibration.T_parent_camera
+    off_m = float(np.linalg.norm(T_cal[:3, 3] - position))
+    cos = float(np.dot(T_cal[:3, 2], axis) / (np.linalg.norm(axis) * np.linalg.norm(T_cal[:3, 2])))
+    off_deg = float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
+    if off_m > NOMINAL_POSITION_TOLERANCE_M or off_deg > NOMINAL_AXIS_TOLERANCE_DEG:
+        return (f"it was made for another camera pose: {off_m * 100:.1f} cm and {off_deg:.1f} deg from the "
+                f"scene's camera mount ({where}); calibrate again with `bt-grasp calibrate --scene SCENE --out FILE`")
+    return None
+
+
+def calibration_for_scene(scene: Scene, scene_path: str | Path, override: str | Path | None
+                          ) -> tuple[Path | None, CalibrationFile | None]:
+    """The calibration a run uses: ``override`` (the ``--calibration`` flag) or the file the scene names
+    (relative to the scene file). Bad input (missing, unreadable, made for another mount or camera pose) is
+    a ConfigError naming the file and line; no calibration at all is (None, None)."""
+    if override is not None:
+        path = Path(override)
+        calibration = load_calibration(path, mount=scene.camera.mount)
+        where: int | None = None
+    elif scene.calibration:
+        path = Path(scene_path).parent / scene.calibration
+        where = read_yaml(scene_path)[1].get(("calibration",))
+        if not path.is_file():
+            raise ConfigError(scene_path, f"the calibration file '{scene.calibration}' the scene names does not "
+                              f"exist beside it; make it with `bt-grasp calibrate --scene {scene_path} --out {path}` "
+                              "or pass --calibration FILE", where=where)
+        calibration = load_calibration(path, mount=scene.camera.mount)
+    else:
+        return None, None
+    problem = mismatch_with_mount(calibration, scene)
+    if problem:
+        raise ConfigError(path, f"this calibration does not fit the scene {scene_path}: {problem}", where=where)
+    return path, calibration

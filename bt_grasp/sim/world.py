@@ -12,6 +12,7 @@ from bt_grasp.clock import ManualClock
 from bt_grasp.scene_config import Scene, load_scene
 from bt_grasp.sim.camera import SimCamera
 from bt_grasp.sim.device import create_scene
+from bt_grasp.sim.fixtures import build_fixture
 from bt_grasp.sim.objects import PlacedObject, build_object, draw_poses
 from bt_grasp.sim.robot import SimRobot
 
@@ -44,7 +45,10 @@ class World:
         sapien.physx.get_scene_config()  # touch: scene config applies to scenes created after a change
         self._build_table()
         self.robot = SimRobot(self.scene, scene_config.robot, scene_config.T_world_base())
-        self.placed: list[PlacedObject] = draw_poses(scene_config.objects, self._object_rng, 0.0, str(source))
+        self.fixtures = {f.name: build_fixture(self.scene, f) for f in scene_config.fixtures}
+        self.placed: list[PlacedObject] = draw_poses(
+            scene_config.objects, self._object_rng, 0.0, str(source), scene_config.object_gap_m
+        )
         self.objects = {p.spec.name: build_object(self.scene, p) for p in self.placed}
         self._build_lights()
         mount = camera_mount or scene_config.camera.mount

@@ -1,0 +1,145 @@
+"""Static fixtures a scene file may declare (``fixtures:``): trays, bins, flat markers, walls.
+
+A fixture is installation data, like the table: the robot knows where it is from the scene file (the
+planner avoids its solid parts, a tree can ask for its pose with ``FixturePose``); nothing about it is
+drawn from the seed. Frames: world frame, z up, origin on the table top.
+
+Every kind is a frozen model with a ``kind`` tag and one method, :meth:`parts`, which describes the
+fixture as boxes in the world frame. The simulator builds those boxes (solid ones collide, flat ones are
+paint), and the planning scene adds the solid ones as obstacles. **Adding a kind** (e.g. a conveyor):
+
+1. write a model here with ``kind: Literal["conveyor"]``, a ``name`` and a ``parts()`` method;
+2. add it to the :data:`Fixture` union below (the file format then accepts it, with strict key checks);
+3. if it is not made of static boxes (a moving belt), register a builder for its kind in
+   ``bt_grasp.sim.fixtures.BUILDERS``; otherwise nothing else is needed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Annotated, Literal
+
+import numpy as np
+from pydantic import Field, field_validator
+
+from bt_grasp.colors import RGB, check_color, rgb_of
+from bt_grasp.config import StrictModel
+from bt_grasp.geometry import Mat4, make_T, rot_z
+
+PositiveFloat = Annotated[float, Field(gt=0)]
+Name = Annotated[str, Field(min_length=1, pattern=r"^[A-Za-z_][A-Za-z0-9_\-]*$")]
+
+@dataclass(frozen=True)
+class FixturePart:
+    """One box of a fixture: full edge lengths along its axes, its pose in the world frame."""
+
+    name: str
+    size_m: tuple[float, float, float]
+    T_world_part: Mat4
+    solid: bool = True  # False: paint (a marker), no collision and no planning obstacle
+    rgb: RGB = (0.5, 0.5, 0.5)
+
+
+class _FixtureBase(StrictModel):
+    name: Name
+    center_xy_m: tuple[float, float]
+    yaw_deg: float = 0.0
+    color: str | RGB = "grey"
+
+    @field_validator("color")
+    @classmethod
+    def _known_color(cls, value: str | RGB) -> str | RGB:
+        return check_color(value)
+
+    @property
+    def rgb(self) -> RGB:
+        return rgb_of(self.color)
+
+    def T_world_fixture(self, z_m: float = 0.0) -> Mat4:
+        """The fixture's frame: centre of its footprint on the table top, yawed."""
+        return make_T(rot_z(np.deg2rad(self.yaw_deg)), [self.center_xy_m[0], self.center_xy_m[1], z_m])
+
+    def _box(self, name: str, size: tuple[float, float, float], xyz: tuple[float, float, float],
+             solid: bool = True) -> FixturePart:
+        T = self.T_world_fixture() @ make_T(translation=list(xyz))
+        return FixturePart(f"{self.name}/{name}", size, T, solid, self.rgb)
+
+
+class Container(_FixtureBase):
+    """A floor plate with four walls; ``inner_size_m`` is the free floor inside the walls (x, y)."""
+
+    inner_size_m: tuple[PositiveFloat, PositiveFloat]
+    wall_height_m: PositiveFloat = 0.03
+    wall_thickness_m: PositiveFloat = 0.01
+    floor_thickness_m: PositiveFloat = 0.004
+
+    @property
+    def surface_z_m(self) -> float:
+        """Height of the floor's top above the table: where a placed object's bottom rests."""
+        return self.floor_thickness_m
+
+    def contains_xy(self, xy: tuple[float, float] | np.ndarray, margin_m: float = 0.0) -> bool:
+        """True when a world point's (x, y) lies inside the walls, ``margin_m`` away from them."""
+        local = np.linalg.inv(self.T_world_fixture()) @ np.array([xy[0], xy[1], 0.0, 1.0])
+        hx, hy = self.inner_size_m[0] / 2 - margin_m, self.inner_size_m[1] / 2 - margin_m
+        return bool(abs(local[0]) <= hx and abs(local[1]) <= hy)
+
+    def parts(self) -> tuple[FixturePart, ...]:
+        ix, iy = self.inner_size_m
+        t, h, f = self.wall_thickness_m, self.wall_height_m, self.floor_thickness_m
+        ox, oy = ix + 2 * t, iy + 2 * t
+        return (
+            self._box("floor", (ox, oy, f), (0.0, 0.0, f / 2)),
+            self._box("wall_x_minus", (t, oy, h), (-(ix + t) / 2, 0.0, h / 2)),
+            self._box("wall_x_plus", (t, oy, h), ((ix + t) / 2, 0.0, h / 2)),
+            self._box("wall_y_minus", (ix, t, h), (0.0, -(iy + t) / 2, h / 2)),
+            self._box("wall_y_plus", (ix, t, h), (0.0, (iy + t) / 2, h / 2)),
+        )
+
+
+class Tray(Container):
+    """A shallow container objects are placed into (walls 3 cm by default)."""
+
+    kind: Literal["tray"]
+
+
+class Bin(Container):
+    """A deeper container (walls 8 cm by default)."""
+
+    kind: Literal["bin"]
+    wall_height_m: PositiveFloat = 0.08
+
+
+class Marker(_FixtureBase):
+    """A flat coloured patch painted on the table (1 mm thick, no collision): a visible place target."""
+
+    kind: Literal["marker"]
+    size_m: tuple[PositiveFloat, PositiveFloat] = (0.06, 0.06)
+
+    @property
+    def surface_z_m(self) -> float:
+        return 0.0
+
+    def parts(self) -> tuple[FixturePart, ...]:
+        return (self._box("patch", (self.size_m[0], self.size_m[1], 0.001), (0.0, 0.0, 0.0005), solid=False),)
+
+
+class Wall(_FixtureBase):
+    """A solid upright slab standing on the table (``size_m``: x, y, height)."""
+
+    kind: Literal["wall"]
+    size_m: tuple[PositiveFloat, PositiveFloat, PositiveFloat]
+
+    @property
+    def surface_z_m(self) -> float:
+        return float(self.size_m[2])
+
+    def parts(self) -> tuple[FixturePart, ...]:
+        x, y, z = self.size_m
+        return (self._box("slab", (x, y, z), (0.0, 0.0, z / 2)),)
+
+
+#: what ``fixtures:`` entries may be; the ``kind`` key selects the model
+Fixture = Annotated[Tray | Bin | Marker | Wall, Field(discriminator="kind")]
+FIXTURE_KINDS: tuple[str, ...] = ("tray", "bin", "marker", "wall")
+CONTAINER_KINDS: tuple[str, ...] = ("tray", "bin")

@@ -1,0 +1,100 @@
+"""The goal a scene declares (``goal:``): what a run on this scene is judged on, by physics.
+
+Kinds (the ``kind`` key selects one)::
+
+    goal: {kind: pick, color: red, height_m: 0.15}                 # an object held >= height_m above the table
+    goal: {kind: place, object: red_box, at: target_marker}        # resting on a marker (or at_xy_m: [x, y])
+    goal: {kind: stack, object: red_box, on: blue_box}             # resting centred on another object
+    goal: {kind: sort, rules: [{color: red, into: left_tray}, {color: blue, into: right_tray}]}
+    goal: {kind: clear, into: bin}                                 # every object placed into the bin
+
+Placed objects (place, stack, sort, clear into a container) must be released (not touching the fingers),
+upright within :data:`UPRIGHT_DEG`, still for :data:`STILL_S` of simulated time after release, and set down,
+not dropped (fallen less than :data:`MAX_DROP_M` after the fingers opened). The judge in ``bt_grasp.sim``
+checks these with the simulator's ground truth; the pipeline never reads them.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import Field, model_validator
+
+from bt_grasp.colors import check_color
+from bt_grasp.config import StrictModel
+
+Name = Annotated[str, Field(min_length=1, pattern=r"^[A-Za-z_][A-Za-z0-9_\-]*$")]
+PositiveFloat = Annotated[float, Field(gt=0)]
+
+#: a placed object's tilt from upright may not exceed this
+UPRIGHT_DEG = 10.0
+#: a placed object must stay still this long (simulated time) after release
+STILL_S = 1.0
+#: ... moving slower than this (centre speed)
+STILL_SPEED_M_S = 0.005
+#: a placed object may fall at most this far after the fingers opened (more is a drop)
+MAX_DROP_M = 0.01
+
+
+class PickGoal(StrictModel):
+    """An object is held in the gripper at least ``height_m`` above where it started."""
+
+    kind: Literal["pick"]
+    object: Name | None = None  # a scene object's name; None: the object the tree lifted
+    color: str | None = None  # informs trees that read {color}; the judge checks ``object`` when given
+    height_m: PositiveFloat = 0.15
+
+
+class PlaceGoal(StrictModel):
+    """``object`` rests within ``tolerance_m`` of a target: a fixture's centre (``at``) or a point."""
+
+    kind: Literal["place"]
+    object: Name
+    at: Name | None = None  # a fixture (marker, tray, ...) whose centre is the target
+    at_xy_m: tuple[float, float] | None = None  # or a world (x, y) on the table
+    tolerance_m: PositiveFloat = 0.01
+
+    @model_validator(mode="after")
+    def _one_target(self) -> PlaceGoal:
+        if (self.at is None) == (self.at_xy_m is None):
+            raise ValueError("a place goal needs exactly one of 'at' (a fixture name) or 'at_xy_m' ([x, y])")
+        return self
+
+
+class StackGoal(StrictModel):
+    """``object`` rests on top of ``on``: centred within ``xy_tolerance_m``, its bottom within
+    ``z_tolerance_m`` of the lower object's top (ManiSkill's StackCube: about 3 cm and 5 mm)."""
+
+    kind: Literal["stack"]
+    object: Name
+    on: Name
+    xy_tolerance_m: PositiveFloat = 0.03
+    z_tolerance_m: PositiveFloat = 0.005
+
+
+class SortRule(StrictModel):
+    color: str
+    into: Name  # a tray or bin
+
+    @model_validator(mode="after")
+    def _color(self) -> SortRule:
+        check_color(self.color)
+        return self
+
+
+class SortGoal(StrictModel):
+    """Every object whose colour a rule names is placed inside that rule's container."""
+
+    kind: Literal["sort"]
+    rules: Annotated[tuple[SortRule, ...], Field(min_length=1)]
+
+
+class ClearGoal(StrictModel):
+    """Every object leaves the work area; with ``into``, each is placed (not dropped) inside that container."""
+
+    kind: Literal["clear"]
+    into: Name | None = None
+
+
+Goal = Annotated[PickGoal | PlaceGoal | StackGoal | SortGoal | ClearGoal, Field(discriminator="kind")]
+GOAL_KINDS: tuple[str, ...] = ("pick", "place", "stack", "sort", "clear")
