@@ -73,13 +73,21 @@ def perception(
     scene: Path = typer.Option(Path("scenes/tabletop.yaml"), "--scene", help="Base scene (table, camera)."),
     calibration: bool = typer.Option(True, "--calibration/--no-calibration",
                                      help="Also judge hand-eye calibration (both mounts, noise on/off)."),
+    noise_sweep: bool = typer.Option(False, "--noise-sweep",
+                                     help="Sweep the sensor noise (1x-4x the default stereo error) instead."),
+    adapt: bool = typer.Option(True, "--adapt/--fixed-thresholds",
+                               help="With --noise-sweep: perception adapts to the measured noise (default) or not."),
     as_json: bool = typer.Option(False, "--json", help="Print exactly one JSON object."),
 ) -> None:
     """Perception accuracy against the simulator's truth: detection rate, centroid/yaw error, timings."""
     from bt_grasp.cli.calibrate_cmd import SimBenchBackend
     from bt_grasp.perception.bench import run_perception_bench
+    from bt_grasp.perception.noise_bench import run_noise_sweep
 
-    summary = run_perception_bench(scenes, seed, backend=SimBenchBackend(scene), calibrate=calibration)
+    if noise_sweep:
+        summary = run_noise_sweep(scenes, seed, backend=SimBenchBackend(scene), adapt=adapt)
+    else:
+        summary = run_perception_bench(scenes, seed, backend=SimBenchBackend(scene), calibrate=calibration)
     summary["machine"] = f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}"
     if as_json:
         typer.echo(json.dumps(summary))

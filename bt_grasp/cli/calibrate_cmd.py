@@ -169,6 +169,16 @@ class SimBenchBackend:
         oracle = GroundTruthOracle(world)
         return world.camera.capture(), {name: oracle.T_base_object(name) for name in oracle.object_names()}
 
+    def capture_levels(self, scene: Any, seed: int, noises: Any) -> tuple[list[Any], dict[str, np.ndarray]]:
+        from bt_grasp.sim.oracle import GroundTruthOracle
+        from bt_grasp.sim.world import World
+
+        world = World(scene, seed, camera_mount="eye-to-hand")
+        world.step(world.steps_per_tick * 10)
+        oracle = GroundTruthOracle(world)
+        frames = world.camera.capture_variants(noises, seed)
+        return list(frames), {name: oracle.T_base_object(name) for name in oracle.object_names()}
+
     def calibrate(self, scene: Any, mount: str, seed: int, poses: int
                   ) -> tuple[np.ndarray, dict[str, tuple[float, float]]]:
         result = run_sim_calibration(scene, mount, seed, poses)

@@ -85,6 +85,20 @@ class SegmentationSettings(StrictModel):
     top_min_normal_z: Annotated[float, Field(ge=0, le=1)] = 0.8  # |normal . up| of a top-face point
 
 
+class NoiseSettings(StrictModel):
+    """Adapting to the depth noise measured in each frame (see ``noise_adapt.py`` and docs/perception.md)."""
+
+    adapt: bool = True  # measure the noise and adapt; False keeps the fixed thresholds above
+    tuned_sigma_m: PositiveFloat = 0.0025  # per-pixel depth error the fixed thresholds were tuned at (1x, ~1 m)
+    window_efficiency: Annotated[float, Field(gt=0, le=1)] = 0.7  # share of a window's pixels the gate keeps
+    max_filter_radius_px: Annotated[int, Field(ge=1, le=6)] = 4  # largest denoising window: (2r+1)^2 pixels
+    gate_sigmas: PositiveFloat = 2.5  # neighbours further than this many sigma from the median are not averaged
+    plane_sigmas: PositiveFloat = 3.0  # plane inlier distance >= this many height sigmas
+    height_sigmas: PositiveFloat = 3.5  # an object point stands at least this many height sigmas above the plane
+    top_band_sigmas: PositiveFloat = 3.0  # top-face band >= this many height sigmas
+    cluster_spacings: PositiveFloat = 3.0  # DBSCAN radius >= this many median point spacings
+
+
 class ColorSettings(StrictModel):
     """Colour names to HSV boxes; morphology and area limits for the colour masks."""
 
@@ -119,6 +133,7 @@ class PerceptionConfig(StrictModel):
     roi: RegionOfInterest = RegionOfInterest()
     cloud: CloudSettings = CloudSettings()
     segmentation: SegmentationSettings = SegmentationSettings()
+    noise: NoiseSettings = NoiseSettings()
     color: ColorSettings = ColorSettings()
     grasp: GraspSettings = GraspSettings()
 

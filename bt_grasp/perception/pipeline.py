@@ -21,8 +21,9 @@ from numpy.typing import NDArray
 from bt_grasp.geometry import Mat4
 from bt_grasp.interfaces import RGBDFrame
 from bt_grasp.perception import cloud as pc
+from bt_grasp.perception import noise_adapt
 from bt_grasp.perception.color import blobs, classify, color_mask, pixel_matches, to_hsv
-from bt_grasp.perception.config import PerceptionConfig
+from bt_grasp.perception.config import PerceptionConfig, SegmentationSettings
 from bt_grasp.perception.results import Detection, PerceptionResult, PerceptionStatus
 from bt_grasp.perception.segment import (
     Plane,
@@ -111,6 +112,13 @@ def perceive(
             in_window = np.zeros_like(valid)
             in_window[v0:v1, u0:u1] = True
             valid &= in_window
+    with timer.stage("noise"):
+        noise = noise_adapt.measure(depth, valid, config.noise)
+        if noise.filter_radius_px:
+            depth = noise_adapt.denoise_depth(depth, valid, noise.filter_radius_px, noise.k_per_m,
+                                              config.noise.gate_sigmas)
+            valid &= depth > 0
+    with timer.stage("cloud"):
         cam = pc.depth_to_cloud(depth, frame.intrinsics, valid)
     with timer.stage("roi"):
         roi = pc.crop_roi(pc.to_base(cam, T_base_camera), config.roi)
@@ -119,16 +127,24 @@ def perceive(
                        f"{len(roi)} of {n_valid} valid points lie in the region of interest")
     with timer.stage("voxel"):
         sparse = pc.downsample(roi.points, config.cloud.voxel_m)
+    height_sigma = 0.0
     with timer.stage("plane"):
+        seg = noise_adapt.adapt_segmentation(seg, noise.sigma_after_m, config.noise)
         plane = fit_table_plane(sparse, seg)
+        if plane is not None:
+            sparse_h = plane.height(np.asarray(sparse.points))
+            height_sigma = noise_adapt.height_spread_m(sparse_h[np.abs(sparse_h) < seg.plane_distance_m])
+            seg = noise_adapt.adapt_segmentation(seg, height_sigma, config.noise)
     if plane is None:
-        return _status(PerceptionStatus.NO_POINTS, timer, "no near-horizontal table plane in the region of interest")
+        return _status(PerceptionStatus.NO_POINTS, timer, "no near-horizontal table plane in the region of interest",
+                       noise=noise)
     with timer.stage("outliers"):
         sparse_pts = np.asarray(sparse.points)
         off_plane = pc.remove_outliers(pc.to_o3d(sparse_pts[plane.height(sparse_pts) > seg.min_height_m]),
                                        config.cloud)
         off_plane_pts = np.asarray(off_plane.points)
     with timer.stage("cluster"):
+        seg = seg.model_copy(update={"cluster_eps_m": noise_adapt.cluster_radius_m(off_plane_pts, seg, config.noise)})
         clusters = cluster(off_plane_pts, seg)
         labels = np.full(len(off_plane_pts), -1, dtype=np.intp)
         for k, idx in enumerate(clusters):
@@ -140,7 +156,7 @@ def perceive(
         )
     if not full_clusters:
         return _status(PerceptionStatus.NO_OBJECTS, timer, "the table is empty (no cluster above the plane)",
-                       table_plane_base=plane.as_tuple())
+                       table_plane_base=plane.as_tuple(), noise=noise, height_sigma_m=height_sigma)
     hsv = None
     with timer.stage("color"):
         hsv = to_hsv(frame.color)
@@ -149,18 +165,18 @@ def perceive(
             mask = color_mask(hsv, config.color.ranges[color], config.color)
     with timer.stage("geometry"):
         detections = [
-            d for d in (_describe(c, plane, hsv, mask, config) for c in full_clusters) if d is not None
+            d for d in (_describe(c, plane, hsv, mask, config, seg) for c in full_clusters) if d is not None
         ]
     if not detections:
         return _status(PerceptionStatus.NO_OBJECTS, timer, "no cluster large enough to be an object",
-                       table_plane_base=plane.as_tuple())
+                       table_plane_base=plane.as_tuple(), noise=noise, height_sigma_m=height_sigma)
     ranked = _rank(detections, color, size_hint_m, config)
     n_colour_blobs = len(blobs(mask, config.color)) if mask is not None else 0
     if color is not None and not ranked:
         return _status(
             PerceptionStatus.NO_MATCH, timer,
             f"{len(detections)} object(s) on the table, none {color} ({n_colour_blobs} {color} blob(s) in the image)",
-            table_plane_base=plane.as_tuple(), others=tuple(detections),
+            table_plane_base=plane.as_tuple(), others=tuple(detections), noise=noise, height_sigma_m=height_sigma,
         )
     result = PerceptionResult(
         status=PerceptionStatus.OK,
@@ -170,6 +186,8 @@ def perceive(
         + ", ".join(f"{v:.3f}" for v in ranked[0].centroid_base_m),
         table_plane_base=plane.as_tuple(),
         others=tuple(detections),
+        noise=noise,
+        height_sigma_m=height_sigma,
     )
     log.debug("perception: %s in %.1f ms", result.message, result.timings_ms["total"])
     return result
@@ -177,11 +195,11 @@ def perceive(
 
 def _describe(
     obj: pc.PixelCloud, plane: Plane, hsv: NDArray[np.uint8], mask: NDArray[np.uint8] | None,
-    config: PerceptionConfig,
+    config: PerceptionConfig, seg: SegmentationSettings,
 ) -> Detection | None:
-    if len(obj) < config.segmentation.min_cluster_points:
+    if len(obj) < seg.min_cluster_points:
         return None
-    geo = object_geometry(obj.points, plane, config.segmentation)
+    geo = object_geometry(obj.points, plane, seg)
     u, v = obj.pixels[:, 0], obj.pixels[:, 1]
     label, label_fraction = classify(hsv[v, u], config.color)
     match = float((mask[v, u] > 0).mean()) if mask is not None else label_fraction

@@ -52,6 +52,21 @@ class Detection:
 
 
 @dataclass(frozen=True)
+class NoiseEstimate:
+    """What the frame says about its depth noise, and what perception did about it."""
+
+    k_per_m: float  # sigma(z) = k * z^2, metres of error per metre^2 of distance (1/m)
+    working_depth_m: float  # median valid depth in the region of interest
+    sigma_m: float  # k * working_depth^2: the per-pixel error where the objects are
+    filter_radius_px: int  # 0: no denoising was needed
+    sigma_after_m: float  # expected per-pixel error after the denoising
+
+    def as_dict(self) -> dict[str, float]:
+        return {"k_per_m": self.k_per_m, "working_depth_m": self.working_depth_m, "sigma_m": self.sigma_m,
+                "filter_radius_px": float(self.filter_radius_px), "sigma_after_m": self.sigma_after_m}
+
+
+@dataclass(frozen=True)
 class PerceptionResult:
     """What one frame showed. ``detections`` are ranked: the best match for the request first."""
 
@@ -61,6 +76,8 @@ class PerceptionResult:
     message: str = ""
     table_plane_base: tuple[float, float, float, float] | None = None  # a, b, c, d with ax+by+cz+d=0, c>0
     others: tuple[Detection, ...] = ()  # every object cluster found (for clearance checks)
+    noise: NoiseEstimate | None = None  # the depth noise measured in the frame and what was done about it
+    height_sigma_m: float = 0.0  # spread of the table points about the fitted plane (after denoising)
 
     @property
     def ok(self) -> bool:

@@ -8,7 +8,7 @@ integers, so the OpenCV intrinsics use ((W-1)/2, (H-1)/2).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import numpy as np
 import sapien
@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 from bt_grasp.geometry import Mat4, T_from_xyz_rpy
 from bt_grasp.interfaces import CameraIntrinsics, RGBDFrame
 from bt_grasp.scene_config import Camera as CameraConfig
+from bt_grasp.scene_config import DepthNoise
 from bt_grasp.sim.noise import apply_color_noise, apply_depth_noise
 from bt_grasp.sim.poses import cv_from_sapien_cam, look_at_cv, sapien_cam_from_cv, to_pose, to_T
 
@@ -100,6 +101,19 @@ class SimCamera:
         return RGBDFrame(
             color=color, depth_m=depth, intrinsics=self._intrinsics, stamp_ns=self._now_ns(), mount=self._mount
         )
+
+    def capture_variants(self, noises: Sequence[DepthNoise], seed: int) -> list[RGBDFrame]:
+        """One rendering of the scene as it is, seen through each noise model (for the noise sweep benchmark:
+        the same scene at several sensor qualities). Each variant's noise draws come from ``[seed, k]``."""
+        color, depth = self.render_true()
+        frames = []
+        for k, noise in enumerate(noises):
+            rng = np.random.default_rng([seed, k])
+            frames.append(RGBDFrame(
+                color=apply_color_noise(color, noise, rng), depth_m=apply_depth_noise(depth, noise, rng),
+                intrinsics=self._intrinsics, stamp_ns=self._now_ns(), mount=self._mount,
+            ))
+        return frames
 
     def true_T_world_cv(self) -> Mat4:
         """The camera's true optical-frame pose. Ground truth: only the oracle may call this."""
