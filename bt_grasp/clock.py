@@ -30,5 +30,9 @@ class ManualClock:
             raise ValueError("a clock cannot go backwards")
         self._now_ns += int(delta_ns)
 
+    def restart(self) -> None:
+        """Back to 0 for a new episode in a reused world (the only way this clock goes back)."""
+        self._now_ns = 0
+
     def advance_s(self, delta_s: float) -> None:
         self.advance_ns(round(delta_s * 1e9))

@@ -7,11 +7,19 @@ that lives only in ``bt_grasp.sim.oracle``.
 
 from __future__ import annotations
 
+import enum
 from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
+
+
+class Mount(enum.StrEnum):
+    """Where the camera is: fixed in the cell looking at the robot, or on the robot's wrist."""
+
+    EYE_TO_HAND = "eye-to-hand"
+    EYE_IN_HAND = "eye-in-hand"
 
 
 @dataclass(frozen=True)
@@ -53,7 +61,7 @@ class RGBDFrame:
     depth_m: NDArray[np.float32]
     intrinsics: CameraIntrinsics
     stamp_ns: int
-    mount: str  # "eye-to-hand" or "eye-in-hand"
+    mount: Mount
     frame_id: str = "camera_color_optical_frame"
 
 
@@ -64,7 +72,7 @@ class Camera(Protocol):
     def intrinsics(self) -> CameraIntrinsics: ...
 
     @property
-    def mount(self) -> str: ...
+    def mount(self) -> Mount: ...
 
     def capture(self) -> RGBDFrame | None: ...
 

@@ -16,7 +16,8 @@ FORBIDDEN = {
     "behaviours": ("sapien", "bt_grasp.sim", "bt_grasp.cli"),
     "tree": ("sapien", "bt_grasp.sim", "bt_grasp.cli"),
     "recording": ("sapien", "bt_grasp.sim", "bt_grasp.cli"),
-    "faults": ("bt_grasp.sim.oracle", "bt_grasp.cli"),
+    "faults": ("sapien", "bt_grasp.sim", "bt_grasp.cli"),
+    "episode": ("sapien", "bt_grasp.cli"),
 }
 LEAF_MODULES = (
     "errors", "clock", "geometry", "interfaces", "config", "scene_config", "robot_description", "colors",

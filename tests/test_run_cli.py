@@ -31,6 +31,9 @@ def _bt(*args: str, timeout: float = 600) -> subprocess.CompletedProcess[str]:
         (["trees/pick.xml", "--scene", str(SCENE), "--calibration", "missing.yaml"], "missing.yaml"),
         (["tests/data/bad_trees/unknown_node.xml", "--scene", str(SCENE)], "unknown node"),
         (["trees/pick.xml", "--scene", str(SCENE), "--set", "novalue"], "expected KEY=VALUE"),
+        (["trees/pick.xml", "--scene", str(SCENE), "--goal", "place"], "--goal: expected one of pick, clear"),
+        (["trees/pick.xml", "--scene", str(SCENE), "--goal", "pick", "--lift-height", "2"], "--lift-height"),
+        (["trees/pick.xml", "--scene", str(SCENE), "--color", "purple"], "--color"),
     ],
 )
 def test_bad_input_exits_2_with_one_line_and_no_log(args: list[str], fragment: str, tmp_path: Path) -> None:
@@ -148,17 +151,22 @@ def test_sigkill_mid_run_leaves_a_readable_log(tmp_path: Path) -> None:
 
 @pytest.mark.sim
 @pytest.mark.slow
-def test_xml_and_yaml_twins_tick_identically_on_the_same_seed() -> None:
-    from bt_grasp.cli.session import Prepared, RunRequest, execute
+def test_xml_and_yaml_twins_tick_identically_on_the_same_seed(tmp_path: Path) -> None:
+    from bt_grasp.episode import EpisodeRequest, run_episode
+    from bt_grasp.recording.reader import open_log
 
     streams = []
     for tree in ("trees/pick.xml", "trees/pick.yaml"):
-        request = RunRequest(
-            tree=REPO / tree, scene=SCENE, seed=5, calibration=CALIB, blackboard={"color": "red", "lift_height": 0.15}
+        log = tmp_path / f"{Path(tree).suffix[1:]}.mcap"
+        request = EpisodeRequest(
+            tree=REPO / tree, scene=SCENE, seed=5, calibration=CALIB, log=log,
+            blackboard={"color": "red", "lift_height": 0.15},
         )
-        summary, stream = execute(Prepared(request))
+        summary = run_episode(request)
         assert summary.success, summary
-        streams.append([tick["status"] for tick in stream])
+        run = open_log(log)
+        paths = {uid: info.path for uid, info in run.structures[0].nodes().items()}
+        streams.append([{paths[n.uid]: n.status for n in tick.nodes if n.ticked} for tick in run.ticks])
     assert len(streams[0]) == len(streams[1])
     for tick, (a, b) in enumerate(zip(*streams, strict=True), start=1):
         assert a == b, f"tick {tick} differs"

@@ -30,7 +30,7 @@ class CalibrationJob:
         from bt_grasp.perception.calibration import CalibrationSettings, nominal_plan, plan_calibration_poses
 
         self.cell = cell
-        board = cell.extras.get("calibration_board")
+        board = cell.board
         self.error: str | None = None
         self.progress = "planning views"
         self.views: list[Any] = []
@@ -40,11 +40,10 @@ class CalibrationJob:
         if board is None:
             self.error = "no calibration board is mounted in this cell"
             return
-        spec, T_nominal_board = board
-        self.settings = CalibrationSettings(poses=poses, board=spec)
-        self.plan = nominal_plan(cell.scene, cell.camera.mount, cell.camera.intrinsics, T_nominal_board)
-        kin = cell.service("kinematics")
-        checker = cell.service("planner").checker(PlanningScene.from_scene(cell.scene), 0.0)
+        self.settings = CalibrationSettings(poses=poses, board=board.spec)
+        self.plan = nominal_plan(cell.scene, cell.camera.mount, cell.camera.intrinsics, board.T_nominal_board)
+        kin = cell.kinematics
+        checker = cell.planner.checker(PlanningScene.from_scene(cell.scene), 0.0)
         try:
             self.targets = plan_calibration_poses(
                 self.plan, kin, cell.robot.joint_positions(), self.settings,
@@ -87,8 +86,8 @@ class CalibrationJob:
         from bt_grasp.motion.planning_scene import PlanningScene
 
         def compute(q: NDArray[np.float64]) -> NDArray[np.float64] | PathFailure:
-            result = self.cell.service("planner").plan_to_joints(
-                q, q_goal, PlanningScene.from_scene(self.cell.scene), self.cell.service("planner_options")
+            result = self.cell.planner.plan_to_joints(
+                q, q_goal, PlanningScene.from_scene(self.cell.scene), self.cell.planner_options
             )
             if not result.ok:
                 from bt_grasp.behaviours.reasons import FailureReason
@@ -113,7 +112,7 @@ class CalibrationJob:
             self.progress = f"view {self.visited}: {obs.n_corners} corners, rejected"
             return
         q = self.cell.robot.joint_positions()
-        T_base_tool = self.cell.service("kinematics").fk_link(q, s.tool_link)
+        T_base_tool = self.cell.kinematics.fk_link(q, s.tool_link)
         points = corner_object_points(s.board)[obs.corner_ids]
         self.views.append(View(T_base_tool, obs.T_camera_board, obs.corner_ids, obs.corners_px, points))
         self.progress = f"view {self.visited}: {obs.n_corners} corners, {obs.reprojection_px:.2f} px"

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
@@ -81,3 +82,8 @@ class Calibrate(RobotLeaf):
         job = getattr(self, "job", None)
         if job is not None and new_status == Status.INVALID:
             job.cancel()
+
+
+def needs_calibration_board(nodes: Iterable[object]) -> bool:
+    """Whether a tree has a leaf that calibrates (so the cell must have a calibration board mounted)."""
+    return any(isinstance(node, Calibrate) for node in nodes)

@@ -1,49 +1,65 @@
-"""What robot leaves receive in ``setup(cell=...)``: the robot, the camera and the pipeline's services."""
+"""What robot leaves receive in ``setup(cell=...)``: the hardware and the typed services of one run.
+
+Every field is typed (Protocols for what can be wrapped or stood in for, frozen dataclasses for settings);
+a leaf reads ``cell.planner``, ``cell.kinematics``, ... directly, never by a string key.
+"""
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Protocol
+from typing import TYPE_CHECKING
 
-import numpy as np
-from numpy.typing import NDArray
-
+from bt_grasp.behaviours.services import CameraCalibration, MediaSink, NullSink, Planner
 from bt_grasp.clock import Clock
-from bt_grasp.interfaces import Camera, RGBDFrame, Robot
+from bt_grasp.interfaces import Camera, Robot
 from bt_grasp.scene_config import Scene
 
-
-class MediaSink(Protocol):
-    """Where leaves send what they saw and computed (the run's MCAP recorder, or nothing)."""
-
-    def frame(self, frame: RGBDFrame, T_base_camera: NDArray[np.float64] | None) -> None: ...
-
-    def perception(self, result: Any, T_base_camera: NDArray[np.float64]) -> None: ...
-
-    def grasps(self, candidates: Sequence[Any]) -> None: ...
-
-    def trajectory(self, name: str, times_s: NDArray[np.float64], q: NDArray[np.float64], kind: str) -> None: ...
-
-    def log(self, level: str, name: str, message: str) -> None: ...
+if TYPE_CHECKING:
+    from bt_grasp.motion.executor import ExecutorOptions
+    from bt_grasp.motion.kinematics import KinematicModel
+    from bt_grasp.motion.planner import PlannerOptions
+    from bt_grasp.motion.trajectory import MotionLimits
+    from bt_grasp.perception.calibration import BoardMount
+    from bt_grasp.perception.config import PerceptionConfig
+    from bt_grasp.perception.grasps import GraspSettings
 
 
-class NullSink:
-    def frame(self, frame: RGBDFrame, T_base_camera: NDArray[np.float64] | None) -> None:
-        return None
+def _kinematics() -> KinematicModel:
+    from bt_grasp.motion.kinematics import ArmKinematics
 
-    def perception(self, result: Any, T_base_camera: NDArray[np.float64]) -> None:
-        return None
+    return ArmKinematics()
 
-    def grasps(self, candidates: Sequence[Any]) -> None:
-        return None
 
-    def trajectory(self, name: str, times_s: NDArray[np.float64], q: NDArray[np.float64], kind: str) -> None:
-        return None
+def _planner() -> Planner:
+    from bt_grasp.motion.planner import MotionPlanner
 
-    def log(self, level: str, name: str, message: str) -> None:
-        return None
+    return MotionPlanner()
+
+
+def _planner_options() -> PlannerOptions:
+    from bt_grasp.motion.planner import PlannerOptions
+
+    return PlannerOptions()
+
+
+def _motion_limits() -> MotionLimits:
+    from bt_grasp.motion.trajectory import MotionLimits
+
+    return MotionLimits()
+
+
+def _executor_options() -> ExecutorOptions:
+    from bt_grasp.motion.executor import ExecutorOptions
+
+    # a grasped object makes the wrist jitter by ~0.01 rad/s at rest: settle on position, not stillness
+    return ExecutorOptions(settle_velocity_rad_s=0.03)
+
+
+def _grasp_settings() -> GraspSettings:
+    from bt_grasp.perception.grasps import GraspSettings
+
+    return GraspSettings()
 
 
 @dataclass
@@ -51,8 +67,10 @@ class Cell:
     """The hardware and services the leaves share during one run.
 
     ``calibration`` is filled by ``LoadCalibration``/``Calibrate`` (or ``--calibration``); leaves that need
-    the camera pose fail with CALIBRATION_MISSING until then. ``services`` holds replaceable pipeline
-    pieces (planner, perception config, ...), which fault injectors may wrap.
+    the camera pose fail with CALIBRATION_MISSING until then. ``board`` is the calibration board mounted in
+    the cell (None: no board; ``Calibrate`` fails). Fault injectors replace ``robot``, ``camera``,
+    ``planner``, ``kinematics`` and ``calibration`` with wrappers of the same Protocols.
+    Build one with :func:`make_cell` (the run's settings) or directly (tests).
     """
 
     robot: Robot
@@ -60,11 +78,35 @@ class Cell:
     clock: Clock
     scene: Scene
     seed: int
-    services: dict[str, Any] = field(default_factory=dict)
-    calibration: Any = None
+    perception_config: PerceptionConfig
+    kinematics: KinematicModel = field(default_factory=_kinematics)
+    planner: Planner = field(default_factory=_planner)
+    planner_options: PlannerOptions = field(default_factory=_planner_options)
+    motion_limits: MotionLimits = field(default_factory=_motion_limits)
+    executor_options: ExecutorOptions = field(default_factory=_executor_options)
+    grasp_settings: GraspSettings = field(default_factory=_grasp_settings)
+    calibration: CameraCalibration | None = None
+    board: BoardMount | None = None
     media: MediaSink = field(default_factory=NullSink)
     workdir: Path = Path(".")
-    extras: Mapping[str, Any] = field(default_factory=dict)
 
-    def service(self, name: str) -> Any:
-        return self.services[name]
+
+def make_cell(
+    robot: Robot, camera: Camera, clock: Clock, scene: Scene, seed: int,
+    calibration: CameraCalibration | None = None, board: BoardMount | None = None,
+) -> Cell:
+    """A cell with the run's settings: the planner seeded from the run's seed, perception from the scene."""
+    from bt_grasp.motion.planner import PlannerOptions
+    from bt_grasp.perception.config import PerceptionConfig
+
+    return Cell(
+        robot=robot,
+        camera=camera,
+        clock=clock,
+        scene=scene,
+        seed=seed,
+        perception_config=PerceptionConfig.for_scene(scene),
+        planner_options=PlannerOptions(seed=seed + 1, time_limit_s=2.0),
+        calibration=calibration,
+        board=board,
+    )

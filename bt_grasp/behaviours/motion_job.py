@@ -84,11 +84,11 @@ class MotionJob:
         from bt_grasp.motion.executor import TrajectoryExecutor
         from bt_grasp.motion.trajectory import time_parametrize
 
-        limits = self.cell.service("motion_limits")
+        limits = self.cell.motion_limits
         rate_hz = self.cell.scene.physics.control_rate_hz
         trajectory = time_parametrize(np.asarray(path, dtype=float), limits, rate_hz=rate_hz, blend=True)
         self.cell.media.trajectory(name, trajectory.times_s, trajectory.q, "planned")
-        options = self.cell.services.get("executor_options")
+        options = self.cell.executor_options
         executor = TrajectoryExecutor(self.cell.robot, trajectory, self.cell.clock, options)
         executor.start()
         return executor

@@ -6,8 +6,8 @@ objects perception reported (as boxes); never the simulator's true poses.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from typing import Any
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -15,27 +15,59 @@ from py_trees.common import Status
 
 from bt_grasp.behaviours.base import RobotLeaf
 from bt_grasp.behaviours.gripper import EMPTY_WIDTH_M
-from bt_grasp.behaviours.motion_job import MotionJob, PathFailure, Segment
+from bt_grasp.behaviours.motion_job import MotionJob, PathFailure, PathFn, Segment
 from bt_grasp.behaviours.reasons import FailureReason
 from bt_grasp.tree.registry import PortDirection, PortSpec, leaf
 
-_PLAN_REASONS = {
-    "ik_unreachable": FailureReason.IK_UNREACHABLE,
-    "start_in_collision": FailureReason.COLLISION,
-    "goal_in_collision": FailureReason.COLLISION,
-}
+if TYPE_CHECKING:
+    from bt_grasp.motion.cartesian import CartesianStatus
+    from bt_grasp.motion.planner import PlanResult, PlanStatus
+    from bt_grasp.motion.planning_scene import Box, PlanningScene
+    from bt_grasp.perception.results import Detection
+
+#: a tool pose computed from the current one (e.g. straight up from it)
+PoseFn = Callable[[NDArray[np.float64]], NDArray[np.float64]]
+
+def plan_reason(status: PlanStatus) -> FailureReason:
+    """The leaf's failure reason for a planner status (motion is imported late: it loads pinocchio)."""
+    from bt_grasp.motion.planner import PlanStatus
+
+    reasons = {
+        PlanStatus.IK_UNREACHABLE: FailureReason.IK_UNREACHABLE,
+        PlanStatus.START_IN_COLLISION: FailureReason.COLLISION,
+        PlanStatus.GOAL_IN_COLLISION: FailureReason.COLLISION,
+    }
+    return reasons.get(status, FailureReason.PLAN_FAILED)
 
 
-def detection_box(detection: Any, name: str, margin_m: float = 0.005) -> Any:
+def cartesian_reason(status: CartesianStatus) -> FailureReason:
+    from bt_grasp.motion.cartesian import CartesianStatus
+
+    reasons = {
+        CartesianStatus.UNREACHABLE: FailureReason.IK_UNREACHABLE,
+        CartesianStatus.COLLISION: FailureReason.COLLISION,
+    }
+    return reasons.get(status, FailureReason.PLAN_FAILED)
+
+
+def plan_failure(result: PlanResult) -> PathFailure:
+    """The leaf's failure for a planner result that is not OK (the reason from the status enum)."""
+    reason = plan_reason(result.status)
+    return PathFailure(reason, f"planning failed ({result.status.value}): {result.message}")
+
+
+def detection_box(detection: Detection, name: str, margin_m: float = 0.005) -> Box:
     from bt_grasp.geometry import make_T, rot_z
     from bt_grasp.motion.planning_scene import Box
 
     length, width, height = detection.size_m
-    T = make_T(rot_z(detection.yaw_rad), detection.centroid_base_m)
+    T = make_T(rot_z(detection.yaw_rad), np.asarray(detection.centroid_base_m, dtype=float))
     return Box.at(name, (length + margin_m, width + margin_m, height + margin_m), T)
 
 
-def planning_scene(leaf: RobotLeaf, target: Any = None, objects: Sequence[Any] = (), allow_target: bool = False) -> Any:
+def planning_scene(
+    leaf: RobotLeaf, target: Detection | None = None, objects: Sequence[Detection] = (), allow_target: bool = False
+) -> PlanningScene:
     from bt_grasp.motion.planning_scene import PlanningScene
 
     obstacles = []
@@ -50,29 +82,27 @@ def planning_scene(leaf: RobotLeaf, target: Any = None, objects: Sequence[Any] =
     return scene
 
 
-def _planned(leaf: RobotLeaf, method: str, goal: Any, scene: Any) -> Any:
-    """A PathFn that calls the planner's ``plan_to_pose`` or ``plan_to_joints`` from the measured q."""
+def plan_to_pose_fn(leaf: RobotLeaf, T_goal: NDArray[np.float64], scene: PlanningScene) -> PathFn:
+    """A PathFn that plans from the measured q to a tool pose."""
 
     def compute(q: NDArray[np.float64]) -> NDArray[np.float64] | PathFailure:
-        planner = leaf.cell.service("planner")
-        result = getattr(planner, method)(q, goal, scene, leaf.cell.service("planner_options"))
-        if not result.ok:
-            reason = _PLAN_REASONS.get(result.status.value, FailureReason.PLAN_FAILED)
-            return PathFailure(reason, f"planning failed ({result.status.value}): {result.message}")
-        return np.asarray(result.path)
+        result = leaf.cell.planner.plan_to_pose(q, T_goal, scene, leaf.cell.planner_options)
+        return np.asarray(result.path) if result.ok else plan_failure(result)
 
     return compute
 
 
-def plan_to_pose_fn(leaf: RobotLeaf, T_goal: NDArray[np.float64], scene: Any) -> Any:
-    return _planned(leaf, "plan_to_pose", T_goal, scene)
+def plan_to_joints_fn(leaf: RobotLeaf, q_goal: NDArray[np.float64], scene: PlanningScene) -> PathFn:
+    """A PathFn that plans from the measured q to a joint configuration."""
+
+    def compute(q: NDArray[np.float64]) -> NDArray[np.float64] | PathFailure:
+        result = leaf.cell.planner.plan_to_joints(q, q_goal, scene, leaf.cell.planner_options)
+        return np.asarray(result.path) if result.ok else plan_failure(result)
+
+    return compute
 
 
-def plan_to_joints_fn(leaf: RobotLeaf, q_goal: NDArray[np.float64], scene: Any) -> Any:
-    return _planned(leaf, "plan_to_joints", q_goal, scene)
-
-
-def straight_up(height_m: float) -> Any:
+def straight_up(height_m: float) -> PoseFn:
     """The goal of a vertical Cartesian segment: the current tool pose raised by height_m."""
 
     def up(T_now: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -83,20 +113,17 @@ def straight_up(height_m: float) -> Any:
     return up
 
 
-def cartesian_fn(leaf: RobotLeaf, T_goal_fn: Any, scene: Any) -> Any:
+def cartesian_fn(leaf: RobotLeaf, T_goal_fn: PoseFn, scene: PlanningScene) -> PathFn:
     """A straight tool line from the current pose to ``T_goal_fn(T_now)``."""
 
     def compute(q: NDArray[np.float64]) -> NDArray[np.float64] | PathFailure:
         from bt_grasp.motion.cartesian import cartesian_path
 
-        kin = leaf.cell.service("kinematics")
+        kin = leaf.cell.kinematics
         T_now = kin.fk(q)
         result = cartesian_path(q, T_goal_fn(T_now), scene, kin=kin)
         if not result.ok:
-            reason = {
-                "unreachable": FailureReason.IK_UNREACHABLE,
-                "collision": FailureReason.COLLISION,
-            }.get(result.status.value, FailureReason.PLAN_FAILED)
+            reason = cartesian_reason(result.status)
             return PathFailure(reason, f"straight-line segment failed ({result.status.value}): {result.message}")
         return np.asarray(result.path)
 
@@ -171,33 +198,34 @@ class PlanGrasp(RobotLeaf):
         if target is None:
             return self.failed(FailureReason.NO_DETECTION, "no target on the blackboard: run Perceive first")
         objects = self.input("objects") or ()
-        result = synthesize_grasps(target, objects, self.cell.service("grasp_settings"))
+        result = synthesize_grasps(target, objects, self.cell.grasp_settings)
         if not result.ok:
             return self.failed(FailureReason.NOTHING_TO_GRASP, f"{result.status.value}: {result.message}")
         self.cell.media.grasps(result.candidates)
-        kin = self.cell.service("kinematics")
-        planner = self.cell.service("planner")
+        kin, planner = self.cell.kinematics, self.cell.planner
         q = self.cell.robot.joint_positions()
         scene = planning_scene(self, target, objects)
-        last = "no candidate"
+        last = PathFailure(FailureReason.PLAN_FAILED, "no candidate")
         for rank, candidate in enumerate(result.candidates[int(self.input("skip") or 0) :]):
             pre = kin.ik(candidate.T_base_tcp_pregrasp, q)
             if not pre.ok:
-                last = f"candidate {rank}: pre-grasp unreachable"
+                last = PathFailure(FailureReason.IK_UNREACHABLE, f"candidate {rank}: pre-grasp unreachable")
                 continue
             at = kin.ik(candidate.T_base_tcp_grasp, pre.q)
             if not at.ok:
-                last = f"candidate {rank}: grasp pose unreachable"
+                last = PathFailure(FailureReason.IK_UNREACHABLE, f"candidate {rank}: grasp pose unreachable")
                 continue
-            plan = planner.plan_to_pose(q, candidate.T_base_tcp_pregrasp, scene, self.cell.service("planner_options"))
+            plan = planner.plan_to_pose(q, candidate.T_base_tcp_pregrasp, scene, self.cell.planner_options)
             if not plan.ok:
-                last = f"candidate {rank}: {plan.status.value} ({plan.message})"
+                last = PathFailure(plan_reason(plan.status), f"candidate {rank}: {plan.status.value} ({plan.message})")
                 continue
             self.ports.set("grasp", candidate)
             self.feedback_message = f"candidate {rank} of {len(result.candidates)}: {candidate.reason}"
             return Status.SUCCESS
-        reason = FailureReason.IK_UNREACHABLE if "unreachable" in last else FailureReason.PLAN_FAILED
-        return self.failed(reason, f"none of {len(result.candidates)} grasps is reachable; last: {last}")
+        # as before the typed seams: a planner failure other than IK counts as PLAN_FAILED here
+        unreachable = last.reason is FailureReason.IK_UNREACHABLE
+        reason = FailureReason.IK_UNREACHABLE if unreachable else FailureReason.PLAN_FAILED
+        return self.failed(reason, f"none of {len(result.candidates)} grasps is reachable; last: {last.sentence}")
 
 
 @leaf(

@@ -2,53 +2,56 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 from py_trees.common import Status
 
 from bt_grasp.behaviours.base import RobotLeaf
+from bt_grasp.behaviours.cell import Cell
 from bt_grasp.behaviours.reasons import FailureReason
-from bt_grasp.interfaces import RGBDFrame
+from bt_grasp.interfaces import Mount, RGBDFrame
 from bt_grasp.tree.registry import NodeKind, PortDirection, PortSpec, leaf
+
+if TYPE_CHECKING:
+    from bt_grasp.perception.results import PerceptionResult
 
 _COLOR = PortSpec("color", PortDirection.INPUT, str, "", "target colour name (empty: the most graspable)")
 
 
-def camera_pose(cell: Any) -> NDArray[np.float64] | None:
+def camera_pose(cell: Cell) -> NDArray[np.float64] | None:
     """T_base_camera now, from the calibration (eye-in-hand composes it with the arm's forward kinematics)."""
     calibration = cell.calibration
     if calibration is None:
         return None
-    if calibration.mount == "eye-to-hand":
-        return np.asarray(calibration.T_base_camera, dtype=float)
-    kin = cell.service("kinematics")
-    T_base_tool = kin.fk_link(cell.robot.joint_positions(), calibration.tool_link)
-    return np.asarray(T_base_tool @ calibration.T_tool_camera, dtype=float)
+    if calibration.mount == Mount.EYE_TO_HAND:
+        return np.asarray(calibration.T_base_camera_at(None), dtype=float)
+    T_base_tool = cell.kinematics.fk_link(cell.robot.joint_positions(), calibration.tool_link)
+    return np.asarray(calibration.T_base_camera_at(T_base_tool), dtype=float)
 
 
-def perceive_once(leaf: RobotLeaf, color: str | None) -> tuple[Status | None, Any]:
-    """Capture + pipeline. Returns (failure status or None, PerceptionResult)."""
+def perceive_once(leaf: RobotLeaf, color: str | None) -> Status | PerceptionResult:
+    """Capture + pipeline: the leaf's FAILURE status, or the (successful) PerceptionResult."""
     from bt_grasp.perception.pipeline import perceive
 
     cell = leaf.cell
     T_base_camera = camera_pose(cell)
     if T_base_camera is None:
-        return leaf.failed(FailureReason.CALIBRATION_MISSING, "no camera calibration loaded"), None
+        return leaf.failed(FailureReason.CALIBRATION_MISSING, "no camera calibration loaded")
     frame: RGBDFrame | None = cell.camera.capture()
     if frame is None:
-        return leaf.failed(FailureReason.NO_FRAME, "the camera returned no frame"), None
+        return leaf.failed(FailureReason.NO_FRAME, "the camera returned no frame")
     cell.media.frame(frame, T_base_camera)
-    config = cell.service("perception_config")
+    config = cell.perception_config
     if color and color not in config.color.ranges:
         known = ", ".join(config.color.ranges)
-        return leaf.failed(FailureReason.BAD_INPUT, f"unknown colour '{color}'; known: {known}"), None
+        return leaf.failed(FailureReason.BAD_INPUT, f"unknown colour '{color}'; known: {known}")
     result = perceive(frame, T_base_camera, config, color or None)
     cell.media.perception(result, T_base_camera)
     if not result.ok:
-        return leaf.failed(FailureReason.NO_DETECTION, f"{result.status.value}: {result.message}"), result
-    return None, result
+        return leaf.failed(FailureReason.NO_DETECTION, f"{result.status.value}: {result.message}")
+    return result
 
 
 @leaf(
@@ -65,10 +68,12 @@ class Perceive(RobotLeaf):
     """Capture one RGB-D frame and find the target object on the table (base frame, via the calibration)."""
 
     def update(self) -> Status:
-        failure, result = perceive_once(self, self.input("color"))
-        if failure is not None:
-            return failure
+        result = perceive_once(self, self.input("color"))
+        if isinstance(result, Status):
+            return result
         best = result.best
+        if best is None:
+            return self.failed(FailureReason.NO_DETECTION, "the pipeline succeeded with no detection")
         self.ports.set("target", best)
         self.ports.set("objects", tuple(result.others))
         c = best.centroid_base_m
@@ -83,8 +88,8 @@ class ObjectVisible(RobotLeaf):
     """SUCCESS when the camera sees an object (of the colour) on the table."""
 
     def update(self) -> Status:
-        failure, result = perceive_once(self, self.input("color"))
-        if failure is not None:
-            return failure
+        result = perceive_once(self, self.input("color"))
+        if isinstance(result, Status):
+            return result
         self.feedback_message = f"{len(result.detections)} object(s) visible"
         return Status.SUCCESS

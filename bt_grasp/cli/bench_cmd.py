@@ -6,11 +6,11 @@ The group lives here; each benchmark's logic lives in its own package.
 from __future__ import annotations
 
 import json
-import os
-import platform
 from pathlib import Path
 
 import typer
+
+from bt_grasp.environment import machine_description
 
 bench_app = typer.Typer(help="Benchmarks (planning; perception).", no_args_is_help=True)
 
@@ -39,7 +39,7 @@ def plan(
         export.write_text(json.dumps([p.to_json() for p in make_problems(config, problems, seed)], indent=1))
     report = run_plan_bench(config, problems, seed, options)
     summary = report.summary()
-    summary["machine"] = f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}"
+    summary["machine"] = machine_description()
     if as_json:
         typer.echo(json.dumps(summary))
         return
@@ -88,7 +88,7 @@ def perception(
         summary = run_noise_sweep(scenes, seed, backend=SimBenchBackend(scene), adapt=adapt)
     else:
         summary = run_perception_bench(scenes, seed, backend=SimBenchBackend(scene), calibrate=calibration)
-    summary["machine"] = f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}"
+    summary["machine"] = machine_description()
     if as_json:
         typer.echo(json.dumps(summary))
         return

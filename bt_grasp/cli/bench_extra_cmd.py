@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import platform
 import statistics
 import tempfile
 import time
@@ -15,19 +14,15 @@ from rich.console import Console
 from rich.table import Table
 
 from bt_grasp.cli.bench_cmd import bench_app
-
-
-def _machine() -> str:
-    import os
-
-    return f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}"
+from bt_grasp.environment import machine_description
 
 
 def run_pick_bench(
     trees: list[Path], scene: Path, seeds: int, first_seed: int, calibration: Path | None, log_dir: Path | None
 ) -> dict[str, Any]:
     from bt_grasp.cli.calibrate_cmd import run_sim_calibration
-    from bt_grasp.cli.session import Prepared, RunRequest, execute
+    from bt_grasp.episode import EpisodeRequest, EpisodeResult, run_episode
+    from bt_grasp.goals import DEFAULT_LIFT_HEIGHT_M, goal_from_options
     from bt_grasp.perception.calibration_file import save_calibration
 
     work = Path(tempfile.mkdtemp(prefix="bt_grasp_bench_"))
@@ -35,31 +30,33 @@ def run_pick_bench(
         calibration = save_calibration(
             run_sim_calibration(scene, "eye-to-hand", first_seed).run.calibration, work / "calibration.yaml"
         )
-    report: dict[str, Any] = {"machine": _machine(), "scene": str(scene), "calibration": str(calibration), "trees": {}}
+    report: dict[str, Any] = {
+        "machine": machine_description(), "scene": str(scene), "calibration": str(calibration), "trees": {}
+    }
     for tree in trees:
-        runs = []
+        runs: list[EpisodeResult] = []
         for seed in range(first_seed, first_seed + seeds):
             log = (log_dir / f"{tree.stem}_seed{seed}.mcap") if log_dir is not None else None
-            request = RunRequest(
+            request = EpisodeRequest(
                 tree=tree,
                 scene=scene,
                 seed=seed,
+                goal=goal_from_options("pick", "red"),
                 calibration=calibration,
                 log=log,
-                blackboard={"color": "red", "lift_height": 0.15},
+                blackboard={"color": "red", "lift_height": DEFAULT_LIFT_HEIGHT_M},
             )
-            summary, _ = execute(Prepared(request))
-            runs.append(summary.to_json())
-        ok = [r for r in runs if r["success"]]
+            runs.append(run_episode(request))
+        ok = [r for r in runs if r.success]
         report["trees"][str(tree)] = {
             "runs": len(runs),
             "successes": len(ok),
             "success_rate": len(ok) / len(runs),
-            "failures": {r["seed"]: f"{r['reason']} ({r['failed_leaf']})" for r in runs if not r["success"]},
-            "sim_time_s_median": statistics.median(r["sim_time_s"] for r in runs),
-            "wall_time_s_median": statistics.median(r["wall_time_s"] for r in runs),
-            "ticks_median": statistics.median(r["ticks"] for r in runs),
-            "retries_total": sum(sum(r["retries"].values()) for r in runs),
+            "failures": {r.seed: f"{r.reason} ({r.failed_leaf})" for r in runs if not r.success},
+            "sim_time_s_median": round(statistics.median(r.sim_time_s for r in runs), 3),
+            "wall_time_s_median": round(statistics.median(r.wall_time_s for r in runs), 3),
+            "ticks_median": statistics.median(r.ticks for r in runs),
+            "retries_total": sum(sum(r.retries.values()) for r in runs),
         }
     return report
 
@@ -117,7 +114,7 @@ def tree(
     """Tick overhead of the tree runtime itself (no physics, no rendering), per node per tick."""
     from bt_grasp.tree.bench import tick_overhead
 
-    report = {"machine": _machine(), **tick_overhead(nodes, ticks)}
+    report = {"machine": machine_description(), **tick_overhead(nodes, ticks)}
     typer.echo(json.dumps(report) if as_json else "\n".join(f"{k:24s} {v}" for k, v in report.items()))
 
 
@@ -131,7 +128,9 @@ def logging_bench(
     from bt_grasp.recording.bench import bench_logging, bench_reading
 
     t0 = time.perf_counter()
-    report: dict[str, Any] = {"machine": _machine(), "write": bench_logging(ticks, nodes), "read": bench_reading(10000)}
+    report: dict[str, Any] = {
+        "machine": machine_description(), "write": bench_logging(ticks, nodes), "read": bench_reading(10000)
+    }
     report["elapsed_s"] = round(time.perf_counter() - t0, 2)
     typer.echo(json.dumps(report) if as_json else json.dumps(report, indent=2))
 

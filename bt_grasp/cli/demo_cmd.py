@@ -19,7 +19,8 @@ def demo(
     from bt_grasp.cli.calibrate_cmd import run_sim_calibration
     from bt_grasp.cli.run_cmd import live_progress, print_summary
     from bt_grasp.cli.scene_cmd import render
-    from bt_grasp.cli.session import Prepared, RunRequest, execute
+    from bt_grasp.episode import EpisodeRequest, run_episode
+    from bt_grasp.goals import DEFAULT_LIFT_HEIGHT_M, goal_from_options
     from bt_grasp.perception.calibration_file import save_calibration
     from bt_grasp.scene_config import load_scene
 
@@ -39,16 +40,17 @@ def demo(
         f"{true_mm:.3f} mm / {true_deg:.4f} deg -> {calibration_path}"
     )
     console.rule(f"3/3  {tree}")
-    request = RunRequest(
+    request = EpisodeRequest(
         tree=tree,
         scene=scene,
         seed=seed,
+        goal=goal_from_options("pick", "red"),
         calibration=calibration_path,
         log=out / "pick.mcap",
-        blackboard={"color": "red", "lift_height": 0.15},
+        blackboard={"color": "red", "lift_height": DEFAULT_LIFT_HEIGHT_M},
         argv=("bt-grasp", "demo", "--seed", str(seed)),
     )
-    summary, _ = execute(Prepared(request), live_progress(Console(stderr=True)))
+    summary = run_episode(request, on_tick=(live_progress(Console(stderr=True)),))
     print_summary(console, summary)
     (out / "summary.json").write_text(json.dumps(summary.to_json(), indent=2) + "\n")
     console.print(f"summary: {out / 'summary.json'}")

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from bt_grasp.errors import LogFileError
+from bt_grasp.goals import Goal
 
 
 @dataclass
@@ -53,8 +54,21 @@ def _attachment(run: Any, folder: str, workdir: Path) -> Path | None:
     return None
 
 
+def recorded_goal(log_path: Path, meta: dict[str, str]) -> Goal | None:
+    """The goal a log was judged against (None for older logs: the scene's goal or the default pick)."""
+    if "goal" not in meta:
+        return None
+    from pydantic import TypeAdapter, ValidationError
+
+    try:
+        goal: Goal = TypeAdapter(Goal).validate_json(meta["goal"])
+    except ValidationError:
+        raise LogFileError(log_path, "the recorded goal cannot be read") from None
+    return goal
+
+
 def resimulate(log_path: Path, workdir: Path | None = None) -> ResimReport:
-    from bt_grasp.cli.session import Prepared, RunRequest, execute
+    from bt_grasp.episode import EpisodeRequest, run_episode
     from bt_grasp.recording.compare import compare_tick_streams
     from bt_grasp.recording.reader import open_log
 
@@ -80,11 +94,13 @@ def resimulate(log_path: Path, workdir: Path | None = None) -> ResimReport:
         blackboard = json.loads(meta.get("blackboard", "{}"))
     except json.JSONDecodeError:
         blackboard = {}
+    goal = recorded_goal(log_path, meta)
     new_log = workdir / "resim.mcap"
-    request = RunRequest(
+    request = EpisodeRequest(
         tree=tree,
         scene=scene,
         seed=int(meta["seed"]),
+        goal=goal,
         calibration=calibration,
         log=new_log,
         max_ticks=int(meta.get("max_ticks", "12000")),
@@ -93,7 +109,7 @@ def resimulate(log_path: Path, workdir: Path | None = None) -> ResimReport:
         blackboard=blackboard,
         argv=("bt-grasp", "replay", str(log_path), "--resim"),
     )
-    summary, _ = execute(Prepared(request))
+    summary = run_episode(request)
     new_run = open_log(new_log)
     divergence = compare_tick_streams(run.ticks, new_run.ticks, stop_at_shorter=run.truncated)
     recorded_success = run.result.get("success") if isinstance(run.result, dict) else None

@@ -5,28 +5,35 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 import typer
 from rich.console import Console
 
-from bt_grasp.cli.session import DEFAULT_MAX_TICKS, RunRequest, RunSummary, parse_assignments
+from bt_grasp.episode.request import DEFAULT_MAX_TICKS, EpisodeRequest, parse_assignments
+from bt_grasp.episode.result import EpisodeResult
+from bt_grasp.goals import DEFAULT_LIFT_HEIGHT_M, goal_from_options
+
+if TYPE_CHECKING:
+    from bt_grasp.episode import TickCallback
+    from bt_grasp.episode.request import BlackboardValue
+    from bt_grasp.tree.loader import LoadedTree
 
 
-def print_summary(console: Console, summary: RunSummary) -> None:
+def judged_phrase(summary: EpisodeResult) -> str:
+    """The judge's view in a few words: the goal and what was measured."""
+    verdict = summary.judged
+    facts = "; ".join(detail for _criterion, _met, detail in verdict.conditions)
+    return f"goal {summary.goal.kind} judged by physics: {facts}"
+
+
+def print_summary(console: Console, summary: EpisodeResult) -> None:
     verdict = "[bold green]SUCCESS[/]" if summary.success else "[bold red]FAILURE[/]"
-    task = summary.judge.get("task", "pick")
-    if task == "pick":
-        held = summary.judge["in_gripper"]
-        judged = f"judged by physics: lift {summary.object_lift_m * 100:.1f} cm, in gripper: {held}"
-    elif task == "clear":
-        left = summary.judge["objects_in_workspace"] or "none"
-        judged = f"judged by physics: objects left in the work area: {left}"
-    else:
-        judged = "no physical goal: the tree's own result"
-    console.print(f"\n{verdict}  (tree: {summary.tree_status}, {judged})")
+    console.print(f"\n{verdict}  (tree: {summary.tree_status}, {judged_phrase(summary)})")
     if not summary.success:
         console.print(f"  reason: [red]{summary.reason}[/]  leaf: {summary.failed_leaf}")
+        if summary.judged.failed_condition is not None:
+            console.print(f"  goal not met: {summary.judged.failed_condition}")
     console.print(
         f"  ticks {summary.ticks}, simulated {summary.sim_time_s:.2f} s, "
         f"wall {summary.wall_time_s:.2f} s, seed {summary.seed}"
@@ -39,11 +46,11 @@ def print_summary(console: Console, summary: RunSummary) -> None:
         console.print(f"  log: {summary.log}  (bt-grasp replay {summary.log})")
 
 
-def live_progress(console: Console) -> Any:
+def live_progress(console: Console) -> TickCallback:
     """A tick hook that shows the active leaf, its feedback, the tick and the simulated time."""
     state = {"last": ""}
 
-    def hook(tick: int, tree: Any) -> None:
+    def hook(tick: int, tree: LoadedTree) -> None:
         if not console.is_terminal and tick % 100:
             return
         running = [n for n in tree.nodes() if n.bt_state.value == "RUNNING" and not n.children]
@@ -71,19 +78,26 @@ def run(
     faults: Path | None = typer.Option(None, "--faults", help="Fault plan YAML."),
     inject: list[str] = typer.Option([], "--inject", help="A fault, e.g. 'frame_drop@Perceive#1' (repeatable)."),
     set_: list[str] = typer.Option([], "--set", help="Blackboard entry KEY=VALUE before the first tick."),
-    color: str = typer.Option("red", "--color", help="Target colour for trees that read {color} ('' = any)."),
-    lift_height: float = typer.Option(0.15, "--lift-height", help="Lift height in metres ({lift_height})."),
+    goal: str | None = typer.Option(
+        None, "--goal", help="What the judge checks: pick (held and lifted) or clear; default: the scene's goal, "
+        "else pick."
+    ),
+    color: str = typer.Option("red", "--color", help="The pick goal's colour, also {color} for the tree ('' = any)."),
+    lift_height: float = typer.Option(
+        DEFAULT_LIFT_HEIGHT_M, "--lift-height", help="The pick goal's lift height in metres, also {lift_height}."
+    ),
     quiet: bool = typer.Option(False, "--quiet", help="No live progress."),
 ) -> None:
     """Run a task tree on the simulated cell. Exit code 0 on task success (judged by physics), 1 on failure."""
-    from bt_grasp.cli.session import Prepared, execute
+    from bt_grasp.episode import run_episode
 
-    blackboard: dict[str, Any] = {"color": color, "lift_height": lift_height}
+    blackboard: dict[str, BlackboardValue] = {"color": color, "lift_height": lift_height}
     blackboard.update(parse_assignments(set_))
-    request = RunRequest(
+    request = EpisodeRequest(
         tree=tree,
         scene=scene,
         seed=seed,
+        goal=goal_from_options(goal, color, lift_height) if goal is not None else None,
         calibration=calibration,
         log=log,
         max_ticks=max_ticks,
@@ -93,8 +107,7 @@ def run(
         argv=tuple(sys.argv),
     )
     console = Console(stderr=True)
-    prepared = Prepared(request)
-    summary, _stream = execute(prepared, None if quiet else live_progress(console))
+    summary = run_episode(request, on_tick=() if quiet else (live_progress(console),))
     out = Console()
     print_summary(out, summary)
     if summary_json is not None:

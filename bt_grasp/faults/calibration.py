@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import Any
-
 import numpy as np
 from numpy.typing import NDArray
 
-from bt_grasp.geometry import T_from_xyz_rpy
+from bt_grasp.behaviours.services import CameraCalibration
+from bt_grasp.geometry import Mat4, T_from_xyz_rpy
+from bt_grasp.interfaces import Mount
 
 
 def offset_transform(dxyz_mm: tuple[float, float, float], drpy_deg: tuple[float, float, float]) -> NDArray[np.float64]:
@@ -26,37 +25,25 @@ def apply_offset(T_ref_camera: NDArray[np.float64], T_offset: NDArray[np.float64
 
 
 class OffsetCalibration:
-    """Reads like the wrapped calibration, except its camera pose carries the offset.
+    """Reads like the wrapped calibration (a :class:`bt_grasp.behaviours.services.CameraCalibration`),
+    except that its camera pose carries the offset: in the base frame for an eye-to-hand camera, in the
+    tool frame for an eye-in-hand one (where the pose is ``T_base_tool @ T_tool_camera``)."""
 
-    Eye-to-hand: ``T_base_camera`` (an attribute or a method) is offset in the base frame. Eye-in-hand:
-    ``T_tool_camera``, or the result of the method ``T_base_camera(T_base_tool)``, is offset in the tool
-    frame. Everything else (mount, tool_link, residuals, ...) is the real calibration's.
-    """
-
-    def __init__(self, inner: Any, T_offset: NDArray[np.float64]) -> None:
+    def __init__(self, inner: CameraCalibration, T_offset: NDArray[np.float64]) -> None:
         self.inner = inner
         self.T_offset = np.asarray(T_offset, dtype=float)
 
-    def __getattr__(self, name: str) -> Any:
-        value = getattr(self.inner, name)
-        mount = getattr(self.inner, "mount", "eye-to-hand")
-        if name == "T_tool_camera" and mount == "eye-in-hand" and not callable(value):
-            return apply_offset(np.asarray(value, dtype=float), self.T_offset)
-        if name != "T_base_camera":
-            return value
-        if not callable(value):
-            return apply_offset(np.asarray(value, dtype=float), self.T_offset) if mount == "eye-to-hand" else value
-        return self._offset_method(value, mount)
+    @property
+    def mount(self) -> str:
+        return self.inner.mount
 
-    def _offset_method(self, method: Callable[..., Any], mount: str) -> Callable[..., NDArray[np.float64]]:
-        """``T_base_camera(T_base_tool=None)`` as a method: offset its result (in the tool frame for
-        eye-in-hand, where the result is T_base_tool @ T_tool_camera)."""
+    @property
+    def tool_link(self) -> str:
+        return self.inner.tool_link
 
-        def T_base_camera(T_base_tool: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
-            T = np.asarray(method(T_base_tool) if T_base_tool is not None else method(), dtype=float)
-            if mount == "eye-in-hand" and T_base_tool is not None:
-                T_tool = np.asarray(T_base_tool, dtype=float)
-                return T_tool @ apply_offset(np.linalg.inv(T_tool) @ T, self.T_offset)
-            return apply_offset(T, self.T_offset)
-
-        return T_base_camera
+    def T_base_camera_at(self, T_base_tool: Mat4 | None = None) -> Mat4:
+        T = np.asarray(self.inner.T_base_camera_at(T_base_tool), dtype=float)
+        if self.mount == Mount.EYE_IN_HAND and T_base_tool is not None:
+            T_tool = np.asarray(T_base_tool, dtype=float)
+            return T_tool @ apply_offset(np.linalg.inv(T_tool) @ T, self.T_offset)
+        return apply_offset(T, self.T_offset)

@@ -1,7 +1,7 @@
 """Installing a fault plan on a prepared run: wrap the interfaces, watch leaf entries and ticks, arm faults.
 
 The injector never touches tree results or blackboard entries. It wraps ``cell.camera``, ``cell.robot``,
-``cell.services["planner"]`` and ``cell.services["kinematics"]`` (and, when an offset fires,
+``cell.planner`` and ``cell.kinematics`` (and, when an offset fires,
 ``cell.calibration``), and it changes physics through the world. Leaf entries are seen by wrapping each
 leaf's ``initialise``: the wrapper only arms a fault; the fault then acts on the interfaces.
 """
@@ -9,7 +9,7 @@ leaf's ``initialise``: the wrapper only arms a fault; the fault then acts on the
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -69,20 +69,9 @@ class Injector:
         self._tick = 0  # the last tick finished
         self._in_after_tick = False
         self._faults = [_Armed(f, i) for i, f in enumerate(plan.faults)]
-        self._check_leaf_names()
+        check_fault_plan(plan, leaves, None)
         for node in leaves:
             self._hook(node)
-
-    def _check_leaf_names(self) -> None:
-        names = sorted({n.name for n in self.leaves})
-        for armed in self._faults:
-            wanted = armed.fault.trigger.on_leaf
-            if wanted is not None and not any(_matches(n, wanted) for n in self.leaves):
-                raise InputError(
-                    armed.fault.source,
-                    f"on_leaf '{wanted}' names no leaf of the tree; leaves: {', '.join(names)}",
-                    armed.fault.where,
-                )
 
     def _hook(self, node: Any) -> None:
         original: Callable[[], None] = node.initialise
@@ -184,6 +173,26 @@ class Injector:
             self.recorder.write_fault(self.wrapped.now_ns(), tick, record)
 
 
+def check_fault_plan(plan: FaultPlan, leaves: Sequence[Any], object_names: Sequence[str] | None) -> None:
+    """InputError (naming the plan's file and fault) when a trigger names no leaf of the tree or a nudge
+    names no object of the scene: checked before anything is built."""
+    names = sorted({n.name for n in leaves})
+    for fault in plan.faults:
+        wanted = fault.trigger.on_leaf
+        if wanted is not None and not any(_matches(n, wanted) for n in leaves):
+            raise InputError(
+                fault.source, f"on_leaf '{wanted}' names no leaf of the tree; leaves: {', '.join(names)}", fault.where
+            )
+        name = fault.params.object if fault.kind is FaultKind.OBJECT_NUDGE else None
+        if object_names is not None and name is not None and name not in object_names:
+            known = ", ".join(object_names)
+            raise InputError(fault.source, f"no object '{name}' in the scene; objects: {known}", fault.where)
+
+
+def leaves_of(nodes: Sequence[Any]) -> list[Any]:
+    return [n for n in nodes if _is_leaf(n)]
+
+
 def _fault_rngs(world: Any, plan: FaultPlan) -> dict[int, np.random.Generator]:
     """One generator per fault, derived from the world's fault stream (independent of the plan's length)."""
     seq: np.random.SeedSequence = world.fault_seed_sequence
@@ -198,21 +207,17 @@ def install_faults(plan: FaultPlan, prepared: Any, recorder: FaultRecorder | Non
     cell, world = prepared.cell, prepared.world
     camera = FaultyCamera(cell.camera)
     robot = FaultyRobot(cell.robot, cell.clock)
-    planner = FaultyPlanner(cell.services["planner"])
-    kinematics = FaultyKinematics(cell.services["kinematics"])
+    planner = FaultyPlanner(cell.planner)
+    kinematics = FaultyKinematics(cell.kinematics)
     cell.camera, cell.robot = camera, robot
-    cell.services["planner"], cell.services["kinematics"] = planner, kinematics
+    cell.planner, cell.kinematics = planner, kinematics
     color = None
     root_blackboard = getattr(prepared.tree, "root_blackboard", None)
     if root_blackboard is not None and root_blackboard.has("color"):
         color = root_blackboard.get("color")
     wrapped = Wrapped(cell, world, camera, robot, planner, kinematics, _fault_rngs(world, plan), color=color)
-    for fault in plan.faults:
-        name = fault.params.object if fault.kind is FaultKind.OBJECT_NUDGE else None
-        if name is not None and name not in world.objects:
-            known = ", ".join(world.objects)
-            raise InputError(fault.source, f"no object '{name}' in the scene; objects: {known}", fault.where)
-    leaves = [n for n in prepared.tree.nodes() if _is_leaf(n)]
+    leaves = leaves_of(prepared.tree.nodes())
+    check_fault_plan(plan, leaves, list(world.objects))
     injector = Injector(plan, wrapped, leaves, recorder)
     log.info("installed %d fault(s) on %d leaves", len(plan.faults), len(leaves))
     return injector

@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 from numpy.typing import NDArray
 
+from bt_grasp.behaviours.services import Planner
 from bt_grasp.faults.episode import Episode
-from bt_grasp.motion.kinematics import IKResult, IKStatus
-from bt_grasp.motion.planner import PlanResult, PlanStatus
+from bt_grasp.geometry import Mat4
+from bt_grasp.motion.collision import CollisionChecker
+from bt_grasp.motion.kinematics import IKOptions, IKResult, IKStatus, KinematicModel
+from bt_grasp.motion.planner import PlannerOptions, PlanResult, PlanStatus
+from bt_grasp.motion.planning_scene import PlanningScene
 
 
 class _FailingCalls:
@@ -34,26 +36,33 @@ class _FailingCalls:
 
 
 class FaultyPlanner:
-    """The motion planner, but ``plan_to_pose``/``plan_to_joints`` fail while a planner fault is armed."""
+    """The motion planner (a :class:`bt_grasp.behaviours.services.Planner`), but ``plan_to_pose``/
+    ``plan_to_joints`` fail while a planner fault is armed; ``checker`` is the real planner's."""
 
-    def __init__(self, inner: Any) -> None:
+    def __init__(self, inner: Planner) -> None:
         self.inner = inner
         self.failing = _FailingCalls()
 
-    def __getattr__(self, name: str) -> Any:  # checker(), options, ...: the real planner's
-        return getattr(self.inner, name)
+    def checker(self, scene: PlanningScene, margin_m: float) -> CollisionChecker:
+        return self.inner.checker(scene, margin_m)
 
     def _failure(self, episode: Episode) -> PlanResult:
         status = PlanStatus(episode.params.status)
         return PlanResult(status=status, message=f"injected fault '{episode.fault.label}'")
 
-    def plan_to_pose(self, *args: Any, **kwargs: Any) -> PlanResult:
+    def plan_to_pose(self, q_start: NDArray[np.float64], T_base_tcp_goal: Mat4, scene: PlanningScene,
+                     options: PlannerOptions | None = None) -> PlanResult:
         episode = self.failing.take("plan_to_pose")
-        return self._failure(episode) if episode is not None else self.inner.plan_to_pose(*args, **kwargs)
+        if episode is not None:
+            return self._failure(episode)
+        return self.inner.plan_to_pose(q_start, T_base_tcp_goal, scene, options)
 
-    def plan_to_joints(self, *args: Any, **kwargs: Any) -> PlanResult:
+    def plan_to_joints(self, q_start: NDArray[np.float64], q_goal: NDArray[np.float64], scene: PlanningScene,
+                       options: PlannerOptions | None = None) -> PlanResult:
         episode = self.failing.take("plan_to_joints")
-        return self._failure(episode) if episode is not None else self.inner.plan_to_joints(*args, **kwargs)
+        if episode is not None:
+            return self._failure(episode)
+        return self.inner.plan_to_joints(q_start, q_goal, scene, options)
 
 
 class FaultyKinematics:
@@ -62,30 +71,38 @@ class FaultyKinematics:
     Forward kinematics is never touched (it is arithmetic on measured joints, it does not fail).
     """
 
-    def __init__(self, inner: Any) -> None:
+    def __init__(self, inner: KinematicModel) -> None:
         self.inner = inner
         self.failing = _FailingCalls()
 
-    def __getattr__(self, name: str) -> Any:  # fk, fk_link, limits, ...: the real model's
-        return getattr(self.inner, name)
+    @property
+    def opening_m(self) -> float:
+        return self.inner.opening_m
+
+    def fk(self, q: NDArray[np.float64]) -> Mat4:
+        return self.inner.fk(q)
+
+    def fk_link(self, q: NDArray[np.float64], link: str) -> Mat4:
+        return self.inner.fk_link(q, link)
 
     @staticmethod
     def _unreachable(q_current: NDArray[np.float64]) -> IKResult:
         q = np.asarray(q_current, dtype=float).reshape(-1).copy()
         return IKResult(IKStatus.UNREACHABLE, q, float("inf"), float("inf"), 0)
 
-    def ik(self, T_base_tcp_goal: Any, q_current: NDArray[np.float64], **kwargs: Any) -> IKResult:
+    def ik(self, T_base_tcp_goal: Mat4, q_current: NDArray[np.float64], *, seeds: int = 8,
+           rng: np.random.Generator | None = None, options: IKOptions | None = None) -> IKResult:
         if self.failing.take("ik") is not None:
             return self._unreachable(q_current)
-        result: IKResult = self.inner.ik(T_base_tcp_goal, q_current, **kwargs)
-        return result
+        return self.inner.ik(T_base_tcp_goal, q_current, seeds=seeds, rng=rng, options=options)
 
     def ik_solutions(
-        self, T_base_tcp_goal: Any, q_current: NDArray[np.float64], **kwargs: Any
+        self, T_base_tcp_goal: Mat4, q_current: NDArray[np.float64], *, seeds: int = 8,
+        rng: np.random.Generator | None = None, options: IKOptions | None = None, max_solutions: int | None = None,
+        stop_if_current_converges: bool = False,
     ) -> tuple[list[NDArray[np.float64]], IKResult]:
         if self.failing.take("ik_solutions") is not None:
             return [], self._unreachable(q_current)
-        result: tuple[list[NDArray[np.float64]], IKResult] = self.inner.ik_solutions(
-            T_base_tcp_goal, q_current, **kwargs
-        )
-        return result
+        return self.inner.ik_solutions(T_base_tcp_goal, q_current, seeds=seeds, rng=rng, options=options,
+                                       max_solutions=max_solutions,
+                                       stop_if_current_converges=stop_if_current_converges)

@@ -22,7 +22,7 @@ from scipy.spatial.transform import Rotation, Slerp
 
 from bt_grasp.geometry import Mat4, make_T, rotation_angle_rad
 from bt_grasp.motion.collision import FINE_RESOLUTION_RAD, collision_checker
-from bt_grasp.motion.kinematics import ArmKinematics, IKOptions, default_kinematics, is_rigid_transform
+from bt_grasp.motion.kinematics import IKOptions, KinematicModel, default_kinematics, is_rigid_transform
 from bt_grasp.motion.planning_scene import PlanningScene
 
 log = logging.getLogger(__name__)
@@ -73,7 +73,7 @@ def offset_in_base(T_base_tcp: Mat4, xyz_m: Vec | list[float]) -> Mat4:
 
 
 def cartesian_path(q_start: NDArray[np.float64], T_base_tcp_goal: Mat4, scene: PlanningScene,
-                   options: CartesianOptions | None = None, kin: ArmKinematics | None = None) -> CartesianResult:
+                   options: CartesianOptions | None = None, kin: KinematicModel | None = None) -> CartesianResult:
     """Joint waypoints that move the tcp on a straight line from ``fk(q_start)`` to the goal pose."""
     opts = options or CartesianOptions()
     kin = kin or default_kinematics()

@@ -18,6 +18,7 @@ import logging
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
+from typing import Protocol
 
 import numpy as np
 import pinocchio as pin
@@ -272,3 +273,36 @@ class ArmKinematics:
 def default_kinematics(opening_m: float = MAX_OPENING_M) -> ArmKinematics:
     """A shared model per gripper opening (building one parses the URDF: ~10 ms)."""
     return ArmKinematics(opening_m)
+
+
+class KinematicModel(Protocol):
+    """What callers need of the arm's kinematics: :class:`ArmKinematics`, or a wrapper of it (a fault's)."""
+
+    @property
+    def opening_m(self) -> float: ...
+
+    def fk(self, q: NDArray[np.float64]) -> Mat4: ...
+
+    def fk_link(self, q: NDArray[np.float64], link: str) -> Mat4: ...
+
+    def ik(
+        self,
+        T_base_tcp_goal: Mat4,
+        q_current: NDArray[np.float64],
+        *,
+        seeds: int = 8,
+        rng: np.random.Generator | None = None,
+        options: IKOptions | None = None,
+    ) -> IKResult: ...
+
+    def ik_solutions(
+        self,
+        T_base_tcp_goal: Mat4,
+        q_current: NDArray[np.float64],
+        *,
+        seeds: int = 8,
+        rng: np.random.Generator | None = None,
+        options: IKOptions | None = None,
+        max_solutions: int | None = None,
+        stop_if_current_converges: bool = False,
+    ) -> tuple[list[Vec], IKResult]: ...

@@ -72,6 +72,15 @@ class CalibrationSettings(StrictModel):
 
 
 @dataclass(frozen=True)
+class BoardMount:
+    """A calibration board mounted in the cell (installation data, not ground truth): its spec and nominal
+    pose, ``T_tool_board`` (eye-to-hand: on the gripper) or ``T_base_board`` (eye-in-hand: on the table)."""
+
+    spec: BoardSpec
+    T_nominal_board: Mat4
+
+
+@dataclass(frozen=True)
 class ViewPlan:
     """What the planner knows: nominal camera and board poses (installation data, not ground truth)."""
 

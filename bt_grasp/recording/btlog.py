@@ -26,13 +26,15 @@ import defusedxml.ElementTree as SafeET
 from bt_grasp.errors import InputError, LogFileError
 from bt_grasp.recording.reader import RunLog
 from bt_grasp.recording.replay import status_changes
+from bt_grasp.tree.registry import NodeKind
 
 MAGIC = b"BTCPP4-FileLogger2"
 PROTOCOL = 1
 STATUS_CODES = {"IDLE": 0, "RUNNING": 1, "SUCCESS": 2, "FAILURE": 3, "SKIPPED": 4}
 STATUS_NAMES = {code: name for name, code in STATUS_CODES.items()}
 _MAX_TIME_US = (1 << 48) - 1
-_LEAF_TAGS = {"action": "Action", "condition": "Condition"}
+#: leaf kinds as the tree introspection writes them (``NodeKind.value``) -> the .btlog model's tag
+_LEAF_TAGS = {NodeKind.ACTION.value: "Action", NodeKind.CONDITION.value: "Condition"}
 
 
 @dataclass(frozen=True)
@@ -84,7 +86,7 @@ def _add_node(
     uid, path = int(node["uid"]), str(node.get("path", ""))
     if not 0 <= uid <= 0xFFFF:
         raise InputError("--export-btlog", f"node uid {uid} does not fit the .btlog format's 16 bits")
-    if kind == "subtree":
+    if kind == NodeKind.SUBTREE.value:
         subtree_id = str((node.get("attributes") or {}).get("ID") or node.get("name") or "SubTree")
         attrs = {"ID": subtree_id, "_uid": str(uid), "_fullpath": path}
         ET.SubElement(parent, "SubTree", {**attrs, **{k: _attr(v) for k, v in attributes.items()}})

@@ -23,10 +23,12 @@ from numpy.typing import NDArray
 from bt_grasp.errors import LogFileError
 from bt_grasp.recording import mcap_io, topics
 from bt_grasp.recording.schemas import PROTOBUF_CLASSES
+from bt_grasp.tree.registry import NodeKind
 
 log = logging.getLogger(__name__)
 
-LEAF_KINDS = frozenset({"action", "condition"})
+#: leaf kinds as the tree introspection writes them (``NodeKind.value``: "Action", "Condition")
+LEAF_KINDS = frozenset({NodeKind.ACTION.value, NodeKind.CONDITION.value})
 
 
 class NodeUpdate(NamedTuple):

@@ -226,7 +226,8 @@ class RunRecorder:
         """Write the tree's structure on /bt/tree unless it equals the last one written; True if written.
 
         ``structure``: the root node as nested dicts with ``uid``, ``type``, ``name``, ``path``, ``kind``
-        ("control", "decorator", "action", "condition", "subtree"), ``attributes`` and ``children``.
+        (a ``NodeKind`` value: "Control", "Decorator", "Action", "Condition", "SubTree"), ``attributes`` and
+        ``children``.
         """
         converted = to_jsonable(structure, max_array_elements=1 << 30)
         if converted == self._last_structure:

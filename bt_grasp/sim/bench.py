@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-import platform
 import statistics
 import time
 from pathlib import Path
 
 import numpy as np
 
+from bt_grasp.environment import machine_description
 from bt_grasp.scene_config import load_scene
 from bt_grasp.sim.world import World
 
@@ -47,7 +47,7 @@ def run_sim_bench(scene_path: str | Path, captures: int = 20, physics_seconds: f
     wall = time.perf_counter() - t
     steps = ticks * world.steps_per_tick
     return {
-        "machine": f"{platform.machine()}, {__import__('os').cpu_count()} cores, {platform.python_version()}",
+        "machine": machine_description(),
         "scene_build_s_first": round(build_first_s, 3),
         "scene_build_s_median": round(statistics.median(builds), 3),
         "first_capture_s": round(first_capture_s, 2),

@@ -15,7 +15,7 @@ import sapien
 from numpy.typing import NDArray
 
 from bt_grasp.geometry import Mat4, T_from_xyz_rpy
-from bt_grasp.interfaces import CameraIntrinsics, RGBDFrame
+from bt_grasp.interfaces import CameraIntrinsics, Mount, RGBDFrame
 from bt_grasp.scene_config import Camera as CameraConfig
 from bt_grasp.scene_config import DepthNoise
 from bt_grasp.sim.noise import apply_color_noise, apply_depth_noise
@@ -36,7 +36,7 @@ class SimCamera:
     ) -> None:
         self._scene = scene
         self._config = config
-        self._mount = mount
+        self._mount = Mount(mount)
         self._rng = rng
         self._now_ns = now_ns
         w, h = config.width_px, config.height_px
@@ -77,7 +77,7 @@ class SimCamera:
         return self._intrinsics
 
     @property
-    def mount(self) -> str:
+    def mount(self) -> Mount:
         return self._mount
 
     def render_true(self) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
@@ -91,6 +91,11 @@ class SimCamera:
         depth[position[..., 3] >= 1.0] = 0.0
         depth[depth < 0] = 0.0
         return color, depth
+
+    def reseed(self, rng: np.random.Generator) -> None:
+        """Draw the noise of the next captures from ``rng`` (a new episode in a reused world)."""
+        self._rng = rng
+        self.captures = 0
 
     def capture(self) -> RGBDFrame | None:
         color, depth = self.render_true()

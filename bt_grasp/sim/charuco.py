@@ -11,7 +11,9 @@ from __future__ import annotations
 import numpy as np
 import sapien
 
-from bt_grasp.geometry import Mat4, make_T
+from bt_grasp.geometry import Mat4, inv, make_T
+from bt_grasp.interfaces import Mount
+from bt_grasp.perception.calibration import BoardMount
 from bt_grasp.perception.charuco import BoardSpec, board_image
 from bt_grasp.sim.poses import to_pose
 from bt_grasp.sim.world import World
@@ -64,7 +66,9 @@ def attach_board_to_link(world: World, spec: BoardSpec, link_name: str = "grippe
     body = sapien.render.RenderBodyComponent()
     body.attach(shape)
     body.set_name("charuco_board")
-    world.robot.links[link_name].entity.add_component(body)
+    entity = world.robot.links[link_name].entity
+    entity.add_component(body)
+    world.episode_fixtures.append(lambda: entity.remove_component(body))
     return T
 
 
@@ -79,7 +83,19 @@ def place_board_on_table(world: World, spec: BoardSpec, T_world_board: Mat4 | No
     entity.add_component(body)
     entity.set_pose(to_pose(T))
     world.scene.add_entity(entity)
+    world.episode_fixtures.append(lambda: world.scene.remove_entity(entity))
     return T
+
+
+def mount_calibration_board(world: World, spec: BoardSpec | None = None) -> BoardMount:
+    """The one place a calibration board is mounted: on the gripper palm when the camera is eye-to-hand,
+    on the table when it is eye-in-hand. Returns what a calibration may know: the board's spec and its
+    nominal (design) pose, ``T_tool_board`` or ``T_base_board``. Removed again by ``world.reset``."""
+    spec = spec or BoardSpec()
+    if world.camera_mount == Mount.EYE_TO_HAND:
+        # the board is screwed to the palm, which is bolted to tool0 with no offset: its design pose
+        return BoardMount(spec, attach_board_to_link(world, spec, "gripper_palm"))
+    return BoardMount(spec, inv(world.config.T_world_base()) @ place_board_on_table(world, spec))
 
 
 def move_until_still(world: World, q_goal: np.ndarray, *, max_speed_rad_s: float = 0.8,

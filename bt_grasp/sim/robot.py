@@ -57,7 +57,9 @@ class SimRobot:
 
     # --- state -------------------------------------------------------------------------------------
     def reset(self, q_rad: NDArray[np.float64], opening_m: float = MAX_OPENING_M) -> None:
-        """Place the arm (used only when building the world, before time starts)."""
+        """Place the arm and restore the gripper drive (when building or resetting the world, before time
+        starts)."""
+        self._finger.set_drive_properties(FINGER_STIFFNESS, FINGER_DAMPING, self._default_force_n)
         qpos = np.zeros(self.articulation.dof)
         qpos[self._arm_idx] = q_rad
         qpos[self._finger_idx] = qpos[self._mimic_idx] = opening_m / 2

@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import sapien
 
 from bt_grasp.clock import ManualClock
+from bt_grasp.interfaces import Mount
 from bt_grasp.scene_config import Scene, load_scene
 from bt_grasp.sim.camera import SimCamera
 from bt_grasp.sim.device import create_scene
@@ -33,12 +35,11 @@ class World:
         self, scene_config: Scene, seed: int, *, camera_mount: str | None = None, source: str | Path = "scene"
     ) -> None:
         self.config = scene_config
-        self.seed = int(seed)
-        seeds = np.random.SeedSequence(self.seed).spawn(3)
-        self._object_rng = np.random.default_rng(seeds[_STREAM_OBJECTS])
-        self.camera_rng = np.random.default_rng(seeds[_STREAM_CAMERA])
-        self.fault_seed_sequence = seeds[_STREAM_FAULTS]
+        self._seed_streams(seed)
         self.clock = ManualClock()
+        self.camera_mount = Mount(camera_mount or scene_config.camera.mount)
+        #: undoes what was added for one episode only (a calibration board), newest first, at reset()
+        self.episode_fixtures: list[Callable[[], None]] = []
         physics = scene_config.physics
         self.scene = create_scene()
         self.scene.set_timestep(physics.timestep_s)
@@ -51,13 +52,54 @@ class World:
         )
         self.objects = {p.spec.name: build_object(self.scene, p) for p in self.placed}
         self._build_lights()
-        mount = camera_mount or scene_config.camera.mount
+        mount = self.camera_mount
         parent = None
-        if mount == "eye-in-hand":
+        if mount == Mount.EYE_IN_HAND:
             parent = self.robot.links[scene_config.camera.eye_in_hand.parent_link]
         self.camera = SimCamera(self.scene, scene_config.camera, mount, self.camera_rng, self.clock.now_ns, parent)
         self._physics_steps = 0
         log.debug("world built: seed %d, %d objects", self.seed, len(self.objects))
+
+    def _seed_streams(self, seed: int) -> None:
+        self.seed = int(seed)
+        seeds = np.random.SeedSequence(self.seed).spawn(3)
+        self._object_rng = np.random.default_rng(seeds[_STREAM_OBJECTS])
+        self.camera_rng = np.random.default_rng(seeds[_STREAM_CAMERA])
+        self.fault_seed_sequence = seeds[_STREAM_FAULTS]
+
+    # --- reuse ---------------------------------------------------------------------------------------
+    def can_reset_to(self, scene_config: Scene, camera_mount: str | None = None) -> bool:
+        """True when ``scene_config`` differs from this world's only in what ``reset`` redoes: its objects (and
+        what is not built: workspace, goal, calibration file name)."""
+        keep = {"objects", "workspace", "name", "goal", "calibration", "object_gap_m", "version"}
+        same = self.config.model_dump(exclude=keep) == scene_config.model_dump(exclude=keep)
+        return same and Mount(camera_mount or scene_config.camera.mount) == self.camera_mount
+
+    def reset(self, scene_config: Scene, seed: int, *, source: str | Path = "scene") -> None:
+        """Start a new episode in this warm world, as if built anew for ``(scene_config, seed)``.
+
+        The simulator, renderer (its compiled shaders), table, robot, camera and lights stay; every object is
+        removed and drawn again from the seed's stream, episode fixtures (a calibration board) are removed, the
+        arm goes home with the gripper open, the clock restarts at 0 and the camera's noise stream is reseeded.
+        Raises ValueError when the scene differs in more than its objects (build a new World then).
+        """
+        if not self.can_reset_to(scene_config):
+            raise ValueError("the scene differs from this world's in more than its objects: build a new World")
+        while self.episode_fixtures:
+            self.episode_fixtures.pop()()
+        for entity in self.objects.values():
+            self.scene.remove_entity(entity)
+        self.config = scene_config
+        self._seed_streams(seed)
+        self.clock.restart()
+        self.robot.reset(np.asarray(scene_config.robot.home_q_rad, dtype=float))
+        self.placed = draw_poses(
+            scene_config.objects, self._object_rng, 0.0, str(source), scene_config.object_gap_m
+        )
+        self.objects = {p.spec.name: build_object(self.scene, p) for p in self.placed}
+        self.camera.reseed(self.camera_rng)
+        self._physics_steps = 0
+        log.debug("world reset: seed %d, %d objects", self.seed, len(self.objects))
 
     @classmethod
     def from_file(cls, path: str | Path, seed: int, *, camera_mount: str | None = None) -> World:

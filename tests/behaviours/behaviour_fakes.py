@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from bt_grasp.behaviours.cell import Cell
+from bt_grasp.behaviours.cell import Cell, make_cell
 from bt_grasp.clock import ManualClock
 from bt_grasp.robot_description import MAX_OPENING_M
 from bt_grasp.scene_config import Scene
@@ -59,4 +59,4 @@ class FakeCamera:
 
 
 def fake_cell(robot: FakeRobot, clock: ManualClock) -> Cell:
-    return Cell(robot=robot, camera=FakeCamera(), clock=clock, scene=Scene(), seed=0)  # type: ignore[arg-type]
+    return make_cell(robot, FakeCamera(), clock, Scene(), seed=0)  # type: ignore[arg-type]

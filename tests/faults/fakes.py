@@ -101,6 +101,10 @@ class FakeKinematics:
 class FakeCalibration:
     T_base_camera: NDArray[np.float64]
     mount: str = "eye-to-hand"
+    tool_link: str = "tool0"
+
+    def T_base_camera_at(self, T_base_tool: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
+        return self.T_base_camera
 
 
 @dataclass
@@ -108,7 +112,8 @@ class FakeCell:
     camera: Any
     robot: Any
     clock: ManualClock
-    services: dict[str, Any]
+    planner: Any
+    kinematics: Any
     calibration: Any = None
 
 
@@ -239,7 +244,7 @@ def rig(leaves: tuple[str, ...] = ("Perceive", "PlanGrasp", "Approach", "Grasp",
         color: str | None = "red") -> Rig:
     clock = ManualClock()
     camera, robot, planner, kin = FakeCamera(clock), FakeRobot(), FakePlanner(), FakeKinematics()
-    cell = FakeCell(camera, robot, clock, {"planner": planner, "kinematics": kin})
+    cell = FakeCell(camera, robot, clock, planner, kin)
     nodes = {n: FakeNode(n) for n in leaves}
     control = FakeNode("pick", kind="Control")
     tree = FakeTree([control, *nodes.values()], color)

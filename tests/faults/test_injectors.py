@@ -32,8 +32,8 @@ def test_interfaces_are_wrapped_and_pass_through_when_idle() -> None:
     assert r.cell.camera.capture() is not None
     r.cell.robot.set_joint_targets(np.ones(6))
     assert len(r.robot.targets) == 1
-    assert r.cell.services["planner"].checker("scene", 0.0) == "checker"  # other methods: the real ones
-    assert r.cell.services["kinematics"].ik(np.eye(4), np.zeros(6)).ok
+    assert r.cell.planner.checker("scene", 0.0) == "checker"  # other methods: the real ones
+    assert r.cell.kinematics.ik(np.eye(4), np.zeros(6)).ok
     assert injector.fired == 0 and recorder.faults == []
 
 
@@ -106,20 +106,20 @@ def test_calibration_offset_applies_and_survives_a_reload() -> None:
     assert r.cell.calibration.T_base_camera is T
     injector.after_tick(2)
     assert isinstance(r.cell.calibration, OffsetCalibration)
-    T_new = r.cell.calibration.T_base_camera
+    T_new = r.cell.calibration.T_base_camera_at()
     assert np.allclose(T_new[:3, 3], [1.0, 0.03, 0.5])
     assert np.allclose(T_new[:3, :3], [[0, -1, 0], [1, 0, 0], [0, 0, 1]], atol=1e-12)
     assert r.cell.calibration.mount == "eye-to-hand"
     r.cell.calibration = FakeCalibration(T)  # LoadCalibration reads the file again
     r.nodes["Perceive"].enter()
-    assert np.allclose(r.cell.calibration.T_base_camera[:3, 3], [1.0, 0.03, 0.5])
+    assert np.allclose(r.cell.calibration.T_base_camera_at()[:3, 3], [1.0, 0.03, 0.5])
     assert injector.fired == 1 and recorder.faults[0][1] == 2
 
 
 def test_ik_fail_for_the_next_calls() -> None:
     r = rig()
     injector, _ = install(r, "ik_fail@PlanGrasp:calls=2")
-    kin = r.cell.services["kinematics"]
+    kin = r.cell.kinematics
     r.nodes["PlanGrasp"].enter()
     q = np.arange(6.0)
     first, (sols, second), third = kin.ik(np.eye(4), q), kin.ik_solutions(np.eye(4), q), kin.ik(np.eye(4), q)
@@ -133,7 +133,7 @@ def test_ik_fail_for_the_next_calls() -> None:
 def test_ik_fail_within_attempt_expires_with_the_leaf() -> None:
     r = rig()
     injector, _ = install(r, "ik_fail@PlanGrasp:calls=100,within_attempt=true")
-    kin, node = r.cell.services["kinematics"], r.nodes["PlanGrasp"]
+    kin, node = r.cell.kinematics, r.nodes["PlanGrasp"]
     node.enter()
     node.bt_state = BtStatus.RUNNING
     assert not kin.ik(np.eye(4), np.zeros(6)).ok
@@ -147,7 +147,7 @@ def test_ik_fail_within_attempt_expires_with_the_leaf() -> None:
 def test_planner_fail_returns_the_planners_failure_status() -> None:
     r = rig()
     injector, recorder = install(r, "planner_fail@tick:3:status=timeout")
-    planner = r.cell.services["planner"]
+    planner = r.cell.planner
     assert planner.plan_to_pose(None, None, None, None).ok
     injector.after_tick(3)
     failed = planner.plan_to_joints(None, None, None, None)
@@ -265,9 +265,9 @@ class _MethodCalibration:
     """A calibration whose camera pose is a method (eye-to-hand: fixed; eye-in-hand: tool pose first)."""
 
     def __init__(self, mount: str, T: np.ndarray) -> None:
-        self.mount, self.T = mount, T
+        self.mount, self.T, self.tool_link = mount, T, "tool0"
 
-    def T_base_camera(self, T_base_tool: np.ndarray | None = None) -> np.ndarray:
+    def T_base_camera_at(self, T_base_tool: np.ndarray | None = None) -> np.ndarray:
         return self.T if T_base_tool is None else T_base_tool @ self.T
 
 
@@ -278,7 +278,7 @@ def test_calibration_offset_of_a_method_pose(mount: str) -> None:
     offset = OffsetCalibration(_MethodCalibration(mount, np.eye(4)), offset_transform((10.0, 0.0, 0.0), (0, 0, 0)))
     T_tool = np.eye(4)
     T_tool[:3, :3] = [[0, -1, 0], [1, 0, 0], [0, 0, 1]]  # the tool turned 90 degrees about z
-    T = offset.T_base_camera(T_tool) if mount == "eye-in-hand" else offset.T_base_camera()
+    T = offset.T_base_camera_at(T_tool) if mount == "eye-in-hand" else offset.T_base_camera_at()
     expected = [0.0, 0.01, 0.0] if mount == "eye-in-hand" else [0.01, 0.0, 0.0]  # tool x is base y
     assert np.allclose(T[:3, 3], expected)
 
@@ -287,7 +287,7 @@ def test_within_attempt_ends_at_the_next_leaf_entry_in_the_same_tick() -> None:
     # PlanGrasp fails, the recovery's leaf is entered, PlanGrasp is retried: all within one tick
     r = rig()
     install(r, "ik_fail@PlanGrasp:calls=100,within_attempt=true")
-    kin, node = r.cell.services["kinematics"], r.nodes["PlanGrasp"]
+    kin, node = r.cell.kinematics, r.nodes["PlanGrasp"]
     node.enter()
     assert not kin.ik(np.eye(4), np.zeros(6)).ok
     node.bt_state = BtStatus.FAILURE

@@ -1,4 +1,4 @@
-"""Failure injection end to end: run a tree with a fault through ``bt_grasp.cli.session``, then read the
+"""Failure injection end to end: run a tree with a fault through ``bt_grasp.episode``, then read the
 MCAP log to see that the fault fired (/faults), which reason the leaf reported (/bt/events), which
 recovery branch ran next (/bt/tick) and whether the task still succeeded (/run/result).
 
@@ -74,13 +74,13 @@ class Outcome:
 
 
 def run(tmp_path: Path, calibration: Path, tree: Path, *inject: str) -> Outcome:
-    from bt_grasp.cli.session import Prepared, RunRequest, execute
+    from bt_grasp.episode import EpisodeRequest, run_episode
     from bt_grasp.recording.reader import open_log
 
     log_path = tmp_path / "run.mcap"
-    request = RunRequest(tree=tree, scene=SCENE, seed=SEED, calibration=calibration, log=log_path,
-                         inject=tuple(inject), blackboard=dict(BLACKBOARD), max_ticks=6000)
-    summary, _ = execute(Prepared(request))
+    request = EpisodeRequest(tree=tree, scene=SCENE, seed=SEED, calibration=calibration, log=log_path,
+                             inject=tuple(inject), blackboard=dict(BLACKBOARD), max_ticks=6000)
+    summary = run_episode(request)
     log = open_log(log_path)
     assert log.result is not None and log.result["success"] == summary.success
     assert log.result["faults_fired"] == len(log.faults) == summary.faults_fired

@@ -25,6 +25,7 @@ import typer
 from bt_grasp.cli import replay_cmd
 from bt_grasp.errors import BtGraspError
 from bt_grasp.recording import BoxMarker, PoseMarker, RunRecorder
+from bt_grasp.tree.registry import NodeKind
 
 
 class Scripted(py_trees.behaviour.Behaviour):
@@ -68,11 +69,12 @@ def build_tree(grasp_failures: int) -> py_trees.trees.BehaviourTree:
 
 
 def _kind(b: py_trees.behaviour.Behaviour) -> str:
+    """The kind as ``bt_grasp.tree.introspect`` writes it (``NodeKind.value``)."""
     if isinstance(b, py_trees.composites.Composite):
-        return "control"
+        return NodeKind.CONTROL.value
     if isinstance(b, py_trees.decorators.Decorator):
-        return "decorator"
-    return "action"
+        return NodeKind.DECORATOR.value
+    return NodeKind.ACTION.value
 
 
 class TreeAdapter:

@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from bt_grasp.behaviours.services import TrajectoryKind
 from bt_grasp.interfaces import RGBDFrame
+from bt_grasp.perception.results import GraspCandidate, PerceptionResult
 from bt_grasp.recording.schemas import BoxMarker, PoseMarker
 from bt_grasp.recording.writer import RunRecorder
 
@@ -16,7 +17,7 @@ _POINTS_MAX = 20000
 
 
 class RecorderSink:
-    """Implements :class:`bt_grasp.behaviours.cell.MediaSink` on a :class:`RunRecorder`."""
+    """Implements :class:`bt_grasp.behaviours.services.MediaSink` on a :class:`RunRecorder`."""
 
     def __init__(self, recorder: RunRecorder, now_ns: Callable[[], int]) -> None:
         self.recorder = recorder
@@ -45,24 +46,24 @@ class RecorderSink:
         u, v = cloud.pixels[:, 0], cloud.pixels[:, 1]
         self.recorder.write_points(stamp, cloud.points.astype(np.float32), frame.color[v, u], "base")
 
-    def perception(self, result: Any, T_base_camera: NDArray[np.float64]) -> None:
+    def perception(self, result: PerceptionResult, T_base_camera: NDArray[np.float64]) -> None:
         from bt_grasp.geometry import make_T, rot_z
 
         markers = []
         for i, det in enumerate(result.detections):
-            T = make_T(rot_z(det.yaw_rad), det.centroid_base_m)
-            markers.append(BoxMarker(f"det{i}", T, tuple(det.size_m), label=f"{det.label} {det.confidence:.2f}"))
+            T = make_T(rot_z(det.yaw_rad), np.asarray(det.centroid_base_m, dtype=float))
+            markers.append(BoxMarker(f"det{i}", T, det.size_m, label=f"{det.label} {det.confidence:.2f}"))
         self.recorder.write_markers(self.now_ns(), markers, topic="/perception/detections")
         self.recorder.write_log(self.now_ns(), "INFO", "perception", f"{result.status.value}: {result.message}")
 
-    def grasps(self, candidates: Sequence[Any]) -> None:
+    def grasps(self, candidates: Sequence[GraspCandidate]) -> None:
         markers = [
             PoseMarker(f"grasp{i}", c.T_base_tcp_grasp, label=f"#{i} {c.score:.2f}") for i, c in enumerate(candidates)
         ]
         self.recorder.write_markers(self.now_ns(), markers, topic="/perception/grasps")
 
-    def trajectory(self, name: str, times_s: NDArray[np.float64], q: NDArray[np.float64], kind: str) -> None:
-        self.recorder.write_trajectory(self.now_ns(), name, times_s, q, "executed" if kind == "executed" else "planned")
+    def trajectory(self, name: str, times_s: NDArray[np.float64], q: NDArray[np.float64], kind: TrajectoryKind) -> None:
+        self.recorder.write_trajectory(self.now_ns(), name, times_s, q, kind)
 
     def log(self, level: str, name: str, message: str) -> None:
         self.recorder.write_log(self.now_ns(), level, name, message)

@@ -1,0 +1,254 @@
+"""One episode: validate every input, build (or reuse) the world, run the tree to the end, judge, summarise.
+
+This is the composition root of a run: the only place where the simulator, the pipeline services, the tree,
+the fault plan, the recorder and the judge meet. ``bt-grasp run``/``demo``/``replay --resim``, benchmarks,
+evaluation workers and notebooks call it; it never prints (callbacks see every tick).
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from bt_grasp.episode.request import EpisodeRequest
+from bt_grasp.episode.result import EpisodeResult, Judged
+from bt_grasp.episode.worlds import FreshWorlds, WorldSource
+from bt_grasp.errors import InputError
+from bt_grasp.goals import Goal, PickGoal, goal_for_run
+
+if TYPE_CHECKING:
+    from bt_grasp.behaviours.cell import Cell
+    from bt_grasp.faults.plan import FaultPlan
+    from bt_grasp.perception.calibration_file import CalibrationFile
+    from bt_grasp.recording.writer import RunRecorder
+    from bt_grasp.scene_config import Scene
+    from bt_grasp.sim.judge import Verdict
+    from bt_grasp.sim.world import World
+    from bt_grasp.tree.loader import LoadedTree
+
+log = logging.getLogger(__name__)
+
+#: the log is flushed at the first tick boundary after this much wall time: a killed run loses at most this
+LOG_FLUSH_INTERVAL_S = 0.05
+
+#: called after every tick with the tick's number and the tree (progress bars, live views, logging)
+TickCallback = Callable[[int, "LoadedTree"], None]
+
+
+class _EpisodeClock:
+    """The tree's clock: the world's, once the world exists (the tree is loaded and checked first)."""
+
+    def __init__(self) -> None:
+        self.world: World | None = None
+
+    def now_ns(self) -> int:
+        return 0 if self.world is None else self.world.clock.now_ns()
+
+
+@dataclass(frozen=True)
+class Inputs:
+    """Every input file read and checked: nothing is built yet."""
+
+    scene: Scene
+    tree: LoadedTree
+    calibration_path: Path | None  # --calibration, else the file the scene names beside it
+    calibration: CalibrationFile | None
+    goal: Goal
+    fault_plan: FaultPlan | None
+    clock: _EpisodeClock
+
+
+def load_inputs(request: EpisodeRequest) -> Inputs:
+    """Read and check every input of ``request``; raises InputError (or a ConfigError) naming the file."""
+    from bt_grasp.behaviours import robot_registry
+    from bt_grasp.scene_config import load_scene
+    from bt_grasp.tree.loader import load_tree
+
+    scene = load_scene(request.scene)
+    goal = request.goal if request.goal is not None else goal_for_run(scene, request.blackboard)
+    _check_goal(goal, request, scene)
+    from bt_grasp.perception.calibration_file import calibration_for_scene
+
+    # --calibration, else the file the scene names beside it; another mount or camera pose is bad input
+    calibration_path, calibration = calibration_for_scene(scene, request.scene, request.calibration)
+    clock = _EpisodeClock()
+    tree = load_tree(request.tree, robot_registry(), clock=clock)
+    fault_plan = None
+    if request.faults is not None or request.inject:
+        from bt_grasp.faults.injector import check_fault_plan, leaves_of
+        from bt_grasp.faults.plan import load_fault_plan
+
+        fault_plan = load_fault_plan(request.faults, request.inject)
+        check_fault_plan(fault_plan, leaves_of(list(tree.nodes())), [o.name for o in scene.objects])
+    if request.max_ticks < 1:
+        raise InputError("--max-ticks", f"must be at least 1, got {request.max_ticks}")
+    return Inputs(scene, tree, calibration_path, calibration, goal, fault_plan, clock)
+
+
+def _check_goal(goal: Goal, request: EpisodeRequest, scene: Scene) -> None:
+    from bt_grasp.sim.judge import cannot_judge
+
+    problem = cannot_judge(goal)
+    if problem is not None:
+        raise InputError(request.scene if request.goal is None else "--goal", problem)
+    if isinstance(goal, PickGoal) and goal.color and goal.object is None:
+        colors = sorted({str(o.color) for o in scene.objects})
+        if goal.color not in colors:
+            raise InputError("--color", f"the pick goal's colour '{goal.color}' is not the colour of any object "
+                                        f"of {request.scene}; colours there: {', '.join(colors) or 'none'}")
+
+
+class Episode:
+    """A prepared episode: inputs checked, world built or reset, cell and tree wired. ``run()`` once."""
+
+    def __init__(self, request: EpisodeRequest, worlds: WorldSource | None = None) -> None:
+        self.request = request
+        self.inputs = load_inputs(request)  # bad input stops here: nothing built, nothing written
+        self.scene = self.inputs.scene
+        self.tree = self.inputs.tree
+        self.world: World = (worlds or FreshWorlds()).world_for(self.scene, request.seed, request.scene)
+        self.inputs.clock.world = self.world
+        for key, value in request.blackboard.items():
+            self.tree.root_blackboard.set(key, value)
+        if self.inputs.calibration_path is not None:
+            self.tree.root_blackboard.set("calibration_file", str(self.inputs.calibration_path))
+        self.cell = self._build_cell()
+        self._ran = False
+
+    def _build_cell(self) -> Cell:
+        from bt_grasp.behaviours.calibration_leaves import needs_calibration_board
+        from bt_grasp.behaviours.cell import make_cell
+
+        world = self.world
+        board = None
+        if needs_calibration_board(self.tree.nodes()):
+            from bt_grasp.sim.charuco import mount_calibration_board
+
+            board = mount_calibration_board(world)
+        return make_cell(world.robot, world.camera, world.clock, self.scene, self.request.seed,
+                         calibration=self.inputs.calibration, board=board)
+
+    def run(self, on_tick: Sequence[TickCallback] = ()) -> EpisodeResult:
+        """Tick the tree to the end (or ``max_ticks``), judge the goal, write the result; returns it."""
+        from bt_grasp.sim.judge import Judge
+        from bt_grasp.tree.runner import TreeRunner
+
+        if self._ran:
+            raise RuntimeError("an Episode runs once; prepare a new one (a WarmWorlds source reuses the world)")
+        self._ran = True
+        request, world, cell = self.request, self.world, self.cell
+        judge = Judge(world)
+        recorder = self._open_recorder()
+        try:
+            injector = None
+            if self.inputs.fault_plan is not None:
+                from bt_grasp.faults.injector import install_faults
+
+                injector = install_faults(self.inputs.fault_plan, self, recorder)
+            for node in self.tree.nodes():
+                node.setup(cell=cell)
+
+            def tick_hook(tick: int, tree: LoadedTree) -> None:
+                if injector is not None:
+                    injector.after_tick(tick)
+                for callback in on_tick:
+                    callback(tick, tree)
+
+            if injector is not None:
+                injector.before_run()
+            runner = TreeRunner(self.tree, world, steps_per_tick=world.steps_per_tick, recorder=recorder,
+                                robot_state=robot_state_reader(cell), on_tick=tick_hook)
+            outcome = runner.run(request.max_ticks)
+            verdict = judge.check(self.inputs.goal)
+            last = outcome.last_failure
+            success = verdict.success and outcome.status == "SUCCESS"
+            reason = None
+            if not success:
+                reason = last.reason if last else ("MAX_TICKS" if outcome.status == "RUNNING" else None)
+            result = EpisodeResult(
+                success=success,
+                tree_status=outcome.status,
+                reason=reason,
+                failed_leaf=None if success else (last.leaf if last else None),
+                ticks=outcome.ticks,
+                sim_time_s=outcome.sim_time_s,
+                wall_time_s=outcome.wall_time_s,
+                retries=outcome.retries,
+                judged=judged(verdict),
+                log=str(request.log) if request.log else None,
+                seed=request.seed,
+                faults_fired=injector.fired if injector is not None else 0,
+                goal=self.inputs.goal,
+            )
+            if recorder is not None:
+                recorder.write_result(world.now_ns(), result.to_json())
+        finally:
+            if recorder is not None:
+                recorder.close()
+        return result
+
+    def _open_recorder(self) -> RunRecorder | None:
+        request = self.request
+        if request.log is None:
+            return None
+        from bt_grasp.episode.media import RecorderSink
+        from bt_grasp.episode.metadata import run_attachments, run_metadata
+        from bt_grasp.recording.writer import RunRecorder
+        from bt_grasp.tree.introspect import tree_structure
+
+        request.log.parent.mkdir(parents=True, exist_ok=True)
+        recorder = RunRecorder(
+            request.log,
+            metadata=run_metadata(
+                request, self.scene, self.tree, self.inputs.calibration_path, self.inputs.goal
+            ),
+            attachments=run_attachments(request, self.tree, self.inputs.calibration_path),
+            flush_interval_s=LOG_FLUSH_INTERVAL_S,
+        )
+        recorder.write_tree_structure(self.world.now_ns(), tree_structure(self.tree.root))
+        self.cell.media = RecorderSink(recorder, self.world.now_ns)
+        return recorder
+
+
+def judged(verdict: Verdict) -> Judged:
+    failed = verdict.failed
+    return Judged(
+        goal=verdict.goal,
+        success=verdict.success,
+        failed_condition=failed.criterion.value if failed is not None else None,
+        conditions=tuple((c.criterion.value, c.met, c.detail) for c in verdict.conditions),
+        object_name=verdict.object_name,
+        object_lift_m=verdict.object_lift_m,
+        in_gripper=verdict.in_gripper,
+        lifted_objects=verdict.lifted_objects,
+        objects_in_workspace=verdict.objects_in_workspace,
+    )
+
+
+RobotState = dict[str, list[float] | list[list[float]] | float]
+
+
+def robot_state_reader(cell: Cell) -> Callable[[], RobotState]:
+    """What the log records of the robot every tick (measured joints, gripper, tool pose by FK)."""
+
+    def read() -> RobotState:
+        q = cell.robot.joint_positions()
+        return {
+            "q_rad": q.tolist(),
+            "qd_rad_s": cell.robot.joint_velocities().tolist(),
+            "gripper_width_m": cell.robot.gripper_width_m(),
+            "T_base_tcp": np.asarray(cell.kinematics.fk(q)).tolist(),
+        }
+
+    return read
+
+
+def run_episode(request: EpisodeRequest, *, worlds: WorldSource | None = None,
+                on_tick: Sequence[TickCallback] = ()) -> EpisodeResult:
+    """Prepare and run one episode (``worlds``: where the world comes from; default a fresh one)."""
+    return Episode(request, worlds).run(on_tick)

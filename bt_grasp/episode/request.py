@@ -1,0 +1,54 @@
+"""What one episode is asked to do: every input as a path or a value, nothing built yet."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from bt_grasp.errors import InputError
+from bt_grasp.goals import Goal
+
+DEFAULT_MAX_TICKS = 12000  # 120 s of simulated time at 100 Hz
+
+#: what a user may put on the blackboard before the first tick (``--set KEY=VALUE``)
+BlackboardValue = str | int | float | bool
+
+
+@dataclass(frozen=True)
+class EpisodeRequest:
+    """One episode: a tree on a scene with a seed, judged against ``goal``.
+
+    ``goal``: what the judge checks; None: the scene's declared goal, else a pick of the blackboard's
+    ``color`` lifted by its ``lift_height`` (:func:`bt_grasp.goals.goal_for_run`).
+    ``calibration``: a calibration file to load before the first tick (``LoadCalibration`` may load one
+    too); ``log``: write the run to this MCAP file; ``faults``/``inject``: a fault plan file and/or
+    one-line faults; ``blackboard``: entries set on the main tree's blackboard before the first tick;
+    ``argv``: the command line, recorded in the log's metadata.
+    """
+
+    tree: Path
+    scene: Path
+    seed: int = 0
+    goal: Goal | None = None
+    calibration: Path | None = None
+    log: Path | None = None
+    max_ticks: int = DEFAULT_MAX_TICKS
+    faults: Path | None = None
+    inject: tuple[str, ...] = ()
+    blackboard: Mapping[str, BlackboardValue] = field(default_factory=dict)
+    argv: tuple[str, ...] = ()
+
+
+def parse_assignments(items: Sequence[str], source: str = "--set") -> dict[str, BlackboardValue]:
+    """KEY=VALUE pairs; values are parsed as YAML scalars (numbers, true/false) or kept as text."""
+    import yaml
+
+    out: dict[str, BlackboardValue] = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or not key:
+            raise InputError(source, f"expected KEY=VALUE, got '{item}'")
+        parsed = yaml.safe_load(value) if value else ""
+        out[key] = parsed if isinstance(parsed, str | int | float | bool) else value
+    return out

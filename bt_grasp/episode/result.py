@@ -1,0 +1,90 @@
+"""How one episode ended: the tree's view, the judge's verdict, and where its log is."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from bt_grasp.goals import Goal
+
+JsonScalar = str | int | float | bool | None
+JsonValue = JsonScalar | list["JsonValue"] | dict[str, "JsonValue"]
+
+
+def goal_json(goal: Goal) -> dict[str, JsonValue]:
+    """The goal as the scene file would write it (``kind`` plus its fields)."""
+    return {key: value for key, value in goal.model_dump(mode="json").items()}
+
+
+@dataclass(frozen=True)
+class Judged:
+    """The judge's verdict as plain data (from ``bt_grasp.sim.judge.Verdict``): ground truth, judge only."""
+
+    goal: Goal
+    success: bool
+    failed_condition: str | None  # the first condition not met (a ``Criterion`` value), None on success
+    conditions: tuple[tuple[str, bool, str], ...]  # (criterion, met, what was measured)
+    object_name: str | None = None
+    object_lift_m: float = 0.0
+    in_gripper: bool = False
+    lifted_objects: tuple[str, ...] = ()
+    objects_in_workspace: tuple[str, ...] = ()
+
+    def to_json(self) -> dict[str, JsonValue]:
+        return {
+            "source": "simulator ground truth (judge only)",
+            "goal": goal_json(self.goal),
+            "task": self.goal.kind,
+            "success": self.success,
+            "failed_condition": self.failed_condition,
+            "conditions": [{"criterion": c, "met": m, "detail": d} for c, m, d in self.conditions],
+            "object": self.object_name,
+            "in_gripper": self.in_gripper,
+            "lifted_objects": list(self.lifted_objects),
+            "objects_in_workspace": list(self.objects_in_workspace),
+        }
+
+
+@dataclass(frozen=True)
+class EpisodeResult:
+    """``success``: the goal judged met by physics AND the tree returned SUCCESS.
+
+    ``reason``/``failed_leaf``: the last leaf FAILURE (or ``MAX_TICKS`` when the tick limit ran out, or
+    ``GOAL_NOT_MET`` with the judge's failed condition when the tree succeeded but the goal was not met).
+    """
+
+    success: bool
+    tree_status: str  # SUCCESS, FAILURE, or RUNNING when max_ticks ran out
+    reason: str | None
+    failed_leaf: str | None
+    ticks: int
+    sim_time_s: float
+    wall_time_s: float
+    retries: dict[str, int]
+    judged: Judged
+    log: str | None
+    seed: int
+    goal: Goal
+    faults_fired: int = 0
+
+    @property
+    def object_lift_m(self) -> float:
+        return self.judged.object_lift_m
+
+    def to_json(self) -> dict[str, JsonValue]:
+        retries: dict[str, JsonValue] = {k: v for k, v in self.retries.items()}
+        return {
+            "success": self.success,
+            "tree_status": self.tree_status,
+            "reason": self.reason,
+            "failed_leaf": self.failed_leaf,
+            "ticks": self.ticks,
+            "sim_time_s": round(self.sim_time_s, 3),
+            "wall_time_s": round(self.wall_time_s, 3),
+            "retries": retries,
+            "object_lift_m": round(self.judged.object_lift_m, 4),
+            "goal": goal_json(self.goal),
+            "judge": self.judged.to_json(),
+            "log": self.log,
+            "seed": self.seed,
+            "faults_fired": self.faults_fired,
+        }
