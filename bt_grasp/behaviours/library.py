@@ -2,7 +2,12 @@
 
 from __future__ import annotations
 
-from bt_grasp.behaviours import calibration_leaves, gripper, motion_leaves, perceive
+from collections.abc import Iterable
+from typing import Any
+
+from bt_grasp.behaviours import calibration_leaves, gripper, motion_leaves, objects, perceive, place
+from bt_grasp.errors import TreeFileError
+from bt_grasp.scene_config import Scene
 from bt_grasp.tree.registry import NodeRegistry, builtin_registry
 
 ROBOT_LEAVES = (
@@ -19,6 +24,14 @@ ROBOT_LEAVES = (
     gripper.OpenGripper,
     gripper.Grasp,
     gripper.IsGrasped,
+    objects.PerceiveAll,
+    objects.SelectObject,
+    objects.ObjectPose,
+    objects.ObjectCount,
+    objects.FixturePose,
+    place.Place,
+    place.PlaceOn,
+    place.MoveTo,
 )
 
 
@@ -31,3 +44,14 @@ def register_robot_leaves(registry: NodeRegistry) -> NodeRegistry:
 def robot_registry() -> NodeRegistry:
     """Every built-in node plus bt_grasp's robot leaves: what tree files may name."""
     return register_robot_leaves(builtin_registry())
+
+
+def check_tree_against_scene(nodes: Iterable[Any], scene: Scene) -> None:
+    """Literal ports that name scene things (a fixture, a place pose) must fit the scene: TreeFileError with
+    the node's file:line before anything runs. A leaf says how with ``check_scene(scene) -> str | None``."""
+    for node in nodes:
+        check = getattr(node, "check_scene", None)
+        problem = check(scene) if check is not None else None
+        if problem:
+            ctx = node.ctx
+            raise TreeFileError(ctx.source or "tree", f"{node.name}: {problem}", where=ctx.line or None)

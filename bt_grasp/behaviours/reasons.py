@@ -19,3 +19,7 @@ class FailureReason(enum.StrEnum):
     CALIBRATION_MISSING = "CALIBRATION_MISSING"
     CALIBRATION_FAILED = "CALIBRATION_FAILED"
     BAD_INPUT = "BAD_INPUT"  # a port held something of the wrong kind
+    NOT_HOLDING = "NOT_HOLDING"  # Place/PlaceOn started with nothing between the fingers
+    DROPPED = "DROPPED"  # the held object left the fingers while it was carried
+    PLACE_BLOCKED = "PLACE_BLOCKED"  # the place target is occupied, or the descent met something early
+    COUNT_EXCEEDED = "COUNT_EXCEEDED"  # ObjectCount: more objects than the port ``max`` allows

@@ -66,6 +66,7 @@ class Inputs:
 def load_inputs(request: EpisodeRequest) -> Inputs:
     """Read and check every input of ``request``; raises InputError (or a ConfigError) naming the file."""
     from bt_grasp.behaviours import robot_registry
+    from bt_grasp.behaviours.library import check_tree_against_scene
     from bt_grasp.scene_config import load_scene
     from bt_grasp.tree.loader import load_tree
 
@@ -78,6 +79,7 @@ def load_inputs(request: EpisodeRequest) -> Inputs:
     calibration_path, calibration = calibration_for_scene(scene, request.scene, request.calibration)
     clock = _EpisodeClock()
     tree = load_tree(request.tree, robot_registry(), clock=clock)
+    check_tree_against_scene(tree.nodes(), scene)
     fault_plan = None
     if request.faults is not None or request.inject:
         from bt_grasp.faults.injector import check_fault_plan, leaves_of

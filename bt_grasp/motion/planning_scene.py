@@ -1,8 +1,10 @@
 """What the planner knows about the robot's surroundings, in the robot base frame.
 
-A :class:`PlanningScene` holds the table (installation data from the scene file, never from the
-simulator), obstacles as boxes or cylinders (from perception), and optionally one ``allowed_object``:
-the object being grasped, which may touch the finger pads at the end of an approach but nothing else.
+A :class:`PlanningScene` holds the table and the fixtures (installation data from the scene file, never
+from the simulator), obstacles as boxes or cylinders (from perception), optionally one ``allowed_object``:
+the object being grasped, which may touch the finger pads at the end of an approach but nothing else, and
+optionally one ``attached`` object: the object held in the gripper while it is carried, given in the frame
+of the link it moves with, checked against every scene shape (not against the robot holding it).
 Each shape names the robot links allowed to touch it (``touch_links``): the table lets ``base_link``
 stand on it; the allowed object lets the fingers close on it.
 
@@ -102,6 +104,8 @@ class PlanningScene:
     table: Box | None = None
     obstacles: tuple[Shape, ...] = ()
     allowed_object: Shape | None = None  # may touch the finger pads (see ``touch_links``)
+    attached: Shape | None = None  # the held object, its pose in ``attached_link``'s frame (not the base)
+    attached_link: str = "tcp"
     names: tuple[str, ...] = field(init=False, default=())
 
     def __post_init__(self) -> None:
@@ -135,6 +139,10 @@ class PlanningScene:
         if shape is not None and not shape.touch_links:
             shape = replace(shape, touch_links=FINGER_LINKS)
         return replace(self, allowed_object=shape)
+
+    def with_attached(self, shape: Shape | None, link: str = "tcp") -> PlanningScene:
+        """The scene with ``shape`` (posed in ``link``'s frame) carried by the robot."""
+        return replace(self, attached=shape, attached_link=link)
 
 
 def fixture_boxes(scene: Scene) -> tuple[Box, ...]:

@@ -8,7 +8,7 @@ from typing import Any
 
 from bt_grasp.tree.blackboard import EMPTY, Blackboard
 from bt_grasp.tree.exceptions import PortValueError, TreeRuntimeError
-from bt_grasp.tree.registry import NO_DEFAULT, PortDirection, PortSpec
+from bt_grasp.tree.registry import NO_DEFAULT, PortDirection, PortSpec, is_text_port_type
 
 _TRUE = ("true", "True", "TRUE", "1")
 _FALSE = ("false", "False", "FALSE", "0")
@@ -21,6 +21,11 @@ def convert_text(text: str, port: PortSpec) -> Any:
     value: Any
     if kind is str or kind is object:
         value = text
+    elif is_text_port_type(kind):
+        try:
+            value = kind.from_port_text(text)  # type: ignore[attr-defined]
+        except ValueError as exc:
+            raise PortValueError(f"port '{port.name}': {exc}") from None
     elif kind is bool:
         if text.strip() in _TRUE:
             value = True

@@ -63,6 +63,13 @@ NO_DEFAULT: Any = _NoDefault()
 #: the Python types a port may carry; ``object`` means "any blackboard value"
 PORT_TYPES: tuple[type, ...] = (str, int, float, bool, object)
 
+
+def is_text_port_type(kind: type) -> bool:
+    """An application type a port may carry besides PORT_TYPES (BT.CPP's ``convertFromString<T>``): a class
+    with a classmethod ``from_port_text(text) -> instance`` that raises ValueError with one sentence on
+    malformed text (e.g. ``bt_grasp.tasks.pose.Pose`` for ``"0.35;-0.25;0.0;90"``)."""
+    return callable(getattr(kind, "from_port_text", None))
+
 #: attribute names a port may not use (BT.CPP reserves the same ones)
 RESERVED_ATTRIBUTES: frozenset[str] = frozenset(
     {"ID", "name", "_description", "_autoremap", "_uid", "_fullpath"}
@@ -93,8 +100,10 @@ class PortSpec:
     choices: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
-        if self.type not in PORT_TYPES:
-            raise ValueError(f"port {self.name!r}: type must be one of str, int, float, bool, object")
+        if self.type not in PORT_TYPES and not is_text_port_type(self.type):
+            raise ValueError(
+                f"port {self.name!r}: type must be one of str, int, float, bool, object, or a class with from_port_text"
+            )
         if not self.name or not (self.name[0].isalpha()) or self.name in RESERVED_ATTRIBUTES:
             raise ValueError(f"port name {self.name!r} is empty, reserved or does not start with a letter")
 

@@ -1,0 +1,225 @@
+"""Object queries: PerceiveAll, SelectObject, ObjectPose, ObjectCount, and FixturePose.
+
+A perceived object is a :class:`bt_grasp.perception.results.Detection` (base frame; ``label`` is its colour
+name, ``shape`` "box" or "round", ``size_m`` length/width/height). A list of them (an *object list*) is a
+tuple of detections; the object loop (``ForEachObject``) walks one. Poses are :class:`bt_grasp.pose.Pose`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from py_trees.common import Status
+
+from bt_grasp.behaviours.base import RobotLeaf
+from bt_grasp.behaviours.perceive import perceive_once
+from bt_grasp.behaviours.reasons import FailureReason
+from bt_grasp.pose import Pose
+from bt_grasp.tree.leaf import Leaf
+from bt_grasp.tree.registry import NodeKind, PortDirection, PortSpec, leaf
+
+_OBJECTS_IN = PortSpec("objects", PortDirection.INPUT, object, "{objects}", "an object list (from PerceiveAll)")
+ORDERS = ("first", "nearest", "farthest", "largest", "smallest")
+SHAPES = ("", "box", "round")
+
+
+def is_detection(value: Any) -> bool:
+    return all(hasattr(value, a) for a in ("centroid_base_m", "size_m", "yaw_rad", "label"))
+
+
+def object_list(value: Any) -> tuple[Any, ...] | None:
+    """The value as a tuple of detections, or None when it is not an object list."""
+    if is_detection(value):
+        return (value,)
+    if isinstance(value, Sequence) and not isinstance(value, str) and all(is_detection(v) for v in value):
+        return tuple(value)
+    return None
+
+
+def footprint_m2(det: Any) -> float:
+    return float(det.size_m[0] * det.size_m[1])
+
+
+def matches(det: Any, color: str, shape: str, min_size_m: float, max_size_m: float) -> bool:
+    """Colour (its label), shape, and the footprint's long side within [min_size_m, max_size_m]."""
+    if color and det.label != color:
+        return False
+    if shape and det.shape != shape:
+        return False
+    length = float(max(det.size_m[0], det.size_m[1]))
+    return min_size_m <= length <= max_size_m
+
+
+@leaf(
+    None,
+    name="PerceiveAll",
+    ports=[PortSpec("objects", PortDirection.OUTPUT, object, "{objects}", "every object seen, as an object list")],
+    needs_robot=True,
+)
+class PerceiveAll(RobotLeaf):
+    """Capture one RGB-D frame and list every object standing on the table (an empty list when none).
+
+    FAILURE: CALIBRATION_MISSING (no calibration loaded), NO_FRAME (the camera returned nothing),
+    NO_DETECTION (no table was found in the image at all).
+    """
+
+    def update(self) -> Status:
+        from bt_grasp.perception.results import PerceptionStatus
+
+        failure, result = perceive_once(self, None)
+        if failure is not None and (result is None or result.status is not PerceptionStatus.NO_OBJECTS):
+            return failure
+        objects = tuple(result.others) if result is not None else ()
+        self.ports.set("objects", objects)
+        self.feedback_message = f"{len(objects)} object(s): " + ", ".join(d.label for d in objects)
+        return Status.SUCCESS
+
+
+@leaf(
+    None,
+    name="SelectObject",
+    ports=[
+        _OBJECTS_IN,
+        PortSpec("color", PortDirection.INPUT, str, "", "only objects of this colour name (empty: any)"),
+        PortSpec("shape", PortDirection.INPUT, str, "", "only this shape: box or round (empty: any)", SHAPES),
+        PortSpec("min_size", PortDirection.INPUT, float, 0.0, "only footprints whose long side is at least this, m"),
+        PortSpec("max_size", PortDirection.INPUT, float, 1.0, "only footprints whose long side is at most this, m"),
+        PortSpec("order", PortDirection.INPUT, str, "first", "which match: " + ", ".join(ORDERS), ORDERS),
+        PortSpec("point", PortDirection.INPUT, Pose, "0;0", "the point nearest/farthest measure from"),
+        PortSpec("object", PortDirection.OUTPUT, object, "{object}", "the chosen object"),
+    ],
+)
+class SelectObject(Leaf):
+    """Choose one object from a list by colour, shape and size, then by order (first in the list, nearest
+    to or farthest from ``point``, largest or smallest footprint). FAILURE: NO_DETECTION (nothing matches),
+    BAD_INPUT (``objects`` is not an object list)."""
+
+    def update(self) -> Status:
+        objects = object_list(self.ports.get("objects") if self.ports.has("objects") else None)
+        if objects is None:
+            return self.fail(FailureReason.BAD_INPUT.value, "'objects' is not an object list: run PerceiveAll first")
+        color, shape = str(self.ports.get("color")), str(self.ports.get("shape"))
+        lo, hi = float(self.ports.get("min_size")), float(self.ports.get("max_size"))
+        found = [d for d in objects if matches(d, color, shape, lo, hi)]
+        if not found:
+            wanted = " ".join(w for w in (color, shape or "object") if w)
+            return self.fail(FailureReason.NO_DETECTION.value, f"no {wanted} among {len(objects)} object(s)")
+        order = str(self.ports.get("order"))
+        point: Pose = self.ports.get("point")
+        chosen = found[0]
+        if order in ("nearest", "farthest"):
+            dist = [math.hypot(d.centroid_base_m[0] - point.x_m, d.centroid_base_m[1] - point.y_m) for d in found]
+            chosen = found[int(np.argmin(dist) if order == "nearest" else np.argmax(dist))]
+        elif order in ("largest", "smallest"):
+            area = [footprint_m2(d) for d in found]
+            chosen = found[int(np.argmax(area) if order == "largest" else np.argmin(area))]
+        self.ports.set("object", chosen)
+        c = chosen.centroid_base_m
+        self.feedback_message = f"{chosen.label} {chosen.shape} at ({c[0]:.3f}, {c[1]:.3f}) of {len(found)} match(es)"
+        return Status.SUCCESS
+
+
+@leaf(
+    None,
+    name="ObjectPose",
+    ports=[
+        PortSpec("object", PortDirection.INPUT, object, "{object}", "a perceived object"),
+        PortSpec("at", PortDirection.INPUT, str, "center", "center, top (its top face) or bottom",
+                 ("center", "top", "bottom")),
+        PortSpec("offset_z", PortDirection.INPUT, float, 0.0, "added to the height, m (e.g. 0.1: above it)"),
+        PortSpec("pose", PortDirection.OUTPUT, object, "{pose}", "the pose (base frame; yaw = the object's)"),
+    ],
+)
+class ObjectPose(Leaf):
+    """A perceived object's pose in the base frame: its centre, top face or bottom, raised by ``offset_z``.
+    ``at="top"`` is where another object's bottom would rest on it (the z ``Place`` expects).
+    FAILURE: BAD_INPUT (``object`` is not a perceived object)."""
+
+    def update(self) -> Status:
+        det: Any = self.ports.get("object") if self.ports.has("object") else None
+        if not is_detection(det):
+            return self.fail(FailureReason.BAD_INPUT.value, "'object' is not a perceived object: run SelectObject")
+        x, y, z = (float(v) for v in det.centroid_base_m)
+        half = float(det.size_m[2]) / 2
+        z += {"center": 0.0, "top": half, "bottom": -half}[str(self.ports.get("at"))]
+        pose = Pose(x, y, z + float(self.ports.get("offset_z")), math.degrees(float(det.yaw_rad)))
+        self.ports.set("pose", pose)
+        self.feedback_message = f"{det.label}: {pose}"
+        return Status.SUCCESS
+
+
+@leaf(
+    None,
+    name="ObjectCount",
+    kind=NodeKind.CONDITION,
+    ports=[
+        _OBJECTS_IN,
+        PortSpec("color", PortDirection.INPUT, str, "", "count only objects of this colour (empty: all)"),
+        PortSpec("min", PortDirection.INPUT, int, 1, "SUCCESS needs at least this many"),
+        PortSpec("max", PortDirection.INPUT, int, -1, "... and at most this many (-1: no limit)"),
+        PortSpec("count", PortDirection.OUTPUT, object, "{object_count}", "how many were counted"),
+    ],
+)
+class ObjectCount(Leaf):
+    """Count the objects of a list (optionally of one colour); SUCCESS when min <= count <= max.
+    FAILURE: NO_DETECTION (fewer than ``min``), COUNT_EXCEEDED (more than ``max``), BAD_INPUT."""
+
+    def update(self) -> Status:
+        objects = object_list(self.ports.get("objects") if self.ports.has("objects") else None)
+        if objects is None:
+            return self.fail(FailureReason.BAD_INPUT.value, "'objects' is not an object list: run PerceiveAll first")
+        color = str(self.ports.get("color"))
+        count = sum(1 for d in objects if not color or d.label == color)
+        self.ports.set("count", count)
+        low, high = int(self.ports.get("min")), int(self.ports.get("max"))
+        what = f"{color} object(s)" if color else "object(s)"
+        if count < low:
+            return self.fail(FailureReason.NO_DETECTION.value, f"{count} {what}, fewer than {low}")
+        if 0 <= high < count:
+            return self.fail(FailureReason.COUNT_EXCEEDED.value, f"{count} {what}, more than {high}")
+        self.feedback_message = f"{count} {what}"
+        return Status.SUCCESS
+
+
+@leaf(
+    None,
+    name="FixturePose",
+    ports=[
+        PortSpec("fixture", PortDirection.INPUT, str, description="a fixture's name in the scene file"),
+        PortSpec("pose", PortDirection.OUTPUT, object, "{pose}", "its centre on its surface (base frame)"),
+    ],
+    needs_robot=True,
+)
+class FixturePose(RobotLeaf):
+    """Where a fixture (tray, bin, marker, wall) is, from the scene file (installation data, not
+    perception): its centre in x, y, its yaw, and z = the surface an object set on it rests on (a tray's
+    floor). An unknown name in a tree file is a load error. FAILURE: BAD_INPUT (unknown name from the
+    blackboard)."""
+
+    def check_scene(self, scene: Any) -> str | None:
+        """A problem with the literal ``fixture`` port for this scene (checked before the run), or None."""
+        if self.ports.key("fixture") is not None:
+            return None
+        return _fixture_problem(scene, str(self.ports.get("fixture")))
+
+    def update(self) -> Status:
+        name = str(self.ports.get("fixture"))
+        fixture = self.cell.scene.fixture(name)
+        if fixture is None:
+            return self.failed(FailureReason.BAD_INPUT, str(_fixture_problem(self.cell.scene, name)))
+        world = Pose(fixture.center_xy_m[0], fixture.center_xy_m[1], float(fixture.surface_z_m),
+                     float(fixture.yaw_deg), "world")
+        pose = world.in_base(self.cell.scene.T_world_base())
+        self.ports.set("pose", pose)
+        self.feedback_message = f"{fixture.kind} {name}: {pose}"
+        return Status.SUCCESS
+
+
+def _fixture_problem(scene: Any, name: str) -> str | None:
+    if scene.fixture(name) is not None:
+        return None
+    known = ", ".join(f.name for f in scene.fixtures) or "none"
+    return f"no fixture named '{name}' in the scene (fixtures: {known})"

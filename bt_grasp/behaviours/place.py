@@ -1,0 +1,304 @@
+"""Place, PlaceOn and MoveTo: setting a held object down where a pose says, and moving the tool to a pose.
+
+``Place`` reads where the held OBJECT should come to rest (its centre's x, y, its yaw, and the height of the
+surface under it) and works out the tool pose from the grasp it holds (``grasp`` from PlanGrasp, ``object``
+the detection that was grasped): the object's centre relative to the tool stays what it was at the grasp.
+It then runs, one control period per tick:
+
+1. carry: a planned path to a pre-place pose ``approach`` metres above the target, with the held object
+   modelled as part of the robot (so it does not sweep through a neighbour);
+2. descend: a straight line down until the object's bottom is ``release_gap`` above the surface, or until
+   contact stops the arm early (the arm leaves its straight line, i.e. a tracking error, within
+   ``contact_window`` of the target height: the object touched down);
+3. open the fingers; 4. retreat straight up.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from py_trees.common import Status
+
+from bt_grasp.behaviours.base import RobotLeaf
+from bt_grasp.behaviours.gripper import EMPTY_WIDTH_M
+from bt_grasp.behaviours.motion_job import MotionJob, PathFailure, Segment
+from bt_grasp.behaviours.motion_leaves import _MovingLeaf, cartesian_fn, detection_box, plan_to_pose_fn
+from bt_grasp.behaviours.objects import is_detection, object_list
+from bt_grasp.behaviours.reasons import FailureReason
+from bt_grasp.geometry import Mat4, inv, make_T, rot_z
+from bt_grasp.pose import Pose
+from bt_grasp.robot_description import MAX_OPENING_M, TCP_LINK
+from bt_grasp.tree.registry import PortDirection, PortSpec, leaf
+
+#: the tool points down: tcp z along base -z
+R_DOWN = np.diag([1.0, -1.0, -1.0])
+#: how long opening the fingers may take (simulated time)
+OPEN_TIMEOUT_S = 1.5
+
+_HELD_PORTS = [
+    PortSpec("grasp", PortDirection.INPUT, object, "{grasp}", "the grasp holding the object (from PlanGrasp)"),
+    PortSpec("held", PortDirection.INPUT, object, "{target}", "the detection of the held object, as grasped"),
+    PortSpec("objects", PortDirection.INPUT, object, "{objects}", "objects seen (obstacles while carrying)"),
+    PortSpec("approach", PortDirection.INPUT, float, 0.08, "height of the pre-place pose above the target, m"),
+    PortSpec("release_gap", PortDirection.INPUT, float, 0.003, "the object's bottom above the surface at release, m"),
+    PortSpec("contact_window", PortDirection.INPUT, float, 0.02, "contact this close above the target = set down, m"),
+    PortSpec("retreat", PortDirection.INPUT, float, 0.08, "how far to back off upwards after opening, m"),
+]
+
+
+def table_z_base(cell: Any, x: float, y: float) -> float:
+    """The table top's height in the base frame under (x, y) (installation data)."""
+    T_base_world = inv(cell.scene.T_world_base())
+    return float((T_base_world @ np.array([x, y, 0.0, 1.0]))[2])
+
+
+def held_offset(grasp: Any, held: Any) -> Mat4:
+    """T_tcp_object: the held object's centre in the tool frame, as it was grasped."""
+    T_base_obj = make_T(rot_z(float(held.yaw_rad)), list(held.centroid_base_m))
+    return inv(np.asarray(grasp.T_base_tcp_grasp, dtype=float)) @ T_base_obj
+
+
+def tool_pose_for(target: Pose, T_tcp_obj: Mat4, T_base_tcp_grasp: Mat4, height_m: float, gap_m: float,
+                  surface_z_m: float) -> Mat4:
+    """The tool pose that puts the held object's centre over (x, y), its bottom ``gap_m`` above the surface
+    and its yaw at ``target.yaw_deg`` (or, with no yaw, the tool turned as it was at the grasp). Of the two
+    object yaws 180 degrees apart (a top-down grasp is symmetric) the one nearer the grasp's tool yaw."""
+    z = surface_z_m + height_m / 2 + gap_m
+    T_obj_tcp = inv(T_tcp_obj)
+    grasp_yaw = math.atan2(T_base_tcp_grasp[1, 0], T_base_tcp_grasp[0, 0])
+    if target.yaw_deg is None:  # the object turned as it was held at the grasp
+        R_obj = T_base_tcp_grasp[:3, :3] @ inv(T_obj_tcp)[:3, :3]
+        return make_T(R_obj, [target.x_m, target.y_m, z]) @ T_obj_tcp
+    best: Mat4 | None = None
+    for flip in (0.0, math.pi):
+        T = make_T(rot_z(math.radians(target.yaw_deg) + flip), [target.x_m, target.y_m, z]) @ T_obj_tcp
+        yaw = math.atan2(T[1, 0], T[0, 0])
+        if best is None or abs(_wrap(yaw - grasp_yaw)) < abs(_wrap(math.atan2(best[1, 0], best[0, 0]) - grasp_yaw)):
+            best = T
+    assert best is not None
+    return best
+
+
+def _wrap(angle: float) -> float:
+    return (angle + math.pi) % (2 * math.pi) - math.pi
+
+
+def _raised(T: Mat4, dz: float) -> Mat4:
+    out = np.array(T, dtype=float)
+    out[2, 3] += dz
+    return out
+
+
+class _PlaceBase(RobotLeaf):
+    """Carry, descend, open, retreat. Subclasses say where the object goes (:meth:`target_pose`)."""
+
+    def target_pose(self) -> tuple[Pose, Any] | str:
+        """(object pose in the base frame with z = surface height, the support detection or None)."""
+        raise NotImplementedError
+
+    def initialise(self) -> None:
+        self.phase = "move"
+        self.job: MotionJob | None = None
+        self._early: Status | None = None
+        self._t_open = 0.0
+        self._T_place: Mat4 | None = None
+        setup = self._setup_motion()
+        if isinstance(setup, Status):
+            self._early = setup
+        else:
+            self.job = MotionJob(self.cell, setup)
+
+    def _setup_motion(self) -> list[Segment] | Status:
+        from bt_grasp.motion.planning_scene import PlanningScene
+
+        grasp, held = self.input("grasp"), self.input("held")
+        if grasp is None or not hasattr(grasp, "T_base_tcp_grasp"):
+            return self.failed(FailureReason.BAD_INPUT, "no grasp on the blackboard: run PlanGrasp first")
+        if not is_detection(held):
+            return self.failed(FailureReason.BAD_INPUT, "'held' is not the detection of the grasped object")
+        if self.cell.robot.gripper_target_width_m() > 0.0 or self.cell.robot.gripper_width_m() < EMPTY_WIDTH_M:
+            return self.failed(FailureReason.NOT_HOLDING, "the gripper holds nothing to place")
+        target = self.target_pose()
+        if isinstance(target, str):
+            return self.failed(FailureReason.BAD_INPUT, target)
+        pose, support = target
+        surface = pose.z_m if pose.z_m is not None else table_z_base(self.cell, pose.x_m, pose.y_m)
+        T_tcp_obj = held_offset(grasp, held)
+        height = float(held.size_m[2])
+        gap = float(self.input("release_gap"))
+        T_place = tool_pose_for(pose, T_tcp_obj, np.asarray(grasp.T_base_tcp_grasp), height, gap, surface)
+        self._T_place = T_place
+        self._target_text = f"{pose.x_m:.3f};{pose.y_m:.3f};{surface:.3f}"
+        margin = 0.004
+        held_box = detection_box(held, "held", margin_m=margin)
+        held_shape = type(held_box).at("held", held_box.size_m, T_tcp_obj)
+        others = [d for d in object_list(self.input("objects")) or () if d.centroid_base_m != held.centroid_base_m]
+        obstacles = tuple(detection_box(d, f"object_{i}") for i, d in enumerate(others))
+        carry_scene = PlanningScene.from_scene(self.cell.scene, obstacles).with_attached(held_shape, TCP_LINK)
+        # the descent may end touching what the object is set on (the support), nothing else
+        below = tuple(o for o, d in zip(obstacles, others, strict=True)
+                      if support is None or d.centroid_base_m != support.centroid_base_m)
+        descent_scene = PlanningScene.from_scene(self.cell.scene, below).with_attached(held_shape, TCP_LINK)
+        pre = _raised(T_place, float(self.input("approach")))
+        self.feedback_message = f"placing at {self._target_text}"
+        return [
+            Segment("carry", self._blocked_if_collision(plan_to_pose_fn(self, pre, carry_scene))),
+            Segment("descend", self._blocked_if_collision(cartesian_fn(self, lambda _T: T_place, descent_scene))),
+        ]
+
+    @staticmethod
+    def _blocked_if_collision(fn: Any) -> Any:
+        """A target that collides with what is seen there is an occupied target: PLACE_BLOCKED."""
+
+        def compute(q: NDArray[np.float64]) -> Any:
+            out = fn(q)
+            if isinstance(out, PathFailure) and out.reason is FailureReason.COLLISION:
+                return PathFailure(FailureReason.PLACE_BLOCKED, f"the place target is occupied: {out.sentence}")
+            return out
+
+        return compute
+
+    def _tcp_z(self) -> float:
+        kin = self.cell.service("kinematics")
+        return float(kin.fk(self.cell.robot.joint_positions())[2, 3])
+
+    def update(self) -> Status:
+        if self._early is not None:
+            return self._early
+        assert self.job is not None and self._T_place is not None
+        if self.phase == "move":
+            if self.cell.robot.gripper_width_m() < EMPTY_WIDTH_M:
+                self.job.cancel()
+                return self.failed(FailureReason.DROPPED, f"the object left the fingers during '{self.job.current}'")
+            outcome = self.job.update()
+            if outcome is None:
+                self.feedback_message = f"placing at {self._target_text}: {self.job.current}"
+                return Status.RUNNING
+            if isinstance(outcome, PathFailure):
+                self.job.cancel()
+                above = self._tcp_z() - float(self._T_place[2, 3])
+                touched = self.job.current == "descend" and outcome.reason is FailureReason.TRACKING_ERROR
+                if touched and above <= float(self.input("contact_window")):
+                    self.feedback_message = f"touched down {above * 1e3:.0f} mm above the target"
+                elif touched:
+                    return self.failed(FailureReason.PLACE_BLOCKED,
+                                       f"the descent met something {above * 100:.1f} cm above the target")
+                else:
+                    return self.failed(outcome.reason, outcome.sentence)
+            self.cell.robot.open_gripper()
+            self._t_open = self.now_s()
+            self.phase = "open"
+            return Status.RUNNING
+        if self.phase == "open":
+            width = self.cell.robot.gripper_width_m()
+            if width < MAX_OPENING_M - 0.002:
+                if self.now_s() - self._t_open > OPEN_TIMEOUT_S:
+                    return self.failed(FailureReason.TIMEOUT, f"the gripper opened only to {width * 1e3:.1f} mm")
+                return Status.RUNNING
+            from bt_grasp.behaviours.motion_leaves import straight_up
+            from bt_grasp.motion.planning_scene import PlanningScene
+
+            scene = PlanningScene.from_scene(self.cell.scene)
+            self.job = MotionJob(self.cell, [Segment("retreat", cartesian_fn(self, straight_up(
+                float(self.input("retreat"))), scene))])
+            self.phase = "retreat"
+        outcome = self.job.update()
+        if outcome is None:
+            return Status.RUNNING
+        if isinstance(outcome, PathFailure):
+            return self.failed(outcome.reason, f"after release: {outcome.sentence}")
+        self.feedback_message = f"placed at {self._target_text}"
+        return Status.SUCCESS
+
+    def terminate(self, new_status: Status) -> None:
+        job = getattr(self, "job", None)
+        if job is not None and new_status == Status.INVALID:
+            job.cancel()
+
+
+@leaf(
+    None,
+    name="Place",
+    ports=[PortSpec("pose", PortDirection.INPUT, Pose, description="where the held object comes to rest: "
+                    "x;y[;surface_z[;yaw_deg[;frame]]] (no z: the table; no yaw: as held)"), *_HELD_PORTS],
+    needs_robot=True,
+)
+class Place(_PlaceBase):
+    """Set the held object down with its centre at (x, y), on the surface at height z, turned to yaw.
+
+    FAILURE: NOT_HOLDING (nothing in the gripper), DROPPED (it left the fingers while carried),
+    PLACE_BLOCKED (the target is occupied, or the descent met something early), IK_UNREACHABLE,
+    PLAN_FAILED, TRACKING_ERROR, TIMEOUT (the fingers did not open), BAD_INPUT.
+    """
+
+    def check_scene(self, scene: Any) -> str | None:
+        """A literal pose off the table or out of reach is a load error (checked before the run)."""
+        if self.ports.key("pose") is not None:
+            return None
+        from bt_grasp.scene_config import place_xy_problem
+
+        pose: Pose = self.ports.get("pose")
+        T = np.asarray(scene.T_world_base()) @ np.array([pose.x_m, pose.y_m, 0.0, 1.0])
+        xy = (pose.x_m, pose.y_m) if pose.frame == "world" else (float(T[0]), float(T[1]))
+        problem = place_xy_problem(scene, xy)
+        return f"Place pose {problem}" if problem else None
+
+    def target_pose(self) -> tuple[Pose, Any] | str:
+        pose = self.input("pose")
+        if not isinstance(pose, Pose):
+            return f"'pose' is not a pose: {pose!r}"
+        return pose.in_base(self.cell.scene.T_world_base()), None
+
+
+@leaf(
+    None,
+    name="PlaceOn",
+    ports=[
+        PortSpec("object", PortDirection.INPUT, object, "{object}", "the perceived object to place on top of"),
+        PortSpec("align", PortDirection.INPUT, bool, True, "turn the held object to the lower object's yaw"),
+        *_HELD_PORTS,
+    ],
+    needs_robot=True,
+)
+class PlaceOn(_PlaceBase):
+    """Set the held object down centred on top of a perceived object (stacking).
+
+    FAILURE: as Place; BAD_INPUT when ``object`` is not a perceived object.
+    """
+
+    def target_pose(self) -> tuple[Pose, Any] | str:
+        support = self.input("object")
+        if not is_detection(support):
+            return "'object' is not a perceived object: run SelectObject first"
+        x, y, z = (float(v) for v in support.centroid_base_m)
+        yaw = math.degrees(float(support.yaw_rad)) if self.input("align") else None
+        return Pose(x, y, z + float(support.size_m[2]) / 2, yaw), support
+
+
+@leaf(
+    None,
+    name="MoveTo",
+    ports=[
+        PortSpec("pose", PortDirection.INPUT, Pose, description="tool centre point x;y[;z[;yaw_deg[;frame]]] "
+                 "(no z: 0.15 m above the table; no yaw: 0)"),
+    ],
+    needs_robot=True,
+)
+class MoveTo(_MovingLeaf):
+    """Plan and move the tool, pointing down, to a pose (generalises MoveAbove).
+    FAILURE: IK_UNREACHABLE, PLAN_FAILED, COLLISION, TRACKING_ERROR, BAD_INPUT."""
+
+    def segments(self) -> list[Segment] | Status:
+        from bt_grasp.motion.planning_scene import PlanningScene
+
+        pose = self.input("pose")
+        if not isinstance(pose, Pose):
+            return self.failed(FailureReason.BAD_INPUT, f"'pose' is not a pose: {pose!r}")
+        base = pose.in_base(self.cell.scene.T_world_base())
+        z = base.z_m if base.z_m is not None else table_z_base(self.cell, base.x_m, base.y_m) + 0.15
+        T = make_T(rot_z(math.radians(base.yaw_deg or 0.0)) @ R_DOWN, [base.x_m, base.y_m, z])
+        self.feedback_message = f"to {base}"
+        return [Segment("move to", plan_to_pose_fn(self, T, PlanningScene.from_scene(self.cell.scene)))]

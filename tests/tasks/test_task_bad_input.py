@@ -1,0 +1,36 @@
+"""Task trees that do not fit their scene are bad input: exit 2, file:line, one sentence, nothing run."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+BAD = REPO / "tests" / "data" / "bad_task_trees"
+
+CASES = {
+    "place_off_table.xml": (6, "Place pose (0.350, 0.950) m is off the table"),
+    "place_unreachable.xml": (5, "is out of reach"),
+    "unknown_fixture.xml": (5, "no fixture named 'left_tray' in the scene"),
+    "malformed_pose.xml": (5, "expected a pose 'x;y[;z[;yaw_deg[;frame]]]'"),
+}
+
+
+@pytest.mark.sim
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_tree_not_fitting_the_scene_exits_2(name: str, tmp_path: Path) -> None:
+    line, fragment = CASES[name]
+    log = tmp_path / "run.mcap"
+    proc = subprocess.run(
+        [sys.executable, "-m", "bt_grasp.cli.main", "run", str(BAD / name), "--scene", "scenes/tabletop.yaml",
+         "--log", str(log), "--quiet"],
+        capture_output=True, text=True, timeout=300, cwd=REPO,
+    )
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"error: {BAD / name}:{line}:"), proc.stderr
+    assert fragment in lines[0], lines[0]
+    assert not log.exists() and proc.stdout.strip() == ""
