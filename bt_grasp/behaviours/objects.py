@@ -67,12 +67,10 @@ class PerceiveAll(RobotLeaf):
     """
 
     def update(self) -> Status:
-        from bt_grasp.perception.results import PerceptionStatus
-
-        failure, result = perceive_once(self, None)
-        if failure is not None and (result is None or result.status is not PerceptionStatus.NO_OBJECTS):
-            return failure
-        objects = tuple(result.others) if result is not None else ()
+        result = perceive_once(self, None, accept_empty=True)
+        if isinstance(result, Status):
+            return result
+        objects = tuple(result.others)
         self.ports.set("objects", objects)
         self.feedback_message = f"{len(objects)} object(s): " + ", ".join(d.label for d in objects)
         return Status.SUCCESS

@@ -31,8 +31,9 @@ def camera_pose(cell: Cell) -> NDArray[np.float64] | None:
     return np.asarray(calibration.T_base_camera_at(T_base_tool), dtype=float)
 
 
-def perceive_once(leaf: RobotLeaf, color: str | None) -> Status | PerceptionResult:
-    """Capture + pipeline: the leaf's FAILURE status, or the (successful) PerceptionResult."""
+def perceive_once(leaf: RobotLeaf, color: str | None, accept_empty: bool = False) -> Status | PerceptionResult:
+    """Capture + pipeline: the leaf's FAILURE status, or the (successful) PerceptionResult. With
+    ``accept_empty`` a table with nothing on it is a result (no detections), not a failure."""
     from bt_grasp.perception.pipeline import perceive
 
     cell = leaf.cell
@@ -49,6 +50,8 @@ def perceive_once(leaf: RobotLeaf, color: str | None) -> Status | PerceptionResu
         return leaf.failed(FailureReason.BAD_INPUT, f"unknown colour '{color}'; known: {known}")
     result = perceive(frame, T_base_camera, config, color or None)
     cell.media.perception(result, T_base_camera)
+    if accept_empty and result.status.value == "no_objects":
+        return result
     if not result.ok:
         return leaf.failed(FailureReason.NO_DETECTION, f"{result.status.value}: {result.message}")
     return result

@@ -162,8 +162,7 @@ class _PlaceBase(RobotLeaf):
         return compute
 
     def _tcp_z(self) -> float:
-        kin = self.cell.service("kinematics")
-        return float(kin.fk(self.cell.robot.joint_positions())[2, 3])
+        return float(self.cell.kinematics.fk(self.cell.robot.joint_positions())[2, 3])
 
     def update(self) -> Status:
         if self._early is not None:

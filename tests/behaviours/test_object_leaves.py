@@ -130,13 +130,13 @@ def test_perceive_all_lists_every_object_and_an_empty_table_is_an_empty_list(mon
     from bt_grasp.behaviours import objects as leaves
 
     results = iter([
-        (None, PerceptionResult(PerceptionStatus.OK, OBJECTS[:1], others=OBJECTS)),
-        ("fail", PerceptionResult(PerceptionStatus.NO_OBJECTS)),
+        PerceptionResult(PerceptionStatus.OK, OBJECTS[:1], others=OBJECTS),
+        PerceptionResult(PerceptionStatus.NO_OBJECTS),
     ])
 
-    def fake_perceive(leaf: Any, color: str | None) -> Any:
-        failure, result = next(results)
-        return (leaf.failed(leaves.FailureReason.NO_DETECTION, "x") if failure else None), result
+    def fake_perceive(leaf: Any, color: str | None, accept_empty: bool = False) -> Any:
+        assert accept_empty
+        return next(results)
 
     monkeypatch.setattr(leaves, "perceive_once", fake_perceive)
     status, tree = run('<PerceiveAll objects="{all}"/>')

@@ -55,10 +55,8 @@ def run(body: str, robot: ContactRobot, values: dict[str, Any], during: Any = No
     clock = ManualClock()
     tree = load_tree_from_string(xml, robot_registry(), clock=clock)
     cell = fake_cell(robot, clock)
-    cell.services.update({
-        "kinematics": KIN, "planner": default_planner(), "planner_options": PlannerOptions(seed=1),
-        "motion_limits": MotionLimits(), "executor_options": ExecutorOptions(settle_timeout_s=0.3),
-    })
+    cell.kinematics, cell.planner, cell.planner_options = KIN, default_planner(), PlannerOptions(seed=1)
+    cell.motion_limits, cell.executor_options = MotionLimits(), ExecutorOptions(settle_timeout_s=0.3)
     for node in tree.nodes():
         node.setup(cell=cell)
     for key, value in values.items():
