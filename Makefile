@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed
 SYSSTAMP := .venv-system.stamp
 SEED ?= 0
 
-.PHONY: demo test setup system lint bench clean
+.PHONY: demo test setup system browser lint bench clean
 
 setup: $(STAMP)
 
@@ -24,10 +24,14 @@ $(STAMP): pyproject.toml $(SYSSTAMP)
 	$(BIN)/python -m pip install -q -e '.[dev]'
 	@touch $@
 
+# Chromium, the Foxglove Studio web build and puppeteer-core for the browser tests (into .cache/browser/)
+browser:
+	bash tools/setup_browser.sh
+
 demo: setup
 	$(BIN)/bt-grasp demo --seed $(SEED)
 
-test: setup
+test: setup browser
 	$(BIN)/ruff check bt_grasp tests tools
 	$(BIN)/mypy
 	$(BIN)/python -m pytest -q

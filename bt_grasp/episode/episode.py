@@ -200,8 +200,11 @@ class Episode:
             return None
         from bt_grasp.episode.media import RecorderSink
         from bt_grasp.episode.metadata import run_attachments, run_metadata
-        from bt_grasp.recording.writer import RunRecorder
-        from bt_grasp.tree.introspect import tree_structure
+        from bt_grasp.recording import topics
+        from bt_grasp.recording.robot_model import default_robot_model
+        from bt_grasp.recording.scene_entities import fixture_update
+        from bt_grasp.recording.writer import BASE_FRAME, WORLD_FRAME, RunRecorder
+        from bt_grasp.tree.introspect import node_records, tree_structure
 
         request.log.parent.mkdir(parents=True, exist_ok=True)
         recorder = RunRecorder(
@@ -211,7 +214,12 @@ class Episode:
             ),
             attachments=run_attachments(request, self.tree, self.inputs.calibration_path),
             flush_interval_s=LOG_FLUSH_INTERVAL_S,
+            robot_model=default_robot_model(),
+            leaf_names=[n["name"] for n in node_records(self.tree.root) if n["kind"] in ("Action", "Condition")],
         )
+        # the frame tree's root: where the robot is bolted (installation data), repeated with every /tf
+        recorder.static_transforms[(WORLD_FRAME, BASE_FRAME)] = self.scene.T_world_base()
+        recorder.write_scene(topics.SCENE, 0, fixture_update(self.scene, recorder.t(0)))
         recorder.write_tree_structure(self.world.now_ns(), tree_structure(self.tree.root))
         self.cell.media = RecorderSink(recorder, self.world.now_ns)
         return recorder

@@ -11,7 +11,7 @@ from bt_grasp.behaviours.services import TrajectoryKind
 from bt_grasp.interfaces import RGBDFrame
 from bt_grasp.perception.results import GraspCandidate, PerceptionResult
 from bt_grasp.recording.schemas import BoxMarker, PoseMarker
-from bt_grasp.recording.writer import RunRecorder
+from bt_grasp.recording.writer import BASE_FRAME, CAMERA_FRAME, RunRecorder
 
 _POINTS_MAX = 20000
 
@@ -25,10 +25,12 @@ class RecorderSink:
 
     def frame(self, frame: RGBDFrame, T_base_camera: NDArray[np.float64] | None) -> None:
         stamp = self.now_ns()
-        self.recorder.write_color_image(stamp, frame.color, "camera")
-        self.recorder.write_depth(stamp, frame.depth_m, "camera")
+        self.recorder.write_color_image(stamp, frame.color, CAMERA_FRAME)
+        self.recorder.write_camera_calibration(stamp, CAMERA_FRAME, frame.intrinsics)
+        self.recorder.write_depth(stamp, frame.depth_m, CAMERA_FRAME)
         if T_base_camera is not None:
-            self.recorder.write_transforms(stamp, [("base", "camera", T_base_camera)])
+            self.recorder.static_transforms[(BASE_FRAME, CAMERA_FRAME)] = np.asarray(T_base_camera, dtype=np.float64)
+            self.recorder.write_transforms(stamp, [(BASE_FRAME, CAMERA_FRAME, T_base_camera)])
             self._write_cloud(stamp, frame, T_base_camera)
 
     def _write_cloud(self, stamp: int, frame: RGBDFrame, T_base_camera: NDArray[np.float64]) -> None:
@@ -44,7 +46,7 @@ class RecorderSink:
             return
         cloud = to_base(depth_to_cloud(frame.depth_m, frame.intrinsics, valid), T_base_camera)
         u, v = cloud.pixels[:, 0], cloud.pixels[:, 1]
-        self.recorder.write_points(stamp, cloud.points.astype(np.float32), frame.color[v, u], "base")
+        self.recorder.write_points(stamp, cloud.points.astype(np.float32), frame.color[v, u], BASE_FRAME)
 
     def perception(self, result: PerceptionResult, T_base_camera: NDArray[np.float64]) -> None:
         from bt_grasp.geometry import make_T, rot_z

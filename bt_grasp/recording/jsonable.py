@@ -174,7 +174,8 @@ class NodeDiffer:
             if last == state and not ticked:
                 continue
             entry: dict[str, Any] = {"uid": uid, "status": state[0], "feedback": state[1]}
-            entry["failure_reason"] = state[2]
+            if state[2] is not None:  # left out when none (Foxglove's JSON schemas have no nullable types)
+                entry["failure_reason"] = state[2]
             entry["ticked"] = ticked
             if last is None:
                 for name in _NAME_FIELDS:

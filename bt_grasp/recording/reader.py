@@ -132,6 +132,8 @@ class RunLog:
     stop_reason: str = ""
     _learned: dict[int, NodeInfo] = field(default_factory=dict, repr=False)
     _robot_raw: dict[int, bytes] = field(default_factory=dict, repr=False)  # stamp_ns -> JSON, decoded lazily
+    #: the file's time of simulated time 0 (format 2; 0 for format 1, whose times are simulated time)
+    time_origin_ns: int = 0
 
     @property
     def ticks_recovered(self) -> int:
@@ -189,13 +191,14 @@ class RunLog:
     def iter_messages(self, topic: str) -> Iterator[TopicMessage]:
         """Every message on ``topic``, decoded (JSON -> dict, Foxglove -> protobuf message)."""
         for raw in mcap_io.iter_topic(self.path, [topic], self.indexed):
-            yield TopicMessage(raw.topic, raw.log_time_ns, raw.publish_time_ns, raw.schema_name, decode(raw))
+            yield TopicMessage(raw.topic, raw.log_time_ns - self.time_origin_ns, raw.publish_time_ns,
+                               raw.schema_name, decode(raw))
 
     def images(self) -> Iterator[Image]:
         """The recorded colour and depth images, decoded to numpy arrays, in file order."""
         for raw in mcap_io.iter_topic(self.path, [topics.COLOR, topics.DEPTH], self.indexed):
             msg = decode(raw)
-            stamp = msg.timestamp.seconds * 1_000_000_000 + msg.timestamp.nanos
+            stamp = msg.timestamp.seconds * 1_000_000_000 + msg.timestamp.nanos - self.time_origin_ns
             if raw.topic == topics.COLOR:
                 bgr = cv2.imdecode(np.frombuffer(msg.data, np.uint8), cv2.IMREAD_COLOR)
                 if bgr is None:
@@ -259,16 +262,22 @@ def open_log(path: str | Path) -> RunLog:
     problem = _not_bt_grasp(p, scan, p.stat().st_size)
     if problem is not None:
         raise problem
+    metadata = scan.metadata.get(topics.RUN_METADATA_NAME, {})
+    fmt = metadata.get("log_format", "1")
+    if fmt not in topics.READABLE_LOG_FORMATS:
+        readable = " and ".join(topics.READABLE_LOG_FORMATS)
+        raise LogFileError(p, f"was written in bt_grasp log format {fmt}; this bt_grasp reads formats {readable}")
+    origin = int(metadata.get(topics.TIME_ORIGIN_KEY, "0") or 0)  # format 1: simulated time from 0
     by_topic: dict[str, list[tuple[mcap_io.RawMessage, Any]]] = {}
     robot_raw: dict[int, bytes] = {}
     for raw in scan.messages:
         if raw.topic == topics.JOINT_STATE:
-            robot_raw[raw.log_time_ns] = raw.data
+            robot_raw[raw.log_time_ns - origin] = raw.data
             continue
         try:
             by_topic.setdefault(raw.topic, []).append((raw, decode(raw)))
         except Exception as exc:
-            where = f"on {raw.topic} at {raw.log_time_ns} ns"
+            where = f"on {raw.topic} at {raw.log_time_ns - origin} ns"
             raise LogFileError(p, f"has an undecodable message {where}") from exc
     learned: dict[int, NodeInfo] = {}
     ticks = []
@@ -281,23 +290,23 @@ def open_log(path: str | Path) -> RunLog:
     ticks.sort(key=lambda t: t.tick)
 
     def stamped(topic: str) -> list[dict[str, Any]]:
-        return [{"stamp_ns": raw.log_time_ns, **msg} for raw, msg in by_topic.get(topic, [])]
+        return [{"stamp_ns": raw.log_time_ns - origin, **msg} for raw, msg in by_topic.get(topic, [])]
 
-    logs = [{"stamp_ns": raw.log_time_ns, "level": msg.Level.Name(msg.level), "name": msg.name,
+    logs = [{"stamp_ns": raw.log_time_ns - origin, "level": msg.Level.Name(msg.level), "name": msg.name,
              "message": msg.message} for raw, msg in by_topic.get(topics.LOG, [])]
     results = by_topic.get(topics.RESULT, [])
-    structures = [TreeSnapshot(raw.log_time_ns, msg.get("tick"), msg["structure"])
+    structures = [TreeSnapshot(raw.log_time_ns - origin, msg.get("tick"), msg["structure"])
                   for raw, msg in by_topic.get(topics.TREE, [])]
     return RunLog(
         path=p,
-        metadata=scan.metadata.get(topics.RUN_METADATA_NAME, {}),
+        metadata=metadata,
         attachments=scan.attachments,
         structures=structures,
         ticks=ticks,
         events=stamped(topics.EVENTS),
         faults=stamped(topics.FAULTS),
         logs=logs,
-        trajectories=stamped(topics.TRAJECTORY),
+        trajectories=[_trajectory(t) for t in stamped(topics.TRAJECTORY)],
         result=results[-1][1] if results else None,
         topics=dict(sorted(scan.topic_counts.items())),
         truncated=not scan.complete,
@@ -306,4 +315,12 @@ def open_log(path: str | Path) -> RunLog:
         stop_reason=scan.stop_reason,
         _learned=learned,
         _robot_raw=robot_raw,
+        time_origin_ns=origin,
     )
+
+
+def _trajectory(msg: dict[str, Any]) -> dict[str, Any]:
+    """Format 2 writes waypoints as objects; readers get ``q_rad`` rows as format 1 wrote them."""
+    if "q_rad" not in msg and "points" in msg:
+        msg = {**msg, "q_rad": [p["q_rad"] for p in msg["points"]]}
+    return msg

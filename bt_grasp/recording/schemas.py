@@ -14,6 +14,7 @@ from typing import Any
 import cv2
 import numpy as np
 from foxglove_schemas_protobuf.ArrowPrimitive_pb2 import ArrowPrimitive
+from foxglove_schemas_protobuf.CameraCalibration_pb2 import CameraCalibration
 from foxglove_schemas_protobuf.Color_pb2 import Color
 from foxglove_schemas_protobuf.CompressedImage_pb2 import CompressedImage
 from foxglove_schemas_protobuf.CubePrimitive_pb2 import CubePrimitive
@@ -37,7 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 #: protobuf classes of every Foxglove schema a bt_grasp log uses, by full name
 PROTOBUF_CLASSES: dict[str, Any] = {
     cls.DESCRIPTOR.full_name: cls
-    for cls in (CompressedImage, RawImage, PointCloud, FrameTransforms, SceneUpdate, Log)
+    for cls in (CompressedImage, RawImage, CameraCalibration, PointCloud, FrameTransforms, SceneUpdate, Log)
 }
 
 RGBA = tuple[float, float, float, float]
@@ -152,6 +153,17 @@ def compressed_image(
     return CompressedImage(timestamp=timestamp(stamp_ns), frame_id=frame_id, data=buf.tobytes(), format=fmt)
 
 
+def camera_calibration(
+    stamp_ns: int, frame_id: str, width: int, height: int, fx: float, fy: float, cx: float, cy: float
+) -> CameraCalibration:
+    """A pinhole camera without distortion (the simulated D435's colour stream), OpenCV pixel convention."""
+    K = [fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0]
+    P = [fx, 0.0, cx, 0.0, 0.0, fy, cy, 0.0, 0.0, 0.0, 1.0, 0.0]
+    R = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]
+    return CameraCalibration(timestamp=timestamp(stamp_ns), frame_id=frame_id, width=int(width),
+                             height=int(height), distortion_model="plumb_bob", D=[0.0] * 5, K=K, R=R, P=P)
+
+
 def depth_image(
     stamp_ns: int, depth_m: NDArray[np.floating], frame_id: str, encoding: str = "16UC1"
 ) -> RawImage:
@@ -204,7 +216,7 @@ def point_cloud(
     )
 
 
-def _color(rgba: RGBA) -> Color:
+def color(rgba: RGBA) -> Color:
     r, g, b, a = (float(c) for c in rgba)
     return Color(r=r, g=g, b=b, a=a)
 
@@ -217,21 +229,21 @@ _AXIS_ROTATIONS: tuple[tuple[NDArray[np.float64], RGBA], ...] = (
 )
 
 
-def _text(T: NDArray[np.float64], label: str, lift_m: float) -> TextPrimitive:
+def text_primitive(T: NDArray[np.float64], label: str, lift_m: float) -> TextPrimitive:
     M = T.copy()
     M[2, 3] += lift_m
     return TextPrimitive(pose=pose(M), billboard=True, font_size=14.0, scale_invariant=True,
-                         color=_color((1.0, 1.0, 1.0, 1.0)), text=label)
+                         color=color((1.0, 1.0, 1.0, 1.0)), text=label)
 
 
 def box_entity(stamp_ns: int, marker: BoxMarker, frame_id: str) -> SceneEntity:
     M = as_matrix(marker.T_base_box)
     sx, sy, sz = (float(s) for s in marker.size_m)
     entity = SceneEntity(timestamp=timestamp(stamp_ns), frame_id=frame_id, id=marker.id)
-    cube = CubePrimitive(pose=pose(M), size=Vector3(x=sx, y=sy, z=sz), color=_color(marker.rgba))
+    cube = CubePrimitive(pose=pose(M), size=Vector3(x=sx, y=sy, z=sz), color=color(marker.rgba))
     entity.cubes.append(cube)
     if marker.label:
-        entity.texts.append(_text(M, marker.label, 0.5 * sz + 0.02))
+        entity.texts.append(text_primitive(M, marker.label, 0.5 * sz + 0.02))
         entity.metadata.append(KeyValuePair(key="label", value=marker.label))
     return entity
 
@@ -246,10 +258,10 @@ def pose_entity(stamp_ns: int, marker: PoseMarker, frame_id: str) -> SceneEntity
         entity.arrows.append(ArrowPrimitive(
             pose=pose(A), shaft_length=0.75 * length, shaft_diameter=0.06 * length,
             head_length=0.25 * length, head_diameter=0.15 * length,
-            color=_color(marker.rgba if i == 2 else rgba),
+            color=color(marker.rgba if i == 2 else rgba),
         ))
     if marker.label:
-        entity.texts.append(_text(M, marker.label, 0.02))
+        entity.texts.append(text_primitive(M, marker.label, 0.02))
     for key, value in {"label": marker.label, **marker.metadata}.items():
         entity.metadata.append(KeyValuePair(key=key, value=str(value)))
     return entity

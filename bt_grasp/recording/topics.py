@@ -6,13 +6,23 @@ agree. Foxglove well-known schemas (protobuf) are named by their full protobuf n
 
 from __future__ import annotations
 
+import copy
 import json
+import re
+from collections.abc import Sequence
 from typing import Any
 
 #: Metadata record holding the run's description (seed, tree file, versions, ...).
 RUN_METADATA_NAME = "bt_grasp.run"
-#: Version of the layout of the topics below; the reader refuses nothing but reports it.
-LOG_FORMAT_VERSION = "1"
+#: Version of the layout of the topics below, in the run metadata as ``log_format``. The reader reads every
+#: version in ``READABLE_LOG_FORMATS`` and refuses others with one sentence naming the version.
+#: 1: log_time = simulated time from 0, publish_time = wall clock, frames "base"/"camera"/"tool", JSON schemas
+#:    Foxglove rejects. 2: log_time = publish_time = run start (wall) + simulated time (metadata
+#:    ``time_origin_ns``), URDF frame names, every link on /tf, the robot's meshes, CameraCalibration.
+LOG_FORMAT_VERSION = "2"
+READABLE_LOG_FORMATS: tuple[str, ...] = ("1", "2")
+#: metadata key: the wall-clock time (ns since the Unix epoch) at which simulated time 0 is placed
+TIME_ORIGIN_KEY = "time_origin_ns"
 
 TREE = "/bt/tree"
 TICK = "/bt/tick"
@@ -22,29 +32,47 @@ RESULT = "/run/result"
 JOINT_STATE = "/robot/joint_state"
 TRAJECTORY = "/motion/trajectory"
 TF = "/tf"
+ROBOT_MODEL = "/robot/model"
+SCENE = "/scene/fixtures"
 COLOR = "/camera/color"
 DEPTH = "/camera/depth"
+CALIBRATION = "/camera/calibration"
 POINTS = "/perception/points"
 DETECTIONS = "/perception/detections"
 GRASPS = "/perception/grasps"
 LOG = "/log"
+#: the simulator's true object poses, written by the judge's side for offline debugging; nothing in the
+#: pipeline reads a log, and nothing reads this topic back into a run
+JUDGE_OBJECTS = "/judge/true_objects"
 
 #: Topics whose messages are JSON objects.
 JSON_TOPICS: tuple[str, ...] = (TREE, TICK, EVENTS, FAULTS, RESULT, JOINT_STATE, TRAJECTORY)
 #: Topics whose messages are Foxglove protobuf messages, with their schema names.
 PROTOBUF_TOPICS: dict[str, str] = {
     TF: "foxglove.FrameTransforms",
+    ROBOT_MODEL: "foxglove.SceneUpdate",
+    SCENE: "foxglove.SceneUpdate",
     COLOR: "foxglove.CompressedImage",
     DEPTH: "foxglove.RawImage",
+    CALIBRATION: "foxglove.CameraCalibration",
     POINTS: "foxglove.PointCloud",
     DETECTIONS: "foxglove.SceneUpdate",
     GRASPS: "foxglove.SceneUpdate",
     LOG: "foxglove.Log",
+    JUDGE_OBJECTS: "foxglove.SceneUpdate",
 }
 #: Topics the reader loads eagerly (everything except bulky sensor data).
 EAGER_TOPICS: tuple[str, ...] = (*JSON_TOPICS, LOG)
 
-_NODE_STATUS = {"enum": ["SUCCESS", "FAILURE", "RUNNING", "IDLE", "SKIPPED"]}
+# Foxglove Studio's JSON-schema support (1.48) accepts a subset of JSON Schema: one "type" per property (no
+# type lists: a value that may be absent is left out of the message instead of written as null), "enum" only
+# together with "type", no arrays of arrays, and every object with "properties" (free-form objects such as
+# the blackboard declare an empty set; Foxglove still shows their keys).
+_STATUS = {"type": "string", "enum": ["SUCCESS", "FAILURE", "RUNNING", "IDLE", "SKIPPED"]}
+_INT = {"type": "integer"}
+_STR = {"type": "string"}
+_FLOATS = {"type": "array", "items": {"type": "number"}}
+_FREE = {"type": "object", "properties": {}}
 
 
 def _object(title: str, properties: dict[str, Any], required: list[str]) -> dict[str, Any]:
@@ -57,57 +85,60 @@ def _object(title: str, properties: dict[str, Any], required: list[str]) -> dict
     }
 
 
-_FLOATS = {"type": "array", "items": {"type": "number"}}
+def _node(children: dict[str, Any] | None) -> dict[str, Any]:
+    props: dict[str, Any] = {"uid": _INT, "type": _STR, "name": _STR, "path": _STR, "kind": _STR,
+                             "attributes": _FREE}
+    if children is not None:
+        props["children"] = {"type": "array", "items": children}
+    return {"type": "object", "properties": props}
+
 
 JSON_SCHEMAS: dict[str, dict[str, Any]] = {
-    TREE: _object(
-        "bt_grasp.TreeStructure",
-        {"tick": {"type": ["integer", "null"]}, "structure": {"type": "object"}},
-        ["structure"],
-    ),
+    # the tree is recursive; the schema names the fields of three levels (deeper levels are still in the data)
+    TREE: _object("bt_grasp.TreeStructure", {"tick": _INT, "structure": _node(_node(_node(None)))}, ["structure"]),
     TICK: _object(
         "bt_grasp.Tick",
         {
-            "tick": {"type": "integer"},
-            "stamp_ns": {"type": "integer"},
+            "tick": _INT,
+            "stamp_ns": _INT,
             "nodes": {
                 "type": "array",
                 "items": {
                     "type": "object",
                     "properties": {
-                        "uid": {"type": "integer"},
-                        "status": _NODE_STATUS,
-                        "feedback": {"type": "string"},
-                        "failure_reason": {"type": ["string", "null"]},
+                        "uid": _INT,
+                        "path": _STR,
+                        "name": _STR,
+                        "type": _STR,
+                        "status": _STATUS,
+                        "feedback": _STR,
+                        "failure_reason": _STR,
                         "ticked": {"type": "boolean"},
                     },
                     "required": ["uid", "status"],
                 },
             },
-            "bb": {"type": "object"},
-            "bb_removed": {"type": "array", "items": {"type": "string"}},
+            # every leaf's status this tick, keyed by leaf_keys(): what Foxglove's State Transitions plots
+            # (``/bt/tick.leaves.Perceive``); tick_schema() lists the tree's leaves here
+            "leaves": _FREE,
+            "bb": _FREE,
+            "bb_removed": {"type": "array", "items": _STR},
         },
         ["tick", "stamp_ns", "nodes"],
     ),
-    EVENTS: _object(
-        "bt_grasp.Event",
-        {"tick": {"type": ["integer", "null"]}, "kind": {"type": "string"}, "payload": {"type": "object"}},
-        ["kind", "payload"],
-    ),
-    FAULTS: _object(
-        "bt_grasp.Fault",
-        {"tick": {"type": ["integer", "null"]}, "fault": {"type": "object"}},
-        ["fault"],
-    ),
-    RESULT: _object("bt_grasp.RunResult", {"success": {"type": "boolean"}}, []),
+    EVENTS: _object("bt_grasp.Event", {"tick": _INT, "kind": _STR, "payload": _FREE}, ["kind", "payload"]),
+    FAULTS: _object("bt_grasp.Fault", {"tick": _INT, "fault": _FREE}, ["fault"]),
+    RESULT: _object("bt_grasp.RunResult", {"success": {"type": "boolean"}, "reason": _STR,
+                                           "failed_leaf": _STR, "ticks": _INT, "sim_time_s": {"type": "number"}},
+                    []),
     JOINT_STATE: _object(
         "bt_grasp.JointState",
         {
-            "tick": {"type": ["integer", "null"]},
-            "name": {"type": "array", "items": {"type": "string"}},
+            "tick": _INT,
+            "name": {"type": "array", "items": _STR},
             "position": _FLOATS,
             "velocity": _FLOATS,
-            "gripper_width_m": {"type": ["number", "null"]},
+            "gripper_width_m": {"type": "number"},
             "tcp_xyz_m": _FLOATS,
             "tcp_quat_xyzw": _FLOATS,
         },
@@ -116,15 +147,40 @@ JSON_SCHEMAS: dict[str, dict[str, Any]] = {
     TRAJECTORY: _object(
         "bt_grasp.JointTrajectory",
         {
-            "name": {"type": "string"},
-            "kind": {"enum": ["planned", "executed"]},
+            "name": _STR,
+            "kind": {"type": "string", "enum": ["planned", "executed"]},
             "times_s": _FLOATS,
-            "q_rad": {"type": "array", "items": _FLOATS},
+            # one object per waypoint (Foxglove accepts no arrays of arrays)
+            "points": {"type": "array", "items": {"type": "object",
+                                                  "properties": {"t_s": {"type": "number"}, "q_rad": _FLOATS}}},
         },
-        ["name", "kind", "times_s", "q_rad"],
+        ["name", "kind", "times_s", "points"],
     ),
 }
 
 
-def json_schema_bytes(topic: str) -> bytes:
-    return json.dumps(JSON_SCHEMAS[topic], separators=(",", ":")).encode()
+def leaf_keys(names: Sequence[str]) -> list[str]:
+    """The keys of ``/bt/tick.leaves`` for the leaves' names in tree order: letters, digits and ``_`` only
+    (a Foxglove message path names them), a repeated name numbered ``_2``, ``_3``, ..."""
+    keys: list[str] = []
+    seen: dict[str, int] = {}
+    for name in names:
+        key = re.sub(r"[^A-Za-z0-9_]", "_", name) or "leaf"
+        if key[0].isdigit():
+            key = "_" + key
+        seen[key] = seen.get(key, 0) + 1
+        keys.append(key if seen[key] == 1 else f"{key}_{seen[key]}")
+    return keys
+
+
+def tick_schema(leaf_names: Sequence[str]) -> dict[str, Any]:
+    """The /bt/tick schema with the tree's leaves declared under ``leaves``."""
+    schema = copy.deepcopy(JSON_SCHEMAS[TICK])
+    schema["properties"]["leaves"] = {"type": "object",
+                                      "properties": {key: _STATUS for key in leaf_keys(leaf_names)}}
+    return schema
+
+
+def json_schema_bytes(topic: str, leaf_names: Sequence[str] = ()) -> bytes:
+    schema = tick_schema(leaf_names) if topic == TICK and leaf_names else JSON_SCHEMAS[topic]
+    return json.dumps(schema, separators=(",", ":")).encode()

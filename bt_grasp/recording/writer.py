@@ -10,7 +10,11 @@ Usage (the runner owns the loop; the recorder only writes)::
             rec.flush_tick()         # ends the chunk: a killed process keeps everything up to here
         rec.write_result(stamp_ns, result)
 
-``log_time`` of every message is simulated time (``stamp_ns``); ``publish_time`` is the wall clock.
+Callers pass simulated time (``stamp_ns``, from 0 at the start of the run). In the file every time is
+``time_origin_ns + stamp_ns``: ``log_time``, ``publish_time`` and the Foxglove messages' own timestamps, with
+``time_origin_ns`` the wall clock at the start of the run (metadata ``time_origin_ns``). So Foxglove's timeline
+shows the date of the run and simulated time runs on from there; the file depends on the wall clock in that one
+number only, and nothing in a run reads it (docs/recording.md argues the convention).
 Chunks are compressed (zstd by default) and indexed; ``close()`` (or leaving the ``with`` block, also
 through an exception, Ctrl-C or SIGTERM) writes the summary and footer. Not thread-safe: one thread writes.
 """
@@ -40,10 +44,16 @@ from bt_grasp.recording.signals import SignalGuard
 
 log = logging.getLogger(__name__)
 
+#: frame ids: the robot description's link names and the calibration file's camera frame
+WORLD_FRAME = "world"
+BASE_FRAME = "base_link"
+TOOL_FRAME = "tcp"
+CAMERA_FRAME = "camera_color_optical_frame"
 UR5_JOINT_NAMES: tuple[str, ...] = (
     "shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
     "wrist_1_joint", "wrist_2_joint", "wrist_3_joint",
 )
+_LEAF_KINDS = ("Action", "Condition")  # NodeKind values of leaves
 _COMPRESSION = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}
 _MEDIA_TYPES = {".xml": "application/xml", ".yaml": "application/yaml", ".yml": "application/yaml",
                 ".json": "application/json", ".txt": "text/plain", ".urdf": "application/xml"}
@@ -68,6 +78,12 @@ def _media_type(name: str, data: bytes) -> str:
     return "text/plain"
 
 
+def _ticked(tick: int | None, msg: dict[str, Any]) -> dict[str, Any]:
+    """``msg`` tagged with the last tick written; before the first tick the key is left out (Foxglove's JSON
+    schemas have no nullable types)."""
+    return msg if tick is None else {"tick": tick, **msg}
+
+
 def _dumps(obj: Any) -> bytes:
     return json.dumps(obj, separators=(",", ":"), allow_nan=False).encode()
 
@@ -82,7 +98,8 @@ class RunRecorder:
             strings; two keys are added: ``log_format`` and ``start_unix_ns``.
         attachments: file name -> exact bytes of every file needed to run again (tree, scene, calibration,
             fault plan).
-        wall_clock: wall time in ns, for ``publish_time`` only.
+        wall_clock: wall time in ns: read once for ``time_origin_ns`` (unless given) and for attachment times.
+        time_origin_ns: where simulated time 0 is placed on the file's time line (default: now).
         compression: "zstd", "lz4" or "none" for the chunks.
         chunk_size: a chunk is also ended when it grows past this many bytes.
         image_format: "jpeg" or "png" for /camera/color; jpeg_quality: 0-100.
@@ -93,9 +110,15 @@ class RunRecorder:
             that much wall time (fewer, larger chunks; a killed process loses at most that much).
         handle_signals: while used as a context manager, turn SIGTERM/SIGINT into exceptions that unwind
             through ``__exit__`` (only where those signals still have their default handlers).
-        base_frame, tool_frame: frame ids of the arm base and the tool (TCP) on /tf.
+        base_frame, tool_frame: frame ids of the arm base and the tool (TCP) on /tf: the robot description's
+            link names.
         joint_names: names on /robot/joint_state.
         max_array_elements: blackboard arrays larger than this are logged as a summary, not element-wise.
+        leaf_names: the tree's leaves' names in uid order, declared in the /bt/tick schema so Foxglove can
+            plot ``/bt/tick.leaves.<name>``.
+        robot_model: a :class:`bt_grasp.recording.robot_model.RobotModel`: its link entities are written on
+            /robot/model at the start and every link's pose on /tf with each arm state; None writes only the
+            tool frame.
     """
 
     def __init__(
@@ -113,15 +136,19 @@ class RunRecorder:
         fsync_interval_s: float | None = None,
         flush_interval_s: float = 0.0,
         handle_signals: bool = True,
-        base_frame: str = "base",
-        tool_frame: str = "tool",
+        time_origin_ns: int | None = None,
+        base_frame: str = BASE_FRAME,
+        tool_frame: str = TOOL_FRAME,
         joint_names: Sequence[str] = UR5_JOINT_NAMES,
         max_array_elements: int = 64,
+        robot_model: Any = None,
+        leaf_names: Sequence[str] = (),
     ) -> None:
         if compression not in _COMPRESSION:
             raise ValueError(f"unknown compression {compression!r}; expected one of {sorted(_COMPRESSION)}")
         self.path = Path(path)
         self._wall_clock = wall_clock
+        self.time_origin_ns = int(wall_clock() if time_origin_ns is None else time_origin_ns)
         self._image_format = image_format
         self._jpeg_quality = jpeg_quality
         self._depth_encoding = depth_encoding
@@ -141,6 +168,13 @@ class RunRecorder:
         self._last_stamp_ns = 0
         self._sequence: dict[int, int] = {}
         self._closed = False
+        self._taps: list[Callable[[str, int, bytes], None]] = []
+        self._robot_model = robot_model
+        self._leaf_names = tuple(leaf_names)
+        self._leaf_keys: tuple[tuple[str, ...], list[str]] = ((), [])
+        #: (parent, child) -> T_parent_child repeated in every /tf message written with an arm state, so a
+        #: viewer that seeks (and reads only the last /tf message) still has the whole frame tree
+        self.static_transforms: dict[tuple[str, str], NDArray[np.float64]] = {}
 
         self._file: BinaryIO = open(self.path, "wb")  # noqa: SIM115 - closed in close()
         try:
@@ -155,13 +189,16 @@ class RunRecorder:
         self._writer.start(profile="", library=_library_id())
         meta = {str(k): str(v) for k, v in metadata.items()}
         meta.setdefault("log_format", topics.LOG_FORMAT_VERSION)
-        meta.setdefault("start_unix_ns", str(self._wall_clock()))
+        meta.setdefault("start_unix_ns", str(self.time_origin_ns))
+        meta[topics.TIME_ORIGIN_KEY] = str(self.time_origin_ns)
         self._writer.add_metadata(topics.RUN_METADATA_NAME, meta)
         now = self._wall_clock()
         for name, data in attachments.items():
             self._writer.add_attachment(now, 0, name, _media_type(name, bytes(data)), bytes(data))
         self._channels: dict[str, int] = {}
         self._register_channels()
+        if self._robot_model is not None:
+            self.write_scene(topics.ROBOT_MODEL, 0, self._robot_model.scene_update(self.t(0)))
         self._file.flush()
 
     # -- set-up ------------------------------------------------------------------------------------------
@@ -171,7 +208,7 @@ class RunRecorder:
             schema_id = self._writer.register_schema(
                 name=str(topics.JSON_SCHEMAS[topic]["title"]),
                 encoding=SchemaEncoding.JSONSchema,
-                data=topics.json_schema_bytes(topic),
+                data=topics.json_schema_bytes(topic, self._leaf_names),
             )
             self._channels[topic] = self._writer.register_channel(topic, MessageEncoding.JSON, schema_id)
         schema_ids: dict[str, int] = {}
@@ -213,9 +250,20 @@ class RunRecorder:
         self._sequence[channel] = seq
         stamp_ns = int(stamp_ns)
         self._last_stamp_ns = max(self._last_stamp_ns, stamp_ns)
+        t = self.time_origin_ns + stamp_ns
         with self._guard.busy():
-            self._writer.add_message(channel, log_time=stamp_ns, data=data,
-                                     publish_time=self._wall_clock(), sequence=seq)
+            self._writer.add_message(channel, log_time=t, data=data, publish_time=t, sequence=seq)
+        for tap in self._taps:
+            tap(topic, t, data)
+
+    def add_tap(self, tap: Callable[[str, int, bytes], None]) -> None:
+        """Also hand every message written to ``tap(topic, time_ns, data)`` (a live server); it must not
+        block and must not raise."""
+        self._taps.append(tap)
+
+    def t(self, stamp_ns: int) -> int:
+        """The file's time of simulated time ``stamp_ns``."""
+        return self.time_origin_ns + int(stamp_ns)
 
     def _write_json(self, topic: str, stamp_ns: int, obj: Any) -> None:
         self._write(topic, stamp_ns, _dumps(obj))
@@ -233,7 +281,7 @@ class RunRecorder:
         if converted == self._last_structure:
             return False
         self._last_structure = converted
-        self._write_json(topics.TREE, stamp_ns, {"tick": self._last_tick, "structure": converted})
+        self._write_json(topics.TREE, stamp_ns, _ticked(self._last_tick, {"structure": converted}))
         return True
 
     def write_tick(
@@ -252,7 +300,12 @@ class RunRecorder:
         """
         changed_nodes = self._nodes.diff(nodes)
         bb_changed, bb_removed = self._blackboard.diff(blackboard)
-        msg: dict[str, Any] = {"tick": int(tick), "stamp_ns": int(stamp_ns), "nodes": changed_nodes}
+        leaves = [n for n in nodes if n.get("kind") in _LEAF_KINDS]
+        names = tuple(str(n.get("name", "")) for n in leaves)
+        if names != self._leaf_keys[0]:
+            self._leaf_keys = (names, topics.leaf_keys(names))
+        msg: dict[str, Any] = {"tick": int(tick), "stamp_ns": int(stamp_ns), "nodes": changed_nodes,
+                               "leaves": {k: n["status"] for k, n in zip(self._leaf_keys[1], leaves, strict=True)}}
         if bb_changed:
             msg["bb"] = bb_changed
         if bb_removed:
@@ -266,42 +319,61 @@ class RunRecorder:
         """The arm state on /robot/joint_state (JSON, for plots) and base->tool on /tf (for the 3D view)."""
         q = np.asarray(robot["q_rad"], dtype=np.float64).ravel()
         qd = robot.get("qd_rad_s")
-        state: dict[str, Any] = {
-            "tick": self._last_tick,
+        state: dict[str, Any] = _ticked(self._last_tick, {
             "name": self._joint_names[: q.size],
             "position": q.tolist(),
             "velocity": [] if qd is None else np.asarray(qd, dtype=np.float64).ravel().tolist(),
-        }
+        })
         width = robot.get("gripper_width_m")
-        state["gripper_width_m"] = None if width is None else float(width)
+        if width is not None:
+            state["gripper_width_m"] = float(width)
         T = robot.get("T_base_tcp")
         if T is not None:
             M = schemas.as_matrix(T)
             state["tcp_xyz_m"] = M[:3, 3].tolist()
             state["tcp_quat_xyzw"] = list(schemas.quat_xyzw(M))
         self._write_json(topics.JOINT_STATE, stamp_ns, to_jsonable(state))
-        if T is not None:
-            self.write_transforms(stamp_ns, [(self.base_frame, self.tool_frame, M)])
+        frames: list[tuple[str, str, ArrayLike]] = [(p, c, T_pc) for (p, c), T_pc in self.static_transforms.items()]
+        if self._robot_model is not None:  # every link of the robot description, for the 3D view
+            links = self._robot_model.link_poses(q, None if width is None else float(width))
+            frames += [(self.base_frame, name, L) for name, L in links.items()]
+        elif T is not None:
+            frames.append((self.base_frame, self.tool_frame, M))
+        if frames:
+            self.write_transforms(stamp_ns, frames)
 
     # -- sensors and perception ----------------------------------------------------------------------------
 
     def write_color_image(self, stamp_ns: int, rgb: NDArray[np.uint8], frame_id: str) -> None:
-        msg = schemas.compressed_image(stamp_ns, rgb, frame_id, self._image_format, self._jpeg_quality)
+        msg = schemas.compressed_image(self.t(stamp_ns), rgb, frame_id, self._image_format, self._jpeg_quality)
         self._write(topics.COLOR, stamp_ns, msg.SerializeToString())
 
+    def write_camera_calibration(self, stamp_ns: int, frame_id: str, intrinsics: Any) -> None:
+        """``intrinsics``: width_px, height_px, fx_px, fy_px, cx_px, cy_px (a CameraIntrinsics)."""
+        i = intrinsics
+        msg = schemas.camera_calibration(self.t(stamp_ns), frame_id, i.width_px, i.height_px, i.fx_px, i.fy_px,
+                                         i.cx_px, i.cy_px)
+        self._write(topics.CALIBRATION, stamp_ns, msg.SerializeToString())
+
+    def write_scene(self, topic: str, stamp_ns: int, update: Any) -> None:
+        """A ready ``foxglove.SceneUpdate`` on one of the scene topics (robot model, fixtures, judge)."""
+        if topics.PROTOBUF_TOPICS.get(topic) != "foxglove.SceneUpdate":
+            raise ValueError(f"{topic!r} is not a scene topic")
+        self._write(topic, stamp_ns, update.SerializeToString())
+
     def write_depth(self, stamp_ns: int, depth_m: NDArray[np.floating], frame_id: str) -> None:
-        msg = schemas.depth_image(stamp_ns, depth_m, frame_id, self._depth_encoding)
+        msg = schemas.depth_image(self.t(stamp_ns), depth_m, frame_id, self._depth_encoding)
         self._write(topics.DEPTH, stamp_ns, msg.SerializeToString())
 
     def write_points(
-        self, stamp_ns: int, xyz: ArrayLike, rgb: ArrayLike | None = None, frame_id: str = "base"
+        self, stamp_ns: int, xyz: ArrayLike, rgb: ArrayLike | None = None, frame_id: str | None = None
     ) -> None:
-        msg = schemas.point_cloud(stamp_ns, xyz, rgb, frame_id)
+        msg = schemas.point_cloud(self.t(stamp_ns), xyz, rgb, frame_id or self.base_frame)
         self._write(topics.POINTS, stamp_ns, msg.SerializeToString())
 
     def write_transforms(self, stamp_ns: int, transforms: Sequence[tuple[str, str, ArrayLike]]) -> None:
         """(parent, child, T_parent_child) triples on /tf, e.g. ("base", "camera", T_base_camera)."""
-        self._write(topics.TF, stamp_ns, schemas.frame_transforms(stamp_ns, transforms).SerializeToString())
+        self._write(topics.TF, stamp_ns, schemas.frame_transforms(self.t(stamp_ns), transforms).SerializeToString())
 
     def write_markers(
         self,
@@ -318,16 +390,16 @@ class RunRecorder:
         by_topic: dict[str, list[Any]] = {topic: []} if topic else {}
         for marker in entities:
             if isinstance(marker, schemas.BoxMarker):
-                entity, default = schemas.box_entity(stamp_ns, marker, frame), topics.DETECTIONS
+                entity, default = schemas.box_entity(self.t(stamp_ns), marker, frame), topics.DETECTIONS
             elif isinstance(marker, schemas.PoseMarker):
-                entity, default = schemas.pose_entity(stamp_ns, marker, frame), topics.GRASPS
+                entity, default = schemas.pose_entity(self.t(stamp_ns), marker, frame), topics.GRASPS
             else:
                 raise TypeError(f"a marker must be a BoxMarker or a PoseMarker, got {type(marker).__name__}")
             by_topic.setdefault(topic or default, []).append(entity)
         for name, group in by_topic.items():
             if name not in (topics.DETECTIONS, topics.GRASPS):
                 raise ValueError(f"markers go to {topics.DETECTIONS} or {topics.GRASPS}, not {name!r}")
-            self._write(name, stamp_ns, schemas.scene_update(stamp_ns, group).SerializeToString())
+            self._write(name, stamp_ns, schemas.scene_update(self.t(stamp_ns), group).SerializeToString())
 
     # -- motion, logs, events ------------------------------------------------------------------------------
 
@@ -337,16 +409,17 @@ class RunRecorder:
     ) -> None:
         times = np.asarray(times_s, dtype=np.float64).ravel()
         q = np.asarray(q_rad, dtype=np.float64).reshape(times.size, -1)
-        msg = {"name": name, "kind": kind, "times_s": times.tolist(), "q_rad": q.tolist()}
+        msg = {"name": name, "kind": kind, "times_s": times.tolist(),
+               "points": [{"t_s": float(t), "q_rad": row} for t, row in zip(times.tolist(), q.tolist(), strict=True)]}
         self._write_json(topics.TRAJECTORY, stamp_ns, to_jsonable(msg, max_array_elements=1 << 30))
 
     def write_log(self, stamp_ns: int, level: str | int, name: str, message: str) -> None:
-        self._write(topics.LOG, stamp_ns, schemas.log(stamp_ns, level, name, message).SerializeToString())
+        self._write(topics.LOG, stamp_ns, schemas.log(self.t(stamp_ns), level, name, message).SerializeToString())
 
     def write_event(self, stamp_ns: int, kind: str, payload: Mapping[str, Any]) -> None:
         """An event on /bt/events (a failure, a retry, an abort); tagged with the last tick written."""
         self._write_json(topics.EVENTS, stamp_ns,
-                         {"tick": self._last_tick, "kind": kind, "payload": to_jsonable(payload)})
+                         _ticked(self._last_tick, {"kind": kind, "payload": to_jsonable(payload)}))
 
     def write_fault(self, stamp_ns: int, tick: int, fault: Mapping[str, Any]) -> None:
         """One firing of an injected fault on /faults."""

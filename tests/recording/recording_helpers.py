@@ -136,7 +136,7 @@ def record_run(
     attachments = {"pick.xml": b"<root BTCPP_format=\"4\"/>", "table.yaml": b"objects: []\n"}
     with RunRecorder(path, metadata=meta, attachments=attachments, **(recorder_kwargs or {})) as rec:
         rec.write_tree_structure(0, adapter.structure())
-        rec.write_transforms(0, [("base", "camera", np.eye(4))])
+        rec.write_transforms(0, [("base_link", "camera_color_optical_frame", np.eye(4))])
         bb: dict[str, Any] = {"big_cloud": np.zeros((500, 3)), "target": "cube"}
         for tick in range(1, max_ticks + 1):
             stamp = tick * DT_NS
@@ -155,7 +155,7 @@ def record_run(
                 depth = np.full((24, 32), 0.5 + 0.01 * tick, np.float32)
                 depth[0, 0] = np.nan
                 rec.write_depth(stamp, depth, "camera_color_optical_frame")
-                rec.write_points(stamp, np.random.default_rng(tick).random((50, 3)), None, "base")
+                rec.write_points(stamp, np.random.default_rng(tick).random((50, 3)), None, "base_link")
                 rec.write_markers(stamp, [BoxMarker("cube", np.eye(4), (0.05, 0.05, 0.05), label="cube"),
                                           PoseMarker("g0", np.eye(4), label="top grasp")])
             for n in nodes:

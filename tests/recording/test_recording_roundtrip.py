@@ -84,13 +84,18 @@ def test_plain_mcap_reader_sees_foxglove_schemas(ok_run):
         assert decoded["/camera/color"].format == "jpeg"
         assert decoded["/camera/depth"].encoding == "16UC1"
         assert decoded["/perception/points"].point_stride == 12
-        assert decoded["/tf"].transforms[0].parent_frame_id == "base"
+        assert decoded["/tf"].transforms[0].parent_frame_id == "base_link"
         assert decoded["/perception/detections"].entities[0].cubes[0].size.x == 0.05
         assert len(decoded["/perception/grasps"].entities[0].arrows) == 3
-        # log_time is simulated time, publish_time the wall clock
+        # log_time = publish_time = the run's start (wall clock, in the metadata) + simulated time
+        origin = int(next(iter(reader.iter_metadata())).metadata["time_origin_ns"])
+        assert origin > 1_500_000_000 * 10**9
         ticks = [m for _, _, m in reader.iter_messages(topics=["/bt/tick"])]
-        assert [m.log_time for m in ticks] == [i * 10_000_000 for i in range(1, 8)]
-        assert all(m.publish_time > 1_500_000_000 * 10**9 for m in ticks)
+        assert [m.log_time - origin for m in ticks] == [i * 10_000_000 for i in range(1, 8)]
+        assert all(m.publish_time == m.log_time for m in ticks)
+        # the messages' own stamps are on the same time line (Foxglove matches images and transforms by them)
+        stamp = decoded["/camera/color"].timestamp
+        assert stamp.seconds * 10**9 + stamp.nanos >= origin
 
 
 def _raw_ticks(path: Path) -> list[dict]:

@@ -1,0 +1,8 @@
+"""Browser tests: a real Foxglove Studio web build in headless Chromium (see foxglove.py)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))

@@ -1,0 +1,107 @@
+// Opens a Foxglove Studio URL in headless chromium (puppeteer-core) and writes what it shows as JSON:
+// the Problems list, topics, the 3D panel's frames, whether the image and 3D panels drew something.
+// Usage: node probe.cjs --url URL --out OUT.json --chromium PATH --profile DIR [--wait S] [--screenshot PNG]
+//        [--dump-text]
+"use strict";
+const fs = require("fs");
+const puppeteer = require("puppeteer-core");
+
+function arg(name, fallback) {
+  const i = process.argv.indexOf("--" + name);
+  return i >= 0 ? process.argv[i + 1] : fallback;
+}
+const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+
+async function main() {
+  const url = arg("url");
+  const out = arg("out");
+  const waitS = Number(arg("wait", "25"));
+  const browser = await puppeteer.launch({
+    executablePath: arg("chromium"),
+    headless: true,
+    args: ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+      "--disable-component-update", "--disable-sync", "--no-first-run", "--use-angle=swiftshader",
+      "--enable-unsafe-swiftshader", "--user-data-dir=" + arg("profile"), "--window-size=1600,1000"],
+    defaultViewport: { width: 1600, height: 1000 },
+    protocolTimeout: 180000,
+  });
+  const result = { errors: [], console: [] };
+  try {
+    const page = await browser.newPage();
+    page.on("console", (m) => { if (result.console.length < 400) result.console.push(m.type() + ": " + m.text()); });
+    page.on("pageerror", (e) => result.errors.push(String(e)));
+    await page.goto(url, { waitUntil: "load", timeout: 180000 });
+    await sleep(waitS * 1000);
+    result.text = await page.evaluate(() => document.body.innerText);
+    // the Problems tab of the data-source sidebar: its badge counts problems, its list names them
+    Object.assign(result, await page.evaluate(async () => {
+      const tab = [...document.querySelectorAll("button, [role=tab]")].find((e) => /^Problems/.test(e.innerText.trim()));
+      if (!tab) return { problemsTab: false, problems: [] };
+      tab.click();
+      await new Promise((r) => setTimeout(r, 1500));
+      const top = tab.getBoundingClientRect().bottom;
+      const right = tab.parentElement.getBoundingClientRect().right + 40;
+      const items = [...document.querySelectorAll("button, [role=button], li")].filter((e) => {
+        const r = e.getBoundingClientRect();
+        return r.top >= top && r.right <= right && r.width > 0 && e.innerText.trim().length > 0;
+      }).map((e) => e.innerText.trim());
+      const badge = tab.innerText.replace("Problems", "").trim();
+      return { problemsTab: true, problemCount: badge ? Number(badge) : 0, problems: [...new Set(items)] };
+    }));
+    // where the 3D and image panels are
+    const panels = await page.evaluate(() => {
+      const out = [];
+      for (const c of document.querySelectorAll("canvas")) {
+        let el = c;
+        while (el && ![...el.querySelectorAll("button")].some((b) => b.getAttribute("title") === "Close Window")) el = el.parentElement;
+        if (!el) continue;
+        const is3d = [...el.querySelectorAll("button")].some((b) => b.getAttribute("title") === "Switch to 2D camera");
+        const r = c.getBoundingClientRect();
+        if (r.width < 50 || r.height < 50) continue;
+        out.push({ kind: is3d ? "3d" : "other", text: el.innerText.slice(0, 200),
+                   x: r.left, y: r.top, width: r.width, height: r.height });
+      }
+      return out;
+    });
+    result.panels = panels;
+    const shotDir = arg("panel-shots");
+    if (shotDir) {
+      let i = 0;
+      for (const p of panels) {
+        const file = shotDir + "/panel" + (i++) + "-" + p.kind + ".png";
+        await page.screenshot({ path: file, clip: { x: p.x, y: p.y, width: p.width, height: p.height } });
+        p.file = file;
+      }
+    }
+    const shot = arg("screenshot");
+    if (shot) await page.screenshot({ path: shot });
+    // the 3D panel's settings: select the panel, open "Panel settings", expand "Transforms": the frames it knows
+    const three = panels.find((p) => p.kind === "3d");
+    result.frames = [];
+    if (three) {
+      await page.mouse.click(three.x + three.width / 2, three.y + three.height / 2);
+      await sleep(500);
+      result.settingsText = await page.evaluate(async () => {
+        const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+        const nav = [...document.querySelectorAll("button")].find((b) => b.getAttribute("title") === "Panel settings");
+        if (nav) { nav.click(); await sleep(1500); }
+        const tf = [...document.querySelectorAll("div, span, p")].find((e) => e.children.length === 0 && /^Transforms( \(\d+\))?$/.test((e.innerText || "").trim()));
+        if (tf) { tf.click(); await sleep(1500); }
+        return document.body.innerText;
+      });
+      const m = result.settingsText.split("\n");
+      const i0 = m.findIndex((l) => /^Transforms/.test(l.trim()));
+      if (i0 >= 0) {
+        for (let i = i0 + 1; i < m.length; i++) {
+          const l = m[i].trim();
+          if (/^(Topics|Custom Layers|Publish)/.test(l)) break;
+          if (l && l !== "Settings") result.frames.push(l);
+        }
+      }
+    }
+  } finally {
+    await browser.close();
+  }
+  fs.writeFileSync(out, JSON.stringify(result, null, 1));
+}
+main().catch((e) => { console.error(e); process.exit(1); });
