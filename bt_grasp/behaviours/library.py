@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from typing import Any
 
-from bt_grasp.behaviours import calibration_leaves, gripper, motion_leaves, objects, perceive, place
+from bt_grasp.behaviours import calibration_leaves, gripper, motion_leaves, objects, perceive, place, viewing
 from bt_grasp.errors import TreeFileError
 from bt_grasp.scene_config import Scene
 from bt_grasp.tree.registry import NodeRegistry, builtin_registry
@@ -32,6 +32,7 @@ ROBOT_LEAVES = (
     place.Place,
     place.PlaceOn,
     place.MoveTo,
+    viewing.LookAt,
 )
 
 

@@ -1,0 +1,121 @@
+"""LookAt: move a wrist (eye-in-hand) camera so that it looks at a point, a detection or the work area.
+
+The observation strategy of a wrist camera is coarse to fine and written in the tree: ``LookAt
+view="workspace"`` (a survey view from high above the work area's centre), ``Perceive``, ``LookAt
+target="{target}"`` (a close view above the target), ``Perceive`` again to refine the pose, then the grasp.
+
+Geometry: the tool points straight down (tool z = base -z) and is yawed so that tool x points away from the
+robot base; the tool is placed so that the camera's optical axis (from the calibration, ``T_tool_camera``)
+passes through the point at ``distance`` metres from the camera. The fingers hang 0.1-0.15 m below the
+camera, closer than the D435's minimum depth range (0.28 m), so they never enter the depth image perception
+uses; views are also chosen so the object lies beyond that range (distance >= 0.35 m).
+With an eye-to-hand camera the leaf has nothing to move: it succeeds and says so.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from py_trees.common import Status
+
+from bt_grasp.behaviours.base import RobotLeaf
+from bt_grasp.behaviours.motion_leaves import _MovingLeaf, plan_to_pose_fn
+from bt_grasp.behaviours.motion_job import Segment
+from bt_grasp.behaviours.reasons import FailureReason
+from bt_grasp.geometry import inv, make_T, rot_z
+from bt_grasp.tree.registry import PortDirection, PortSpec, leaf
+
+#: camera-to-point distance of the survey view and of a close view, m
+SURVEY_DISTANCE_M = 0.62
+CLOSE_DISTANCE_M = 0.40
+#: the work-area point a survey looks at sits this far towards the robot from the workspace's centre, m
+#: (the arm reaches a high view more easily there; the 55 x 42 degree view still covers the objects' area)
+SURVEY_PULL_M = 0.02
+
+
+def parse_point(text: str) -> NDArray[np.float64] | None:
+    """'x;y;z' (BT.CPP's vector syntax) or 'x,y,z' -> array; None when it is not three numbers."""
+    parts = [p for p in text.replace(",", ";").split(";") if p.strip()]
+    if len(parts) != 3:
+        return None
+    try:
+        return np.array([float(p) for p in parts], dtype=float)
+    except ValueError:
+        return None
+
+
+def tool_pose_for_view(point_base: NDArray[np.float64], distance_m: float, T_tool_camera: NDArray[np.float64]
+                       ) -> NDArray[np.float64]:
+    """T_base_tool with the tool pointing down, tool x away from the base, camera axis through the point."""
+    yaw = float(np.arctan2(point_base[1], point_base[0]))
+    R_tool = rot_z(yaw) @ np.diag([1.0, -1.0, -1.0])
+    z_cam = R_tool @ T_tool_camera[:3, 2]
+    cam_position = point_base - distance_m * z_cam
+    tool_position = cam_position - R_tool @ T_tool_camera[:3, 3]
+    return make_T(R_tool, tool_position)
+
+
+def view_point(leaf: RobotLeaf, view: str, target: Any) -> tuple[NDArray[np.float64], float] | str:
+    """(point in the base frame, default distance) for the ports, or a sentence saying what is wrong."""
+    if target is not None:
+        c = np.asarray(target.centroid_base_m, dtype=float)
+        return c, CLOSE_DISTANCE_M
+    if view == "workspace":
+        ws = leaf.cell.scene.workspace
+        centre_world = np.array([np.mean(ws.x_m), np.mean(ws.y_m), 0.0, 1.0])
+        centre = (inv(leaf.cell.scene.T_world_base()) @ centre_world)[:3]
+        centre[:2] -= SURVEY_PULL_M * centre[:2] / max(float(np.linalg.norm(centre[:2])), 1e-9)
+        return centre, SURVEY_DISTANCE_M
+    point = parse_point(view)
+    if point is None:
+        return f"view '{view}' is neither 'workspace' nor a point 'x;y;z' in the base frame"
+    return point, CLOSE_DISTANCE_M
+
+
+@leaf(
+    None,
+    name="LookAt",
+    ports=[
+        PortSpec("view", PortDirection.INPUT, str, "workspace",
+                 "'workspace' (survey the work area) or a point 'x;y;z' in the base frame, m"),
+        PortSpec("target", PortDirection.INPUT, object, "", "a detection to look at (overrides view)"),
+        PortSpec("distance", PortDirection.INPUT, float, 0.0,
+                 "camera-to-point distance along the optical axis, m (0: 0.62 survey, 0.40 close)"),
+    ],
+    needs_robot=True,
+)
+class LookAt(_MovingLeaf):
+    """Move the wrist camera to look at the work area, a point or a detection (eye-in-hand views)."""
+
+    def segments(self) -> list[Segment] | Status:
+        from bt_grasp.motion.planning_scene import PlanningScene
+
+        calibration = self.cell.calibration
+        if calibration is None:
+            return self.failed(FailureReason.CALIBRATION_MISSING, "no camera calibration loaded")
+        if calibration.mount != "eye-in-hand":
+            self.cell.media.log("INFO", self.name, "eye-to-hand camera: nothing to move")
+            self.feedback_message = "fixed camera: nothing to move"
+            return Status.SUCCESS
+        found = view_point(self, str(self.input("view") or "workspace"), self.input("target") or None)
+        if isinstance(found, str):
+            return self.failed(FailureReason.BAD_INPUT, found)
+        point, default_distance = found
+        distance = float(self.input("distance") or 0.0) or default_distance
+        if not 0.3 <= distance <= 1.5:
+            return self.failed(FailureReason.BAD_INPUT, f"view distance {distance} m is outside [0.3, 1.5]")
+        kin = self.cell.service("kinematics")
+        q = self.cell.robot.joint_positions()
+        T_tool_tcp = inv(kin.fk_link(q, calibration.tool_link)) @ kin.fk(q)
+        T_tool = tool_pose_for_view(point, distance, np.asarray(calibration.T_tool_camera, dtype=float))
+        T_tcp = T_tool @ T_tool_tcp
+        if not kin.ik(T_tcp, q).ok:
+            return self.failed(FailureReason.IK_UNREACHABLE,
+                               f"the view of ({point[0]:.3f}, {point[1]:.3f}, {point[2]:.3f}) from {distance:.2f} m "
+                               "is out of the arm's reach")
+        self.cell.media.log("INFO", self.name, f"view of ({point[0]:.3f}, {point[1]:.3f}, {point[2]:.3f}) m from "
+                            f"{distance:.2f} m: tool at ({T_tool[0, 3]:.3f}, {T_tool[1, 3]:.3f}, {T_tool[2, 3]:.3f})")
+        self.feedback_message = f"looking at ({point[0]:.2f}, {point[1]:.2f}, {point[2]:.2f}) from {distance:.2f} m"
+        return [Segment("view", plan_to_pose_fn(self, T_tcp, PlanningScene.from_scene(self.cell.scene)))]

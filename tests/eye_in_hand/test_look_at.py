@@ -1,0 +1,67 @@
+"""LookAt's view geometry (no simulator), and the eye-in-hand pick in the simulator: the XML tree and its
+YAML twin succeed by physics and tick identically on the same seed."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from bt_grasp.behaviours.viewing import parse_point, tool_pose_for_view
+from bt_grasp.geometry import T_from_xyz_rpy
+
+REPO = Path(__file__).resolve().parents[2]
+SCENE = REPO / "scenes/eye_in_hand.yaml"
+T_TOOL_CAMERA = T_from_xyz_rpy(np.array([-0.07, 0.0, 0.01]), np.deg2rad([0.0, 12.0, 0.0]))
+
+
+@pytest.mark.parametrize("point", [(0.5, 0.0, 0.0), (0.4, -0.25, 0.02), (0.45, 0.2, 0.05)])
+@pytest.mark.parametrize("distance", [0.4, 0.62])
+def test_the_view_puts_the_point_on_the_optical_axis_at_the_distance(point: tuple[float, ...], distance: float
+                                                                      ) -> None:
+    p = np.array(point)
+    T_tool = tool_pose_for_view(p, distance, T_TOOL_CAMERA)
+    assert T_tool[:3, 2] @ np.array([0.0, 0.0, -1.0]) == pytest.approx(1.0)  # the tool points down
+    assert T_tool[:3, 0] @ np.array([p[0], p[1], 0.0]) > 0  # tool x points away from the base
+    T_cam = T_tool @ T_TOOL_CAMERA
+    in_cam = np.linalg.inv(T_cam) @ np.array([*p, 1.0])
+    assert in_cam[:2] == pytest.approx([0.0, 0.0], abs=1e-9)
+    assert in_cam[2] == pytest.approx(distance)
+
+
+def test_view_points_parse_like_btcpp_vectors() -> None:
+    assert parse_point("0.5;0.1;0") == pytest.approx([0.5, 0.1, 0.0])
+    assert parse_point("0.5, 0.1, 0") == pytest.approx([0.5, 0.1, 0.0])
+    assert parse_point("workspace") is None and parse_point("1;2") is None and parse_point("a;b;c") is None
+
+
+@pytest.mark.sim
+@pytest.mark.slow
+def test_eye_in_hand_pick_xml_and_yaml_twins_succeed_and_tick_identically() -> None:
+    from bt_grasp.cli.session import Prepared, RunRequest, execute
+
+    streams = []
+    for tree in ("trees/pick_eye_in_hand.xml", "trees/pick_eye_in_hand.yaml"):
+        request = RunRequest(tree=REPO / tree, scene=SCENE, seed=3, blackboard={"color": "red", "lift_height": 0.15})
+        summary, stream = execute(Prepared(request))
+        assert summary.success, summary
+        streams.append([tick["status"] for tick in stream])
+    assert streams[0] == streams[1]
+    # the survey, the close view and the refining perception all ran (coarse to fine)
+    assert len(streams[0]) > 100
+
+
+@pytest.mark.sim
+def test_an_unreachable_view_fails_with_ik_unreachable(tmp_path: Path) -> None:
+    from bt_grasp.cli.session import Prepared, RunRequest, execute
+
+    tree = tmp_path / "far.xml"
+    tree.write_text(
+        '<root BTCPP_format="4" main_tree_to_execute="T"><BehaviorTree ID="T"><Sequence>'
+        '<LoadCalibration file="{calibration_file}"/><LookAt view="1.6;0;0.2"/>'
+        "</Sequence></BehaviorTree></root>"
+    )
+    summary, stream = execute(Prepared(RunRequest(tree=tree, scene=SCENE, seed=0)))
+    assert not summary.success and summary.reason == "IK_UNREACHABLE" and summary.failed_leaf == "LookAt"
+    assert len(stream) <= 3  # refused before moving
