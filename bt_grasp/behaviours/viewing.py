@@ -21,8 +21,8 @@ from numpy.typing import NDArray
 from py_trees.common import Status
 
 from bt_grasp.behaviours.base import RobotLeaf
-from bt_grasp.behaviours.motion_leaves import _MovingLeaf, plan_to_pose_fn
 from bt_grasp.behaviours.motion_job import Segment
+from bt_grasp.behaviours.motion_leaves import _MovingLeaf, plan_to_pose_fn
 from bt_grasp.behaviours.reasons import FailureReason
 from bt_grasp.geometry import inv, make_T, rot_z
 from bt_grasp.tree.registry import PortDirection, PortSpec, leaf
@@ -106,10 +106,11 @@ class LookAt(_MovingLeaf):
         distance = float(self.input("distance") or 0.0) or default_distance
         if not 0.3 <= distance <= 1.5:
             return self.failed(FailureReason.BAD_INPUT, f"view distance {distance} m is outside [0.3, 1.5]")
-        kin = self.cell.service("kinematics")
+        kin = self.cell.kinematics
         q = self.cell.robot.joint_positions()
         T_tool_tcp = inv(kin.fk_link(q, calibration.tool_link)) @ kin.fk(q)
-        T_tool = tool_pose_for_view(point, distance, np.asarray(calibration.T_tool_camera, dtype=float))
+        T_tool_camera = np.asarray(calibration.T_base_camera_at(np.eye(4)), dtype=np.float64)  # camera in tool frame
+        T_tool = tool_pose_for_view(point, distance, T_tool_camera)
         T_tcp = T_tool @ T_tool_tcp
         if not kin.ik(T_tcp, q).ok:
             return self.failed(FailureReason.IK_UNREACHABLE,
