@@ -89,6 +89,31 @@ def view_point(leaf: RobotLeaf, view: str, target: Any) -> tuple[NDArray[np.floa
 class LookAt(_MovingLeaf):
     """Move the wrist camera to look at the work area, a point or a detection (eye-in-hand views)."""
 
+    def check_scene(self, scene: Any) -> str | None:
+        """A literal view that is not a point, or that the arm cannot reach with the scene's nominal camera
+        mount, is a load error (file:line before anything runs)."""
+        if scene.camera.mount != "eye-in-hand" or self.ports.key("view") is not None:
+            return None
+        view = str(self.ports.get("view"))
+        if view == "workspace" or self.ports.key("target") is not None:
+            return None
+        point = parse_point(view)
+        if point is None:
+            return f"view '{view}' is neither 'workspace' nor a point 'x;y;z' in the base frame"
+        distance = float(self.ports.get("distance") or 0.0) or CLOSE_DISTANCE_M
+        from bt_grasp.geometry import T_from_xyz_rpy
+        from bt_grasp.motion.kinematics import ArmKinematics
+
+        mount = scene.camera.eye_in_hand
+        T_tool_camera = T_from_xyz_rpy(np.array(mount.xyz_m), np.deg2rad(mount.rpy_deg))
+        kin = ArmKinematics()
+        q_home = np.asarray(scene.robot.home_q_rad, dtype=np.float64)
+        T_tool_tcp = inv(kin.fk_link(q_home, mount.parent_link)) @ kin.fk(q_home)
+        if not kin.ik(tool_pose_for_view(point, distance, T_tool_camera) @ T_tool_tcp, q_home).ok:
+            return (f"the view of ({point[0]:.3f}, {point[1]:.3f}, {point[2]:.3f}) m from {distance:.2f} m is out of "
+                    "the arm's reach")
+        return None
+
     def segments(self) -> list[Segment] | Status:
         from bt_grasp.motion.planning_scene import PlanningScene
 

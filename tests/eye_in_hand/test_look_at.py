@@ -58,16 +58,41 @@ def test_eye_in_hand_pick_xml_and_yaml_twins_succeed_and_tick_identically(tmp_pa
     assert {p for p in visited if "survey" in p or "close_view" in p or "refine" in p or "find" in p}, visited
 
 
+_VIEW_TREE = """<root BTCPP_format="4" main_tree_to_execute="T">
+  <BehaviorTree ID="T">
+    <Sequence>
+      <LoadCalibration file="{calibration_file}"/>
+      <LookAt view="%s"/>
+    </Sequence>
+  </BehaviorTree>
+</root>
+"""
+
+
+@pytest.mark.parametrize(("view", "fragment"), [("1.6;0;0.2", "out of the arm's reach"),
+                                                ("over there", "neither 'workspace' nor a point")])
+def test_a_bad_literal_view_exits_2_with_file_and_line(tmp_path: Path, view: str, fragment: str) -> None:
+    import subprocess
+    import sys
+
+    tree = tmp_path / "far.xml"
+    tree.write_text(_VIEW_TREE % view)
+    log = tmp_path / "run.mcap"
+    proc = subprocess.run([sys.executable, "-m", "bt_grasp.cli.main", "run", str(tree), "--scene", str(SCENE),
+                           "--log", str(log)], capture_output=True, text=True, timeout=300, cwd=REPO)
+    assert proc.returncode == 2, proc.stdout + proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and f"{tree}:5" in lines[0] and fragment in lines[0], proc.stderr
+    assert not log.exists()
+
+
 @pytest.mark.sim
-def test_an_unreachable_view_fails_with_ik_unreachable(tmp_path: Path) -> None:
+def test_an_unreachable_view_from_the_blackboard_fails_with_ik_unreachable(tmp_path: Path) -> None:
     from bt_grasp.episode import EpisodeRequest, run_episode
 
     tree = tmp_path / "far.xml"
-    tree.write_text(
-        '<root BTCPP_format="4" main_tree_to_execute="T"><BehaviorTree ID="T"><Sequence>'
-        '<LoadCalibration file="{calibration_file}"/><LookAt view="1.6;0;0.2"/>'
-        "</Sequence></BehaviorTree></root>"
-    )
-    result = run_episode(EpisodeRequest(tree=tree, scene=SCENE, seed=0, blackboard={"color": "red"}))
+    tree.write_text(_VIEW_TREE % "{far}")
+    request = EpisodeRequest(tree=tree, scene=SCENE, seed=0, blackboard={"color": "red", "far": "1.6;0;0.2"})
+    result = run_episode(request)
     assert not result.success and result.reason == "IK_UNREACHABLE" and result.failed_leaf == "LookAt"
     assert result.ticks <= 3  # refused before moving
