@@ -18,10 +18,18 @@ from bt_grasp.environment import machine_description
 
 
 def run_pick_bench(
-    trees: list[Path], scene: Path, seeds: int, first_seed: int, calibration: Path | None, log_dir: Path | None
+    trees: list[Path], scene: Path, seeds: int, first_seed: int, calibration: Path | None, log_dir: Path | None,
+    warm: bool = False,
 ) -> dict[str, Any]:
     from bt_grasp.cli.calibrate_cmd import run_sim_calibration
-    from bt_grasp.episode import EpisodeRequest, EpisodeResult, run_episode
+    from bt_grasp.episode import (
+        EpisodeRequest,
+        EpisodeResult,
+        FreshWorlds,
+        WarmWorlds,
+        WorldSource,
+        run_episode,
+    )
     from bt_grasp.goals import DEFAULT_LIFT_HEIGHT_M, goal_from_options
     from bt_grasp.perception.calibration_file import save_calibration
 
@@ -33,6 +41,8 @@ def run_pick_bench(
     report: dict[str, Any] = {
         "machine": machine_description(), "scene": str(scene), "calibration": str(calibration), "trees": {}
     }
+    worlds: WorldSource = WarmWorlds() if warm else FreshWorlds()
+    report["worlds"] = "warm (one world reset per episode)" if warm else "fresh (a new world per episode)"
     for tree in trees:
         runs: list[EpisodeResult] = []
         for seed in range(first_seed, first_seed + seeds):
@@ -46,7 +56,7 @@ def run_pick_bench(
                 log=log,
                 blackboard={"color": "red", "lift_height": DEFAULT_LIFT_HEIGHT_M},
             )
-            runs.append(run_episode(request))
+            runs.append(run_episode(request, worlds=worlds))
         ok = [r for r in runs if r.success]
         report["trees"][str(tree)] = {
             "runs": len(runs),
@@ -57,6 +67,10 @@ def run_pick_bench(
             "wall_time_s_median": round(statistics.median(r.wall_time_s for r in runs), 3),
             "ticks_median": statistics.median(r.ticks for r in runs),
             "retries_total": sum(sum(r.retries.values()) for r in runs),
+            "plan_calls_per_pick_mean": round(statistics.mean(r.planning.calls for r in runs), 2),
+            "plan_pose_calls_per_pick_mean": round(statistics.mean(r.planning.pose_calls for r in runs), 2),
+            "plan_wall_s_per_pick_median": round(statistics.median(r.planning.wall_s for r in runs), 4),
+            "plan_wall_s_per_pick_mean": round(statistics.mean(r.planning.wall_s for r in runs), 4),
         }
     return report
 
@@ -72,14 +86,16 @@ def pick(
     calibration: Path | None = typer.Option(None, "--calibration", help="Default: calibrate once first."),
     log_dir: Path | None = typer.Option(None, "--log-dir", help="Keep every run's MCAP log here."),
     as_json: bool = typer.Option(False, "--json"),
+    warm: bool = typer.Option(False, "--warm", help="Reuse one warm world (reset per episode) instead of new ones."),
 ) -> None:
     """Pick success over seeded episodes, judged by physics (object held 15 cm up at the end)."""
-    report = run_pick_bench(trees, scene, seeds, first_seed, calibration, log_dir)
+    report = run_pick_bench(trees, scene, seeds, first_seed, calibration, log_dir, warm)
     if as_json:
         typer.echo(json.dumps(report))
         return
     table = Table(title=f"pick over {seeds} seeds ({report['machine']})")
-    for col in ("tree", "success", "median sim s", "median wall s", "retries", "failures"):
+    for col in ("tree", "success", "median sim s", "median wall s", "plans/pick", "plan s/pick", "retries",
+                "failures"):
         table.add_column(col)
     for tree, r in report["trees"].items():
         table.add_row(
@@ -87,6 +103,8 @@ def pick(
             f"{r['successes']}/{r['runs']}",
             f"{r['sim_time_s_median']:.2f}",
             f"{r['wall_time_s_median']:.2f}",
+            f"{r['plan_calls_per_pick_mean']:.2f}",
+            f"{r['plan_wall_s_per_pick_median']:.3f}",
             str(r["retries_total"]),
             json.dumps(r["failures"]),
         )

@@ -23,6 +23,7 @@ from bt_grasp.goals import Goal, PickGoal, goal_for_run
 
 if TYPE_CHECKING:
     from bt_grasp.behaviours.cell import Cell
+    from bt_grasp.episode.instruments import TimedPlanner
     from bt_grasp.faults.plan import FaultPlan
     from bt_grasp.perception.calibration_file import CalibrationFile
     from bt_grasp.recording.writer import RunRecorder
@@ -119,12 +120,14 @@ class Episode:
             self.tree.root_blackboard.set(key, value)
         if self.inputs.calibration_path is not None:
             self.tree.root_blackboard.set("calibration_file", str(self.inputs.calibration_path))
+        self.planning: TimedPlanner
         self.cell = self._build_cell()
         self._ran = False
 
     def _build_cell(self) -> Cell:
         from bt_grasp.behaviours.calibration_leaves import needs_calibration_board
         from bt_grasp.behaviours.cell import make_cell
+        from bt_grasp.episode.instruments import TimedPlanner
 
         world = self.world
         board = None
@@ -132,8 +135,11 @@ class Episode:
             from bt_grasp.sim.charuco import mount_calibration_board
 
             board = mount_calibration_board(world)
-        return make_cell(world.robot, world.camera, world.clock, self.scene, self.request.seed,
+        cell = make_cell(world.robot, world.camera, world.clock, self.scene, self.request.seed,
                          calibration=self.inputs.calibration, board=board)
+        self.planning = TimedPlanner(cell.planner)  # counts the planning the run does (reported only)
+        cell.planner = self.planning
+        return cell
 
     def run(self, on_tick: Sequence[TickCallback] = ()) -> EpisodeResult:
         """Tick the tree to the end (or ``max_ticks``), judge the goal, write the result; returns it."""
@@ -186,6 +192,7 @@ class Episode:
                 seed=request.seed,
                 faults_fired=injector.fired if injector is not None else 0,
                 goal=self.inputs.goal,
+                planning=self.planning.stats(),
             )
             if recorder is not None:
                 recorder.write_result(world.now_ns(), result.to_json())

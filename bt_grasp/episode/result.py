@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from bt_grasp.episode.instruments import PlanningStats
 from bt_grasp.goals import Goal
 
 JsonScalar = str | int | float | bool | None
@@ -64,6 +65,7 @@ class EpisodeResult:
     log: str | None
     seed: int
     goal: Goal
+    planning: PlanningStats
     faults_fired: int = 0
 
     @property
@@ -87,4 +89,5 @@ class EpisodeResult:
             "log": self.log,
             "seed": self.seed,
             "faults_fired": self.faults_fired,
+            "planning": {k: v for k, v in self.planning.to_json().items()},
         }
