@@ -20,10 +20,11 @@ from bt_grasp.behaviours.reasons import FailureReason
 from bt_grasp.tree.registry import PortDirection, PortSpec, leaf
 
 if TYPE_CHECKING:
+    from bt_grasp.behaviours.grasp_plan import GraspPlan
     from bt_grasp.motion.cartesian import CartesianStatus
     from bt_grasp.motion.planner import PlanResult, PlanStatus
     from bt_grasp.motion.planning_scene import Box, PlanningScene
-    from bt_grasp.perception.results import Detection
+    from bt_grasp.perception.results import Detection, GraspCandidate
 
 #: a tool pose computed from the current one (e.g. straight up from it)
 PoseFn = Callable[[NDArray[np.float64]], NDArray[np.float64]]
@@ -183,49 +184,84 @@ _GRASP = PortSpec("grasp", PortDirection.INPUT, object, "{grasp}", "the grasp to
     ports=[
         PortSpec("target", PortDirection.INPUT, object, "{target}", "the detection to grasp"),
         PortSpec("objects", PortDirection.INPUT, object, "{objects}", "every object seen (obstacles)"),
-        PortSpec("grasp", PortDirection.OUTPUT, object, "{grasp}", "the first reachable ranked candidate"),
+        PortSpec("grasp", PortDirection.OUTPUT, object, "{grasp}",
+                 "the first reachable ranked candidate, with its planned approach (a GraspPlan)"),
         PortSpec("skip", PortDirection.INPUT, int, 0, "skip this many of the best candidates"),
     ],
     needs_robot=True,
 )
 class PlanGrasp(RobotLeaf):
-    """Rank top-down grasps of the target and keep the first whose approach can be planned."""
+    """Rank top-down grasps of the target and keep the first whose approach can be planned.
+
+    One candidate per tick (IK of the pre-grasp and grasp poses, then the approach plan: tens of ms, more
+    than a control period), RUNNING while candidates remain; the kept plan travels with the grasp.
+    """
+
+    def initialise(self) -> None:
+        self._candidates: list[GraspCandidate] | None = None
+        self._next = 0
+        self._last = PathFailure(FailureReason.PLAN_FAILED, "no candidate")
 
     def update(self) -> Status:
+        if self._candidates is None:
+            early = self._rank()
+            if early is not None:
+                return early
+        assert self._candidates is not None
+        if self._next < len(self._candidates):
+            rank = self._next  # counted after the skipped ones, as the feedback always did
+            self._next += 1
+            plan = self._try(rank, self._candidates[self._next - 1])
+            if plan is not None:
+                self.ports.set("grasp", plan)
+                self.feedback_message = f"candidate {rank} of {self._total}: {plan.candidate.reason}"
+                return Status.SUCCESS
+            if self._next < len(self._candidates):
+                self.feedback_message = f"candidate {rank}: {self._last.sentence}"
+                return Status.RUNNING
+        # a planner failure other than IK counts as PLAN_FAILED here, as before the typed seams
+        unreachable = self._last.reason is FailureReason.IK_UNREACHABLE
+        reason = FailureReason.IK_UNREACHABLE if unreachable else FailureReason.PLAN_FAILED
+        return self.failed(reason, f"none of {self._total} grasps is reachable; last: {self._last.sentence}")
+
+    def _rank(self) -> Status | None:
+        """Synthesise and rank the candidates (first tick); a FAILURE status when there is nothing to try."""
         from bt_grasp.perception.grasps import synthesize_grasps
 
         target = self.input("target")
         if target is None:
             return self.failed(FailureReason.NO_DETECTION, "no target on the blackboard: run Perceive first")
-        objects = self.input("objects") or ()
-        result = synthesize_grasps(target, objects, self.cell.grasp_settings)
+        self._target: Detection = target
+        self._objects: tuple[Detection, ...] = tuple(self.input("objects") or ())
+        result = synthesize_grasps(target, self._objects, self.cell.grasp_settings)
         if not result.ok:
             return self.failed(FailureReason.NOTHING_TO_GRASP, f"{result.status.value}: {result.message}")
         self.cell.media.grasps(result.candidates)
-        kin, planner = self.cell.kinematics, self.cell.planner
-        q = self.cell.robot.joint_positions()
-        scene = planning_scene(self, target, objects)
-        last = PathFailure(FailureReason.PLAN_FAILED, "no candidate")
-        for rank, candidate in enumerate(result.candidates[int(self.input("skip") or 0) :]):
-            pre = kin.ik(candidate.T_base_tcp_pregrasp, q)
-            if not pre.ok:
-                last = PathFailure(FailureReason.IK_UNREACHABLE, f"candidate {rank}: pre-grasp unreachable")
-                continue
-            at = kin.ik(candidate.T_base_tcp_grasp, pre.q)
-            if not at.ok:
-                last = PathFailure(FailureReason.IK_UNREACHABLE, f"candidate {rank}: grasp pose unreachable")
-                continue
-            plan = planner.plan_to_pose(q, candidate.T_base_tcp_pregrasp, scene, self.cell.planner_options)
-            if not plan.ok:
-                last = PathFailure(plan_reason(plan.status), f"candidate {rank}: {plan.status.value} ({plan.message})")
-                continue
-            self.ports.set("grasp", candidate)
-            self.feedback_message = f"candidate {rank} of {len(result.candidates)}: {candidate.reason}"
-            return Status.SUCCESS
-        # as before the typed seams: a planner failure other than IK counts as PLAN_FAILED here
-        unreachable = last.reason is FailureReason.IK_UNREACHABLE
-        reason = FailureReason.IK_UNREACHABLE if unreachable else FailureReason.PLAN_FAILED
-        return self.failed(reason, f"none of {len(result.candidates)} grasps is reachable; last: {last.sentence}")
+        self._total = len(result.candidates)
+        self._candidates = list(result.candidates[int(self.input("skip") or 0) :])
+        self._q = self.cell.robot.joint_positions()
+        self._scene = planning_scene(self, target, self._objects)
+        return None
+
+    def _try(self, rank: int, candidate: GraspCandidate) -> GraspPlan | None:
+        from bt_grasp.behaviours.grasp_plan import GraspPlan
+
+        kin, q = self.cell.kinematics, self._q
+        pre = kin.ik(candidate.T_base_tcp_pregrasp, q)
+        if not pre.ok:
+            self._last = PathFailure(FailureReason.IK_UNREACHABLE, f"candidate {rank}: pre-grasp unreachable")
+            return None
+        at = kin.ik(candidate.T_base_tcp_grasp, pre.q)
+        if not at.ok:
+            self._last = PathFailure(FailureReason.IK_UNREACHABLE, f"candidate {rank}: grasp pose unreachable")
+            return None
+        options = self.cell.planner_options
+        plan = self.cell.planner.plan_to_pose(q, candidate.T_base_tcp_pregrasp, self._scene, options)
+        if not plan.ok:
+            sentence = f"candidate {rank}: {plan.status.value} ({plan.message})"
+            self._last = PathFailure(plan_reason(plan.status), sentence)
+            return None
+        return GraspPlan(candidate, q.copy(), np.asarray(plan.path, dtype=float), self._target, self._objects)
 
 
 @leaf(
@@ -239,20 +275,35 @@ class PlanGrasp(RobotLeaf):
     needs_robot=True,
 )
 class Approach(_MovingLeaf):
-    """Plan and move to the pre-grasp pose, then descend in a straight line to the grasp pose."""
+    """Move to the pre-grasp pose along the path PlanGrasp planned (planned anew if the arm moved or the scene
+    changed since), then descend in a straight line to the grasp pose."""
 
     def segments(self) -> list[Segment] | Status:
+        from bt_grasp.behaviours.grasp_plan import GraspPlan
+
         grasp = self.input("grasp")
         if grasp is None:
             return self.failed(FailureReason.BAD_INPUT, "no grasp on the blackboard: run PlanGrasp first")
-        target, objects = self.input("target"), self.input("objects") or ()
+        target, objects = self.input("target"), tuple(self.input("objects") or ())
         free = planning_scene(self, target, objects)
         touching = planning_scene(self, target, objects, allow_target=True)
         T_grasp = grasp.T_base_tcp_grasp
+        to_pregrasp = plan_to_pose_fn(self, grasp.T_base_tcp_pregrasp, free)
+        if isinstance(grasp, GraspPlan) and grasp.planned_in(target, objects):
+            to_pregrasp = planned_path_fn(grasp, to_pregrasp)
         return [
-            Segment("to pre-grasp", plan_to_pose_fn(self, grasp.T_base_tcp_pregrasp, free)),
+            Segment("to pre-grasp", to_pregrasp),
             Segment("descend", cartesian_fn(self, lambda _T: T_grasp, touching)),
         ]
+
+
+def planned_path_fn(plan: GraspPlan, replan: PathFn) -> PathFn:
+    """The plan's approach path while the arm is where the plan starts; else ``replan`` (the arm moved)."""
+
+    def compute(q: NDArray[np.float64]) -> NDArray[np.float64] | PathFailure:
+        return plan.approach_path if plan.starts_at(q) else replan(q)
+
+    return compute
 
 
 @leaf(

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from bt_grasp.episode.request import EpisodeRequest
+from bt_grasp.episode.request import BlackboardValue, EpisodeRequest
 from bt_grasp.episode.result import EpisodeResult, Judged
 from bt_grasp.episode.worlds import FreshWorlds, WorldSource
 from bt_grasp.errors import InputError
@@ -116,7 +116,7 @@ class Episode:
         self.tree = self.inputs.tree
         self.world: World = (worlds or FreshWorlds()).world_for(self.scene, request.seed, request.scene)
         self.inputs.clock.world = self.world
-        for key, value in request.blackboard.items():
+        for key, value in {**goal_entries(self.inputs.goal), **request.blackboard}.items():
             self.tree.root_blackboard.set(key, value)
         if self.inputs.calibration_path is not None:
             self.tree.root_blackboard.set("calibration_file", str(self.inputs.calibration_path))
@@ -230,6 +230,13 @@ class Episode:
         recorder.write_tree_structure(self.world.now_ns(), tree_structure(self.tree.root))
         self.cell.media = RecorderSink(recorder, self.world.now_ns)
         return recorder
+
+
+def goal_entries(goal: Goal) -> dict[str, BlackboardValue]:
+    """What a goal tells trees that read ``{color}`` and ``{lift_height}`` (the request's blackboard wins)."""
+    if isinstance(goal, PickGoal):
+        return {"color": goal.color or "", "lift_height": goal.height_m}
+    return {}
 
 
 def judged(verdict: Verdict) -> Judged:

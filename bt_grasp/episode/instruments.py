@@ -7,15 +7,17 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
-from bt_grasp.behaviours.services import Planner
-from bt_grasp.geometry import Mat4
-from bt_grasp.motion.collision import CollisionChecker
-from bt_grasp.motion.planner import PlannerOptions, PlanResult
-from bt_grasp.motion.planning_scene import PlanningScene
+if TYPE_CHECKING:  # motion loads pinocchio and ompl: only the types are needed to import this
+    from bt_grasp.behaviours.services import Planner
+    from bt_grasp.geometry import Mat4
+    from bt_grasp.motion.collision import CollisionChecker
+    from bt_grasp.motion.planner import PlannerOptions, PlanResult
+    from bt_grasp.motion.planning_scene import PlanningScene
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,174 @@
+"""PlanGrasp and Approach, tick by tick, with stand-in kinematics and planner (no simulator).
+
+PlanGrasp tries one ranked candidate per tick (IK of pre-grasp and grasp, then the approach plan) and hands
+Approach a GraspPlan; Approach executes its path and plans again only when the arm moved or the scene changed.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from behaviour_fakes import FakeKinematics, FakePlanner, FakeRobot, detection, fake_cell
+
+from bt_grasp.behaviours import robot_registry
+from bt_grasp.behaviours.cell import Cell
+from bt_grasp.behaviours.grasp_plan import GraspPlan
+from bt_grasp.clock import ManualClock
+from bt_grasp.motion.planner import PlanStatus
+from bt_grasp.perception.results import Detection
+from bt_grasp.tree.loader import LoadedTree, load_tree_from_string
+
+PLAN = """
+<root BTCPP_format="4">
+  <BehaviorTree ID="T">
+    <PlanGrasp target="{target}" objects="{objects}" grasp="{grasp}" skip="{skip}"/>
+  </BehaviorTree>
+</root>
+"""
+
+APPROACH = """
+<root BTCPP_format="4">
+  <BehaviorTree ID="T">
+    <Sequence>
+      <PlanGrasp target="{target}" objects="{objects}" grasp="{grasp}"/>
+      <Approach grasp="{grasp}" target="{target}" objects="{objects}"/>
+    </Sequence>
+  </BehaviorTree>
+</root>
+"""
+
+
+def _setup(xml: str, kin: FakeKinematics, planner: FakePlanner) -> tuple[LoadedTree, Cell, FakeRobot]:
+    clock, robot = ManualClock(), FakeRobot()
+    tree = load_tree_from_string(xml, robot_registry(), clock=clock)
+    cell = fake_cell(robot, clock)
+    cell.kinematics, cell.planner = kin, planner
+    for node in tree.nodes():
+        node.setup(cell=cell)
+    tree.root_blackboard.set("target", detection())
+    tree.root_blackboard.set("objects", (detection(), detection(x_m=0.3, label="blue")))
+    tree.root_blackboard.set("skip", 0)
+    return tree, cell, robot
+
+
+def _ticks(tree: LoadedTree, n: int) -> list[str]:
+    out = []
+    for _ in range(n):
+        out.append(tree.tick().value)
+        if out[-1] != "RUNNING":
+            break
+    return out
+
+
+def test_first_candidate_plans_in_the_first_tick() -> None:
+    # tick 1: candidates ranked, candidate 0's IK and plan succeed -> SUCCESS with its GraspPlan
+    tree, _, robot = _setup(PLAN, FakeKinematics(), FakePlanner())
+    assert _ticks(tree, 5) == ["SUCCESS"]
+    plan = tree.root_blackboard.get("grasp")
+    assert isinstance(plan, GraspPlan)
+    assert np.allclose(plan.q_start, robot.q) and plan.approach_path.shape == (2, 6)
+    assert plan.target == detection()
+
+
+def test_one_candidate_per_tick_until_one_is_reachable() -> None:
+    # tick 1: candidate 0's pre-grasp IK fails -> RUNNING
+    # tick 2: candidate 1's IK succeeds twice, its plan fails (NO_PATH) -> RUNNING
+    # tick 3: candidate 2 plans -> SUCCESS
+    planner = FakePlanner((PlanStatus.NO_PATH,))
+    tree, _, _ = _setup(PLAN, FakeKinematics(failures=1), planner)
+    assert _ticks(tree, 10) == ["RUNNING", "RUNNING", "SUCCESS"]
+    assert len(planner.pose_calls) == 2
+    assert "candidate 2" in tree.find("PlanGrasp").feedback_message
+
+
+@pytest.mark.parametrize(
+    ("ik_failures", "statuses", "reason"),
+    [
+        (99, (), "IK_UNREACHABLE"),  # every pre-grasp unreachable
+        (0, (PlanStatus.NO_PATH,) * 4, "PLAN_FAILED"),  # reachable, but no path to any
+        (0, (PlanStatus.GOAL_IN_COLLISION,) * 4, "PLAN_FAILED"),  # every pre-grasp configuration collides
+        (0, (PlanStatus.IK_UNREACHABLE,) * 4, "IK_UNREACHABLE"),  # the planner's own IK finds nothing
+    ],
+)
+def test_no_candidate_reachable_fails_after_trying_each(
+    ik_failures: int, statuses: tuple[PlanStatus, ...], reason: str
+) -> None:
+    # the four candidates of a 5 cm cube, one per tick: RUNNING x3, then FAILURE with the last reason
+    tree, _, _ = _setup(PLAN, FakeKinematics(failures=ik_failures), FakePlanner(statuses))
+    assert _ticks(tree, 10) == ["RUNNING", "RUNNING", "RUNNING", "FAILURE"]
+    values = tree.blackboard_values()
+    assert values["failure_reason"] == reason and values["failed_leaf"] == "PlanGrasp"
+
+
+def test_no_target_and_nothing_graspable() -> None:
+    tree, _, _ = _setup(PLAN, FakeKinematics(), FakePlanner())
+    tree.root_blackboard.set("target", detection(size_m=0.2))  # wider than the open gripper
+    assert _ticks(tree, 3) == ["FAILURE"]
+    assert tree.blackboard_values()["failure_reason"] == "NOTHING_TO_GRASP"
+
+
+def test_skip_past_every_candidate_fails_at_once() -> None:
+    tree, _, _ = _setup(PLAN, FakeKinematics(), FakePlanner())
+    tree.root_blackboard.set("skip", 4)
+    assert _ticks(tree, 3) == ["FAILURE"]
+    assert tree.blackboard_values()["failure_reason"] == "PLAN_FAILED"
+
+
+def test_approach_executes_the_planned_path_without_planning_again() -> None:
+    # tick 1: PlanGrasp SUCCESS (one plan), Approach starts: its first segment is the plan's path
+    planner = FakePlanner()
+    tree, _, _ = _setup(APPROACH, FakeKinematics(), planner)
+    assert tree.tick().value == "RUNNING"
+    assert len(planner.pose_calls) == 1
+    assert tree.find("Approach").feedback_message == "to pre-grasp"
+
+
+ONLY_APPROACH = """
+<root BTCPP_format="4">
+  <BehaviorTree ID="T">
+    <Approach grasp="{grasp}" target="{target}" objects="{objects}"/>
+  </BehaviorTree>
+</root>
+"""
+
+
+def _plan_then_approach(objects_later: tuple[Detection, ...] | None, arm_moves_by: float) -> FakePlanner:
+    """Plan with PlanGrasp, then (optionally) move the arm or change the objects, then start Approach."""
+    planner = FakePlanner()
+    plan_tree, cell, robot = _setup(PLAN, FakeKinematics(), planner)
+    assert _ticks(plan_tree, 2) == ["SUCCESS"]
+    robot.q = robot.q + arm_moves_by
+    approach = load_tree_from_string(ONLY_APPROACH, robot_registry(), clock=ManualClock())
+    for node in approach.nodes():
+        node.setup(cell=cell)
+    approach.root_blackboard.set("grasp", plan_tree.root_blackboard.get("grasp"))
+    approach.root_blackboard.set("target", plan_tree.root_blackboard.get("target"))
+    objects = plan_tree.root_blackboard.get("objects") if objects_later is None else objects_later
+    approach.root_blackboard.set("objects", objects)
+    assert approach.tick().value == "RUNNING"
+    return planner
+
+
+def test_approach_reuses_the_plan_when_nothing_changed() -> None:
+    planner = _plan_then_approach(None, 0.0)
+    assert len(planner.pose_calls) == 1
+
+
+def test_approach_plans_again_when_the_arm_moved() -> None:
+    planner = _plan_then_approach(None, 0.01)
+    assert len(planner.pose_calls) == 2 and np.allclose(planner.pose_calls[-1], np.full(6, 0.01))
+
+
+def test_approach_plans_again_when_the_scene_changed() -> None:
+    planner = _plan_then_approach((detection(), detection(x_m=0.35, label="blue")), 0.0)
+    assert len(planner.pose_calls) == 2
+
+
+def test_approach_without_a_grasp_fails_bad_input() -> None:
+    tree = load_tree_from_string(ONLY_APPROACH, robot_registry(), clock=ManualClock())
+    clock, robot = ManualClock(), FakeRobot()
+    cell = fake_cell(robot, clock)
+    for node in tree.nodes():
+        node.setup(cell=cell)
+    assert tree.tick().value == "FAILURE"
+    assert tree.blackboard_values()["failure_reason"] == "BAD_INPUT"
