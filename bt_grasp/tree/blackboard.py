@@ -17,6 +17,9 @@ from __future__ import annotations
 from collections.abc import Iterator
 from typing import Any
 
+from bt_grasp.tree.exceptions import TreeRuntimeError
+from bt_grasp.tree.values import convert_text, copy_into
+
 
 class _Empty:
     def __repr__(self) -> str:
@@ -27,14 +30,37 @@ class _Empty:
 EMPTY: Any = _Empty()
 
 
+#: the scalar types an entry can be declared with (BT.CPP's strongly typed entries)
+_SCALARS = (bool, int, float, str)
+
+
+class BlackboardTypeError(TreeRuntimeError):
+    """A value or a port does not fit the type an entry was declared with (BT.CPP's "once declared, the
+    type of a port shall not change")."""
+
+
 class Entry:
-    """One blackboard value; shared between blackboards that remap to it."""
+    """One blackboard value; shared between blackboards that remap to it.
 
-    __slots__ = ("sequence_id", "value")
+    ``declared`` is the scalar type the entry was declared with (by a typed port of the tree, or by the
+    first value a node wrote), None while any value may go in (entries a script created: BT.CPP's
+    ``AnyTypeAllowed``). ``sequence_id`` counts the writes (``WasEntryUpdated`` reads it).
+    """
 
-    def __init__(self, value: Any = EMPTY) -> None:
+    __slots__ = ("declared", "sequence_id", "value")
+
+    def __init__(self, value: Any = EMPTY, declared: type | None = None) -> None:
         self.value = value
         self.sequence_id = 0
+        self.declared = declared
+
+
+def scalar_type(value: Any) -> type | None:
+    """``bool``, ``int``, ``float`` or ``str`` for a scalar value, None for anything else."""
+    for kind in _SCALARS:
+        if isinstance(value, kind):
+            return kind
+    return None
 
 
 def is_private(key: str) -> bool:
@@ -104,9 +130,27 @@ class Blackboard:
         self._storage[key] = entry
         return entry
 
-    def declare(self, key: str) -> None:
-        """Create an empty entry (BT.CPP creates one for every ``{key}`` port when it builds a tree)."""
-        self.create_entry(key)
+    def declare(self, key: str, kind: type | None = None) -> None:
+        """Create an empty entry (BT.CPP creates one for every ``{key}`` port when it builds a tree) declared
+        with the port's scalar type; a second port of another scalar type raises BlackboardTypeError."""
+        entry = self.create_entry(key)
+        kind = kind if kind in _SCALARS else None
+        if kind is None:
+            return
+        if entry.declared is None:
+            entry.declared = kind
+        elif entry.declared is not kind:
+            raise BlackboardTypeError(
+                f"blackboard entry '{key}' is used by ports of type {entry.declared.__name__} and "
+                f"{kind.__name__}; once declared, the type of an entry shall not change"
+            )
+
+    def unset(self, key: str) -> None:
+        """Remove ``key`` from this blackboard (BT.CPP ``unset``; a missing key is not an error)."""
+        if key.startswith("@"):
+            self.root.unset(key[1:])
+            return
+        self._storage.pop(key, None)
 
     # ---- values --------------------------------------------------------------------------------
     def has(self, key: str) -> bool:
@@ -128,16 +172,27 @@ class Blackboard:
         return entry.value
 
     def set(self, key: str, value: Any) -> None:
-        """Write ``key``, creating the entry (in the scope remapping says) when needed."""
+        """Write ``key``, creating the entry (in the scope remapping says) when needed, as BT.CPP's
+        ``Blackboard::set``: the first number or bool written declares the entry's type; a later scalar of
+        another type is converted (text parsed, numbers cast without loss) or refused (BlackboardTypeError)."""
         entry = self.entry(key) or self.create_entry(key)
+        kind = scalar_type(value)
+        if entry.declared is not None and kind is not None and kind is not entry.declared:
+            value = _fit(key, value, entry)
+        elif entry.declared is None and kind is not None and kind is not str:
+            entry.declared = kind
         entry.value = value
         entry.sequence_id += 1
 
     def set_local(self, key: str, value: Any) -> None:
-        """Write ``key`` in this blackboard itself, ignoring autoremapping (SubTree literal ports)."""
+        """Write ``key`` in this blackboard itself, ignoring autoremapping (SubTree literal ports); a number
+        or bool declares the entry's type, as BT.CPP's typed ``set`` of a literal port does."""
         entry = self._storage.get(key)
         if entry is None:
             entry = self._storage[key] = Entry()
+        kind = scalar_type(value)
+        if kind is not None and kind is not str:
+            entry.declared = kind
         entry.value = value
         entry.sequence_id += 1
 
@@ -151,3 +206,17 @@ class Blackboard:
 
     def __repr__(self) -> str:
         return f"Blackboard({self.items()!r})"
+
+
+def _fit(key: str, value: Any, entry: Entry) -> Any:
+    """``value`` converted to the type ``entry`` was declared with."""
+    declared = entry.declared
+    assert declared is not None
+    try:
+        fitted = convert_text(value, declared) if isinstance(value, str) else copy_into(value, declared())
+    except TreeRuntimeError as exc:
+        raise BlackboardTypeError(
+            f"blackboard entry '{key}' holds {declared.__name__}; cannot store {value!r} ({exc})"
+        ) from None
+    current = entry.value
+    return fitted if current is EMPTY or scalar_type(current) is None else copy_into(fitted, current)

@@ -13,16 +13,17 @@ from dataclasses import dataclass, field
 
 from bt_grasp.clock import Clock
 from bt_grasp.errors import TreeFileError
-from bt_grasp.tree.blackboard import Blackboard
+from bt_grasp.tree.blackboard import Blackboard, BlackboardTypeError
 from bt_grasp.tree.builtins.subtree import SubTreeNode
 from bt_grasp.tree.context import NodeContext
 from bt_grasp.tree.exceptions import PortValueError, ScriptSyntaxError
 from bt_grasp.tree.formats.document import Document, NodeDecl
-from bt_grasp.tree.node import BtNode
+from bt_grasp.tree.node import BtNode, WakeUp
 from bt_grasp.tree.ports import PortAccessor, blackboard_key
 from bt_grasp.tree.registry import NodeKind, NodeRegistry, NodeSpec
 from bt_grasp.tree.substitution import SubstitutionRule, substitute
 from bt_grasp.tree.validate import check_models, resolve_node, resolve_subtree
+from bt_grasp.tree.values import literal_value
 
 SUBTREE_SPEC = NodeSpec(
     "SubTree", NodeKind.SUBTREE, (), lambda ctx: SubTreeNode(ctx, ""), "Runs a BehaviorTree on its own blackboard."
@@ -97,6 +98,7 @@ class TreeBuilder:
     clock: Clock
     rules: tuple[SubstitutionRule, ...] = ()
     _uids: itertools.count = field(default_factory=lambda: itertools.count(1))
+    wake_up: WakeUp = field(default_factory=WakeUp)
 
     def build(self, main: str, root_blackboard: Blackboard) -> BtNode:
         return self._node(self.document.trees[main].root, root_blackboard, "", "", (main,))
@@ -108,6 +110,7 @@ class TreeBuilder:
             enums=self.registry.enums,
             source=decl.source,
             line=decl.line,
+            wake_up=self.wake_up,
             **kwargs,  # type: ignore[arg-type]
         )
 
@@ -124,7 +127,10 @@ class TreeBuilder:
             spec, ports = replacement, {}
         for value in ports.values():
             if value.key is not None:
-                bb.declare(value.key)
+                try:
+                    bb.declare(value.key, value.port.type)
+                except BlackboardTypeError as exc:
+                    raise decl.error(f"{spec.name}: port '{value.port.name}': {exc}") from None
         ctx = self._context(
             decl,
             name=name,
@@ -161,8 +167,8 @@ class TreeBuilder:
             key = blackboard_key(value, port)
             if key is not None:
                 inner.add_remapping(port, key)
-            else:
-                inner.set_local(port, value)
+            else:  # a literal: an integer, a real or text, as BT.CPP 4.10 types it
+                inner.set_local(port, literal_value(value))
         sub_instance = (instance + "/" if instance else "") + (decl.name or f"{subtree_id}::{uid}")
         tree = self.document.trees[subtree_id]
         child = self._node(tree.root, inner, sub_instance + "/", sub_instance, (*stack, subtree_id))

@@ -6,7 +6,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from bt_grasp.tree.node import NO_CONDITIONS, Conditions
+from bt_grasp.tree.node import NO_CONDITIONS, Conditions, WakeUp
 
 if TYPE_CHECKING:
     import py_trees
@@ -37,6 +37,7 @@ class NodeContext:
         conditions: parsed pre/post-condition scripts
         enums: scripting enums of the registry
         source: the file the node was written in; ``line`` its line there
+        wake_up: the tree's wake-up signal and control-period counter (shared by all its nodes)
     """
 
     name: str
@@ -54,6 +55,7 @@ class NodeContext:
     enums: Mapping[str, int] = field(default_factory=dict)
     source: str = ""
     line: int = 0
+    wake_up: WakeUp = field(default_factory=WakeUp)
 
     @property
     def root_blackboard(self) -> Blackboard:

@@ -20,6 +20,10 @@ A leaf is written like any py_trees behaviour::
 A tick calls ``initialise()`` when the leaf was not RUNNING, then ``update()``; a finished update (SUCCESS or
 FAILURE) is followed by ``terminate(new_status)``. When a parent halts a RUNNING leaf (ReactiveSequence,
 Timeout, ``_while``) ``terminate(Status.INVALID)`` is called and the leaf returns to IDLE.
+
+A leaf whose spec ``needs_robot`` does one control period of work per tick: when a wake-up re-run of the
+root (see :class:`bt_grasp.tree.node.WakeUp`) reaches it again within the same control period while it is
+RUNNING, it answers RUNNING without calling ``update()``; the robot moves only between periods anyway.
 """
 
 from __future__ import annotations
@@ -48,6 +52,8 @@ class Leaf(BtNode):
         self.blackboard = ctx.blackboard
         #: why the last attempt failed, as a name such as "NO_DETECTION"; None otherwise
         self.failure_reason: str | None = None
+        self._bt_once_per_period = ctx.spec.needs_robot
+        self._bt_updated_in = -1
 
     def fail(self, reason: str, sentence: str) -> Status:
         """Report a typed failure: sets ``failure_reason`` and ``feedback_message`` and writes
@@ -60,9 +66,13 @@ class Leaf(BtNode):
         return Status.FAILURE
 
     def bt_tick(self) -> BtStatus:
+        period = self._bt_wake_up.period
         if self.bt_state is not BtStatus.RUNNING:
             self.failure_reason = None
             self.initialise()
+        elif self._bt_once_per_period and self._bt_updated_in == period:
+            return BtStatus.RUNNING  # a wake-up re-run within the same control period: no second update
+        self._bt_updated_in = period
         new_status = self.update()
         result = FROM_PY.get(new_status) if isinstance(new_status, Status) else None
         if result is None:

@@ -115,12 +115,18 @@ class LoadedTree:
     ticks: int = 0
 
     def tick(self) -> BtStatus:
-        """Tick the root once (a completed root is reset to IDLE first, as BT.CPP's ``tickRoot``)."""
+        """One control period, as BT.CPP's ``tickOnce``: a completed root is reset to IDLE first, then the root
+        is executed, and again while it is RUNNING and a node requested a wake-up (see :attr:`runs`)."""
         for _ in self.root.tick():
             pass
         self.ticks += 1
         self.status = self.root.bt_last_root_status
         return self.status
+
+    @property
+    def runs(self) -> int:
+        """How many times the last :meth:`tick` executed the root (1 + wake-up re-runs)."""
+        return self.root.bt_wake_up.runs
 
     def halt(self) -> None:
         """Halt the whole tree (every RUNNING node gets ``terminate(INVALID)``)."""

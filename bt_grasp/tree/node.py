@@ -16,8 +16,11 @@ hold exactly:
 * halting (BT.CPP ``haltChild``) calls ``halt_node`` on RUNNING children, which reaches a leaf's
   ``terminate(Status.INVALID)``.
 
-``tick()`` (the py_trees generator) ticks the node as a tree root: it resets a completed root to IDLE first,
-then ticks once and yields every node, so ``py_trees.trees.BehaviourTree`` with visitors works unchanged.
+``tick()`` (the py_trees generator) ticks the node as a tree root, as BT.CPP's ``Tree::tickOnce``: it resets
+a completed root to IDLE first, executes the root, and executes it again at once while the root is RUNNING
+and a node requested a wake-up (:class:`WakeUp`; Repeat, RetryUntilSuccessful, SequenceWithMemory,
+AsyncSequence and AsyncFallback do after each synchronous child). It then yields every node, so
+``py_trees.trees.BehaviourTree`` with visitors works unchanged.
 """
 
 from __future__ import annotations
@@ -30,13 +33,14 @@ from typing import TYPE_CHECKING, Any
 import py_trees
 from py_trees.common import Status
 
+from bt_grasp.tree.exceptions import TreeRuntimeError
 from bt_grasp.tree.registry import NodeKind
 
 if TYPE_CHECKING:
     from bt_grasp.tree.blackboard import Blackboard
     from bt_grasp.tree.context import NodeContext
     from bt_grasp.tree.registry import NodeSpec
-    from bt_grasp.tree.scripting.operators import Program
+    from bt_grasp.tree.scripting import Program
 
 
 class BtStatus(enum.Enum):
@@ -86,6 +90,33 @@ class Conditions:
 
 NO_CONDITIONS = Conditions()
 
+#: a control period may execute the root at most this many times (wake-up re-runs included)
+WAKE_UP_LIMIT = 10_000
+
+
+class WakeUp:
+    """BT.CPP's ``WakeUpSignal`` shared by the nodes of one tree, plus the control-period counter.
+
+    ``emit`` is BT.CPP's ``emitWakeUpSignal``; ``take`` reads and clears the flag (``waitFor(0)``).
+    ``period`` counts control periods (CLI ticks); ``runs`` the root executions in the current one.
+    """
+
+    __slots__ = ("pending", "period", "requester", "runs")
+
+    def __init__(self) -> None:
+        self.pending = False
+        self.requester = ""
+        self.period = 0
+        self.runs = 0
+
+    def emit(self, node: BtNode) -> None:
+        self.pending = True
+        self.requester = f"{node.bt_type} '{node.bt_path}'"
+
+    def take(self) -> bool:
+        pending, self.pending = self.pending, False
+        return pending
+
 
 class BtNode(py_trees.behaviour.Behaviour):
     """Base of every node built from a tree file. Subclasses implement :meth:`bt_tick` (and ``halt``)."""
@@ -117,6 +148,7 @@ class BtNode(py_trees.behaviour.Behaviour):
         self._bt_conditions: Conditions = ctx.conditions
         self._bt_pre = ctx.conditions.pre
         self._bt_has_post = any(k in ctx.conditions.scripts for k in POST_CONDITIONS[1:])
+        self._bt_wake_up: WakeUp = ctx.wake_up
 
     # ---- what subclasses provide ------------------------------------------------------------------
     def bt_tick(self) -> BtStatus:
@@ -210,11 +242,35 @@ class BtNode(py_trees.behaviour.Behaviour):
     reset_children = halt_children
 
     # ---- py_trees integration ---------------------------------------------------------------------
+    @property
+    def bt_wake_up(self) -> WakeUp:
+        """The tree's shared wake-up signal and control-period counter."""
+        return self._bt_wake_up
+
+    def emit_wake_up(self) -> None:
+        """Ask the tree to execute the root again within this control period (BT.CPP ``emitWakeUpSignal``)."""
+        self._bt_wake_up.emit(self)
+
     def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
-        """Tick this node as the root of a tree, then yield every node (for py_trees visitors)."""
+        """Tick this node as the root of a tree for one control period (BT.CPP ``tickOnce``), then yield every
+        node (for py_trees visitors). Raises TreeRuntimeError when the wake-up re-runs exceed
+        :data:`WAKE_UP_LIMIT`, naming the node that kept requesting them."""
+        wake_up = self._bt_wake_up
+        wake_up.period += 1
         if self.bt_state.completed:
             self.reset_status()
-        self.bt_last_root_status = self.execute_tick()
+        status = self.execute_tick()
+        runs = 1
+        while status is BtStatus.RUNNING and wake_up.take():
+            if runs >= WAKE_UP_LIMIT:
+                raise TreeRuntimeError(
+                    f"{wake_up.requester} requested a wake-up {WAKE_UP_LIMIT} times within one control period "
+                    "(an endless synchronous loop, e.g. Repeat num_cycles=-1 over a child that never runs)"
+                )
+            status = self.execute_tick()
+            runs += 1
+        wake_up.runs = runs
+        self.bt_last_root_status = status
         yield from self.iterate()
 
     def stop(self, new_status: Status = Status.INVALID) -> None:

@@ -9,6 +9,7 @@ from typing import Any
 from bt_grasp.tree.blackboard import EMPTY, Blackboard
 from bt_grasp.tree.exceptions import PortValueError, TreeRuntimeError
 from bt_grasp.tree.registry import NO_DEFAULT, PortDirection, PortSpec, is_text_port_type
+from bt_grasp.tree.values import cast_to
 
 _TRUE = ("true", "True", "TRUE", "1")
 _FALSE = ("false", "False", "FALSE", "0")
@@ -128,7 +129,9 @@ class PortAccessor:
         return self._value(name).key
 
     def get(self, name: str) -> Any:
-        """The port's value: the typed literal, or the blackboard entry (converted when it holds text)."""
+        """The port's value: the typed literal, or the blackboard entry converted to the port's type as
+        BT.CPP's ``getInput<T>`` does (text parsed; a real becomes an integer only without a fraction, an
+        integer a bool only when 0 or 1; a number read by a text port renders as BT.CPP prints it)."""
         value = self._value(name)
         if value.key is None:
             return value.literal
@@ -137,16 +140,10 @@ class PortAccessor:
             raise TreeRuntimeError(
                 f"{self._owner}: port '{name}' reads blackboard entry '{value.key}', which has no value yet"
             )
-        raw = entry.value
-        port = value.port
-        if isinstance(raw, str) and port.type not in (str, object):
-            try:
-                return convert_text(raw, port)
-            except PortValueError as exc:
-                raise TreeRuntimeError(f"{self._owner}: {exc} (from blackboard entry '{value.key}')") from None
-        if port.type is float and isinstance(raw, int) and not isinstance(raw, bool):
-            return float(raw)
-        return raw
+        try:
+            return cast_to(entry.value, value.port.type)
+        except TreeRuntimeError as exc:
+            raise TreeRuntimeError(f"{self._owner}: port '{name}' (blackboard entry '{value.key}'): {exc}") from None
 
     def set(self, name: str, value: Any) -> None:
         """Write an output (or inout) port's blackboard entry."""

@@ -58,7 +58,7 @@ def test_while_halts_running_node_when_it_turns_false() -> None:
     h.tree.root_blackboard.set("go", False)
     # tick 2: _while false while RUNNING -> Move halted (terminate INVALID), SKIPPED -> the Sequence succeeds
     assert h.tick() == S
-    assert h["Move"].terminated == ["INVALID"] and h.bb["halted"] is True
+    assert h["Move"].terminated == ["INVALID"] and h.bb["halted"] == 1.0
 
 
 def test_while_false_when_idle_skips() -> None:
@@ -75,7 +75,7 @@ def test_post_conditions() -> None:
     h = Harness(xml)
     h["B"].returns(F)
     assert h.tick() == S
-    assert h.bb["ok"] is True and h.bb["failed"] == "B" and h.bb["n"] == 2
+    assert h.bb["ok"] == 1.0 and h.bb["failed"] == "B" and h.bb["n"] == 2
 
 
 def test_on_halted_runs_when_reactive_parent_halts() -> None:
@@ -90,4 +90,4 @@ def test_post_conditions_do_not_run_while_running() -> None:
     h = Harness('<Stub name="A" _post="done := true"/>')
     h["A"].returns(R, S)
     assert h.tick() == R and "done" not in h.bb
-    assert h.tick() == S and h.bb["done"] is True
+    assert h.tick() == S and h.bb["done"] == 1.0

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import pytest
 
+from bt_grasp.tree.exceptions import TreeRuntimeError
+
 from .harness import F, Harness, R, S
 
 
@@ -42,9 +44,11 @@ def test_retry_gives_up_after_num_attempts_and_resumes_running_child() -> None:
     assert h.tick() == R and h.tick() == S
 
 
-def test_retry_forever_does_not_hang_a_tick() -> None:
+def test_retry_forever_over_a_synchronous_failure_is_an_error_not_a_hang() -> None:
     h = Harness('<RetryUntilSuccessful num_attempts="-1"><AlwaysFailure/></RetryUntilSuccessful>')
-    assert h.tick() == R  # gives the tick back after SYNC_LOOP_LIMIT synchronous failures
+    # BT.CPP's tickOnce() would re-run the root forever; bt_grasp stops and names the node
+    with pytest.raises(TreeRuntimeError, match=r"RetryUntilSuccessful 'RetryUntilSuccessful::1' requested a wake-up"):
+        h.tick()
 
 
 def test_repeat_loops_within_one_tick_and_fails_on_child_failure() -> None:
@@ -162,6 +166,6 @@ def test_failure_is_reads_the_reason_a_leaf_reported() -> None:
 
     h.node("Perceive").update = failing_update  # type: ignore[method-assign]
     assert h.tick() == S
-    assert h.bb["recovered"] is True
+    assert h.bb["recovered"] == 1.0
     assert h.bb["failure_reason"] == "NO_DETECTION" and h.bb["failed_leaf"] == "Perceive"
     assert h.node("Perceive").failure_reason == "NO_DETECTION"  # type: ignore[attr-defined]

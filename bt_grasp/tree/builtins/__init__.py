@@ -3,13 +3,13 @@
 
 from __future__ import annotations
 
-from bt_grasp.tree.builtins import actions, conditions, controls, decorators
+from bt_grasp.tree.builtins import actions, conditions, controls, decorators, loops
 from bt_grasp.tree.registry import NodeRegistry, NodeSpec
 
 
 def builtin_specs() -> tuple[NodeSpec, ...]:
     """The specs :func:`register_builtins` adds (SubTree is handled by the loader, not registered)."""
-    return controls.SPECS + decorators.SPECS + actions.SPECS + conditions.SPECS
+    return controls.SPECS + decorators.SPECS + loops.SPECS + actions.SPECS + conditions.SPECS
 
 
 def register_builtins(registry: NodeRegistry) -> None:

@@ -1,5 +1,5 @@
-"""BT.CPP v4 actions: AlwaysSuccess, AlwaysFailure, SetBlackboard, Sleep, Script. Sleep reads the injected
-simulated clock."""
+"""BT.CPP 4.10 actions: AlwaysSuccess, AlwaysFailure, SetBlackboard, UnsetBlackboard, WasEntryUpdated, Sleep,
+Script. Sleep reads the injected simulated clock."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from bt_grasp.tree.builtins.manifest import IN, INOUT, action
 from bt_grasp.tree.context import NodeContext
 from bt_grasp.tree.exceptions import PortValueError, ScriptSyntaxError, TreeRuntimeError
 from bt_grasp.tree.leaf import Leaf
-from bt_grasp.tree.ports import convert_text
+from bt_grasp.tree.ports import blackboard_key, convert_text
 from bt_grasp.tree.registry import PortDirection, PortSpec
 from bt_grasp.tree.scripting import Program, parse_script
 
@@ -84,6 +84,32 @@ class Script(ScriptLeaf):
         return Status.SUCCESS
 
 
+class UnsetBlackboard(Leaf):
+    """Removes the entry ``key`` from the blackboard (a missing entry is not an error); SUCCESS."""
+
+    def update(self) -> Status:
+        self.blackboard.unset(str(self.ports.get("key")))
+        return Status.SUCCESS
+
+
+class WasEntryUpdated(Leaf):
+    """SUCCESS when the entry was written since this node last looked (or ever, the first time), FAILURE
+    otherwise or when it does not exist."""
+
+    def __init__(self, ctx: NodeContext) -> None:
+        super().__init__(ctx)
+        text = ctx.attributes.get("entry", "")
+        self.key = blackboard_key(text, "entry") or text
+        self.seen = 0
+
+    def update(self) -> Status:
+        entry = self.blackboard.entry(self.key)
+        if entry is None:
+            return Status.FAILURE
+        previous, self.seen = self.seen, entry.sequence_id
+        return Status.SUCCESS if previous != entry.sequence_id else Status.FAILURE
+
+
 CODE_PORT = PortSpec("code", IN, str, description="the script to run")
 
 SPECS = (
@@ -103,4 +129,14 @@ SPECS = (
         (PortSpec("msec", IN, int, description="duration in milliseconds of simulated time"),),
     ),
     action(Script, "Runs a script; SUCCESS.", (CODE_PORT,)),
+    action(
+        UnsetBlackboard,
+        "Removes a blackboard entry.",
+        (PortSpec("key", IN, str, description="the entry to remove"),),
+    ),
+    action(
+        WasEntryUpdated,
+        "SUCCESS when the entry was written since this node last looked.",
+        (PortSpec("entry", IN, object, description="the blackboard entry to watch ({key} or key)"),),
+    ),
 )

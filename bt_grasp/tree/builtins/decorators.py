@@ -1,6 +1,7 @@
-"""BT.CPP v4 decorators: Inverter, ForceSuccess, ForceFailure, RetryUntilSuccessful, Repeat, Timeout, Delay,
-KeepRunningUntilFailure, RunOnce, Precondition. Timeout and Delay read the injected
-simulated clock, never the wall clock."""
+"""BT.CPP 4.10 decorators, each following the corresponding ``src/decorators/*``: Inverter, ForceSuccess,
+ForceFailure, RetryUntilSuccessful, Repeat, Timeout, Delay, KeepRunningUntilFailure, RunOnce, Precondition,
+SkipUnlessUpdated and WaitValueUpdate (the Loop* family is in :mod:`bt_grasp.tree.builtins.loops`).
+Timeout and Delay read the injected simulated clock, never the wall clock."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ from bt_grasp.tree.builtins.manifest import IN, STATUS_NAMES, decorator
 from bt_grasp.tree.context import NodeContext
 from bt_grasp.tree.exceptions import ScriptSyntaxError, TreeRuntimeError
 from bt_grasp.tree.node import BtNode, BtStatus
+from bt_grasp.tree.ports import blackboard_key
 from bt_grasp.tree.registry import PortSpec
 from bt_grasp.tree.scripting import Program, parse_script
 
@@ -20,9 +22,6 @@ RUNNING, SUCCESS, FAILURE, SKIPPED, IDLE = (
     BtStatus.SKIPPED,
     BtStatus.IDLE,
 )
-
-#: a RetryUntilSuccessful/Repeat with -1 gives the tick back after this many synchronous rounds
-SYNC_LOOP_LIMIT = 10_000
 
 
 class Decorator(BtNode, py_trees.decorators.Decorator):
@@ -38,6 +37,13 @@ class Decorator(BtNode, py_trees.decorators.Decorator):
 
     def update(self) -> py_trees.common.Status:  # pragma: no cover - py_trees never calls it here
         return self.status
+
+    def execute_tick(self) -> BtStatus:
+        """BT.CPP ``DecoratorNode::executeTick``: a child left SUCCESS or FAILURE goes back to IDLE."""
+        status = super().execute_tick()
+        if self.child.bt_state.completed:
+            self.child.reset_status()
+        return status
 
     def tick_child(self) -> BtStatus:
         status = self.child.execute_tick()
@@ -85,89 +91,78 @@ class KeepRunningUntilFailure(Decorator):
     def bt_tick(self) -> BtStatus:
         self.set_bt_status(RUNNING)
         status = self.tick_child()
-        if status is SUCCESS:
+        if status.completed:
             self.reset_child()
+            return FAILURE if status is FAILURE else RUNNING
+        if status is SKIPPED:  # BT.CPP returns its own (RUNNING) status
             return RUNNING
-        if status is FAILURE:
-            self.reset_child()
-            return FAILURE
         return status
 
 
-class RetryUntilSuccessful(Decorator):
-    """Ticks the child again after each FAILURE, within the same tick, up to ``num_attempts`` (-1: forever)."""
+class _Loop(Decorator):
+    """RetryUntilSuccessful and Repeat (BT.CPP ``RetryNode``/``RepeatNode``).
+
+    The child is ticked again after each ``_again`` status, up to ``_port`` times (-1: forever). When the
+    child completed within the same tick it started in, the node yields: RUNNING plus a wake-up, so the
+    tree executes the root again at once (an enclosing reactive parent re-checks its conditions); a child
+    that had been RUNNING is restarted in the same tick.
+    """
+
+    _port = ""
+    _again: BtStatus = FAILURE  # the status that makes the loop go round
 
     def __init__(self, ctx: NodeContext) -> None:
         super().__init__(ctx)
-        self.tries = 0
+        self.count = 0
 
     def bt_tick(self) -> BtStatus:
-        attempts = int(self.ports.get("num_attempts"))
+        limit = int(self.ports.get(self._port))
+        looping = self.count < limit or limit == -1
         self.set_bt_status(RUNNING)
-        rounds = 0
-        while self.tries < attempts or attempts == -1:
+        while looping:
+            before = self.child.bt_state
             status = self.tick_child()
-            if status is SUCCESS:
-                self.tries = 0
-                self.reset_child()
-                return SUCCESS
             if status is RUNNING:
                 return RUNNING
             if status is SKIPPED:
                 self.reset_child()
                 return SKIPPED
-            self.tries += 1
-            attempts = int(self.ports.get("num_attempts"))
-            self.reset_child()
-            rounds += 1
-            if attempts == -1 and rounds >= SYNC_LOOP_LIMIT:
-                return RUNNING
-        self.tries = 0
-        return FAILURE
-
-    def halt(self) -> None:
-        self.tries = 0
-        super().halt()
-
-
-class Repeat(Decorator):
-    """Ticks the child again after each SUCCESS, within the same tick, ``num_cycles`` times (-1: forever)."""
-
-    def __init__(self, ctx: NodeContext) -> None:
-        super().__init__(ctx)
-        self.count = 0
-
-    def bt_tick(self) -> BtStatus:
-        cycles = int(self.ports.get("num_cycles"))
-        self.set_bt_status(RUNNING)
-        rounds = 0
-        while self.count < cycles or cycles == -1:
-            status = self.tick_child()
-            if status is SUCCESS:
-                self.count += 1
-                self.reset_child()
-                rounds += 1
-                if cycles == -1 and rounds >= SYNC_LOOP_LIMIT:
-                    return RUNNING
-                continue
-            if status is FAILURE:
+            if status is not self._again:
                 self.count = 0
                 self.reset_child()
-                return FAILURE
-            if status is RUNNING:
+                return status
+            self.count += 1
+            limit = int(self.ports.get(self._port))
+            looping = self.count < limit or limit == -1
+            self.reset_child()
+            if before is IDLE and looping:
+                self.emit_wake_up()
                 return RUNNING
-            self.reset_child()  # SKIPPED
-            return SKIPPED
         self.count = 0
-        return SUCCESS
+        return SUCCESS if self._again is SUCCESS else FAILURE
 
     def halt(self) -> None:
         self.count = 0
         super().halt()
+
+
+class RetryUntilSuccessful(_Loop):
+    """Ticks the child again after each FAILURE, up to ``num_attempts`` attempts (-1: forever)."""
+
+    _port = "num_attempts"
+    _again = FAILURE
+
+
+class Repeat(_Loop):
+    """Ticks the child again after each SUCCESS, ``num_cycles`` times (-1: forever)."""
+
+    _port = "num_cycles"
+    _again = SUCCESS
 
 
 class Timeout(Decorator):
-    """Halts the RUNNING child and fails once ``msec`` of simulated time passed since it started."""
+    """Halts the RUNNING child and fails once ``msec`` of simulated time passed since it started
+    (``msec`` 0: no limit). The time is checked when the node is ticked, once per control period."""
 
     def __init__(self, ctx: NodeContext) -> None:
         super().__init__(ctx)
@@ -226,7 +221,8 @@ class Delay(Decorator):
 
 
 class RunOnce(Decorator):
-    """Ticks the child until it completes once; afterwards SKIPPED (``then_skip``) or that same status."""
+    """Ticks the child until it completes once; afterwards SKIPPED (``then_skip``) or that same status.
+    The memory survives halts and resets, as in BT.CPP."""
 
     def __init__(self, ctx: NodeContext) -> None:
         super().__init__(ctx)
@@ -279,6 +275,51 @@ class Precondition(Decorator):
         super().halt()
 
 
+def entry_key(ctx: NodeContext) -> str:
+    """The blackboard key an ``entry`` port names, ``{key}`` or plain ``key`` (BT.CPP reads both)."""
+    text = ctx.attributes.get("entry", "")
+    return blackboard_key(text, "entry") or text
+
+
+class _EntryUpdated(Decorator):
+    """SkipUnlessUpdated / WaitValueUpdate (BT.CPP ``EntryUpdatedDecorator``): the child is ticked only when
+    the entry was written since this node last looked (a RUNNING child is resumed regardless)."""
+
+    _not_updated: BtStatus = SKIPPED
+
+    def __init__(self, ctx: NodeContext) -> None:
+        super().__init__(ctx)
+        self.key = entry_key(ctx)
+        self.seen = 0
+        self.child_running = False
+
+    def bt_tick(self) -> BtStatus:
+        if not self.child_running:
+            entry = self._bt_blackboard.entry(self.key)
+            if entry is None:
+                return self._not_updated
+            previous, self.seen = self.seen, entry.sequence_id
+            if previous == entry.sequence_id:
+                return self._not_updated
+        status = self.tick_child()
+        self.child_running = status is RUNNING
+        return status
+
+    def halt(self) -> None:
+        self.child_running = False
+        super().halt()
+
+
+class SkipUnlessUpdated(_EntryUpdated):
+    _not_updated = SKIPPED
+
+
+class WaitValueUpdate(_EntryUpdated):
+    _not_updated = RUNNING
+
+
+_ENTRY = PortSpec("entry", IN, object, description="the blackboard entry to watch ({key} or key)")
+
 SPECS = (
     decorator(Inverter, "Swaps SUCCESS and FAILURE."),
     decorator(ForceSuccess, "SUCCESS whenever the child completes."),
@@ -317,4 +358,6 @@ SPECS = (
             PortSpec("else", IN, str, "FAILURE", "status when the condition is false", STATUS_NAMES),
         ),
     ),
+    decorator(SkipUnlessUpdated, "Ticks the child only when the entry was written since; else SKIPPED.", (_ENTRY,)),
+    decorator(WaitValueUpdate, "Ticks the child only when the entry was written since; else RUNNING.", (_ENTRY,)),
 )

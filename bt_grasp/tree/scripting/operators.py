@@ -1,23 +1,37 @@
-"""The evaluated form of a BT.CPP script: small expression nodes with BT.CPP's value rules.
+"""The evaluated form of a BT.CPP script (BT.CPP ``scripting/operators.hpp``), with BT.CPP's value rules.
 
-Values are Python ``bool``, ``int``, ``float``, ``str`` or any object a leaf wrote to the blackboard.
-Numbers follow BT.CPP (which computes in ``double``): ``+ - *`` keep ints when both operands are ints,
-``/`` always gives a float, ``==`` compares numbers with a float32 epsilon, a string compared with a number
-is converted (``'true'`` is 1, an enum name is its value). ``&&`` and ``||`` evaluate both sides, as
-BT.CPP does, and need numbers (``true``/``false`` are numbers).
+* An integer literal is an integer; every operator's result is a real: ``6 / 3`` is 2.0, ``3 * 2`` is 6.0,
+  ``-2`` is -2.0, ``1 < 2`` is 1.0 (see :mod:`bt_grasp.tree.values`).
+* ``&&`` and ``||`` evaluate both sides; their operands must be castable to bool.
+* ``..`` joins a string with a string or a number (a real renders with six decimals).
+* Assignment: ``:=`` creates the entry, ``=`` needs it to exist; the first value of an untyped entry is
+  stored as it is, later values are converted to the entry's type (a number entry given a numeric string
+  becomes a real; an entry declared by a typed port converts the string to that type). A compound
+  assignment (``+= -= *= /=``) computes in reals and converts back to the destination's type, so
+  ``n := 6; n /= 2`` keeps the integer 3 and ``n := 5; n /= 2`` is an error.
 """
 
 from __future__ import annotations
 
-import operator
+import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
 from bt_grasp.tree.blackboard import EMPTY, Blackboard
 from bt_grasp.tree.exceptions import TreeRuntimeError
-
-_EPS = 1.1920928955078125e-07  # std::numeric_limits<float>::epsilon()
+from bt_grasp.tree.values import (
+    EPSILON,
+    convert_text,
+    copy_into,
+    is_number,
+    is_scalar,
+    to_bool,
+    to_int,
+    to_real,
+    to_text,
+    type_name,
+)
 
 
 @dataclass(frozen=True)
@@ -28,43 +42,13 @@ class Env:
     enums: Mapping[str, int]
 
 
-def is_number(value: Any) -> bool:
-    return isinstance(value, int | float)  # bool is an int
-
-
-def truthy(value: Any) -> bool:
-    """BT.CPP ``cast<bool>``: a number is true when not zero, a string must read as a boolean."""
-    if is_number(value):
-        return bool(value)
-    if isinstance(value, str):
-        lowered = value.strip()
-        if lowered in ("true", "True", "TRUE", "1"):
-            return True
-        if lowered in ("false", "False", "FALSE", "0", ""):
-            return False
-    raise TreeRuntimeError(f"script: cannot use {value!r} as a boolean")
-
-
-def string_to_number(value: str, env: Env) -> float:
-    if value == "true":
-        return 1.0
-    if value == "false":
-        return 0.0
-    if value in env.enums:
-        return float(env.enums[value])
-    try:
-        return float(value)
-    except ValueError:
-        raise TreeRuntimeError(f"script: cannot convert string {value!r} to a number") from None
-
-
-def _as_number(value: Any) -> int | float:
-    return int(value) if isinstance(value, bool) else value
-
-
 class Expr:
     def evaluate(self, env: Env) -> Any:
         raise NotImplementedError
+
+
+def _not_init(side: str, op: str) -> TreeRuntimeError:
+    return TreeRuntimeError(f"The {side} operand of the operator [{op}] is not initialized")
 
 
 @dataclass(frozen=True)
@@ -77,19 +61,17 @@ class Literal(Expr):
 
 @dataclass(frozen=True)
 class Name(Expr):
-    """An identifier: a scripting enum when registered, otherwise a blackboard variable."""
+    """An identifier: a scripting enum (read as a real) when registered, otherwise a blackboard entry."""
 
     name: str
 
     def evaluate(self, env: Env) -> Any:
         if self.name in env.enums:
-            return env.enums[self.name]
+            return float(env.enums[self.name])
         entry = env.blackboard.entry(self.name)
         if entry is None:
-            raise TreeRuntimeError(f"script: variable not found: {self.name}")
-        if entry.value is EMPTY:
-            raise TreeRuntimeError(f"script: variable {self.name} has no value yet")
-        return entry.value
+            raise TreeRuntimeError(f"Variable not found: {self.name}")
+        return entry.value  # may be EMPTY: operators report it
 
 
 @dataclass(frozen=True)
@@ -99,52 +81,75 @@ class Unary(Expr):
 
     def evaluate(self, env: Env) -> Any:
         value = self.operand.evaluate(env)
-        if not is_number(value):
-            raise TreeRuntimeError(f"script: operator {self.op} needs a number, got {value!r}")
-        if self.op == "-":
-            return -_as_number(value)
-        if self.op == "!":
-            return not value
-        return float(~int(value))
+        if is_number(value):
+            real = float(value)
+            if self.op == "-":
+                return -real
+            if self.op == "!":
+                return 0.0 if real != 0.0 else 1.0
+            if not -(2.0**63) <= real < 2.0**63:
+                raise TreeRuntimeError("Number out of range for bitwise operation")
+            return float(~int(real))
+        if isinstance(value, str):
+            raise TreeRuntimeError("Invalid operator for std::string")
+        raise TreeRuntimeError("ExprUnaryArithmetic: undefined")
 
 
-_ARITH: dict[str, Callable[[Any, Any], Any]] = {
-    "+": operator.add,
-    "-": operator.sub,
-    "*": operator.mul,
-    "/": operator.truediv,
+_ARITH: dict[str, Callable[[float, float], float]] = {
+    "+": lambda a, b: a + b,
+    "-": lambda a, b: a - b,
+    "*": lambda a, b: a * b,
+    "/": lambda a, b: _divide(a, b),
 }
-_BITS: dict[str, Callable[[int, int], int]] = {"&": operator.and_, "|": operator.or_, "^": operator.xor}
+_BITS: dict[str, Callable[[int, int], int]] = {
+    "&": lambda a, b: a & b,
+    "|": lambda a, b: a | b,
+    "^": lambda a, b: a ^ b,
+}
+
+
+def _divide(lhs: float, rhs: float) -> float:
+    """IEEE division, as C++ does it (Python raises on a zero divisor)."""
+    if rhs == 0.0:
+        if lhs == 0.0 or math.isnan(lhs):
+            return math.nan
+        return math.copysign(math.inf, lhs) * math.copysign(1.0, rhs)
+    return lhs / rhs
 
 
 def arithmetic(op: str, lhs: Any, rhs: Any) -> Any:
+    """BT.CPP ``ExprBinaryArithmetic::evaluate`` on two values."""
+    if lhs is EMPTY:
+        raise _not_init("left", op)
+    if rhs is EMPTY:
+        raise _not_init("right", op)
     if is_number(lhs) and is_number(rhs):
         if op in _ARITH:
-            if op == "/" and rhs == 0:
-                return float("inf") if lhs > 0 else float("-inf") if lhs < 0 else float("nan")
-            return _ARITH[op](_as_number(lhs), _as_number(rhs))
+            return _ARITH[op](float(lhs), float(rhs))
         if op in _BITS:
-            if float(lhs) != int(lhs) or float(rhs) != int(rhs):
-                raise TreeRuntimeError("script: bitwise operators need integers")
-            return _BITS[op](int(lhs), int(rhs))
-        if op == "&&":
-            return bool(lhs) and bool(rhs)
-        if op == "||":
-            return bool(lhs) or bool(rhs)
+            try:
+                return float(_BITS[op](to_int(lhs), to_int(rhs)))
+            except TreeRuntimeError:
+                raise TreeRuntimeError(
+                    "Binary operators are not allowed if one of the operands is not an integer"
+                ) from None
+        if op in ("&&", "||"):
+            try:
+                left, right = to_bool(lhs), to_bool(rhs)
+            except TreeRuntimeError:
+                raise TreeRuntimeError(
+                    "Logic operators are not allowed if one of the operands is not castable to bool"
+                ) from None
+            return float(left and right) if op == "&&" else float(left or right)
+        raise TreeRuntimeError("Operation not permitted")  # ".." between two numbers
     if isinstance(lhs, str) and isinstance(rhs, str) and op == "+":
         return lhs + rhs
-    texts = isinstance(lhs, str | int | float) and isinstance(rhs, str | int | float)
-    if op == ".." and texts and (isinstance(lhs, str) or isinstance(rhs, str)):
-        return _to_text(lhs) + _to_text(rhs)
-    raise TreeRuntimeError(f"script: operation {lhs!r} {op} {rhs!r} is not permitted")
-
-
-def _to_text(value: Any) -> str:
-    if isinstance(value, bool):
-        return "1" if value else "0"
-    if isinstance(value, float) and value.is_integer():
-        return str(value)
-    return str(value)
+    texts = (isinstance(lhs, str) and (isinstance(rhs, str) or is_number(rhs))) or (
+        is_number(lhs) and isinstance(rhs, str)
+    )
+    if op == ".." and texts:
+        return to_text(lhs) + to_text(rhs)
+    raise TreeRuntimeError("Operation not permitted")
 
 
 @dataclass(frozen=True)
@@ -157,31 +162,37 @@ class Binary(Expr):
         return arithmetic(self.op, self.lhs.evaluate(env), self.rhs.evaluate(env))
 
 
-def _compare_pair(op: str, lhs: Any, rhs: Any, env: Env) -> bool:
-    if is_number(lhs) and is_number(rhs):
-        lv, rv = float(lhs), float(rhs)
-    elif isinstance(lhs, str) and isinstance(rhs, str):
-        return {"==": lhs == rhs, "!=": lhs != rhs, "<": lhs < rhs, ">": lhs > rhs,
-                "<=": lhs <= rhs, ">=": lhs >= rhs}[op]  # fmt: skip
-    elif isinstance(lhs, str) and is_number(rhs):
-        lv, rv = string_to_number(lhs, env), float(rhs)
-    elif is_number(lhs) and isinstance(rhs, str):
-        lv, rv = float(lhs), string_to_number(rhs, env)
-    else:
-        if op in ("==", "!="):
-            return (lhs == rhs) == (op == "==")
-        raise TreeRuntimeError(f"script: cannot compare {lhs!r} {op} {rhs!r}")
-    same = abs(lv - rv) <= _EPS
+def _holds(op: str, lhs: Any, rhs: Any, reals: bool) -> bool:
     if op == "==":
-        return same
+        return abs(lhs - rhs) <= EPSILON if reals else lhs == rhs
     if op == "!=":
-        return not same
-    return {"<": lv < rv, ">": lv > rv, "<=": lv <= rv, ">=": lv >= rv}[op]
+        return not (abs(lhs - rhs) <= EPSILON if reals else lhs == rhs)
+    return {"<": lhs < rhs, ">": lhs > rhs, "<=": lhs <= rhs, ">=": lhs >= rhs}[op]
+
+
+def compare(op: str, lhs: Any, rhs: Any, enums: Mapping[str, int]) -> bool:
+    """One comparison of BT.CPP ``ExprComparison``: numbers as reals, strings as bytes, a string and a
+    number by reading the string as a number (``true``, ``false`` and enum names included)."""
+    if lhs is EMPTY:
+        raise _not_init("left", op)
+    if rhs is EMPTY:
+        raise _not_init("right", op)
+    if is_number(lhs) and is_number(rhs):
+        return _holds(op, float(lhs), float(rhs), True)
+    if isinstance(lhs, str) and isinstance(rhs, str):
+        return _holds(op, lhs.encode(), rhs.encode(), False)
+    if isinstance(lhs, str) and is_number(rhs):
+        return _holds(op, to_real(lhs, enums), float(rhs), True)
+    if is_number(lhs) and isinstance(rhs, str):
+        return _holds(op, float(lhs), to_real(rhs, enums), True)
+    raise TreeRuntimeError(
+        f"Can't mix different types in Comparison. Left operand [{type_name(lhs)}] right operand [{type_name(rhs)}]"
+    )
 
 
 @dataclass(frozen=True)
 class Compare(Expr):
-    """A chained comparison ``a < b < c`` (BT.CPP evaluates each adjacent pair)."""
+    """A chained comparison ``a < b < c`` (each adjacent pair); 1.0 when all hold, else 0.0."""
 
     operands: tuple[Expr, ...]
     ops: tuple[str, ...]
@@ -190,69 +201,102 @@ class Compare(Expr):
         lhs = self.operands[0].evaluate(env)
         for op, operand in zip(self.ops, self.operands[1:], strict=True):
             rhs = operand.evaluate(env)
-            if not _compare_pair(op, lhs, rhs, env):
-                return False
+            if not compare(op, lhs, rhs, env.enums):
+                return 0.0
             lhs = rhs
-        return True
+        return 1.0
 
 
 @dataclass(frozen=True)
 class Ternary(Expr):
+    """``cond ? a : b``: the condition is read as a real (a string must be numeric, as in BT.CPP 4.10)."""
+
     condition: Expr
     then: Expr
     otherwise: Expr
 
     def evaluate(self, env: Env) -> Any:
         value = self.condition.evaluate(env)
-        chosen = bool(value) if not isinstance(value, str) else len(value) > 0
+        if value is EMPTY:
+            raise TreeRuntimeError("Any::cast failed because it is empty")
+        chosen = to_real(value) != 0.0
         return (self.then if chosen else self.otherwise).evaluate(env)
 
 
 @dataclass(frozen=True)
 class Assign(Expr):
-    """``:=`` creates, ``=`` assigns an existing entry, ``+= -= *= /=`` update a number (or append text)."""
+    """``:=`` creates, ``=`` assigns an existing entry, ``+= -= *= /=`` update it (see the module doc)."""
 
-    name: str
+    target: Expr
     op: str
     value: Expr
 
     def evaluate(self, env: Env) -> Any:
+        if not isinstance(self.target, Name):
+            raise TreeRuntimeError("Assignment left operand not a blackboard entry")
+        key = self.target.name
         bb = env.blackboard
-        entry = bb.entry(self.name)
+        entry = bb.entry(key)
         if entry is None:
             if self.op != ":=":
-                raise TreeRuntimeError(f"script: blackboard entry {self.name} does not exist yet; use := to create it")
-            entry = bb.create_entry(self.name)
+                raise TreeRuntimeError(
+                    f"The blackboard entry [{key}] doesn't exist, yet. If you want to create a new one, "
+                    "use the operator [:=] instead of [=]"
+                )
+            entry = bb.create_entry(key)
         value = self.value.evaluate(env)
+        if value is EMPTY:
+            raise _not_init("right", self.op)
         current = entry.value
         if self.op in (":=", "="):
-            new = _convert_for_entry(current, value, env, self.name)
+            new = self._assigned(key, entry.declared, current, value, env)
         else:
             if current is EMPTY:
-                raise TreeRuntimeError(f"script: {self.name} {self.op} ... needs {self.name} to have a value")
-            new = arithmetic(self.op[0], current, value)
-            if isinstance(current, int) and not isinstance(current, bool) and isinstance(new, float):
-                new = int(new) if new.is_integer() else new
+                raise _not_init("left", self.op)
+            new = self._updated(current, value)
         entry.value = new
         entry.sequence_id += 1
         return new
 
+    def _assigned(self, key: str, declared: type | None, current: Any, value: Any, env: Env) -> Any:
+        if current is EMPTY and declared is None:
+            return value
+        if isinstance(value, str) and not isinstance(current, str):
+            if declared is not None and declared is not object:
+                return convert_text(value, declared)
+            if is_number(current):
+                return to_real(value, env.enums)
+            raise TreeRuntimeError(
+                f"Error assigning a value to entry [{key}] with type [{type_name(current)}]. "
+                "The right operand is a string, can't convert to it"
+            )
+        if current is EMPTY:
+            return value
+        try:
+            return copy_into(value, current)
+        except TreeRuntimeError as exc:
+            raise TreeRuntimeError(
+                f"Error assigning a value to entry [{key}] with type [{type_name(current)}]. "
+                f"The right operand has type [{type_name(value)}] and can't be converted ({exc})"
+            ) from None
 
-def _convert_for_entry(current: Any, value: Any, env: Env, name: str) -> Any:
-    """BT.CPP keeps an entry's type after its first value: a number entry converts a string."""
-    if current is EMPTY or current is None:
-        return value
-    if is_number(current) and not isinstance(current, bool) and isinstance(value, str):
-        number = string_to_number(value, env)
-        return int(number) if isinstance(current, int) and number.is_integer() else number
-    if isinstance(current, int) and not isinstance(current, bool) and isinstance(value, float):
-        return int(value) if value.is_integer() else value
-    return value
+    def _updated(self, current: Any, value: Any) -> Any:
+        temp = current
+        if is_number(value):
+            if not is_number(current):
+                raise TreeRuntimeError("This Assignment operator can't be used with a non-numeric type")
+            temp = _ARITH[self.op[0]](float(current), float(value))
+        elif isinstance(value, str):
+            if self.op != "+=":
+                raise TreeRuntimeError("Operator not supported for strings")
+            temp = to_text(current) + value
+        return copy_into(temp, current)
 
 
 @dataclass(frozen=True)
 class Program:
-    """Statements separated by ``;``; evaluating it returns the last statement's value."""
+    """Statements (separated by ``;`` or simply following each other); evaluating it returns the last
+    statement's value."""
 
     source: str
     statements: tuple[Expr, ...]
@@ -260,12 +304,22 @@ class Program:
     def run(self, blackboard: Blackboard, enums: Mapping[str, int]) -> Any:
         env = Env(blackboard, enums)
         result: Any = None
-        for statement in self.statements:
-            result = statement.evaluate(env)
+        try:
+            for statement in self.statements:
+                result = statement.evaluate(env)
+        except TreeRuntimeError as exc:
+            raise TreeRuntimeError(f"Error in script [{self.source}]: {exc}") from None
         return result
 
     def truth(self, blackboard: Blackboard, enums: Mapping[str, int]) -> bool:
+        """The program's value as BT.CPP's ``cast<bool>`` reads it (ScriptCondition, ``_skipIf`` ...)."""
         result = self.run(blackboard, enums)
-        if result is None:
-            raise TreeRuntimeError(f"script {self.source!r} is empty, it has no true/false value")
-        return truthy(result)
+        try:
+            if result is EMPTY:
+                raise TreeRuntimeError("Any::cast failed because it is empty")
+            return to_bool(result)
+        except TreeRuntimeError as exc:
+            raise TreeRuntimeError(f"script [{self.source}]: {exc}") from None
+
+
+__all__ = ["Env", "Expr", "Program", "arithmetic", "compare", "is_scalar"]
