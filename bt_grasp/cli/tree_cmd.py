@@ -1,4 +1,4 @@
-"""`bt-grasp tree ...`: validate, show, convert and dry-run behaviour-tree files.
+"""`bt-grasp tree ...`: validate, show, convert and dry-run behaviour-tree files; write Groot2's node models.
 
 Every problem with a file or argument prints one line on stderr (``file:line: problem``) and exits 2.
 """
@@ -17,6 +17,7 @@ from bt_grasp.clock import ManualClock
 from bt_grasp.errors import InputError
 from bt_grasp.tree.node import BtStatus
 from bt_grasp.tree.registry import NodeRegistry, builtin_registry
+from bt_grasp.tree.values import display
 
 tree_app = typer.Typer(
     name="tree",
@@ -180,15 +181,40 @@ def run_cmd(
             clock.advance_s(dt_s)
     except InputError as exc:
         raise _fail(exc) from None
-    blackboard = {k: _jsonable(v) for k, v in tree.blackboard_values().items()}
-    if as_json:
+    values = tree.blackboard_values()
+    if as_json:  # typed: integers and reals stay numbers
+        blackboard = {k: _jsonable(v) for k, v in values.items()}
         typer.echo(json.dumps({"status": status.value, "ticks": tree.ticks, "blackboard": blackboard}))
-    else:
+    else:  # as BT.CPP prints values: a real with six decimals
         finished = "" if status.completed else f" (not finished after {tree.ticks} ticks)"
         typer.echo(f"{status.value} after {tree.ticks} ticks{finished}")
-        for key, value in blackboard.items():
-            typer.echo(f"  {key} = {value!r}")
+        for key, value in values.items():
+            typer.echo(f"  {key} = {display(value)}")
     raise typer.Exit(0 if status is BtStatus.SUCCESS else 1)
+
+
+@tree_app.command("models")
+def models_cmd(
+    out: Path | None = typer.Option(None, "--out", help="Write the XML here instead of printing it."),
+    include_builtins: bool = typer.Option(
+        False, "--builtins", help="Also describe BT.CPP's built-in nodes (Groot2 knows them already)."
+    ),
+) -> None:
+    """Write the TreeNodesModel of bt_grasp's nodes (ports, types, defaults), for Groot2's palette."""
+    from bt_grasp.tree.builtins import builtin_specs
+    from bt_grasp.tree.formats.models import tree_nodes_model
+
+    builtin_names = {spec.name for spec in builtin_specs()}
+    specs = [s for s in tree_registry().specs() if include_builtins or s.name not in builtin_names]
+    text = tree_nodes_model(specs)
+    if out is None:
+        typer.echo(text, nl=False)
+        return
+    try:
+        out.write_text(text, encoding="utf-8")
+    except OSError as exc:
+        raise _fail(InputError(out, f"cannot write the file: {exc.strerror}")) from None
+    typer.echo(f"wrote {len(specs)} node models to {out}")
 
 
 def register(app: typer.Typer) -> None:

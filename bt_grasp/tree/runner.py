@@ -3,6 +3,12 @@
 The runner owns no robot or simulator: it receives a :class:`bt_grasp.interfaces.Stepper` (the world),
 an optional recorder and a callable that reads the arm state. One tick per control period; the physics
 steps between ticks; timeouts inside the tree read the same simulated clock.
+
+A tick is BT.CPP's ``tickOnce``: the root may execute several times within it (wake-up re-runs, see
+:class:`bt_grasp.tree.node.WakeUp`). ``max_ticks``, the outcome's ``ticks`` and ``/bt/tick`` count control
+periods: one ``/bt/tick`` record per period, with each node's status after the last root execution and
+``ticked`` when any execution ticked it; a period with re-runs also writes a ``wake_up`` event
+(``{"tick", "runs"}``), and the outcome's ``root_runs`` counts every root execution.
 """
 
 from __future__ import annotations
@@ -58,6 +64,7 @@ class RunOutcome:
     wall_time_s: float
     failures: list[FailureEvent] = field(default_factory=list)
     retried: dict[str, int] = field(default_factory=dict)  # leaf name -> attempts started after a FAILURE
+    root_runs: int = 0  # root executions, wake-up re-runs included (>= ticks)
 
     @property
     def retries(self) -> dict[str, int]:
@@ -101,11 +108,15 @@ class TreeRunner:
         watch = self._watch
         status = BtStatus.RUNNING
         tick = 0
+        root_runs = 0
         while tick < max_ticks:
             tick += 1
             watch.new_tick()
             status = self.tree.tick()
+            root_runs += self.tree.runs
             stamp = self.stepper.now_ns()
+            if self.tree.runs > 1 and self.recorder is not None:
+                self.recorder.write_event(stamp, "wake_up", {"tick": tick, "runs": self.tree.runs})
             records = node_records(self.tree.root)
             for rec in records:
                 ticked = rec["uid"] in watch.ticked
@@ -141,6 +152,7 @@ class TreeRunner:
             wall_time_s=time.perf_counter() - wall0,
             failures=failures,
             retried=dict(watch.retries),
+            root_runs=root_runs,
         )
 
 

@@ -71,7 +71,10 @@ def to_text(value: Any) -> str:
 
 
 def display(value: Any) -> str:
-    """A value as a user reads it (blackboard dumps, replay text): BT.CPP's text for scalars."""
+    """A value as a user reads it (blackboard dumps, replay text): BT.CPP's text for numbers (a real with six
+    decimals, ``2.000000``), ``true``/``false`` for a bool (BT.CPP's ``toStr<bool>``), text as it is."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
     if is_scalar(value):
         return to_text(value)
     return repr(value)
@@ -202,6 +205,12 @@ def convert_text(text: str, kind: type) -> Any:
         if real is None:
             raise TreeRuntimeError(f"Can't convert string [{text}] to double")
         return real
+    parse = getattr(kind, "from_port_text", None)
+    if callable(parse):  # an application type (registry.is_text_port_type)
+        try:
+            return parse(text)
+        except ValueError as exc:
+            raise TreeRuntimeError(str(exc)) from None
     return text
 
 

@@ -69,13 +69,15 @@ class StubLeaf(Leaf):
 class Harness:
     """Load ``xml`` (a full file, or the body of one ``<BehaviorTree ID="Main">``) with Stub leaves."""
 
-    def __init__(self, xml: str, **kwargs: object) -> None:
+    def __init__(self, xml: str, extra_specs: tuple[NodeSpec, ...] = (), **kwargs: object) -> None:
         self.stubs: dict[str, Stub] = {}
         self.registry = builtin_registry()
         out = PortSpec("out", PortDirection.OUTPUT, object, "{=}")
         for kind, type_id in ((NodeKind.ACTION, "Stub"), (NodeKind.CONDITION, "Check")):
             self.registry.register(NodeSpec(type_id, kind, (out,), self._factory))
         self.registry.register(NodeSpec("Arm", NodeKind.ACTION, (), self._factory, needs_robot=True))
+        for spec in extra_specs:
+            self.registry.register(spec)
         if not xml.lstrip().startswith("<root"):
             xml = f'<root BTCPP_format="4"><BehaviorTree ID="Main">{xml}</BehaviorTree></root>'
         self.clock = ManualClock()

@@ -129,3 +129,95 @@ def test_while_do_else_rechecks_and_halts_the_other_branch() -> None:
     # tick 1-2: c SUCCESS -> do RUNNING; tick 3: c FAILURE -> do halted, else RUNNING
     assert [h.tick(), h.tick(), h.tick()] == [R, R, R]
     assert h["do"].halted == 1 and h.state("else") == R and h["c"].ticks == 3
+
+
+def test_async_sequence_yields_after_each_synchronous_child() -> None:
+    h = Harness(
+        '<ReactiveSequence><Check name="ok"/><AsyncSequence><Stub name="A"/><Stub name="B"/></AsyncSequence>'
+        "</ReactiveSequence>"
+    )
+    # tick 1, run 1: ok SUCCESS, A SUCCESS -> AsyncSequence RUNNING + wake-up
+    #         run 2: ok SUCCESS, B SUCCESS -> SUCCESS (one control period, two root executions)
+    assert h.tick() == S and h.tree.runs == 2 and h["ok"].ticks == 2
+
+
+def test_async_fallback_yields_after_each_synchronous_failure() -> None:
+    h = Harness('<AsyncFallback><Stub name="A"/><Stub name="B"/></AsyncFallback>')
+    h["A"].returns(F)
+    # run 1: A FAILURE -> RUNNING + wake-up; run 2: B SUCCESS -> SUCCESS
+    assert h.tick() == S and h.tree.runs == 2
+
+
+def test_sequence_with_memory_yields_after_a_synchronous_child() -> None:
+    h = Harness('<SequenceWithMemory><Stub name="A"/><Stub name="B"/><Stub name="C"/></SequenceWithMemory>')
+    # runs 1-3 within one tick: A, then B, then C -> SUCCESS
+    assert h.tick() == S and h.tree.runs == 3
+
+
+def test_parallel_all_waits_for_every_child_and_counts_failures() -> None:
+    h = Harness('<ParallelAll max_failures="1"><Stub name="A"/><Stub name="B"/></ParallelAll>')
+    h["A"].returns(F)
+    h["B"].returns(R, S)
+    # tick 1: A FAILURE (not re-ticked later), B RUNNING -> RUNNING (a failure does not stop B)
+    assert h.tick() == R and h["B"].halted == 0
+    # tick 2: B SUCCESS; 1 failure >= max_failures -> FAILURE
+    assert h.tick() == F and h["A"].ticks == 1
+
+
+def test_parallel_all_succeeds_below_max_failures() -> None:
+    h = Harness('<ParallelAll max_failures="2"><Stub name="A"/><Stub name="B"/></ParallelAll>')
+    h["A"].returns(F)
+    # tick 1: one failure < 2 -> SUCCESS
+    assert h.tick() == S
+
+
+def test_try_catch_runs_catch_then_fails() -> None:
+    h = Harness('<TryCatch><Stub name="A"/><Stub name="B"/><Stub name="Catch"/></TryCatch>')
+    h["B"].returns(F)
+    h["Catch"].returns(R, S)
+    # tick 1: A SUCCESS, B FAILURE -> catch RUNNING -> RUNNING
+    assert h.tick() == R
+    # tick 2: catch SUCCESS -> the node FAILS; the try block is not re-run
+    assert h.tick() == F and h["A"].ticks == 1 and h["B"].ticks == 1
+
+
+def test_try_catch_succeeds_without_catch() -> None:
+    h = Harness('<TryCatch><Stub name="A"/><Stub name="Catch"/></TryCatch>')
+    # tick 1: A SUCCESS -> SUCCESS, the catch child never ticks
+    assert h.tick() == S and h["Catch"].ticks == 0
+
+
+def test_try_catch_on_halt_runs_catch_once() -> None:
+    xml = (
+        '<ReactiveSequence><Check name="ok"/>'
+        '<TryCatch catch_on_halt="true"><Stub name="A"/><Stub name="Catch"/></TryCatch></ReactiveSequence>'
+    )
+    h = Harness(xml)
+    h["ok"].returns(S, F)
+    h["A"].returns(R)
+    # tick 1: A RUNNING -> RUNNING
+    assert h.tick() == R
+    # tick 2: ok FAILURE -> TryCatch halted: A halted, Catch ticked once -> FAILURE
+    assert h.tick() == F and h["A"].halted == 1 and h["Catch"].ticks == 1
+
+
+def test_switch_picks_the_matching_case_and_halts_the_old_one() -> None:
+    xml = (
+        '<ReactiveSequence><Script code="mode := m"/><Switch2 variable="{mode}" case_1="a" case_2="2">'
+        '<Stub name="A"/><Stub name="Two"/><Stub name="Other"/></Switch2></ReactiveSequence>'
+    )
+    h = Harness(xml)
+    h.tree.root_blackboard.set("m", "a")
+    h["A"].returns(R)
+    # tick 1: mode 'a' -> case 1 (A) RUNNING
+    assert h.tick() == R and h["A"].ticks == 1
+    # tick 2: mode 2 (an integer matches the case text "2") -> A halted, Two SUCCESS
+    h.tree.root_blackboard.set("m", "2")
+    assert h.tick() == S and h["A"].halted == 1 and h["Two"].ticks == 1
+
+
+def test_switch_default_is_the_last_child() -> None:
+    children = "".join(f'<Stub name="{n}"/>' for n in "ABCD")
+    h = Harness(f'<Switch3 variable="x" case_1="1" case_2="2" case_3="3">{children}</Switch3>')
+    # tick 1: "x" matches no case -> the default (D)
+    assert h.tick() == S and h["D"].ticks == 1 and h["A"].ticks == 0

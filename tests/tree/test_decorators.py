@@ -169,3 +169,36 @@ def test_failure_is_reads_the_reason_a_leaf_reported() -> None:
     assert h.bb["recovered"] == 1.0
     assert h.bb["failure_reason"] == "NO_DETECTION" and h.bb["failed_leaf"] == "Perceive"
     assert h.node("Perceive").failure_reason == "NO_DETECTION"  # type: ignore[attr-defined]
+
+
+def test_skip_unless_updated_ticks_the_child_once_per_write() -> None:
+    xml = (
+        '<Sequence><Script code="x := 1"/><SkipUnlessUpdated entry="x"><Stub name="A"/></SkipUnlessUpdated></Sequence>'
+    )
+    h = Harness(f"<KeepRunningUntilFailure>{xml}</KeepRunningUntilFailure>")
+    # tick 1: x written -> A ticked; tick 2: x written again -> A ticked again
+    assert h.tick() == R and h.tick() == R and h["A"].ticks == 2
+    h2 = Harness(
+        '<Sequence><Script code="x := 1"/><SkipUnlessUpdated entry="x"><Stub name="A"/></SkipUnlessUpdated>'
+        '<SkipUnlessUpdated name="second" entry="x"><Stub name="B"/></SkipUnlessUpdated></Sequence>'
+    )
+    h2["A"].returns(R, S)
+    # tick 1: A RUNNING; tick 2: A resumed although x was not written again -> SUCCESS; B saw the write too
+    assert h2.tick() == R and h2.tick() == S and h2["A"].ticks == 2 and h2["B"].ticks == 1
+
+
+def test_wait_value_update_is_running_until_the_entry_is_written() -> None:
+    h = Harness('<WaitValueUpdate entry="{x}"><Stub name="A"/></WaitValueUpdate>')
+    # ticks 1-2: x never written -> RUNNING, A not ticked
+    assert h.tick() == R and h.tick() == R and h["A"].ticks == 0
+    h.tree.root_blackboard.set("x", 3)
+    # tick 3: x written -> A SUCCESS -> SUCCESS
+    assert h.tick() == S and h["A"].ticks == 1
+
+
+def test_repeat_yields_after_each_synchronous_cycle() -> None:
+    h = Harness(
+        '<ReactiveSequence><Check name="ok"/><Repeat num_cycles="3"><Stub name="A"/></Repeat></ReactiveSequence>'
+    )
+    # one control period: three root executions (BT.CPP's wake-up), so the condition is checked 3 times
+    assert h.tick() == S and h.tree.runs == 3 and h["ok"].ticks == 3 and h["A"].ticks == 3
