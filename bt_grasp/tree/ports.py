@@ -156,3 +156,23 @@ class PortAccessor:
 
     def names(self) -> tuple[str, ...]:
         return tuple(self._values)
+
+
+class EntryWatch:
+    """Tells whether one blackboard entry was written since the last look (BT.CPP compares the entry's
+    ``sequence_id`` with the one it saw last; WasEntryUpdated, SkipUnlessUpdated, WaitValueUpdate).
+
+    ``text`` is the ``entry`` attribute as written: ``{key}`` or a plain key.
+    """
+
+    def __init__(self, text: str) -> None:
+        self.key = blackboard_key(text, "entry") or text
+        self.seen = 0
+
+    def written_since(self, blackboard: Blackboard) -> bool:
+        """True when the entry exists and its write count changed since the previous call."""
+        entry = blackboard.entry(self.key)
+        if entry is None:
+            return False
+        previous, self.seen = self.seen, entry.sequence_id
+        return previous != entry.sequence_id

@@ -22,7 +22,8 @@ def test_was_entry_updated_remembers_per_node() -> None:
     # tick 1: x written (sequence 1, the node last saw 0) -> SUCCESS
     assert h.tick() == S
     h2 = Harness(
-        '<Sequence><Script code="x := 1"/><KeepRunningUntilFailure><WasEntryUpdated entry="{x}"/></KeepRunningUntilFailure></Sequence>'
+        '<Sequence><Script code="x := 1"/>'
+        '<KeepRunningUntilFailure><WasEntryUpdated entry="{x}"/></KeepRunningUntilFailure></Sequence>'
     )
     # tick 1: updated -> SUCCESS -> KeepRunningUntilFailure RUNNING; tick 2: not written since -> FAILURE
     assert h2.tick() == "RUNNING" and h2.tick() == F

@@ -7,7 +7,7 @@ import pytest
 
 from bt_grasp.tree.exceptions import TreeRuntimeError
 
-from .harness import R, S, Harness
+from .harness import Harness, R, S
 
 PARALLEL = (
     '<Parallel success_count="-1"><{leaf} name="Move"/><Repeat num_cycles="3"><Stub name="A"/></Repeat></Parallel>'

@@ -11,7 +11,7 @@ from bt_grasp.tree.builtins.manifest import IN, INOUT, action
 from bt_grasp.tree.context import NodeContext
 from bt_grasp.tree.exceptions import PortValueError, ScriptSyntaxError, TreeRuntimeError
 from bt_grasp.tree.leaf import Leaf
-from bt_grasp.tree.ports import blackboard_key, convert_text
+from bt_grasp.tree.ports import EntryWatch, convert_text
 from bt_grasp.tree.registry import PortDirection, PortSpec
 from bt_grasp.tree.scripting import Program, parse_script
 
@@ -98,16 +98,10 @@ class WasEntryUpdated(Leaf):
 
     def __init__(self, ctx: NodeContext) -> None:
         super().__init__(ctx)
-        text = ctx.attributes.get("entry", "")
-        self.key = blackboard_key(text, "entry") or text
-        self.seen = 0
+        self.watch = EntryWatch(ctx.attributes.get("entry", ""))
 
     def update(self) -> Status:
-        entry = self.blackboard.entry(self.key)
-        if entry is None:
-            return Status.FAILURE
-        previous, self.seen = self.seen, entry.sequence_id
-        return Status.SUCCESS if previous != entry.sequence_id else Status.FAILURE
+        return Status.SUCCESS if self.watch.written_since(self.blackboard) else Status.FAILURE
 
 
 CODE_PORT = PortSpec("code", IN, str, description="the script to run")

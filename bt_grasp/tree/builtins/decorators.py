@@ -11,7 +11,7 @@ from bt_grasp.tree.builtins.manifest import IN, STATUS_NAMES, decorator
 from bt_grasp.tree.context import NodeContext
 from bt_grasp.tree.exceptions import ScriptSyntaxError, TreeRuntimeError
 from bt_grasp.tree.node import BtNode, BtStatus
-from bt_grasp.tree.ports import blackboard_key
+from bt_grasp.tree.ports import EntryWatch
 from bt_grasp.tree.registry import PortSpec
 from bt_grasp.tree.scripting import Program, parse_script
 
@@ -275,12 +275,6 @@ class Precondition(Decorator):
         super().halt()
 
 
-def entry_key(ctx: NodeContext) -> str:
-    """The blackboard key an ``entry`` port names, ``{key}`` or plain ``key`` (BT.CPP reads both)."""
-    text = ctx.attributes.get("entry", "")
-    return blackboard_key(text, "entry") or text
-
-
 class _EntryUpdated(Decorator):
     """SkipUnlessUpdated / WaitValueUpdate (BT.CPP ``EntryUpdatedDecorator``): the child is ticked only when
     the entry was written since this node last looked (a RUNNING child is resumed regardless)."""
@@ -289,18 +283,12 @@ class _EntryUpdated(Decorator):
 
     def __init__(self, ctx: NodeContext) -> None:
         super().__init__(ctx)
-        self.key = entry_key(ctx)
-        self.seen = 0
+        self.watch = EntryWatch(ctx.attributes.get("entry", ""))
         self.child_running = False
 
     def bt_tick(self) -> BtStatus:
-        if not self.child_running:
-            entry = self._bt_blackboard.entry(self.key)
-            if entry is None:
-                return self._not_updated
-            previous, self.seen = self.seen, entry.sequence_id
-            if previous == entry.sequence_id:
-                return self._not_updated
+        if not self.child_running and not self.watch.written_since(self._bt_blackboard):
+            return self._not_updated
         status = self.tick_child()
         self.child_running = status is RUNNING
         return status
