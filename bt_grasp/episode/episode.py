@@ -162,6 +162,7 @@ class Episode:
                 node.setup(cell=cell)
 
             def tick_hook(tick: int, tree: LoadedTree) -> None:
+                judge.observe()
                 if injector is not None:
                     injector.after_tick(tick)
                 for callback in on_tick:
@@ -172,6 +173,10 @@ class Episode:
             runner = TreeRunner(self.tree, world, steps_per_tick=world.steps_per_tick, recorder=recorder,
                                 robot_state=robot_state_reader(cell), on_tick=tick_hook)
             outcome = runner.run(request.max_ticks)
+            # a placement goal's "resting for 1 s after release" needs the world to run on a little
+            for _ in range(judge.settle_ticks(self.inputs.goal)):
+                world.step_tick()
+                judge.observe()
             verdict = judge.check(self.inputs.goal)
             last = outcome.last_failure
             success = verdict.success and outcome.status == "SUCCESS"

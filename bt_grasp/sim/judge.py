@@ -8,11 +8,17 @@ benchmarks do.
 from __future__ import annotations
 
 import enum
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import numpy as np
+
 from bt_grasp.goals import ClearGoal, Goal, PickGoal
+from bt_grasp.scene_fixtures import Container
+from bt_grasp.scene_goals import PlaceGoal, SortGoal, StackGoal
 from bt_grasp.sim.oracle import GroundTruthOracle
+from bt_grasp.sim.placement import Placement, PlacementTracker
 from bt_grasp.sim.world import World
 
 #: an object counts as lifted once its centre rose this much
@@ -28,6 +34,13 @@ class Criterion(enum.StrEnum):
     HELD = "held"  # the object is between both fingers, touching them
     LIFTED = "lifted"  # the object rose by at least the goal's height
     AREA_CLEAR = "area_clear"  # no object inside the scene's work area
+    RELEASED = "released"  # placed objects: picked up, let go, no finger touching them
+    UPRIGHT = "upright"  # placed objects: tilted at most 10 degrees
+    RESTING = "resting"  # placed objects: still for 1 s of simulated time after release
+    SET_DOWN = "set_down"  # placed objects: fell less than 1 cm after the fingers opened (not dropped)
+    AT_TARGET = "at_target"  # place: centre within the tolerance of the target, on its surface
+    ON_TOP = "on_top"  # stack: centred on the lower object, bottom resting on its top
+    IN_CONTAINER = "in_container"  # sort / clear into: inside the container, on its floor
 
 
 @dataclass(frozen=True)
@@ -66,6 +79,26 @@ class Judge:
         self._world = world
         self._oracle = GroundTruthOracle(world)
         self._start_z = {n: self._oracle.T_world_object(n)[2, 3] for n in self._oracle.object_names()}
+        self.tracker = PlacementTracker(self._oracle)
+        self.observe()
+
+    def now_s(self) -> float:
+        return self._world.now_ns() * 1e-9
+
+    def observe(self) -> None:
+        """Once per tick (and while settling): releases and motion, for placement goals."""
+        self.tracker.observe(self.now_s())
+
+    def settle_ticks(self, goal: Goal) -> int:
+        """Ticks the world must still run after the tree ended so a placement goal's 'resting for 1 s after
+        release' can be seen (0 for goals that place nothing)."""
+        if isinstance(goal, PickGoal) or (isinstance(goal, ClearGoal) and goal.into is None):
+            return 0
+        tick_s = self._world.steps_per_tick * self._world.dt_s
+        return math.ceil(self.tracker.settle_s(self.now_s()) / tick_s) + 1
+
+    def placement(self, name: str) -> Placement:
+        return self.tracker.placement(name, self.now_s())
 
     def check(self, goal: Goal) -> Verdict:
         """The verdict on ``goal`` now. Raises ValueError for a goal :func:`can_judge` refuses."""
@@ -128,17 +161,111 @@ def _check_clear(judge: Judge, goal: Goal) -> Verdict:
                    lifted_objects=tuple(n for n, r in rises.items() if r > LIFTED_M), objects_in_workspace=left)
 
 
+def _placed_conditions(judge: Judge, placements: list[Placement]) -> list[Condition]:
+    """One condition per placement criterion over every object (naming the ones that miss it)."""
+    out = []
+    for criterion in (Criterion.RELEASED, Criterion.UPRIGHT, Criterion.RESTING, Criterion.SET_DOWN):
+        misses = [detail for p in placements for c, detail in p.problems() if c == criterion.value]
+        measured = "; ".join(p.measured()[criterion.value] for p in placements)
+        out.append(Condition(criterion, not misses, "; ".join(misses) if misses else measured))
+    return out
+
+
+def _missing(goal: Goal, names: list[str], judge: Judge) -> Verdict | None:
+    known = set(judge._oracle.object_names())
+    absent = [n for n in names if n not in known]
+    if not absent and names:
+        return None
+    detail = f"no object {', '.join(absent)} in the scene" if absent else "no object the goal is about"
+    return Verdict(goal, (Condition(Criterion.TARGET_EXISTS, False, detail),))
+
+
+def _check_place(judge: Judge, goal: Goal) -> Verdict:
+    assert isinstance(goal, PlaceGoal)
+    missing = _missing(goal, [goal.object], judge)
+    if missing is not None:
+        return missing
+    scene = judge._world.config
+    fixture = scene.fixture(goal.at) if goal.at is not None else None
+    xy = goal.at_xy_m if goal.at_xy_m is not None else (fixture.center_xy_m if fixture else (0.0, 0.0))
+    surface = float(fixture.surface_z_m) if fixture is not None else 0.0
+    p = judge.placement(goal.object)
+    spec = scene.object_spec(goal.object)
+    height = spec.height_m if spec is not None else 0.0
+    off = float(np.hypot(p.xyz_m[0] - xy[0], p.xyz_m[1] - xy[1]))
+    bottom = p.xyz_m[2] - height / 2 - surface
+    at = off <= goal.tolerance_m and abs(bottom) <= 0.005
+    detail = (f"{goal.object} {off * 100:.1f} cm from the target (tolerance {goal.tolerance_m * 100:.1f} cm), "
+              f"its bottom {bottom * 1000:.0f} mm above the target surface")
+    conditions = [Condition(Criterion.TARGET_EXISTS, True, goal.object), *_placed_conditions(judge, [p]),
+                  Condition(Criterion.AT_TARGET, at, detail)]
+    return Verdict(goal, tuple(conditions), goal.object)
+
+
+def _check_stack(judge: Judge, goal: Goal) -> Verdict:
+    assert isinstance(goal, StackGoal)
+    missing = _missing(goal, [goal.object, goal.on], judge)
+    if missing is not None:
+        return missing
+    scene = judge._world.config
+    top, lower = judge.placement(goal.object), judge.placement(goal.on)
+    h_top = scene.object_spec(goal.object).height_m  # type: ignore[union-attr]
+    h_low = scene.object_spec(goal.on).height_m  # type: ignore[union-attr]
+    off = float(np.hypot(top.xyz_m[0] - lower.xyz_m[0], top.xyz_m[1] - lower.xyz_m[1]))
+    dz = top.xyz_m[2] - (lower.xyz_m[2] + h_low / 2 + h_top / 2)
+    ok = off <= goal.xy_tolerance_m and abs(dz) <= goal.z_tolerance_m and lower.upright
+    detail = (f"{goal.object} {off * 100:.1f} cm off {goal.on}'s centre (at most {goal.xy_tolerance_m * 100:.0f}), "
+              f"{dz * 1000:+.0f} mm from resting on its top (at most {goal.z_tolerance_m * 1000:.0f})"
+              + ("" if lower.upright else f", {goal.on} tilts {lower.tilt_deg:.0f} deg"))
+    conditions = [Condition(Criterion.TARGET_EXISTS, True, f"{goal.object} on {goal.on}"),
+                  *_placed_conditions(judge, [top]), Condition(Criterion.ON_TOP, ok, detail)]
+    return Verdict(goal, tuple(conditions), goal.object)
+
+
+def _in_container(judge: Judge, goal: Goal, wanted: dict[str, str]) -> Verdict:
+    """Each object of ``wanted`` (name -> container) placed inside its container, on its floor."""
+    scene = judge._world.config
+    if not wanted:
+        return Verdict(goal, (Condition(Criterion.TARGET_EXISTS, False, "no object the goal is about"),))
+    placements = [judge.placement(n) for n in wanted]
+    outside = []
+    for p in placements:
+        box = scene.fixture(wanted[p.name])
+        spec = scene.object_spec(p.name)
+        bottom = p.xyz_m[2] - (spec.height_m if spec else 0.0) / 2
+        inside = (isinstance(box, Container) and box.contains_xy(p.xyz_m[:2])
+                  and bottom <= box.surface_z_m + 0.01)
+        if not inside:
+            outside.append(f"{p.name} not on the floor of {wanted[p.name]}")
+    conditions = [Condition(Criterion.TARGET_EXISTS, True, ", ".join(wanted)), *_placed_conditions(judge, placements),
+                  Condition(Criterion.IN_CONTAINER, not outside, "; ".join(outside) or "every object inside")]
+    return Verdict(goal, tuple(conditions), objects_in_workspace=judge.objects_in_workspace())
+
+
+def _check_sort(judge: Judge, goal: Goal) -> Verdict:
+    assert isinstance(goal, SortGoal)
+    wanted = {n: rule.into for rule in goal.rules for n in judge.objects_of_color(rule.color)}
+    return _in_container(judge, goal, wanted)
+
+
+def _check_clear_into(judge: Judge, goal: Goal) -> Verdict:
+    assert isinstance(goal, ClearGoal) and goal.into is not None
+    return _in_container(judge, goal, {n: goal.into for n in judge._oracle.object_names()})
+
+
 #: goal kind -> its checker (a new kind adds one line here)
 _CHECKS: dict[str, Callable[[Judge, Goal], Verdict]] = {
     "pick": _check_pick,
-    "clear": _check_clear,
+    "clear": lambda judge, goal: _check_clear_into(judge, goal) if getattr(goal, "into", None) else _check_clear(
+        judge, goal),
+    "place": _check_place,
+    "stack": _check_stack,
+    "sort": _check_sort,
 }
 
 
 def cannot_judge(goal: Goal) -> str | None:
-    """Why the judge cannot check ``goal`` (a kind or variant with no checker yet), or None."""
+    """Why the judge cannot check ``goal`` (a kind with no checker yet), or None."""
     if goal.kind not in _CHECKS:
         return f"the judge has no checker for goal kind '{goal.kind}' yet; judged kinds: {', '.join(_CHECKS)}"
-    if isinstance(goal, ClearGoal) and goal.into is not None:
-        return "the judge does not check 'clear into a container' yet (only 'clear' of the work area)"
     return None

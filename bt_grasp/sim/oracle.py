@@ -7,6 +7,8 @@ Tests, benchmarks and the run summary's judge use it to score what the pipeline 
 from __future__ import annotations
 
 import numpy as np
+import sapien
+from numpy.typing import NDArray
 
 from bt_grasp.geometry import Mat4
 from bt_grasp.robot_description import TCP_LINK
@@ -48,9 +50,17 @@ class GroundTruthOracle:
 
     def object_in_gripper(self, name: str) -> bool:
         """True when both finger pads touch the object (from the physics contacts)."""
+        return len(self.fingers_touching(name)) == 2
+
+    def object_touches_fingers(self, name: str) -> bool:
+        """True when either finger pad touches the object."""
+        return bool(self.fingers_touching(name))
+
+    def fingers_touching(self, name: str) -> set[str]:
+        """Names of the finger links in contact (with a non-zero impulse) with the object."""
         robot = self._world.robot
         left, right = robot.links["left_finger"], robot.links["right_finger"]
-        body = self._world.objects[name].find_component_by_type(__import__("sapien").physx.PhysxRigidDynamicComponent)
+        body = self._body(name)
         touching = set()
         for contact in self._world.scene.get_contacts():
             bodies = {contact.bodies[0], contact.bodies[1]}
@@ -58,4 +68,11 @@ class GroundTruthOracle:
                 for finger in (left, right):
                     if finger in bodies and any(np.linalg.norm(p.impulse) > 0 for p in contact.points):
                         touching.add(finger.name)
-        return len(touching) == 2
+        return touching
+
+    def object_velocity(self, name: str) -> NDArray[np.float64]:
+        """The object's centre velocity, m/s, world frame."""
+        return np.asarray(self._body(name).get_linear_velocity(), dtype=float)
+
+    def _body(self, name: str) -> sapien.physx.PhysxRigidDynamicComponent:
+        return self._world.objects[name].find_component_by_type(sapien.physx.PhysxRigidDynamicComponent)
