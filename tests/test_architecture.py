@@ -18,6 +18,7 @@ FORBIDDEN = {
     "recording": ("sapien", "bt_grasp.sim", "bt_grasp.cli"),
     "faults": ("sapien", "bt_grasp.sim", "bt_grasp.cli"),
     "episode": ("sapien", "bt_grasp.cli"),
+    "campaign": ("sapien", "bt_grasp.sim", "bt_grasp.cli"),
 }
 LEAF_MODULES = (
     "errors", "clock", "geometry", "interfaces", "config", "scene_config", "robot_description", "colors",

@@ -43,7 +43,8 @@ def _register() -> None:
     from bt_grasp.cli import scene_cmd
 
     scene_cmd.register(app)
-    for name in ("demo_cmd", "run_cmd", "tree_cmd", "calibrate_cmd", "replay_cmd", "bench_extra_cmd", "bench_cmd"):
+    commands = ("demo_cmd", "run_cmd", "tree_cmd", "calibrate_cmd", "replay_cmd", "bench_extra_cmd", "bench_cmd")
+    for name in (*commands, "eval_cmd"):
         try:
             module = __import__(f"bt_grasp.cli.{name}", fromlist=["register"])
         except ModuleNotFoundError as exc:

@@ -1,0 +1,96 @@
+"""Episodes on a Ray cluster: one actor per worker slot, each holding a warm :class:`Worker`.
+
+Ray does the scheduling, placement and fault tolerance (actors restart on a lost node, their method calls
+are retried); this module only hands each idle actor the next episode and yields rows as they come back.
+Every node needs bt_grasp installed at the same version and the campaign's input files at the same paths
+(a shared folder or the same checkout): see docs/campaigns.md.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable, Iterator, Sequence
+from pathlib import Path
+from typing import Any
+
+from bt_grasp.campaign.episode import EpisodeBackend
+from bt_grasp.campaign.runner import EpisodeError
+from bt_grasp.campaign.spec import Episode
+from bt_grasp.campaign.worker import KeepLogs, Worker
+from bt_grasp.errors import InputError
+
+log = logging.getLogger(__name__)
+
+
+class EpisodeActor:
+    """A Ray actor around one warm worker (its simulator and renderer stay up between episodes)."""
+
+    def __init__(self, factory: Callable[[], EpisodeBackend], log_dir: Path, keep_logs: KeepLogs) -> None:
+        logging.getLogger().addHandler(logging.NullHandler())
+        Path(log_dir).mkdir(parents=True, exist_ok=True)
+        self.worker = Worker(factory, log_dir, keep_logs)
+
+    def run(self, episode: Episode) -> dict[str, Any]:
+        return self.worker.run(episode)
+
+
+class RayEngine:
+    def __init__(
+        self,
+        address: str,
+        workers: int | None,
+        backend_factory: Callable[[], EpisodeBackend],
+        log_dir: Path,
+        keep_logs: KeepLogs,
+    ) -> None:
+        self.address = address
+        self.workers = workers
+        self.backend_factory = backend_factory
+        self.log_dir = log_dir
+        self.keep_logs = keep_logs
+
+    def _connect(self) -> Any:
+        import ray
+
+        address = None if self.address == "local" else self.address
+        try:
+            ray.init(
+                address=address,
+                include_dashboard=False,
+                log_to_driver=False,
+                logging_level=logging.WARNING,
+                configure_logging=False,
+            )
+        except (ConnectionError, RuntimeError, ValueError) as exc:
+            raise InputError("--ray", f"cannot connect to the Ray cluster at '{self.address}': {exc}") from None
+        return ray
+
+    def run(self, episodes: Sequence[Episode]) -> Iterator[dict[str, Any] | EpisodeError]:
+        ray = self._connect()
+        try:
+            slots = self.workers or max(1, int(ray.cluster_resources().get("CPU", 1)))
+            actor_cls = ray.remote(num_cpus=1, max_restarts=2, max_task_retries=2)(EpisodeActor)
+            actors = [
+                actor_cls.remote(self.backend_factory, self.log_dir, self.keep_logs)
+                for _ in range(min(slots, len(episodes)))
+            ]
+            queue = list(reversed(episodes))
+            running: dict[Any, tuple[Episode, Any]] = {}
+            for actor in actors:
+                if queue:
+                    episode = queue.pop()
+                    running[actor.run.remote(episode)] = (episode, actor)
+            while running:
+                ready, _ = ray.wait(list(running), num_returns=1)
+                episode, actor = running.pop(ready[0])
+                try:
+                    yield ray.get(ready[0])
+                except ray.exceptions.RayActorError as exc:
+                    yield EpisodeError(episode, f"worker lost: {exc}".splitlines()[0], worker_lost=True)
+                except ray.exceptions.RayTaskError as exc:
+                    yield EpisodeError(episode, str(exc).splitlines()[0])
+                if queue:
+                    nxt = queue.pop()
+                    running[actor.run.remote(nxt)] = (nxt, actor)
+        finally:
+            ray.shutdown()

@@ -1,0 +1,297 @@
+"""Campaign files: trees x scenes x seeds x fault plans x blackboard parameters, loaded strictly.
+
+A campaign file is YAML validated like every other file a user writes: unknown keys, missing files and
+files that do not load (a tree with an unknown node, a scene with a typo, a bad fault plan) are refused
+before any episode runs, with one sentence naming the campaign file, the line and the problem.
+
+Paths in a campaign file are relative to the campaign file's folder.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from pydantic import Field, field_validator, model_validator
+
+from bt_grasp.config import KeyPath, StrictModel, read_yaml, validate
+from bt_grasp.errors import ConfigError, InputError
+
+NO_FAULTS = "none"
+MAX_EPISODES = 1_000_000
+
+
+class SeedRange(StrictModel):
+    first: int = Field(0, ge=0)  # the first seed
+    count: int = Field(..., ge=1)  # how many consecutive seeds
+
+
+class SceneEntry(StrictModel):
+    file: str  # scene YAML, relative to the campaign file
+    calibration: str | None = None  # calibration YAML for this scene (else the campaign's)
+    name: str | None = None  # label in results and reports (default: the file's stem)
+
+
+class FaultPlanEntry(StrictModel):
+    name: str  # label in results and reports
+    file: str | None = None  # fault plan YAML, relative to the campaign file
+    inject: tuple[str, ...] = ()  # `--inject` strings, e.g. "frame_drop@Perceive#1"
+
+    @model_validator(mode="after")
+    def _something(self) -> FaultPlanEntry:
+        if self.file is None and not self.inject:
+            raise ValueError("a fault plan needs a file or inject strings (use 'none' for no faults)")
+        return self
+
+
+class CampaignFile(StrictModel):
+    name: str = Field(..., min_length=1, pattern=r"^[A-Za-z0-9_.-]+$")  # names the results file
+    description: str = ""
+    trees: tuple[str, ...] = Field(..., min_length=1)  # tree files (XML or YAML)
+    scenes: tuple[str | SceneEntry, ...] = Field(..., min_length=1)
+    seeds: SeedRange | tuple[int, ...]  # {first, count} or an explicit list
+    fault_plans: tuple[str | FaultPlanEntry, ...] = (NO_FAULTS,)  # "none", a file, or {name, file, inject}
+    blackboard: tuple[dict[str, str | int | float | bool], ...] = ({"color": "red", "lift_height": 0.15},)
+    calibration: str | None = None  # default calibration for every scene
+    max_ticks: int = Field(12000, ge=1)  # per episode (100 Hz ticks of simulated time)
+
+    @field_validator("seeds")
+    @classmethod
+    def _seeds(cls, value: SeedRange | tuple[int, ...]) -> SeedRange | tuple[int, ...]:
+        if isinstance(value, tuple):
+            if not value:
+                raise ValueError("the seed list is empty")
+            if len(set(value)) != len(value):
+                raise ValueError("the seed list repeats a seed")
+            if min(value) < 0:
+                raise ValueError("seeds must be >= 0")
+        return value
+
+
+@dataclass(frozen=True)
+class FaultPlanRef:
+    """One fault-plan axis value: a label plus what to load (nothing for 'none')."""
+
+    name: str
+    file: Path | None = None
+    inject: tuple[str, ...] = ()
+
+    @property
+    def is_none(self) -> bool:
+        return self.file is None and not self.inject
+
+
+@dataclass(frozen=True)
+class SceneRef:
+    name: str
+    file: Path
+    calibration: Path | None
+
+
+@dataclass(frozen=True)
+class Episode:
+    """Every input of one episode; ``key`` identifies it across runs (resume) and machines."""
+
+    campaign: str
+    index: int
+    tree: str  # as written in the campaign file
+    scene: str  # the scene's label
+    seed: int
+    fault_plan: str  # the fault plan's label ("none")
+    params: tuple[tuple[str, str | int | float | bool], ...]
+    tree_file: Path
+    scene_file: Path
+    calibration_file: Path | None
+    fault_file: Path | None
+    inject: tuple[str, ...]
+    max_ticks: int
+    inputs_digest: str  # content hash of every input file of this episode
+
+    @property
+    def blackboard(self) -> dict[str, Any]:
+        return dict(self.params)
+
+    @property
+    def key(self) -> str:
+        """Stable id: the same inputs (file contents included) give the same key."""
+        text = json.dumps(
+            [self.tree, self.scene, self.seed, self.fault_plan, self.params, self.max_ticks, self.inputs_digest],
+            sort_keys=True,
+        )
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+    def label(self) -> str:
+        return f"{Path(self.tree).stem}/{self.scene}/seed{self.seed}/{self.fault_plan}"
+
+
+@dataclass(frozen=True)
+class Campaign:
+    name: str
+    source: Path
+    description: str
+    trees: tuple[str, ...]
+    scenes: tuple[SceneRef, ...]
+    seeds: tuple[int, ...]
+    fault_plans: tuple[FaultPlanRef, ...]
+    blackboard: tuple[dict[str, Any], ...]
+    max_ticks: int
+    base: Path
+    digests: dict[Path, str] = field(default_factory=dict, compare=False)
+
+    def episodes(self) -> list[Episode]:
+        return list(self._iter())
+
+    def _iter(self) -> Iterator[Episode]:
+        grid = itertools.product(self.trees, self.scenes, self.fault_plans, range(len(self.blackboard)), self.seeds)
+        for index, (tree, scene, plan, params_i, seed) in enumerate(grid):
+            tree_file = self.base / tree
+            files = [tree_file, scene.file, scene.calibration, plan.file]
+            digest = hashlib.sha256(
+                "|".join(self.digests.get(f, "") if f is not None else "-" for f in files).encode()
+            ).hexdigest()[:16]
+            yield Episode(
+                campaign=self.name,
+                index=index,
+                tree=tree,
+                scene=scene.name,
+                seed=seed,
+                fault_plan=plan.name,
+                params=tuple(sorted(self.blackboard[params_i].items())),
+                tree_file=tree_file,
+                scene_file=scene.file,
+                calibration_file=scene.calibration,
+                fault_file=plan.file,
+                inject=plan.inject,
+                max_ticks=self.max_ticks,
+                inputs_digest=digest,
+            )
+
+
+def _digest(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def load_campaign(path: str | Path, *, check_inputs: bool = True) -> Campaign:
+    """Read, validate and resolve a campaign file; with ``check_inputs`` every tree, scene, calibration and
+    fault plan it names is loaded too, so a bad input stops the campaign before its first episode."""
+    path = Path(path)
+    data, lines = read_yaml(path)
+    parsed = validate(CampaignFile, data, path, lines)
+    base = path.parent
+    digests: dict[Path, str] = {}
+
+    def existing(rel: str, key: KeyPath) -> Path:
+        full = base / rel
+        if not full.is_file():
+            raise ConfigError(
+                path,
+                f"{_where(key)}: no such file '{rel}' (paths are relative to the campaign file)",
+                _line(lines, key),
+            )
+        digests[full] = _digest(full)
+        return full
+
+    default_cal = existing(parsed.calibration, ("calibration",)) if parsed.calibration else None
+    for i, tree in enumerate(parsed.trees):
+        existing(tree, ("trees", i))
+    scenes: list[SceneRef] = []
+    for i, entry in enumerate(parsed.scenes):
+        item = entry if isinstance(entry, SceneEntry) else SceneEntry(file=entry)
+        key: KeyPath = ("scenes", i) if isinstance(entry, str) else ("scenes", i, "file")
+        cal = existing(item.calibration, ("scenes", i, "calibration")) if item.calibration else default_cal
+        scenes.append(SceneRef(item.name or Path(item.file).stem, existing(item.file, key), cal))
+    plans: list[FaultPlanRef] = []
+    for i, plan in enumerate(parsed.fault_plans):
+        if isinstance(plan, str):
+            plans.append(
+                FaultPlanRef(NO_FAULTS)
+                if plan == NO_FAULTS
+                else FaultPlanRef(Path(plan).stem, existing(plan, ("fault_plans", i)))
+            )
+        else:
+            file = existing(plan.file, ("fault_plans", i, "file")) if plan.file else None
+            plans.append(FaultPlanRef(plan.name, file, plan.inject))
+    _unique(path, lines, "scenes", [s.name for s in scenes])
+    _unique(path, lines, "fault_plans", [p.name for p in plans])
+    _unique(path, lines, "trees", list(parsed.trees))
+    seeds = (
+        tuple(range(parsed.seeds.first, parsed.seeds.first + parsed.seeds.count))
+        if isinstance(parsed.seeds, SeedRange)
+        else parsed.seeds
+    )
+    campaign = Campaign(
+        name=parsed.name,
+        source=path,
+        description=parsed.description,
+        trees=parsed.trees,
+        scenes=tuple(scenes),
+        seeds=seeds,
+        fault_plans=tuple(plans),
+        blackboard=tuple(dict(b) for b in parsed.blackboard),
+        max_ticks=parsed.max_ticks,
+        base=base,
+        digests=digests,
+    )
+    total = len(parsed.trees) * len(scenes) * len(plans) * len(parsed.blackboard) * len(seeds)
+    if total > MAX_EPISODES:
+        raise ConfigError(path, f"{total} episodes is more than the limit of {MAX_EPISODES}; split the campaign", 1)
+    if check_inputs:
+        _check_inputs(campaign, lines)
+    return campaign
+
+
+def _check_inputs(campaign: Campaign, lines: dict[KeyPath, int]) -> None:
+    """Load every tree, scene, calibration and fault plan once (no simulator): errors name the campaign too."""
+    from bt_grasp.behaviours import robot_registry
+    from bt_grasp.faults.plan import load_fault_plan
+    from bt_grasp.perception.calibration_file import load_calibration
+    from bt_grasp.scene_config import load_scene
+    from bt_grasp.tree.loader import load_tree
+
+    src = campaign.source
+
+    def checked(key: KeyPath, what: str, load: Any) -> Any:
+        try:
+            return load()
+        except InputError as exc:
+            raise ConfigError(src, f"{_where(key)} ({what}) does not load: {exc.message}", _line(lines, key)) from None
+
+    for i, tree in enumerate(campaign.trees):
+        checked(("trees", i), "tree", lambda t=tree: load_tree(campaign.base / t, robot_registry()))
+    for i, scene in enumerate(campaign.scenes):
+        config = checked(("scenes", i), "scene", lambda s=scene: load_scene(s.file))
+        if scene.calibration is not None:
+            mount = config.camera.mount
+            checked(("scenes", i), "calibration", lambda s=scene, m=mount: load_calibration(s.calibration, mount=m))
+    for i, plan in enumerate(campaign.fault_plans):
+        if not plan.is_none:
+            checked(("fault_plans", i), "fault plan", lambda p=plan: load_fault_plan(p.file, p.inject))
+
+
+def _unique(path: Path, lines: dict[KeyPath, int], key: str, names: list[str]) -> None:
+    seen: set[str] = set()
+    for i, name in enumerate(names):
+        if name in seen:
+            raise ConfigError(
+                path, f"{key}[{i}]: the label '{name}' is used twice; give one a 'name'", _line(lines, (key, i))
+            )
+        seen.add(name)
+
+
+def _where(key: KeyPath) -> str:
+    from bt_grasp.config import format_key_path
+
+    return format_key_path(key)
+
+
+def _line(lines: dict[KeyPath, int], key: KeyPath) -> int | None:
+    while key:
+        if key in lines:
+            return lines[key]
+        key = key[:-1]
+    return None

@@ -1,0 +1,94 @@
+"""One campaign worker: a warm episode backend plus what turns an outcome into a results row."""
+
+from __future__ import annotations
+
+import enum
+import logging
+import os
+import socket
+import time
+from collections.abc import Callable
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+from bt_grasp.campaign.environment import environment
+from bt_grasp.campaign.episode import EpisodeBackend, EpisodeOutcome
+from bt_grasp.campaign.fingerprint import temporary_run_fingerprint
+from bt_grasp.campaign.spec import Episode
+
+log = logging.getLogger(__name__)
+
+#: columns that depend on where and when an episode ran, not on its inputs: excluded when comparing runs
+PLACE_COLUMNS = ("wall_time_s", "episode_wall_s", "mcap", "environment", "worker", "finished_at")
+
+
+class KeepLogs(enum.StrEnum):
+    """Which episodes keep their MCAP log."""
+
+    FAILURES = "failures"
+    ALL = "all"
+    NONE = "none"
+
+
+def log_path(log_dir: Path, episode: Episode) -> Path:
+    return (
+        log_dir
+        / f"{Path(episode.tree).stem}__{episode.scene}__{episode.fault_plan}__seed{episode.seed}__{episode.key}.mcap"
+    )
+
+
+def make_row(episode: Episode, outcome: EpisodeOutcome, mcap: Path | None, episode_wall_s: float) -> dict[str, Any]:
+    env = environment()
+    return {
+        "campaign": episode.campaign,
+        "episode": episode.key,
+        "index": episode.index,
+        "tree": episode.tree,
+        "scene": episode.scene,
+        "seed": episode.seed,
+        "fault_plan": episode.fault_plan,
+        "params": episode.blackboard,
+        "max_ticks": episode.max_ticks,
+        "inputs_digest": episode.inputs_digest,
+        "success": outcome.success,
+        "judged_goal": outcome.judged_goal,
+        "tree_status": outcome.tree_status,
+        "failure_reason": outcome.failure_reason,
+        "failed_leaf": outcome.failed_leaf,
+        "retries": outcome.retries,
+        "retries_total": sum(outcome.retries.values()),
+        "faults_fired": outcome.faults_fired,
+        "ticks": outcome.ticks,
+        "sim_time_s": round(outcome.sim_time_s, 6),
+        "judge": outcome.judge,
+        "fingerprint": temporary_run_fingerprint(outcome),
+        "wall_time_s": round(outcome.wall_time_s, 3),
+        "episode_wall_s": round(episode_wall_s, 3),
+        "mcap": str(mcap) if mcap is not None else None,
+        "worker": f"{socket.gethostname()}:{os.getpid()}",
+        "finished_at": datetime.now(UTC).isoformat(timespec="seconds"),
+        "environment": env,
+    }
+
+
+class Worker:
+    """Runs episodes one after another on one backend, whose simulator and renderer stay warm."""
+
+    def __init__(self, backend_factory: Callable[[], EpisodeBackend], log_dir: Path, keep_logs: KeepLogs) -> None:
+        self.backend = backend_factory()
+        self.log_dir = Path(log_dir)
+        self.keep_logs = KeepLogs(keep_logs)
+        t0 = time.perf_counter()
+        self.backend.warm_up()
+        self.warm_up_s = time.perf_counter() - t0
+        log.debug("worker %d warm in %.2f s", os.getpid(), self.warm_up_s)
+
+    def run(self, episode: Episode) -> dict[str, Any]:
+        t0 = time.perf_counter()
+        mcap = None if self.keep_logs is KeepLogs.NONE else log_path(self.log_dir, episode)
+        outcome = self.backend.run(episode, mcap)
+        if mcap is not None and self.keep_logs is KeepLogs.FAILURES and outcome.success:
+            mcap.unlink(missing_ok=True)
+            mcap = None
+        return make_row(episode, outcome, mcap, time.perf_counter() - t0)
