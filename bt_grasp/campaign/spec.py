@@ -203,8 +203,12 @@ def load_campaign(path: str | Path, *, check_inputs: bool = True) -> Campaign:
     for i, entry in enumerate(parsed.scenes):
         item = entry if isinstance(entry, SceneEntry) else SceneEntry(file=entry)
         key: KeyPath = ("scenes", i) if isinstance(entry, str) else ("scenes", i, "file")
-        cal = existing(item.calibration, ("scenes", i, "calibration")) if item.calibration else default_cal
-        scenes.append(SceneRef(item.name or Path(item.file).stem, existing(item.file, key), cal))
+        scene_file = existing(item.file, key)
+        override = existing(item.calibration, ("scenes", i, "calibration")) if item.calibration else default_cal
+        calibration = _scene_calibration(path, lines, ("scenes", i), scene_file, override)
+        if calibration is not None:
+            digests[calibration] = _digest(calibration)
+        scenes.append(SceneRef(item.name or Path(item.file).stem, scene_file, calibration))
     plans: list[FaultPlanRef] = []
     for i, plan in enumerate(parsed.fault_plans):
         if isinstance(plan, str):
@@ -249,8 +253,6 @@ def _check_inputs(campaign: Campaign, lines: dict[KeyPath, int]) -> None:
     """Load every tree, scene, calibration and fault plan once (no simulator): errors name the campaign too."""
     from bt_grasp.behaviours import robot_registry
     from bt_grasp.faults.plan import load_fault_plan
-    from bt_grasp.perception.calibration_file import load_calibration
-    from bt_grasp.scene_config import load_scene
     from bt_grasp.tree.loader import load_tree
 
     src = campaign.source
@@ -263,14 +265,23 @@ def _check_inputs(campaign: Campaign, lines: dict[KeyPath, int]) -> None:
 
     for i, tree in enumerate(campaign.trees):
         checked(("trees", i), "tree", lambda t=tree: load_tree(campaign.base / t, robot_registry()))
-    for i, scene in enumerate(campaign.scenes):
-        config = checked(("scenes", i), "scene", lambda s=scene: load_scene(s.file))
-        if scene.calibration is not None:
-            mount = config.camera.mount
-            checked(("scenes", i), "calibration", lambda s=scene, m=mount: load_calibration(s.calibration, mount=m))
     for i, plan in enumerate(campaign.fault_plans):
         if not plan.is_none:
             checked(("fault_plans", i), "fault plan", lambda p=plan: load_fault_plan(p.file, p.inject))
+
+
+def _scene_calibration(
+    path: Path, lines: dict[KeyPath, int], key: KeyPath, scene_file: Path, override: Path | None
+) -> Path | None:
+    """The scene loads, and the calibration its episodes use (the campaign's, else the scene's own) fits it."""
+    from bt_grasp.perception.calibration_file import calibration_for_scene
+    from bt_grasp.scene_config import load_scene
+
+    try:
+        config = load_scene(scene_file)
+        return calibration_for_scene(config, scene_file, override)[0]
+    except InputError as exc:
+        raise ConfigError(path, f"{_where(key)} (scene) does not load: {exc.message}", _line(lines, key)) from None
 
 
 def _unique(path: Path, lines: dict[KeyPath, int], key: str, names: list[str]) -> None:
