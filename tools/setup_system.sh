@@ -22,7 +22,8 @@ apt_update() { if [ "$APT_UPDATED" = 0 ]; then $SUDO apt-get update -qq; APT_UPD
 apt_install() { DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "$@" >/dev/null; }
 
 need=()
-for p in libusb-1.0-0 libvulkan1 libgomp1 graphviz; do have_pkg "$p" || need+=("$p"); done
+# chromium: the campaign report and browser tests are checked in a real headless browser
+for p in libusb-1.0-0 libvulkan1 libgomp1 graphviz chromium; do have_pkg "$p" || need+=("$p"); done
 if [ "${#need[@]}" -gt 0 ]; then
     echo "setup: installing ${need[*]}"
     apt_update

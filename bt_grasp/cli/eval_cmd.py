@@ -107,5 +107,18 @@ def export(
     typer.echo(str(export_parquet(read_rows(results), out)))
 
 
+@eval_app.command("report")
+def report(
+    results: Path = typer.Argument(..., help="A campaign's results file (NAME.jsonl)."),
+    out: Path = typer.Option(..., "--out", help="HTML file to write; its PNG figures go beside it."),
+    compare: Path | None = typer.Option(None, "--compare", help="A second results file to compare with (B)."),
+) -> None:
+    """A self-contained HTML report (no network needed) with success rates, failures, times, retries."""
+    from bt_grasp.campaign.report import build_report
+
+    written = build_report(results, out, compare)
+    typer.echo(f"{written[0]}  (figures: {written[1].parent})")
+
+
 def register(app: typer.Typer) -> None:
     app.add_typer(eval_app, name="eval")

@@ -1,0 +1,146 @@
+"""The campaign report's figures (matplotlib, no display): each function returns one figure's PNG bytes."""
+
+from __future__ import annotations
+
+import io
+from collections import Counter
+from collections.abc import Sequence
+from typing import Any
+
+from bt_grasp.campaign.stats import Rate, success_rates, tree_label
+
+GROUPS = ("tree", "scene", "fault_plan")
+COLORS = ("#2b6cb0", "#dd6b20", "#38a169", "#805ad5", "#d53f8c", "#319795", "#718096")
+
+
+def _figure(width: float, height: float) -> Any:
+    import matplotlib
+
+    matplotlib.use("Agg")  # no display; only files
+    from matplotlib.figure import Figure
+
+    return Figure(figsize=(width, height), dpi=100, layout="constrained")
+
+
+def _png(fig: Any) -> bytes:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", metadata={"Software": None})
+    return buf.getvalue()
+
+
+def _trees(rows: Sequence[dict[str, Any]]) -> list[str]:
+    return sorted({tree_label(r) for r in rows})
+
+
+def success_by_group(rows: Sequence[dict[str, Any]], title: str) -> bytes:
+    rates = success_rates(rows, GROUPS)
+    fig = _figure(9, 0.9 + 0.38 * len(rates))
+    ax = fig.add_subplot()
+    trees = _trees(rows)
+    ys = list(range(len(rates)))[::-1]
+    for y, r in zip(ys, rates, strict=True):
+        lo, hi = r.interval
+        color = COLORS[trees.index(r.group[0]) % len(COLORS)]
+        ax.barh(y, r.rate, color=color, alpha=0.8)
+        ax.errorbar(r.rate, y, xerr=[[r.rate - lo], [hi - r.rate]], fmt="none", ecolor="black", capsize=3)
+        ax.text(1.01, y, f"{r.successes}/{r.n}", va="center", fontsize=8)
+    ax.set_yticks(ys, [" / ".join(r.group) for r in rates], fontsize=8)
+    ax.set_xlim(0, 1.12)
+    ax.set_xlabel("success rate (bars: 95% Wilson interval)")
+    ax.set_title(title)
+    ax.grid(axis="x", alpha=0.3)
+    return _png(fig)
+
+
+def failure_reasons(rows: Sequence[dict[str, Any]]) -> bytes:
+    failed = [r for r in rows if not r["success"]]
+    trees = _trees(rows)
+    keys = Counter(f"{r['failure_reason'] or '?'} ({r['failed_leaf'] or '-'})" for r in failed)
+    labels = [k for k, _ in keys.most_common(15)] or ["no failures"]
+    fig = _figure(9, 1.2 + 0.35 * len(labels))
+    ax = fig.add_subplot()
+    left = [0] * len(labels)
+    ys = list(range(len(labels)))[::-1]
+    for i, tree in enumerate(trees):
+        counts = Counter(
+            f"{r['failure_reason'] or '?'} ({r['failed_leaf'] or '-'})" for r in failed if tree_label(r) == tree
+        )
+        widths = [counts.get(k, 0) for k in labels]
+        ax.barh(ys, widths, left=left, color=COLORS[i % len(COLORS)], label=tree)
+        left = [a + b for a, b in zip(left, widths, strict=True)]
+    ax.set_yticks(ys, labels, fontsize=8)
+    ax.set_xlabel("failed episodes")
+    ax.set_title("failure reasons (failing leaf)")
+    ax.legend(fontsize=8, loc="lower right")
+    return _png(fig)
+
+
+def time_distributions(rows: Sequence[dict[str, Any]]) -> bytes:
+    fig = _figure(10, 3.4)
+    axes = fig.subplots(1, 2)
+    for ax, column, label in (
+        (axes[0], "sim_time_s", "simulated time per episode [s]"),
+        (axes[1], "episode_wall_s", "wall time per episode [s]"),
+    ):
+        data = [[float(r[column]) for r in rows if tree_label(r) == t] for t in _trees(rows)]
+        ax.boxplot(data, orientation="horizontal", tick_labels=_trees(rows))
+        ax.set_xlabel(label)
+        ax.grid(axis="x", alpha=0.3)
+    fig.suptitle("time distributions")
+    return _png(fig)
+
+
+def retries(rows: Sequence[dict[str, Any]]) -> bytes:
+    fig = _figure(10, 3.2)
+    axes = fig.subplots(1, 2)
+    trees = _trees(rows)
+    top = max([int(r["retries_total"]) for r in rows] + [1])
+    xs = list(range(top + 1))
+    width = 0.8 / max(1, len(trees))
+    for i, tree in enumerate(trees):
+        counts = Counter(int(r["retries_total"]) for r in rows if tree_label(r) == tree)
+        axes[0].bar(
+            [x + i * width for x in xs],
+            [counts.get(x, 0) for x in xs],
+            width,
+            label=tree,
+            color=COLORS[i % len(COLORS)],
+        )
+    axes[0].set_xlabel("retries in the episode")
+    axes[0].set_ylabel("episodes")
+    axes[0].legend(fontsize=8)
+    by_leaf: Counter[str] = Counter()
+    for r in rows:
+        by_leaf.update(r["retries"])
+    leaves = [k for k, _ in by_leaf.most_common(10)] or ["none"]
+    axes[1].barh(leaves[::-1], [by_leaf.get(k, 0) for k in leaves[::-1]], color=COLORS[0])
+    axes[1].set_xlabel("retries, all episodes")
+    axes[1].set_title("retried leaves", fontsize=9)
+    fig.suptitle("retries")
+    return _png(fig)
+
+
+def comparison(a: Sequence[Rate], b: Sequence[Rate], names: tuple[str, str]) -> bytes:
+    groups = sorted({r.group for r in a} | {r.group for r in b})
+    by_a, by_b = {r.group: r for r in a}, {r.group: r for r in b}
+    fig = _figure(9, 1.0 + 0.55 * len(groups))
+    ax = fig.add_subplot()
+    for offset, rates, name, color in ((0.2, by_a, names[0], COLORS[0]), (-0.2, by_b, names[1], COLORS[1])):
+        ys, xs, lows, highs = [], [], [], []
+        for y, g in enumerate(reversed(groups)):
+            if g in rates:
+                r = rates[g]
+                lo, hi = r.interval
+                ys.append(y + offset)
+                xs.append(r.rate)
+                lows.append(r.rate - lo)
+                highs.append(hi - r.rate)
+        ax.barh(ys, xs, height=0.38, color=color, alpha=0.8, label=name)
+        ax.errorbar(xs, ys, xerr=[lows, highs], fmt="none", ecolor="black", capsize=2)
+    ax.set_yticks(range(len(groups)), [" / ".join(g) for g in reversed(groups)], fontsize=8)
+    ax.set_xlim(0, 1.05)
+    ax.set_xlabel("success rate (bars: 95% Wilson interval)")
+    ax.set_title(f"{names[0]} vs {names[1]}")
+    ax.legend(fontsize=8, loc="lower right")
+    ax.grid(axis="x", alpha=0.3)
+    return _png(fig)

@@ -1,0 +1,55 @@
+"""Summary statistics of campaign results: success rates with Wilson score intervals, grouped."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+Z_95 = 1.959963984540054  # two-sided 95% normal quantile
+
+
+def wilson_interval(successes: int, n: int, z: float = Z_95) -> tuple[float, float]:
+    """The Wilson score interval for a binomial proportion (well-behaved at 0/n and n/n, unlike the Wald one)."""
+    if n <= 0:
+        return (0.0, 1.0)
+    p = successes / n
+    denom = 1.0 + z * z / n
+    centre = (p + z * z / (2 * n)) / denom
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / denom
+    return (max(0.0, centre - half), min(1.0, centre + half))
+
+
+@dataclass(frozen=True)
+class Rate:
+    group: tuple[str, ...]
+    successes: int
+    n: int
+
+    @property
+    def rate(self) -> float:
+        return self.successes / self.n if self.n else 0.0
+
+    @property
+    def interval(self) -> tuple[float, float]:
+        return wilson_interval(self.successes, self.n)
+
+
+def tree_label(row: dict[str, Any]) -> str:
+    tree = str(row["tree"])
+    return tree.rsplit("/", 1)[-1].rsplit(".", 1)[0]
+
+
+def group_value(row: dict[str, Any], column: str) -> str:
+    return tree_label(row) if column == "tree" else str(row[column])
+
+
+def success_rates(rows: Iterable[dict[str, Any]], by: Sequence[str]) -> list[Rate]:
+    counts: dict[tuple[str, ...], list[int]] = {}
+    for row in rows:
+        key = tuple(group_value(row, c) for c in by)
+        entry = counts.setdefault(key, [0, 0])
+        entry[0] += bool(row["success"])
+        entry[1] += 1
+    return [Rate(k, s, n) for k, (s, n) in sorted(counts.items())]
