@@ -18,7 +18,7 @@ FORBIDDEN = {
     "recording": ("sapien", "bt_grasp.sim", "bt_grasp.cli"),
     "faults": ("sapien", "bt_grasp.sim", "bt_grasp.cli"),
     "episode": ("sapien", "bt_grasp.cli"),
-    "campaign": ("sapien", "bt_grasp.sim", "bt_grasp.cli"),
+    "campaign": ("sapien", "bt_grasp.sim", "bt_grasp.cli"),  # episodes only through bt_grasp.episode
 }
 LEAF_MODULES = (
     "errors", "clock", "geometry", "interfaces", "config", "scene_config", "robot_description", "colors",

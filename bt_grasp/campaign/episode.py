@@ -33,7 +33,8 @@ class EpisodeOutcome:
     failed_leaf: str | None
     ticks: int
     sim_time_s: float
-    wall_time_s: float
+    wall_time_s: float  # ticking the tree
+    setup_wall_s: float  # preparing the episode: inputs loaded, world built or reset, tree wired (to tick 1)
     retries: dict[str, int]
     faults_fired: int
     judge: dict[str, Any]

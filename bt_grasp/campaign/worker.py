@@ -20,7 +20,7 @@ from bt_grasp.campaign.spec import Episode
 log = logging.getLogger(__name__)
 
 #: columns that depend on where and when an episode ran, not on its inputs: excluded when comparing runs
-PLACE_COLUMNS = ("wall_time_s", "episode_wall_s", "mcap", "environment", "worker", "finished_at")
+PLACE_COLUMNS = ("wall_time_s", "setup_wall_s", "episode_wall_s", "mcap", "environment", "worker", "finished_at")
 
 
 class KeepLogs(enum.StrEnum):
@@ -64,6 +64,7 @@ def make_row(episode: Episode, outcome: EpisodeOutcome, mcap: Path | None, episo
         "judge": outcome.judge,
         "fingerprint": temporary_run_fingerprint(outcome),
         "wall_time_s": round(outcome.wall_time_s, 3),
+        "setup_wall_s": round(outcome.setup_wall_s, 3),
         "episode_wall_s": round(episode_wall_s, 3),
         "mcap": str(mcap) if mcap is not None else None,
         "worker": f"{socket.gethostname()}:{os.getpid()}",

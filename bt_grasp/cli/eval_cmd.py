@@ -62,11 +62,11 @@ def run(
     parquet: bool = typer.Option(True, "--parquet/--no-parquet", help="Also export the results as NAME.parquet."),
 ) -> None:
     """Run every episode of a campaign that has no result yet (so running it again resumes it)."""
+    from bt_grasp.campaign.backend import warm_backend
     from bt_grasp.campaign.results import export_parquet, read_rows, results_path
     from bt_grasp.campaign.runner import run_campaign
     from bt_grasp.campaign.spec import load_campaign
     from bt_grasp.campaign.worker import KeepLogs
-    from bt_grasp.cli.eval_backend import session_backend
     from bt_grasp.errors import InputError
 
     try:
@@ -79,12 +79,12 @@ def run(
         from bt_grasp.campaign.ray_engine import RayEngine
 
         def engine() -> Any:
-            return RayEngine(ray, workers or None, session_backend, log_dir.resolve(), keep)
+            return RayEngine(ray, workers or None, warm_backend, log_dir.resolve(), keep)
     else:
         from bt_grasp.campaign.local import LocalEngine, default_workers
 
         def engine() -> Any:
-            return LocalEngine(workers or default_workers(), session_backend, log_dir.resolve(), keep)
+            return LocalEngine(workers or default_workers(), warm_backend, log_dir.resolve(), keep)
 
     console = Console(stderr=True)
     progress = run_campaign(campaign, out, engine, progress_printer(console))

@@ -149,6 +149,11 @@ class World:
     def now_ns(self) -> int:
         return self.clock.now_ns()
 
+    @property
+    def physics_steps(self) -> int:
+        """Physics steps since this world was built or last reset."""
+        return self._physics_steps
+
     def step(self, n: int = 1) -> None:
         """Advance physics by n steps of dt (the robot's controller runs before each)."""
         dt_ns = round(self.dt_s * 1e9)
