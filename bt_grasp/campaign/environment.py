@@ -1,4 +1,4 @@
-"""The environment fingerprint: what a result row was computed with (libraries, CPU, Python, OS)."""
+"""The environment fingerprint of a results row: what it was computed with (libraries, CPU, Python, OS)."""
 
 from __future__ import annotations
 
@@ -7,45 +7,18 @@ import json
 import os
 import platform
 from functools import lru_cache
-from importlib.metadata import PackageNotFoundError, version
 from typing import Any
 
-LIBRARIES = (
-    "bt-grasp",
-    "sapien",
-    "py-trees",
-    "numpy",
-    "opencv-python-headless",
-    "open3d",
-    "pin",
-    "ompl",
-    "ruckig",
-    "mcap",
-    "ray",
-)
+from bt_grasp.environment import KEY_LIBRARIES, cpu_model, library_version
 
-
-def cpu_model() -> str:
-    try:
-        with open("/proc/cpuinfo", encoding="utf-8") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
+#: the run's key libraries, plus what changes numbers or speed underneath them
+LIBRARIES = (*KEY_LIBRARIES, "numpy", "ray")
 
 
 @lru_cache(maxsize=1)
 def environment() -> dict[str, Any]:
-    libs: dict[str, str | None] = {}
-    for name in LIBRARIES:
-        try:
-            libs[name] = version(name)
-        except PackageNotFoundError:
-            libs[name] = None
-    env = {
-        "libraries": libs,
+    env: dict[str, Any] = {
+        "libraries": {name: library_version(name) for name in LIBRARIES},
         "python": platform.python_version(),
         "os": f"{platform.system()} {platform.release()}",
         "machine": platform.machine(),
