@@ -16,6 +16,7 @@ from rich.text import Text
 from rich.tree import Tree
 
 from bt_grasp.recording.replay import FailureReport, StatusChange
+from bt_grasp.tree.values import display
 
 STATUS_STYLES = {"SUCCESS": "green", "FAILURE": "bold red", "RUNNING": "yellow", "IDLE": "dim",
                  "SKIPPED": "blue"}
@@ -31,7 +32,8 @@ def _seconds(stamp_ns: int) -> str:
 
 
 def _value(value: Any, limit: int = 80) -> str:
-    text = value if isinstance(value, str) else json.dumps(value, separators=(",", ":"))
+    # numbers and bools as BT.CPP prints them (a real with six decimals); the log itself keeps them typed
+    text = display(value) if isinstance(value, str | int | float) else json.dumps(value, separators=(",", ":"))
     return text if len(text) <= limit else text[: limit - 1] + "…"
 
 

@@ -177,10 +177,14 @@ class Blackboard:
         another type is converted (text parsed, numbers cast without loss) or refused (BlackboardTypeError)."""
         entry = self.entry(key) or self.create_entry(key)
         kind = scalar_type(value)
-        if entry.declared is not None and kind is not None and kind is not entry.declared:
-            value = _fit(key, value, entry)
-        elif entry.declared is None and kind is not None and kind is not str:
-            entry.declared = kind
+        if entry.declared is None:  # BT.CPP: an entry with no type yet takes the value (and its type) as it is
+            if kind is not None and kind is not str:
+                entry.declared = kind
+        elif kind is not None:  # typed: converted to the declared type, then to the type held (copyInto)
+            if kind is not entry.declared:
+                value = _fit(key, value, entry)
+            elif scalar_type(entry.value) is not None:
+                value = copy_into(value, entry.value)
         entry.value = value
         entry.sequence_id += 1
 

@@ -22,7 +22,7 @@ from bt_grasp.tree.node import BtNode, WakeUp
 from bt_grasp.tree.ports import PortAccessor, blackboard_key
 from bt_grasp.tree.registry import NodeKind, NodeRegistry, NodeSpec
 from bt_grasp.tree.substitution import SubstitutionRule, substitute
-from bt_grasp.tree.validate import check_models, resolve_node, resolve_subtree
+from bt_grasp.tree.validate import check_models, check_read_only_ports, resolve_node, resolve_subtree
 from bt_grasp.tree.values import literal_value
 
 SUBTREE_SPEC = NodeSpec(
@@ -57,6 +57,7 @@ def main_tree_id(document: Document) -> str:
 def validate_document(document: Document, registry: NodeRegistry) -> str:
     """Check every tree of ``document`` (not only the main one) and its models; returns the main tree ID."""
     check_models(document, registry)
+    check_read_only_ports(document)
 
     def walk(decl: NodeDecl) -> None:
         if decl.type_id == "SubTree":

@@ -14,7 +14,7 @@ from bt_grasp.tree.builtins import REMOVED_V3_NAMES
 from bt_grasp.tree.exceptions import PortValueError, ScriptSyntaxError
 from bt_grasp.tree.formats.document import Document, ModelDecl, NodeDecl
 from bt_grasp.tree.node import POST_CONDITIONS, PRE_CONDITIONS, Conditions
-from bt_grasp.tree.ports import PortValue, convert_text
+from bt_grasp.tree.ports import PortValue, blackboard_key, convert_text
 from bt_grasp.tree.registry import NodeKind, NodeRegistry, NodeSpec, PortDirection, PortSpec
 from bt_grasp.tree.scripting import parse_script
 
@@ -187,3 +187,39 @@ def _check_model(model: ModelDecl, spec: NodeSpec) -> None:
                 f"port '{mport.name}' of {spec.name} has type {port.type.__name__}, the model says {mport.type_name}",
                 mport.line,
             )
+
+
+#: the ports of built-in nodes that hold a script
+_SCRIPT_PORTS = {"Script": "code", "ScriptCondition": "code", "Precondition": "if"}
+
+
+def check_read_only_ports(document: Document) -> None:
+    """A script inside a ``<BehaviorTree>`` may not assign to a port its ``<SubTree>`` TreeNodesModel declares
+    as ``input_port``: the caller's entry is read-only there. Raises TreeFileError at the script's line."""
+    for model in document.models:
+        if model.kind != "SubTree" or model.node_id not in document.trees:
+            continue
+        inputs = {p.name for p in model.ports if p.direction == "input"}
+        if inputs:
+            _check_assignments(document.trees[model.node_id].root, inputs, model.node_id)
+
+
+def _check_assignments(decl: NodeDecl, inputs: set[str], tree_id: str) -> None:
+    scripts = [(k, v) for k, v in decl.attributes if k in CONDITION_ATTRIBUTES]
+    port = _SCRIPT_PORTS.get(decl.type_id)
+    if port is not None:
+        scripts += [(port, v) for k, v in decl.attributes if k == port and blackboard_key(v, port) is None]
+    for key, text in scripts:
+        try:
+            written = parse_script(text).assigned_names() & inputs
+        except ScriptSyntaxError:
+            continue  # reported with its own message by resolve_node / parse_conditions
+        if written:
+            name = sorted(written)[0]
+            label = decl.type_id if key == port else key
+            raise decl.error(
+                f"{label}: script {text!r} assigns to '{name}', a read-only input port of SubTree {tree_id} "
+                "(its TreeNodesModel declares input_port; declare it inout_port or output_port to write it)"
+            )
+    for child in decl.children:
+        _check_assignments(child, inputs, tree_id)

@@ -135,3 +135,34 @@ EXAMPLES = sorted((Path(__file__).resolve().parents[2] / "trees" / "builtin_exam
 def test_builtin_examples_run(example: Path, capsys: pytest.CaptureFixture[str]) -> None:
     code, out, _ = run_cli(capsys, "tree", "run", str(example), "--dry", "--json")
     assert code == 0 and json.loads(out)["status"] == "SUCCESS"
+
+
+def test_run_prints_values_as_btcpp_and_json_keeps_them_typed(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "typed.xml"
+    path.write_text(
+        '<root BTCPP_format="4"><BehaviorTree ID="M">'
+        "<Script code=\"half := 6 / 3; n := 4; s := 'i=' .. half\"/></BehaviorTree></root>"
+    )
+    assert main(["tree", "run", str(path), "--dry"]) == 0
+    text = capsys.readouterr().out
+    assert "half = 2.000000" in text and "n = 4" in text and "s = i=2.000000" in text
+    assert main(["tree", "run", str(path), "--dry", "--json"]) == 0
+    blackboard = json.loads(capsys.readouterr().out)["blackboard"]
+    assert blackboard == {"half": 2.0, "n": 4, "s": "i=2.000000"} and isinstance(blackboard["half"], float)
+
+
+def test_models_describe_the_leaves_for_groot2(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from bt_grasp.cli.tree_cmd import tree_registry
+    from bt_grasp.tree.formats.xml_format import read_xml
+    from bt_grasp.tree.validate import check_models
+
+    out = tmp_path / "models.xml"
+    assert main(["tree", "models", "--out", str(out)]) == 0
+    document = read_xml(out.read_bytes(), str(out))
+    names = {m.node_id for m in document.models}
+    assert "Approach" in names and "Sequence" not in names  # the leaves, not BT.CPP's built-ins
+    check_models(document, tree_registry())  # the models agree with the registry they came from
+    assert main(["tree", "models", "--builtins"]) == 0
+    assert '<Control ID="ParallelAll">' in capsys.readouterr().out

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 from py_trees.common import Status
 
 from bt_grasp.tree import Leaf, NodeContext, NodeKind, NodeRegistry, NodeSpec, PortDirection, PortSpec
+from bt_grasp.tree.exceptions import TreeRuntimeError
 from bt_grasp.tree.registry import builtin_registry
 
 IN, OUT, INOUT = PortDirection.INPUT, PortDirection.OUTPUT, PortDirection.INOUT
@@ -82,7 +83,10 @@ class Counter(_Traced):
 
     def update(self) -> Status:
         self.count_tick()
-        current = self.ports.get("value") if self.ports.has("value") else 0
+        try:  # BT.CPP's getInput returns an error (not an exception) for an empty or unconvertible entry
+            current = self.ports.get("value")
+        except TreeRuntimeError:
+            current = 0
         self.ports.set("value", current + int(self.ports.get("step")))
         return Status.SUCCESS
 

@@ -311,6 +311,21 @@ class Program:
             raise TreeRuntimeError(f"Error in script [{self.source}]: {exc}") from None
         return result
 
+    def assigned_names(self) -> frozenset[str]:
+        """Every blackboard entry the program assigns to (for load-time checks)."""
+        names: set[str] = set()
+        pending: list[Any] = list(self.statements)
+        while pending:
+            expr = pending.pop()
+            if isinstance(expr, Assign) and isinstance(expr.target, Name):
+                names.add(expr.target.name)
+            for value in vars(expr).values():
+                if isinstance(value, Expr):
+                    pending.append(value)
+                elif isinstance(value, tuple):
+                    pending.extend(v for v in value if isinstance(v, Expr))
+        return frozenset(names)
+
     def truth(self, blackboard: Blackboard, enums: Mapping[str, int]) -> bool:
         """The program's value as BT.CPP's ``cast<bool>`` reads it (ScriptCondition, ``_skipIf`` ...)."""
         result = self.run(blackboard, enums)
