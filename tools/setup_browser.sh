@@ -48,10 +48,10 @@ if [ ! -f "$studio/package/assets/index.js" ]; then
     rm -rf "$tmp"
 fi
 
-if [ ! -f "$CACHE/node_modules/puppeteer-core/package.json" ] || [ ! -f "$CACHE/node_modules/react-dom/umd/react-dom.production.min.js" ]; then
+if [ ! -f "$CACHE/node_modules/puppeteer-core/package.json" ] || [ ! -f "$CACHE/node_modules/react-dom/umd/react-dom.production.min.js" ] || [ ! -f "$CACHE/node_modules/ws/package.json" ]; then
     echo "setup: installing puppeteer-core, react and react-dom (npm)"
     (cd "$CACHE" && { [ -f package.json ] || echo '{"name":"bt-grasp-browser-tests","private":true}' > package.json; } \
-        && PUPPETEER_SKIP_DOWNLOAD=1 npm install --silent --no-audit --no-fund "puppeteer-core@$PUPPETEER_VERSION" "react@$REACT_VERSION" "react-dom@$REACT_VERSION" >/dev/null) \
+        && PUPPETEER_SKIP_DOWNLOAD=1 npm install --silent --no-audit --no-fund "puppeteer-core@$PUPPETEER_VERSION" "ws@8" "react@$REACT_VERSION" "react-dom@$REACT_VERSION" >/dev/null) \
         || echo "setup: npm install puppeteer-core failed; browser tests will skip" >&2
 fi
 exit 0

@@ -12,12 +12,18 @@ from rich.console import Console
 
 from bt_grasp.episode.request import DEFAULT_MAX_TICKS, EpisodeRequest, parse_assignments
 from bt_grasp.episode.result import EpisodeResult
+from bt_grasp.errors import InputError
 from bt_grasp.goals import DEFAULT_LIFT_HEIGHT_M, goal_from_options
 
 if TYPE_CHECKING:
     from bt_grasp.episode import TickCallback
     from bt_grasp.episode.request import BlackboardValue
     from bt_grasp.tree.loader import LoadedTree
+
+
+#: the live view's port when ``--live`` has no value (bt_grasp.recording.live.DEFAULT_PORT, not imported here
+#: so that a run without --live does not load the WebSocket server)
+LIVE_DEFAULT_PORT = 8765
 
 
 def judged_phrase(summary: EpisodeResult) -> str:
@@ -87,9 +93,22 @@ def run(
         DEFAULT_LIFT_HEIGHT_M, "--lift-height", help="The pick goal's lift height in metres, also {lift_height}."
     ),
     quiet: bool = typer.Option(False, "--quiet", help="No live progress."),
+    live: int | None = typer.Option(
+        None, "--live", is_flag=False, flag_value=str(LIVE_DEFAULT_PORT), metavar="[PORT]",
+        help=f"Serve the run live to Foxglove (WebSocket on 127.0.0.1, port {LIVE_DEFAULT_PORT} unless given).",
+    ),
+    live_host: str = typer.Option("127.0.0.1", "--live-host", help="Address the live server binds to."),
+    realtime: float | None = typer.Option(
+        None, "--realtime", is_flag=False, flag_value="1.0", metavar="[FACTOR]",
+        help="Pace wall time to simulated time (FACTOR simulated seconds per wall second; default 1).",
+    ),
+    image_hz: float = typer.Option(
+        0.0, "--image-hz", min=0.0, help="Extra logged camera frames per simulated second (0: only at a leaf's "
+        "failure and at the end; each costs a render)."
+    ),
 ) -> None:
     """Run a task tree on the simulated cell. Exit code 0 on task success (judged by physics), 1 on failure."""
-    from bt_grasp.episode import run_episode
+    from bt_grasp.episode.episode import Episode
 
     blackboard: dict[str, BlackboardValue] = {"color": color, "lift_height": lift_height}
     blackboard.update(parse_assignments(set_))
@@ -105,9 +124,19 @@ def run(
         inject=tuple(inject),
         blackboard=blackboard,
         argv=tuple(sys.argv),
+        image_hz=image_hz,
+        live_port=live,
+        live_host=live_host,
+        realtime=realtime,
     )
+    if realtime is not None and realtime <= 0:
+        raise InputError("--realtime", f"the factor must be positive, got {realtime}")
     console = Console(stderr=True)
-    summary = run_episode(request, on_tick=() if quiet else (live_progress(console),))
+    episode = Episode(request)
+    episode.on_live.append(lambda url: console.print(
+        f"live: open Foxglove, Open connection > Foxglove WebSocket > {url} (layout: foxglove/bt_grasp.layout.json)",
+        highlight=False))
+    summary = episode.run(on_tick=() if quiet else (live_progress(console),))
     out = Console()
     print_summary(out, summary)
     if summary_json is not None:

@@ -26,6 +26,7 @@ if TYPE_CHECKING:
     from bt_grasp.episode.instruments import TimedPlanner
     from bt_grasp.faults.plan import FaultPlan
     from bt_grasp.perception.calibration_file import CalibrationFile
+    from bt_grasp.recording.live import LiveServer
     from bt_grasp.recording.writer import RunRecorder
     from bt_grasp.scene_config import Scene
     from bt_grasp.sim.judge import Verdict
@@ -123,6 +124,9 @@ class Episode:
         self.planning: TimedPlanner
         self.cell = self._build_cell()
         self._ran = False
+        self.live: LiveServer | None = None
+        #: called with the live view's URL once its server listens (the CLI prints how to connect)
+        self.on_live: list[Callable[[str], None]] = []
 
     def _build_cell(self) -> Cell:
         from bt_grasp.behaviours.calibration_leaves import needs_calibration_board
@@ -152,7 +156,19 @@ class Episode:
         request, world, cell = self.request, self.world, self.cell
         judge = Judge(world)
         recorder = self._open_recorder()
+        observers: list[TickCallback] = []
+        extras = None
         try:
+            if recorder is not None:
+                from bt_grasp.episode.observers import LogExtras
+
+                extras = LogExtras(recorder, world, cell, request.image_hz)
+                extras.start()
+                observers.append(extras)
+            if request.realtime is not None:
+                from bt_grasp.episode.observers import RealtimePacer
+
+                observers.append(RealtimePacer(world, request.realtime))
             injector = None
             if self.inputs.fault_plan is not None:
                 from bt_grasp.faults.injector import install_faults
@@ -165,7 +181,7 @@ class Episode:
                 judge.observe()
                 if injector is not None:
                     injector.after_tick(tick)
-                for callback in on_tick:
+                for callback in (*observers, *on_tick):
                     callback(tick, tree)
 
             if injector is not None:
@@ -200,15 +216,19 @@ class Episode:
                 planning=self.planning.stats(),
             )
             if recorder is not None:
+                if extras is not None:
+                    extras.finish()
                 recorder.write_result(world.now_ns(), result.to_json())
         finally:
             if recorder is not None:
                 recorder.close()
+            if self.live is not None:
+                self.live.close()
         return result
 
     def _open_recorder(self) -> RunRecorder | None:
         request = self.request
-        if request.log is None:
+        if request.log is None and request.live_port is None:
             return None
         from bt_grasp.episode.media import RecorderSink
         from bt_grasp.episode.metadata import run_attachments, run_metadata
@@ -218,7 +238,12 @@ class Episode:
         from bt_grasp.recording.writer import BASE_FRAME, WORLD_FRAME, RunRecorder
         from bt_grasp.tree.introspect import node_records, tree_structure
 
-        request.log.parent.mkdir(parents=True, exist_ok=True)
+        if request.live_port is not None:  # first: a port that cannot be bound leaves no log behind
+            from bt_grasp.recording.live import LiveServer
+
+            self.live = LiveServer(request.live_port, request.live_host)
+        if request.log is not None:
+            request.log.parent.mkdir(parents=True, exist_ok=True)
         recorder = RunRecorder(
             request.log,
             metadata=run_metadata(
@@ -231,6 +256,11 @@ class Episode:
         )
         # the frame tree's root: where the robot is bolted (installation data), repeated with every /tf
         recorder.static_transforms[(WORLD_FRAME, BASE_FRAME)] = self.scene.T_world_base()
+        if self.live is not None:
+            self.live.attach(recorder)
+            for callback in self.on_live:
+                callback(self.live.url)
+        recorder.write_scene(topics.ROBOT_MODEL, 0, recorder.robot_model_update())
         recorder.write_scene(topics.SCENE, 0, fixture_update(self.scene, recorder.t(0)))
         recorder.write_tree_structure(self.world.now_ns(), tree_structure(self.tree.root))
         self.cell.media = RecorderSink(recorder, self.world.now_ns)

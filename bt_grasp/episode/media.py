@@ -29,6 +29,7 @@ class RecorderSink:
         self.recorder.write_camera_calibration(stamp, CAMERA_FRAME, frame.intrinsics)
         self.recorder.write_depth(stamp, frame.depth_m, CAMERA_FRAME)
         if T_base_camera is not None:
+            # the camera frame as this capture saw it, repeated with every /tf until the next one
             self.recorder.static_transforms[(BASE_FRAME, CAMERA_FRAME)] = np.asarray(T_base_camera, dtype=np.float64)
             self.recorder.write_transforms(stamp, [(BASE_FRAME, CAMERA_FRAME, T_base_camera)])
             self._write_cloud(stamp, frame, T_base_camera)

@@ -24,7 +24,8 @@ class EpisodeRequest:
     ``calibration``: a calibration file to load before the first tick (``LoadCalibration`` may load one
     too); ``log``: write the run to this MCAP file; ``faults``/``inject``: a fault plan file and/or
     one-line faults; ``blackboard``: entries set on the main tree's blackboard before the first tick;
-    ``argv``: the command line, recorded in the log's metadata.
+    ``argv``: the command line, recorded in the log's metadata. ``image_hz``, ``live_port``/``live_host``
+    and ``realtime`` only observe the run (see ``bt_grasp.episode.observers`` and ``bt_grasp.recording.live``).
     """
 
     tree: Path
@@ -38,6 +39,13 @@ class EpisodeRequest:
     inject: tuple[str, ...] = ()
     blackboard: Mapping[str, BlackboardValue] = field(default_factory=dict)
     argv: tuple[str, ...] = ()
+    #: observers (they never change the run): extra camera frames per simulated second in the log (0: only
+    #: at a leaf's failure and at the end), a live Foxglove WebSocket view on this port (None: none; 0: any
+    #: free port) and host, and wall-clock pacing (simulated seconds per wall second; None: as fast as it goes)
+    image_hz: float = 0.0
+    live_port: int | None = None
+    live_host: str = "127.0.0.1"
+    realtime: float | None = None
 
 
 def parse_assignments(items: Sequence[str], source: str = "--set") -> dict[str, BlackboardValue]:

@@ -26,6 +26,7 @@ import logging
 import os
 import time
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from importlib.metadata import PackageNotFoundError
 from importlib.metadata import version as dist_version
 from pathlib import Path
@@ -78,6 +79,17 @@ def _media_type(name: str, data: bytes) -> str:
     return "text/plain"
 
 
+@dataclass(frozen=True)
+class ChannelSpec:
+    """One topic as registered: what a live server advertises so viewers decode it like the file."""
+
+    topic: str
+    message_encoding: str
+    schema_name: str
+    schema_encoding: str
+    schema_data: bytes
+
+
 def _ticked(tick: int | None, msg: dict[str, Any]) -> dict[str, Any]:
     """``msg`` tagged with the last tick written; before the first tick the key is left out (Foxglove's JSON
     schemas have no nullable types)."""
@@ -92,7 +104,8 @@ class RunRecorder:
     """Writes one run to one MCAP file. See the module docstring for the call order.
 
     Args:
-        path: the .mcap file to create (its folder must exist; an existing file is replaced).
+        path: the .mcap file to create (its folder must exist; an existing file is replaced); None writes no
+            file (a live stream only: messages still go to the taps, see ``add_tap``).
         metadata: the run's description, written as the MCAP Metadata record ``bt_grasp.run``: seed,
             command line, tree and scene file names, versions, git commit, fault plan, tick rate. Values are
             strings; two keys are added: ``log_format`` and ``start_unix_ns``.
@@ -116,14 +129,14 @@ class RunRecorder:
         max_array_elements: blackboard arrays larger than this are logged as a summary, not element-wise.
         leaf_names: the tree's leaves' names in uid order, declared in the /bt/tick schema so Foxglove can
             plot ``/bt/tick.leaves.<name>``.
-        robot_model: a :class:`bt_grasp.recording.robot_model.RobotModel`: its link entities are written on
-            /robot/model at the start and every link's pose on /tf with each arm state; None writes only the
-            tool frame.
+        robot_model: a :class:`bt_grasp.recording.robot_model.RobotModel`: every link's pose goes on /tf with
+            each arm state (write its link entities with ``write_scene(ROBOT_MODEL, 0, robot_model_update())``);
+            None writes only the tool frame.
     """
 
     def __init__(
         self,
-        path: str | Path,
+        path: str | Path | None,
         *,
         metadata: Mapping[str, str],
         attachments: Mapping[str, bytes] | None = None,
@@ -146,7 +159,8 @@ class RunRecorder:
     ) -> None:
         if compression not in _COMPRESSION:
             raise ValueError(f"unknown compression {compression!r}; expected one of {sorted(_COMPRESSION)}")
-        self.path = Path(path)
+        self.to_file = path is not None
+        self.path = Path(path) if path is not None else Path(os.devnull)
         self._wall_clock = wall_clock
         self.time_origin_ns = int(wall_clock() if time_origin_ns is None else time_origin_ns)
         self._image_format = image_format
@@ -169,6 +183,8 @@ class RunRecorder:
         self._sequence: dict[int, int] = {}
         self._closed = False
         self._taps: list[Callable[[str, int, bytes], None]] = []
+        #: called with (kind, payload) after every event written (a failure, a retry, an abort)
+        self.event_listeners: list[Callable[[str, Mapping[str, Any]], None]] = []
         self._robot_model = robot_model
         self._leaf_names = tuple(leaf_names)
         self._leaf_keys: tuple[tuple[str, ...], list[str]] = ((), [])
@@ -197,30 +213,32 @@ class RunRecorder:
             self._writer.add_attachment(now, 0, name, _media_type(name, bytes(data)), bytes(data))
         self._channels: dict[str, int] = {}
         self._register_channels()
-        if self._robot_model is not None:
-            self.write_scene(topics.ROBOT_MODEL, 0, self._robot_model.scene_update(self.t(0)))
         self._file.flush()
 
     # -- set-up ------------------------------------------------------------------------------------------
 
-    def _register_channels(self) -> None:
-        for topic in topics.JSON_TOPICS:
-            schema_id = self._writer.register_schema(
-                name=str(topics.JSON_SCHEMAS[topic]["title"]),
-                encoding=SchemaEncoding.JSONSchema,
-                data=topics.json_schema_bytes(topic, self._leaf_names),
-            )
-            self._channels[topic] = self._writer.register_channel(topic, MessageEncoding.JSON, schema_id)
-        schema_ids: dict[str, int] = {}
+    def channel_specs(self) -> list[ChannelSpec]:
+        """Every topic with its message encoding and schema, exactly as registered in the file."""
+        specs = [ChannelSpec(topic, MessageEncoding.JSON, str(topics.JSON_SCHEMAS[topic]["title"]),
+                             SchemaEncoding.JSONSchema, topics.json_schema_bytes(topic, self._leaf_names))
+                 for topic in topics.JSON_TOPICS]
+        descriptors: dict[str, bytes] = {}
         for topic, schema_name in topics.PROTOBUF_TOPICS.items():
-            if schema_name not in schema_ids:
-                fds = build_file_descriptor_set(schemas.PROTOBUF_CLASSES[schema_name])
-                schema_ids[schema_name] = self._writer.register_schema(
-                    name=schema_name, encoding=SchemaEncoding.Protobuf, data=fds.SerializeToString()
-                )
-            self._channels[topic] = self._writer.register_channel(
-                topic, MessageEncoding.Protobuf, schema_ids[schema_name]
-            )
+            if schema_name not in descriptors:
+                descriptors[schema_name] = build_file_descriptor_set(
+                    schemas.PROTOBUF_CLASSES[schema_name]).SerializeToString()
+            specs.append(ChannelSpec(topic, MessageEncoding.Protobuf, schema_name, SchemaEncoding.Protobuf,
+                                     descriptors[schema_name]))
+        return specs
+
+    def _register_channels(self) -> None:
+        schema_ids: dict[str, int] = {}
+        for spec in self.channel_specs():
+            if spec.schema_name not in schema_ids:
+                schema_ids[spec.schema_name] = self._writer.register_schema(
+                    name=spec.schema_name, encoding=spec.schema_encoding, data=spec.schema_data)
+            self._channels[spec.topic] = self._writer.register_channel(
+                spec.topic, spec.message_encoding, schema_ids[spec.schema_name])
 
     def __enter__(self) -> RunRecorder:
         if self._handle_signals:
@@ -355,6 +373,12 @@ class RunRecorder:
                                          i.cx_px, i.cy_px)
         self._write(topics.CALIBRATION, stamp_ns, msg.SerializeToString())
 
+    def robot_model_update(self) -> Any:
+        """The robot's link entities (a ``foxglove.SceneUpdate``) at the start of the run."""
+        if self._robot_model is None:
+            raise ValueError("this recorder has no robot model")
+        return self._robot_model.scene_update(self.t(0))
+
     def write_scene(self, topic: str, stamp_ns: int, update: Any) -> None:
         """A ready ``foxglove.SceneUpdate`` on one of the scene topics (robot model, fixtures, judge)."""
         if topics.PROTOBUF_TOPICS.get(topic) != "foxglove.SceneUpdate":
@@ -420,6 +444,8 @@ class RunRecorder:
         """An event on /bt/events (a failure, a retry, an abort); tagged with the last tick written."""
         self._write_json(topics.EVENTS, stamp_ns,
                          _ticked(self._last_tick, {"kind": kind, "payload": to_jsonable(payload)}))
+        for listener in self.event_listeners:
+            listener(kind, payload)
 
     def write_fault(self, stamp_ns: int, tick: int, fault: Mapping[str, Any]) -> None:
         """One firing of an injected fault on /faults."""
@@ -449,7 +475,8 @@ class RunRecorder:
         if self._fsync_interval_s is not None:
             now = time.monotonic()
             if now - self._last_fsync >= self._fsync_interval_s:
-                os.fsync(self._file.fileno())
+                if self.to_file:
+                    os.fsync(self._file.fileno())
                 self._last_fsync = now
 
     def close(self) -> None:
@@ -461,7 +488,8 @@ class RunRecorder:
             with self._guard.busy():
                 self._writer.finish()
                 self._file.flush()
-                os.fsync(self._file.fileno())
+                if self.to_file:
+                    os.fsync(self._file.fileno())
         finally:
             self._file.close()
             self._guard.uninstall()

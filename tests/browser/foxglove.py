@@ -159,9 +159,9 @@ class StudioServer:
         return (f"http://127.0.0.1:{self.port}/studio.html?ds=remote-file&ds.url={urllib.parse.quote(data, safe='')}"
                 f"{self.layout_param}")
 
-    def url_for_websocket(self, ws_url: str) -> str:
-        return (f"http://127.0.0.1:{self.port}/studio.html?ds=foxglove-websocket&ds.url="
-                f"{urllib.parse.quote(ws_url, safe='')}{self.layout_param}")
+    def url_for_websocket(self) -> str:
+        """Studio on a live server, through the probe's protocol bridge (``open_in_studio(ws_bridge=...)``)."""
+        return f"http://127.0.0.1:{self.port}/studio.html?ds=foxglove-websocket&ds.url=__BRIDGE__{self.layout_param}"
 
 
 @dataclass
@@ -178,7 +178,7 @@ class StudioReport:
 
 
 def open_in_studio(url: str, workdir: Path, *, wait_s: float = 25.0, screenshot: Path | None = None,
-                   timeout_s: float = 240.0) -> StudioReport:
+                   timeout_s: float = 240.0, ws_bridge: str | None = None) -> StudioReport:
     """Open ``url`` in headless chromium, let Foxglove load, and report what it shows."""
     out = workdir / "probe.json"
     profile = workdir / "chromium-profile"
@@ -187,6 +187,8 @@ def open_in_studio(url: str, workdir: Path, *, wait_s: float = 25.0, screenshot:
            "--profile", str(profile), "--wait", str(wait_s)]
     if screenshot is not None:
         cmd += ["--screenshot", str(screenshot)]
+    if ws_bridge is not None:
+        cmd += ["--ws-bridge", ws_bridge]
     shots = workdir / "panels"
     shots.mkdir(exist_ok=True)
     cmd += ["--panel-shots", str(shots)]

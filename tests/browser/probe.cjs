@@ -12,8 +12,34 @@ function arg(name, fallback) {
 }
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 
+// foxglove-sdk 0.30's WebSocket server speaks the Foxglove WebSocket protocol under its newer subprotocol name
+// "foxglove.sdk.v1"; this Studio build (1.48, in a worker) asks only for "foxglove.websocket.v1". The bridge
+// accepts the old name and passes every frame through unchanged to the server under the new one.
+function startBridge(target) {
+  const WebSocket = require("ws");
+  const server = new WebSocket.Server({ host: "127.0.0.1", port: 0, handleProtocols: (protocols) => [...protocols][0] });
+  server.on("connection", (client) => {
+    const upstream = new WebSocket(target, ["foxglove.sdk.v1"]);
+    const pending = [];
+    upstream.on("open", () => { for (const [d, b] of pending) upstream.send(d, { binary: b }); pending.length = 0; });
+    upstream.on("message", (data, isBinary) => client.readyState === 1 && client.send(data, { binary: isBinary }));
+    client.on("message", (data, isBinary) => upstream.readyState === 1 ? upstream.send(data, { binary: isBinary }) : pending.push([data, isBinary]));
+    upstream.on("close", () => client.close());
+    client.on("close", () => upstream.close());
+    upstream.on("error", () => client.close());
+    client.on("error", () => upstream.close());
+  });
+  return new Promise((resolve) => server.on("listening", () => resolve(server)));
+}
+
 async function main() {
-  const url = arg("url");
+  let url = arg("url");
+  const bridgeTarget = arg("ws-bridge");
+  let bridge = null;
+  if (bridgeTarget) {
+    bridge = await startBridge(bridgeTarget);
+    url = url.replace("__BRIDGE__", encodeURIComponent("ws://127.0.0.1:" + bridge.address().port));
+  }
   const out = arg("out");
   const waitS = Number(arg("wait", "25"));
   const browser = await puppeteer.launch({
@@ -101,6 +127,7 @@ async function main() {
     }
   } finally {
     await browser.close();
+    if (bridge) bridge.close();
   }
   fs.writeFileSync(out, JSON.stringify(result, null, 1));
 }

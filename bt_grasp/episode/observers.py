@@ -1,0 +1,129 @@
+"""What watches a run without taking part in it: extra log content and wall-clock pacing.
+
+None of these may change the run: they draw from no run random stream, step nothing and are read by no
+leaf. ``LogExtras`` adds to the log (and the live view) what the leaves do not send: camera frames when a
+leaf fails, at the end and optionally at a fixed simulated rate (rendered noise-free with
+``render_true()``, which steps nothing and draws no noise), the camera's frame from the calibration the
+run holds, and the judge's true object poses on ``/judge/true_objects`` (simulator truth: judge side only).
+``RealtimePacer`` sleeps so wall time follows simulated time (pacing only; no decision reads it).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from bt_grasp.recording import topics
+from bt_grasp.recording.scene_entities import Solid, judge_update
+from bt_grasp.recording.writer import BASE_FRAME, CAMERA_FRAME
+
+if TYPE_CHECKING:
+    from bt_grasp.behaviours.cell import Cell
+    from bt_grasp.recording.writer import RunRecorder
+    from bt_grasp.sim.world import World
+    from bt_grasp.tree.loader import LoadedTree
+
+log = logging.getLogger(__name__)
+
+
+class LogExtras:
+    """Extra camera frames and judge truths for a run's log. ``start()``, every tick, ``finish()``."""
+
+    def __init__(self, recorder: RunRecorder, world: World, cell: Cell, image_hz: float = 0.0) -> None:
+        from bt_grasp.sim.oracle import GroundTruthOracle
+
+        self.recorder = recorder
+        self.world = world
+        self.cell = cell
+        self.period_ns = int(1e9 / image_hz) if image_hz > 0 else 0
+        self._oracle = GroundTruthOracle(world)
+        self._next_image_ns = 0
+        self._failed = False
+        self.captures = 0
+        recorder.event_listeners.append(self._on_event)
+
+    def start(self) -> None:
+        self.write_truth()
+
+    def _on_event(self, kind: str, payload: Mapping[str, Any]) -> None:
+        if kind == "failure":
+            self._failed = True
+
+    def __call__(self, tick: int, tree: LoadedTree) -> None:
+        now = self.world.now_ns()
+        self._update_camera_frame()
+        periodic = self.period_ns > 0 and now >= self._next_image_ns
+        if self._failed or periodic:
+            self.capture("failure" if self._failed else "periodic")
+            if self._failed:
+                self.write_truth()
+            self._failed = False
+        if periodic:
+            self._next_image_ns = now + self.period_ns
+
+    def finish(self) -> None:
+        self._update_camera_frame()
+        self.capture("end")
+        self.write_truth()
+
+    def _update_camera_frame(self) -> None:
+        """base_link -> camera from the calibration the run holds (eye-in-hand: follows the tool link)."""
+        calibration = self.cell.calibration
+        if calibration is None:
+            return
+        T_base_tool = None
+        if calibration.mount == "eye-in-hand":
+            q = self.cell.robot.joint_positions()
+            T_base_tool = self.cell.kinematics.fk_link(q, calibration.tool_link)
+        T = np.asarray(calibration.T_base_camera_at(T_base_tool), dtype=np.float64)
+        self.recorder.static_transforms[(BASE_FRAME, CAMERA_FRAME)] = T
+
+    def capture(self, why: str) -> None:
+        """A noise-free colour frame with its calibration: no noise drawn, nothing stepped."""
+        stamp = self.world.now_ns()
+        started = time.perf_counter()
+        color, _depth = self.world.camera.render_true()
+        self.recorder.write_color_image(stamp, color, CAMERA_FRAME)
+        self.recorder.write_camera_calibration(stamp, CAMERA_FRAME, self.world.camera.intrinsics)
+        took_ms = 1e3 * (time.perf_counter() - started)
+        message = f"{why} frame (noise-free, for the log), {took_ms:.0f} ms"
+        self.recorder.write_log(stamp, "DEBUG", "log_camera", message)
+        self.captures += 1
+
+    def write_truth(self) -> None:
+        """Where the simulator has every object now (the judge's view, for debugging perception offline)."""
+        stamp = self.world.now_ns()
+        by_name = {o.name: o for o in self.world.config.objects}
+        solids = []
+        for name in self._oracle.object_names():
+            obj = by_name.get(name)
+            if obj is None:
+                continue
+            solids.append(Solid(f"true {name}", obj.shape, tuple(obj.size_m), self._oracle.T_world_object(name),
+                                (*obj.rgb, 0.35)))
+        self.recorder.write_scene(topics.JUDGE_OBJECTS, stamp, judge_update(self.recorder.t(stamp), solids))
+
+
+class RealtimePacer:
+    """Sleeps after each tick until ``wall elapsed >= simulated elapsed / factor`` (factor 1 = real time)."""
+
+    def __init__(self, world: World, factor: float = 1.0) -> None:
+        if factor <= 0:
+            raise ValueError(f"a real-time factor must be positive, got {factor}")
+        self.world = world
+        self.factor = float(factor)
+        self._wall0: float | None = None
+        self._sim0 = 0
+
+    def __call__(self, tick: int, tree: LoadedTree) -> None:
+        if self._wall0 is None:
+            self._wall0, self._sim0 = time.monotonic(), self.world.now_ns()
+            return
+        due = self._wall0 + (self.world.now_ns() - self._sim0) * 1e-9 / self.factor
+        delay = due - time.monotonic()
+        if delay > 0:
+            time.sleep(delay)

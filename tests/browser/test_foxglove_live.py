@@ -1,0 +1,71 @@
+"""A run served live (`bt-grasp run ... --live PORT`) watched in a real Foxglove Studio through its
+"Foxglove WebSocket" data source: no problem for any topic, the 3D panel knows every link and draws, the image
+panel draws (the latched topics reach a viewer that joins mid-run)."""
+
+from __future__ import annotations
+
+import os
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from foxglove import missing_reason, open_in_studio, serving
+
+ROOT = Path(__file__).resolve().parents[2]
+LAYOUT = ROOT / "foxglove" / "bt_grasp.layout.json"
+LINKS = ("base_link", "shoulder_link", "upper_arm_link", "forearm_link", "wrist_1_link", "wrist_2_link",
+         "wrist_3_link", "gripper_palm", "left_finger", "right_finger", "tcp")
+
+pytestmark = [pytest.mark.sim, pytest.mark.slow]
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def _wait_for_port(port: int, proc: subprocess.Popen[str], timeout_s: float) -> None:
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if proc.poll() is not None:
+            raise AssertionError(f"the run ended before serving: {proc.communicate()}")
+        with socket.socket() as s:
+            if s.connect_ex(("127.0.0.1", port)) == 0:
+                return
+        time.sleep(0.2)
+    raise AssertionError(f"nothing listens on {port} after {timeout_s} s")
+
+
+def test_live_run_shows_whole_in_foxglove(tmp_path: Path) -> None:
+    reason = missing_reason()
+    if reason is not None:
+        print(f"SKIPPED (browser): {reason}")
+        pytest.skip(reason)
+    port = _free_port()
+    # slower than real time so the run is still going while Studio starts and subscribes
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "bt_grasp.cli.main", "run", str(ROOT / "trees/pick.xml"),
+         "--scene", str(ROOT / "scenes/tabletop.yaml"), "--live", str(port), "--realtime", "0.1",
+         "--max-ticks", "600", "--quiet"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+    )
+    try:
+        _wait_for_port(port, proc, 120)
+        with serving(tmp_path, LAYOUT) as server:
+            report = open_in_studio(server.url_for_websocket(), tmp_path, wait_s=25,
+                                    screenshot=tmp_path / "live.png", ws_bridge=f"ws://127.0.0.1:{port}")
+        assert proc.poll() is None, "the run ended before the viewer looked: the test proves nothing"
+    finally:
+        proc.kill()
+        proc.communicate()
+    assert report.errors == []
+    assert report.problems == [] and report.problem_count == 0, report.problems
+    assert set(LINKS) <= set(report.frames), report.frames
+    assert report.three_d_drawn, "the 3D panel drew nothing"
+    assert report.image_drawn, "the image panel drew nothing"
