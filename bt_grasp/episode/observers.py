@@ -34,13 +34,10 @@ class LogExtras:
     """Extra camera frames and judge truths for a run's log. ``start()``, every tick, ``finish()``."""
 
     def __init__(self, recorder: RunRecorder, world: World, cell: Cell, image_hz: float = 0.0) -> None:
-        from bt_grasp.sim.oracle import GroundTruthOracle
-
         self.recorder = recorder
         self.world = world
         self.cell = cell
         self.period_ns = int(1e9 / image_hz) if image_hz > 0 else 0
-        self._oracle = GroundTruthOracle(world)
         self._next_image_ns = 0
         self._failed = False
         self.captures = 0
@@ -96,15 +93,11 @@ class LogExtras:
 
     def write_truth(self) -> None:
         """Where the simulator has every object now (the judge's view, for debugging perception offline)."""
+        from bt_grasp.sim.judge_view import true_objects
+
         stamp = self.world.now_ns()
-        by_name = {o.name: o for o in self.world.config.objects}
-        solids = []
-        for name in self._oracle.object_names():
-            obj = by_name.get(name)
-            if obj is None:
-                continue
-            solids.append(Solid(f"true {name}", obj.shape, tuple(obj.size_m), self._oracle.T_world_object(name),
-                                (*obj.rgb, 0.35)))
+        solids = [Solid(f"true {o.name}", o.shape, o.size_m, o.T_world_object, (*o.rgb, 0.35))
+                  for o in true_objects(self.world)]
         self.recorder.write_scene(topics.JUDGE_OBJECTS, stamp, judge_update(self.recorder.t(stamp), solids))
 
 
