@@ -6,6 +6,7 @@ Usage: python record_forever.py OUT.mcap [--sleep-s S] [--max-ticks N]
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 import time
 
@@ -20,6 +21,9 @@ def main() -> int:
     parser.add_argument("--sleep-s", type=float, default=0.002)
     parser.add_argument("--max-ticks", type=int, default=1_000_000)
     args = parser.parse_args()
+    # A job started in the background by a non-interactive shell inherits SIGINT ignored (and Python then keeps
+    # it so); the test is about a user's Ctrl-C, which reaches a process with the default handler.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     names = ["Root", "Detect", "Grasp"]
     with RunRecorder(args.out, metadata={"seed": "3", "tree_file": "kill.xml"}) as rec:
         rec.write_tree_structure(0, {"uid": 1, "type": "Sequence", "name": "Root", "path": "Root",

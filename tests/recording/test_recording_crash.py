@@ -53,9 +53,14 @@ def test_sigkill_keeps_every_flushed_tick(tmp_path):
 def test_sigterm_and_sigint_finish_the_file(tmp_path, signum):
     out = tmp_path / "terminated.mcap"
     proc = _start(out)
-    flushed = _read_until(proc, 50)
-    proc.send_signal(signum)
-    proc.communicate(timeout=30)
+    try:
+        flushed = _read_until(proc, 50)
+        proc.send_signal(signum)
+        proc.communicate(timeout=30)
+    finally:  # a child that outlives a failed test must not leak into the next one
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate(timeout=10)
     assert proc.returncode != 0
     run = open_log(out)
     assert not run.truncated and run.indexed  # footer and summary written on the way out
