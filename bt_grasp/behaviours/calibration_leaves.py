@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from pathlib import Path
-from typing import Any
 
 from py_trees.common import Status
 
@@ -60,7 +59,7 @@ class Calibrate(RobotLeaf):
     def initialise(self) -> None:
         from bt_grasp.behaviours.calibration_job import CalibrationJob
 
-        self.job: Any = CalibrationJob(self.cell, int(self.input("poses")))
+        self.job = CalibrationJob(self.cell, int(self.input("poses")))
 
     def update(self) -> Status:
         outcome = self.job.update()
@@ -69,13 +68,14 @@ class Calibrate(RobotLeaf):
             return Status.RUNNING
         if isinstance(outcome, str):
             return self.failed(FailureReason.CALIBRATION_FAILED, outcome)
-        self.cell.calibration = outcome
-        self.ports.set("calibration", outcome)
+        self.run = outcome
+        self.cell.calibration = outcome.calibration
+        self.ports.set("calibration", outcome.calibration)
         file = self.input("file")
         if file:
             from bt_grasp.perception.calibration_file import save_calibration
 
-            save_calibration(outcome, Path(str(file)))
+            save_calibration(outcome.calibration, Path(str(file)))
         return Status.SUCCESS
 
     def terminate(self, new_status: Status) -> None:

@@ -21,7 +21,6 @@ def run_pick_bench(
     trees: list[Path], scene: Path, seeds: int, first_seed: int, calibration: Path | None, log_dir: Path | None,
     warm: bool = False,
 ) -> dict[str, Any]:
-    from bt_grasp.cli.calibrate_cmd import run_sim_calibration
     from bt_grasp.episode import (
         EpisodeRequest,
         EpisodeResult,
@@ -30,13 +29,14 @@ def run_pick_bench(
         WorldSource,
         run_episode,
     )
+    from bt_grasp.episode.calibration import calibrate_in_sim
     from bt_grasp.goals import DEFAULT_LIFT_HEIGHT_M, goal_from_options
     from bt_grasp.perception.calibration_file import save_calibration
 
     work = Path(tempfile.mkdtemp(prefix="bt_grasp_bench_"))
     if calibration is None:
         calibration = save_calibration(
-            run_sim_calibration(scene, "eye-to-hand", first_seed).run.calibration, work / "calibration.yaml"
+            calibrate_in_sim(scene, "eye-to-hand", first_seed).run.calibration, work / "calibration.yaml"
         )
     report: dict[str, Any] = {
         "machine": machine_description(), "scene": str(scene), "calibration": str(calibration), "trees": {}

@@ -1,79 +1,23 @@
 """`bt-grasp calibrate`: hand-eye calibration in the simulator, written to a calibration YAML file.
 
-The calibration itself (view planning, board detection, hand-eye solving) is ``bt_grasp.perception``'s;
-this command builds the simulated cell with a ChArUco board (on the gripper for eye-to-hand, on the table
-for eye-in-hand), drives the arm, and, because this is a simulator, judges the result against the true
-camera pose (printed as such; never used to produce the calibration).
+It runs the ``Calibrate`` leaf's own procedure (``bt_grasp.episode.calibration.calibrate_in_sim``) on a
+simulated cell with a ChArUco board (on the gripper for eye-to-hand, on the table for eye-in-hand) and,
+because this is a simulator, judges the result against the true camera pose (printed as such; never used
+to produce the calibration).
 """
 
 from __future__ import annotations
 
 import json
-import time
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import typer
 
-MOUNTS = ("eye-to-hand", "eye-in-hand")
+from bt_grasp.interfaces import Mount
 
-
-@dataclass(frozen=True)
-class SimCalibration:
-    run: Any  # bt_grasp.perception.calibration.CalibrationRun
-    T_true: np.ndarray  # true T_base_camera (eye-to-hand) or T_tool_camera (eye-in-hand): judge only
-    true_error_per_method: dict[str, tuple[float, float]]  # mm, deg
-    elapsed_s: float
-
-
-def run_sim_calibration(scene: Path | Any, mount: str, seed: int = 0, poses: int = 20,
-                        progress: Any = None) -> SimCalibration:
-    """Calibrate in a fresh simulated world; returns the run and its judgement against ground truth."""
-    from bt_grasp.geometry import inv, pose_error
-    from bt_grasp.motion.collision import collision_checker
-    from bt_grasp.motion.kinematics import default_kinematics
-    from bt_grasp.motion.planning_scene import PlanningScene
-    from bt_grasp.perception.calibration import (
-        CalibrationSettings,
-        nominal_plan,
-        plan_calibration_poses,
-        run_calibration,
-    )
-    from bt_grasp.sim.charuco import attach_board_to_link, move_until_still, place_board_on_table
-    from bt_grasp.sim.oracle import GroundTruthOracle
-    from bt_grasp.sim.world import World
-
-    t0 = time.perf_counter()
-    if isinstance(scene, Path | str):
-        world = World.from_file(scene, seed, camera_mount=mount)
-    else:
-        world = World(scene, seed, camera_mount=mount)
-    settings = CalibrationSettings(poses=poses)
-    T_base_world = inv(world.config.T_world_base())
-    if mount == "eye-to-hand":
-        # the board is screwed to the palm, which is bolted to tool0 with no offset: its design pose
-        T_nominal_board = attach_board_to_link(world, settings.board, "gripper_palm")
-    else:
-        T_nominal_board = T_base_world @ place_board_on_table(world, settings.board)
-    plan = nominal_plan(world.config, mount, world.camera.intrinsics, T_nominal_board)
-    kin = default_kinematics()
-    checker = collision_checker(PlanningScene.from_scene(world.config))
-    q_poses = plan_calibration_poses(plan, kin, world.robot.joint_positions(), settings,
-                                     np.random.default_rng(seed), collision_free=checker.is_valid)
-    run = run_calibration(plan, q_poses, lambda q: move_until_still(world, q), world.camera.capture,
-                          world.robot.joint_positions, kin, settings, progress=progress)
-    oracle = GroundTruthOracle(world)
-    if mount == "eye-to-hand":
-        T_true = oracle.T_base_camera_cv()
-    else:
-        T_true = inv(oracle.T_world_link(settings.tool_link)) @ oracle.T_world_camera_cv()
-    errors = {}
-    for name, result in run.solution.per_method.items():
-        dt, dr = pose_error(result.X, T_true)
-        errors[name] = (dt * 1e3, float(np.degrees(dr)))
-    return SimCalibration(run, T_true, errors, time.perf_counter() - t0)
+MOUNTS = tuple(m.value for m in Mount)
 
 
 def calibrate(
@@ -85,6 +29,7 @@ def calibrate(
     as_json: bool = typer.Option(False, "--json", help="Print exactly one JSON object."),
 ) -> None:
     """Hand-eye calibrate the simulated camera with a ChArUco board and write the calibration file."""
+    from bt_grasp.episode.calibration import calibrate_in_sim
     from bt_grasp.errors import InputError
     from bt_grasp.perception.calibration_file import save_calibration
     from bt_grasp.scene_config import load_scene
@@ -93,7 +38,7 @@ def calibrate(
         raise InputError("--mount", f"expected eye-to-hand or eye-in-hand, got '{mount}'")
     load_scene(scene)  # a bad scene file fails here with file:line, before the simulator starts
     if as_json:
-        result = run_sim_calibration(scene, mount, seed, poses)
+        result = calibrate_in_sim(scene, mount, seed, poses)
     else:
         from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
 
@@ -104,7 +49,7 @@ def calibrate(
             def progress(done: int, total: int, note: str) -> None:
                 bar.update(task, completed=min(done, poses), total=max(total, poses), note=note)
 
-            result = run_sim_calibration(scene, mount, seed, poses, progress)
+            result = calibrate_in_sim(scene, mount, seed, poses, progress)
     run = result.run
     save_calibration(run.calibration, out)
     chosen = run.solution.chosen
@@ -181,7 +126,9 @@ class SimBenchBackend:
 
     def calibrate(self, scene: Any, mount: str, seed: int, poses: int
                   ) -> tuple[np.ndarray, dict[str, tuple[float, float]]]:
-        result = run_sim_calibration(scene, mount, seed, poses)
+        from bt_grasp.episode.calibration import calibrate_in_sim
+
+        result = calibrate_in_sim(scene, mount, seed, poses)
         return result.run.solution.X, result.true_error_per_method
 
 

@@ -16,10 +16,10 @@ def demo(
     out: Path = typer.Option(Path("out/demo"), "--out", help="Folder for images, calibration, log, summary."),
 ) -> None:
     """Render what the camera sees, calibrate it (eye-to-hand), run the pick tree and print the summary."""
-    from bt_grasp.cli.calibrate_cmd import run_sim_calibration
     from bt_grasp.cli.run_cmd import live_progress, print_summary
     from bt_grasp.cli.scene_cmd import render
     from bt_grasp.episode import EpisodeRequest, run_episode
+    from bt_grasp.episode.calibration import calibrate_in_sim
     from bt_grasp.goals import DEFAULT_LIFT_HEIGHT_M, goal_from_options
     from bt_grasp.perception.calibration_file import save_calibration
     from bt_grasp.scene_config import load_scene
@@ -30,7 +30,7 @@ def demo(
     console.rule("1/3  what the camera sees")
     render(scene, seed, out / "render", None)
     console.rule("2/3  hand-eye calibration (eye-to-hand, ChArUco board on the gripper)")
-    result = run_sim_calibration(scene, "eye-to-hand", seed)
+    result = calibrate_in_sim(scene, "eye-to-hand", seed)
     calibration_path = save_calibration(result.run.calibration, out / "calibration.yaml")
     chosen = result.run.solution.chosen
     true_mm, true_deg = result.true_error_per_method[result.run.solution.method]

@@ -6,16 +6,16 @@ calibration. The behaviour-tree leaves call:
 * :func:`perceive` (frame, ``T_base_camera``, config, colour) -> :class:`PerceptionResult`
 * :func:`synthesize_grasps` (detection, neighbours, settings) -> :class:`GraspResult`
 * :func:`load_calibration` (path, mount) / :func:`save_calibration` (calibration, path)
-* :func:`plan_calibration_poses` + :func:`run_calibration` (plan, poses, move_to, capture, joint_positions, ...)
+* :func:`plan_calibration_poses` + :class:`ViewCollector` (the image side of hand-eye calibration)
 """
 
 from bt_grasp.perception.calibration import (
     CalibrationRun,
     CalibrationSettings,
+    ViewCollector,
     ViewPlan,
     nominal_plan,
     plan_calibration_poses,
-    run_calibration,
 )
 from bt_grasp.perception.calibration_file import CalibrationFile, load_calibration, save_calibration
 from bt_grasp.perception.config import GraspSettings, PerceptionConfig, load_perception_config
@@ -42,13 +42,13 @@ __all__ = [
     "PerceptionConfig",
     "PerceptionResult",
     "PerceptionStatus",
+    "ViewCollector",
     "ViewPlan",
     "load_calibration",
     "load_perception_config",
     "nominal_plan",
     "perceive",
     "plan_calibration_poses",
-    "run_calibration",
     "save_calibration",
     "synthesize_grasps",
 ]

@@ -12,7 +12,7 @@ on the table). The calibration measures the true transform from the images.
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Annotated, Protocol
 
@@ -120,7 +120,7 @@ def nominal_plan(scene: Scene, mount: str, intrinsics: CameraIntrinsics, T_nomin
                     intrinsics)
 
 
-def _board_outline(spec: BoardSpec) -> Vec:
+def board_outline(spec: BoardSpec) -> Vec:
     w, h = spec.size_m
     return np.array([[0, 0, 0], [w, 0, 0], [w, h, 0], [0, h, 0]], dtype=float)
 
@@ -170,7 +170,7 @@ def _sample_eye_in_hand(plan: ViewPlan, s: CalibrationSettings, rng: np.random.G
 def _visible(plan: ViewPlan, T_base_tool: Mat4, T_base_board: Mat4, s: CalibrationSettings) -> bool:
     T_base_cam = plan.T_nominal_camera if plan.mount == EYE_TO_HAND else T_base_tool @ plan.T_nominal_camera
     T_cam_board = inv(T_base_cam) @ T_base_board
-    pts = transform_points(T_cam_board, _board_outline(s.board))
+    pts = transform_points(T_cam_board, board_outline(s.board))
     if np.any(pts[:, 2] < 0.25):
         return False
     intr, m = plan.intrinsics, s.image_margin_px
@@ -271,64 +271,65 @@ def _tour(qs: list[Vec], q_start: Vec) -> list[Vec]:
     return out
 
 
-def run_calibration(
-    plan: ViewPlan,
-    poses: Sequence[Vec],
-    move_to: Callable[[Vec], bool],
-    capture: Callable[[], RGBDFrame | None],
-    joint_positions: Callable[[], Vec],
-    kinematics: Kinematics,
-    settings: CalibrationSettings,
-    *,
-    progress: Callable[[int, int, str], None] | None = None,
-) -> CalibrationRun:
-    """Visit poses until ``settings.poses`` views are accepted, then solve and build the calibration file."""
-    s = settings
-    views: list[View] = []
-    rejected = {"unreached": 0, "no_frame": 0, "few_corners": 0, "reprojection": 0}
-    obj_all = corner_object_points(s.board)
-    visited = 0
-    intrinsics = plan.intrinsics
-    for q in poses:
-        if len(views) >= s.poses:
-            break
-        visited += 1
-        if not move_to(np.asarray(q, dtype=float)):
-            rejected["unreached"] += 1
-            _report(progress, visited, len(poses), "could not reach the pose")
-            continue
-        frame = capture()
-        q_measured = np.asarray(joint_positions(), dtype=float)
+class ViewCollector:
+    """The image side of one hand-eye calibration: judges each capture, keeps the usable views, solves.
+
+    The robot side (moving to each planned pose, waiting until the arm is still, one control period per
+    tick) is ``bt_grasp.behaviours.calibration_job.CalibrationJob``: the one procedure both the
+    ``Calibrate`` leaf and ``bt-grasp calibrate`` run.
+    """
+
+    def __init__(self, plan: ViewPlan, settings: CalibrationSettings) -> None:
+        self.plan = plan
+        self.settings = settings
+        self.views: list[View] = []
+        self.visited = 0
+        self.rejected = {"unreached": 0, "no_frame": 0, "few_corners": 0, "reprojection": 0}
+        self.intrinsics = plan.intrinsics
+        self._object_points = corner_object_points(settings.board)
+
+    @property
+    def enough(self) -> bool:
+        return len(self.views) >= self.settings.poses
+
+    def unreached(self) -> str:
+        """A planned pose could not be reached; returns what to report."""
+        self.visited += 1
+        self.rejected["unreached"] += 1
+        return "could not reach the pose"
+
+    def add(self, frame: RGBDFrame | None, T_base_tool: Mat4) -> str:
+        """Judge the capture taken at a reached pose (``T_base_tool`` by FK of the measured joints at capture
+        time); keeps it when the board is seen well enough. Returns what to report."""
+        s = self.settings
+        self.visited += 1
         if frame is None:
-            rejected["no_frame"] += 1
-            _report(progress, visited, len(poses), "no frame")
-            continue
-        intrinsics = frame.intrinsics
+            self.rejected["no_frame"] += 1
+            return "no frame"
+        self.intrinsics = frame.intrinsics
         obs = detect_board(frame.color, frame.intrinsics, s.board, s.min_corners)
         if obs.T_camera_board is None:
-            rejected["few_corners"] += 1
-            _report(progress, visited, len(poses), f"{obs.n_corners} corners: rejected")
-            continue
+            self.rejected["few_corners"] += 1
+            return f"{obs.n_corners} corners: rejected"
         if obs.reprojection_px > s.max_reprojection_px:
-            rejected["reprojection"] += 1
-            _report(progress, visited, len(poses), f"reprojection {obs.reprojection_px:.2f} px: rejected")
-            continue
-        T_base_tool = kinematics.fk_link(q_measured, s.tool_link)
-        views.append(View(T_base_tool, obs.T_camera_board, obs.corner_ids, obs.corners_px, obj_all[obs.corner_ids]))
-        _report(progress, visited, len(poses), f"{obs.n_corners} corners, {obs.reprojection_px:.2f} px")
-    if len(views) < 3:
-        raise ValueError(f"only {len(views)} usable views of the board ({rejected}); cannot calibrate")
-    solution = solve_hand_eye(plan.mount, views, intrinsics, _board_outline(s.board))
-    parent = "base_link" if plan.mount == EYE_TO_HAND else s.tool_link
-    calibration = make_calibration(
-        plan.mount, solution.X, parent, solution.method, len(views),
-        {name: r.as_dict() for name, r in solution.per_method.items()}, intrinsics, s.board,
-    )
-    log.info("calibration: %s from %d views (%d visited), method %s", plan.mount, len(views), visited, solution.method)
-    return CalibrationRun(solution, calibration, tuple(views), visited, rejected)
+            self.rejected["reprojection"] += 1
+            return f"reprojection {obs.reprojection_px:.2f} px: rejected"
+        self.views.append(View(np.asarray(T_base_tool, dtype=float), obs.T_camera_board, obs.corner_ids,
+                               obs.corners_px, self._object_points[obs.corner_ids]))
+        return f"{obs.n_corners} corners, {obs.reprojection_px:.2f} px"
 
-
-def _report(progress: Callable[[int, int, str], None] | None, done: int, total: int, text: str) -> None:
-    log.debug("calibration view %d/%d: %s", done, total, text)
-    if progress is not None:
-        progress(done, total, text)
+    def solve(self) -> CalibrationRun:
+        """Solve every hand-eye method and keep the most consistent; ValueError with fewer than 3 views."""
+        s, plan = self.settings, self.plan
+        if len(self.views) < 3:
+            raise ValueError(f"only {len(self.views)} usable views of the board out of {self.visited} visited "
+                             f"({self.rejected}); cannot calibrate")
+        solution = solve_hand_eye(plan.mount, self.views, self.intrinsics, board_outline(s.board))
+        parent = "base_link" if plan.mount == EYE_TO_HAND else s.tool_link
+        calibration = make_calibration(
+            plan.mount, solution.X, parent, solution.method, len(self.views),
+            {name: r.as_dict() for name, r in solution.per_method.items()}, self.intrinsics, s.board,
+        )
+        log.info("calibration: %s from %d views (%d visited), method %s", plan.mount, len(self.views),
+                 self.visited, solution.method)
+        return CalibrationRun(solution, calibration, tuple(self.views), self.visited, dict(self.rejected))

@@ -96,23 +96,3 @@ def mount_calibration_board(world: World, spec: BoardSpec | None = None) -> Boar
         # the board is screwed to the palm, which is bolted to tool0 with no offset: its design pose
         return BoardMount(spec, attach_board_to_link(world, spec, "gripper_palm"))
     return BoardMount(spec, inv(world.config.T_world_base()) @ place_board_on_table(world, spec))
-
-
-def move_until_still(world: World, q_goal: np.ndarray, *, max_speed_rad_s: float = 0.8,
-                     settle_timeout_s: float = 3.0, tol_rad: float = 0.01, still_rad_s: float = 5e-3) -> bool:
-    """Drive the arm's joint targets along a straight joint-space line at bounded speed, then step until the
-    arm is still. For calibration in the simulator (a stand-in for planned motion); True when it got there."""
-    robot = world.robot
-    q_goal = np.asarray(q_goal, dtype=float)
-    q0 = robot.joint_positions()
-    dt_tick = world.steps_per_tick * world.dt_s
-    ticks = max(1, int(np.ceil(float(np.max(np.abs(q_goal - q0))) / (max_speed_rad_s * dt_tick))))
-    for k in range(1, ticks + 1):
-        robot.set_joint_targets(q0 + (q_goal - q0) * k / ticks)
-        world.step_tick()
-    for _ in range(int(settle_timeout_s / dt_tick)):
-        world.step_tick()
-        still = float(np.max(np.abs(robot.joint_velocities()))) < still_rad_s
-        if still and float(np.max(np.abs(robot.joint_positions() - q_goal))) < tol_rad:
-            return True
-    return False

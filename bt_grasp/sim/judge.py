@@ -14,7 +14,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bt_grasp.geometry import Mat4
 from bt_grasp.goals import ClearGoal, Goal, PickGoal
+from bt_grasp.interfaces import Mount
 from bt_grasp.scene_fixtures import Container
 from bt_grasp.scene_goals import PlaceGoal, SortGoal, StackGoal
 from bt_grasp.sim.oracle import GroundTruthOracle
@@ -269,3 +271,12 @@ def cannot_judge(goal: Goal) -> str | None:
     if goal.kind not in _CHECKS:
         return f"the judge has no checker for goal kind '{goal.kind}' yet; judged kinds: {', '.join(_CHECKS)}"
     return None
+
+
+def true_camera_pose(world: World, mount: str, tool_link: str) -> Mat4:
+    """What a hand-eye calibration should find (judge only): the true ``T_base_camera`` (eye-to-hand) or
+    ``T_tool_camera`` (eye-in-hand), in OpenCV's optical axes."""
+    oracle = GroundTruthOracle(world)
+    if mount == Mount.EYE_TO_HAND:
+        return oracle.T_base_camera_cv()
+    return np.linalg.inv(oracle.T_world_link(tool_link)) @ oracle.T_world_camera_cv()

@@ -8,18 +8,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from bt_grasp.behaviours.calibration_job import CalibrationJob
+from bt_grasp.behaviours.cell import make_cell
+from bt_grasp.episode.calibration import tick_calibration
 from bt_grasp.geometry import pose_error
-from bt_grasp.motion.collision import collision_checker
-from bt_grasp.motion.kinematics import default_kinematics
-from bt_grasp.motion.planning_scene import PlanningScene
-from bt_grasp.perception.calibration import (
-    CalibrationSettings,
-    nominal_plan,
-    plan_calibration_poses,
-    run_calibration,
-)
 from bt_grasp.scene_config import load_scene
-from bt_grasp.sim.charuco import attach_board_to_link, move_until_still
+from bt_grasp.sim.charuco import mount_calibration_board
 from bt_grasp.sim.oracle import GroundTruthOracle
 from bt_grasp.sim.world import World
 
@@ -31,8 +25,7 @@ SCENE = Path(__file__).resolve().parents[2] / "scenes" / "tabletop.yaml"
 def test_eye_to_hand_result_does_not_follow_a_wrong_nominal_camera_pose() -> None:
     scene = load_scene(SCENE)
     world = World(scene, seed=4, camera_mount="eye-to-hand")
-    settings = CalibrationSettings(poses=15)
-    T_palm_board = attach_board_to_link(world, settings.board, "gripper_palm")
+    board = mount_calibration_board(world)
     # the installation drawing is wrong by (3, -2, 2) cm: the planner looks from the wrong place
     e2h = scene.camera.eye_to_hand
     wrong_position = tuple(float(p + d) for p, d in zip(e2h.position_m, (0.03, -0.02, 0.02), strict=True))
@@ -43,23 +36,12 @@ def test_eye_to_hand_result_does_not_follow_a_wrong_nominal_camera_pose() -> Non
             )
         }
     )
-    plan = nominal_plan(wrong, "eye-to-hand", world.camera.intrinsics, T_palm_board)
-    kin = default_kinematics()
-    checker = collision_checker(PlanningScene.from_scene(scene))
-    poses = plan_calibration_poses(
-        plan, kin, world.robot.joint_positions(), settings, np.random.default_rng(4), collision_free=checker.is_valid
-    )
-    run = run_calibration(
-        plan,
-        poses,
-        lambda q: move_until_still(world, q),
-        world.camera.capture,
-        world.robot.joint_positions,
-        kin,
-        settings,
-    )
+    # the cell (what the robot knows) has the wrong drawing; the simulated world has the true camera
+    cell = make_cell(world.robot, world.camera, world.clock, wrong, 4, board=board)
+    job = CalibrationJob(cell, 15)
+    run, _ = tick_calibration(world, job)
     T_true = GroundTruthOracle(world).T_base_camera_cv()
     err_true_m, err_true_rad = pose_error(run.solution.X, T_true)
-    err_nominal_m, _ = pose_error(run.solution.X, plan.T_nominal_camera)
+    err_nominal_m, _ = pose_error(run.solution.X, job.collector.plan.T_nominal_camera)
     assert err_true_m < 1e-3 and np.degrees(err_true_rad) < 0.1, (err_true_m, np.degrees(err_true_rad))
     assert err_nominal_m > 0.03, "the result must not be the nominal pose the planner was given"

@@ -61,10 +61,10 @@ def test_perception_accuracy_on_seeded_scenes(tabletop_scene_path: Path, seed: i
 
 @pytest.mark.parametrize("mount", ["eye-to-hand", "eye-in-hand"])
 def test_hand_eye_calibration_is_accurate(tabletop_scene_path: Path, mount: str) -> None:
-    from bt_grasp.cli.calibrate_cmd import run_sim_calibration
+    from bt_grasp.episode.calibration import calibrate_in_sim
     from bt_grasp.geometry import pose_error
 
-    result = run_sim_calibration(tabletop_scene_path, mount, seed=0, poses=16)
+    result = calibrate_in_sim(tabletop_scene_path, mount, seed=0, poses=16)
     run = result.run
     assert run.visited <= 20
     dt, dr = pose_error(run.solution.X, result.T_true)
