@@ -37,12 +37,27 @@ def replay_command(
     resim: bool = typer.Option(
         False, "--resim", help="Re-run the recorded tree, scene, seed, calibration and faults; compare every tick."
     ),
+    report: Path | None = typer.Option(None, "--report", help="Write a self-contained HTML run report here."),
+    report_dir: Path | None = typer.Option(None, "--report-dir", help="Also write the report's figures as PNG here."),
+    foxglove: bool = typer.Option(False, "--foxglove", help="Print how to open this log in Foxglove."),
 ) -> None:
     """Replay a recorded run: summary and timeline by default, or the views asked for."""
     console = Console(highlight=False)
     run = open_log(log)
     if resim:
         _resim(console, log, as_json)
+        return
+    if foxglove:
+        _print_foxglove(console, run)
+    if report is not None or report_dir is not None:
+        from bt_grasp.recording.report import build_report
+
+        html_path = report if report is not None else report_dir / "report.html"  # type: ignore[operator]
+        made = build_report(run, html_path, report_dir)
+        console.print(f"wrote the run report {made.html_path}"
+                      + (f" and {len(made.pngs)} figures to {report_dir}" if made.pngs else ""))
+    other_views = tick is not None or failures or leaf or topic or as_json or frames_dir or btlog
+    if (foxglove or report is not None or report_dir is not None) and not other_views:
         return
     views: dict[str, Any] = {}
     if tick is not None:
@@ -80,6 +95,26 @@ def replay_command(
         console.print(f"wrote {len(exports['frames'])} frames to {frames_dir}")
     if "btlog" in exports:
         console.print(f"wrote {exports['btlog']['transitions']} transitions to {btlog}")
+
+
+def _print_foxglove(console: Console, run: RunLog) -> None:
+    from bt_grasp.recording.layout import layout_path
+
+    origin = run.time_origin_ns
+    console.print(
+        f"Open {run.path} in Foxglove (desktop or app.foxglove.dev: Open local file, or drag the file in).\n"
+        f"Then load the layout: Layouts > Import from file > {layout_path()}\n"
+        "It shows the arm, point cloud, detections and grasps in 3D, the camera with detections drawn, each "
+        "leaf's status over time (State Transitions on /bt/tick.leaves.*), joint and gripper plots and the log.\n"
+        + (f"The timeline starts at the run's real start ({_utc(origin)}); simulated time runs on from there."
+           if origin else "This log is format 1: its timeline starts at 1970-01-01 (simulated time from 0).")
+    )
+
+
+def _utc(ns: int) -> str:
+    import datetime
+
+    return datetime.datetime.fromtimestamp(ns / 1e9, datetime.UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
 
 
 def _resim(console: Console, log: Path, as_json: bool) -> None:

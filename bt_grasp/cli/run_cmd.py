@@ -109,6 +109,7 @@ def run(
 ) -> None:
     """Run a task tree on the simulated cell. Exit code 0 on task success (judged by physics), 1 on failure."""
     from bt_grasp.episode.episode import Episode
+    from bt_grasp.recording.layout import layout_path
 
     blackboard: dict[str, BlackboardValue] = {"color": color, "lift_height": lift_height}
     blackboard.update(parse_assignments(set_))
@@ -134,7 +135,7 @@ def run(
     console = Console(stderr=True)
     episode = Episode(request)
     episode.on_live.append(lambda url: console.print(
-        f"live: open Foxglove, Open connection > Foxglove WebSocket > {url} (layout: foxglove/bt_grasp.layout.json)",
+        f"live: in Foxglove, Open connection > Foxglove WebSocket > {url} (layout: {layout_path()})",
         highlight=False))
     summary = episode.run(on_tick=() if quiet else (live_progress(console),))
     out = Console()

@@ -224,6 +224,38 @@ def _drawn(png: Path) -> bool:
     return len(colours) > 200
 
 
+def render_page(url: str, workdir: Path, screenshot: Path, *, wait_s: float = 2.0,
+                timeout_s: float = 120.0) -> dict[str, Any]:
+    """Open a plain page (e.g. ``file:///.../report.html``) in headless chromium: its text, its images' sizes,
+    every URL it requested, and a full-page screenshot."""
+    out = workdir / "page.json"
+    profile = workdir / "chromium-profile"
+    profile.mkdir(parents=True, exist_ok=True)
+    cmd = ["node", str(PROBE), "--page", "--url", url, "--out", str(out), "--chromium", str(chromium_path()),
+           "--profile", str(profile), "--wait", str(wait_s), "--screenshot", str(screenshot)]
+    env = {**os.environ, "NODE_PATH": str(CACHE / "node_modules")}
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout_s, env=env, cwd=CACHE)
+    if proc.returncode != 0 or not out.is_file():
+        raise RuntimeError(f"the page probe failed ({proc.returncode}):\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}")
+    result: dict[str, Any] = json.loads(out.read_text())
+    return result
+
+
+def skip_without_browser() -> None:
+    """Skip the calling test, saying why, where chromium, npm or the Studio build is missing."""
+    import pytest
+
+    reason = missing_reason()
+    if reason is not None:
+        print(f"SKIPPED (browser): {reason}")
+        pytest.skip(reason)
+
+
+#: every link of the robot description a viewer must know
+ROBOT_LINKS = ("base_link", "shoulder_link", "upper_arm_link", "forearm_link", "wrist_1_link", "wrist_2_link",
+               "wrist_3_link", "gripper_palm", "left_finger", "right_finger", "tcp")
+
+
 @contextmanager
 def serving(data_dir: Path, layout: Path | None = None) -> Iterator[StudioServer]:
     with StudioServer(data_dir, layout) as server:

@@ -56,8 +56,17 @@ async function main() {
     const page = await browser.newPage();
     page.on("console", (m) => { if (result.console.length < 400) result.console.push(m.type() + ": " + m.text()); });
     page.on("pageerror", (e) => result.errors.push(String(e)));
+    result.requests = [];
+    page.on("request", (r) => result.requests.push(r.url().slice(0, 120)));
     await page.goto(url, { waitUntil: "load", timeout: 180000 });
     await sleep(waitS * 1000);
+    if (process.argv.includes("--page")) {  // a plain page (the run report): its text and a full screenshot
+      result.text = await page.evaluate(() => document.body.innerText);
+      result.images = await page.evaluate(() => [...document.images].map((i) => [i.naturalWidth, i.naturalHeight]));
+      const shot = arg("screenshot");
+      if (shot) await page.screenshot({ path: shot, fullPage: true });
+      return;
+    }
     result.text = await page.evaluate(() => document.body.innerText);
     // the Problems tab of the data-source sidebar: its badge counts problems, its list names them
     Object.assign(result, await page.evaluate(async () => {
@@ -128,7 +137,7 @@ async function main() {
   } finally {
     await browser.close();
     if (bridge) bridge.close();
+    fs.writeFileSync(out, JSON.stringify(result, null, 1));
   }
-  fs.writeFileSync(out, JSON.stringify(result, null, 1));
 }
 main().catch((e) => { console.error(e); process.exit(1); });

@@ -12,13 +12,10 @@ import time
 from pathlib import Path
 
 import pytest
-
-from foxglove import missing_reason, open_in_studio, serving
+from foxglove import ROBOT_LINKS, open_in_studio, serving, skip_without_browser
 
 ROOT = Path(__file__).resolve().parents[2]
-LAYOUT = ROOT / "foxglove" / "bt_grasp.layout.json"
-LINKS = ("base_link", "shoulder_link", "upper_arm_link", "forearm_link", "wrist_1_link", "wrist_2_link",
-         "wrist_3_link", "gripper_palm", "left_finger", "right_finger", "tcp")
+LAYOUT = ROOT / "bt_grasp" / "foxglove_layouts" / "bt_grasp.layout.json"
 
 pytestmark = [pytest.mark.sim, pytest.mark.slow]
 
@@ -42,10 +39,7 @@ def _wait_for_port(port: int, proc: subprocess.Popen[str], timeout_s: float) -> 
 
 
 def test_live_run_shows_whole_in_foxglove(tmp_path: Path) -> None:
-    reason = missing_reason()
-    if reason is not None:
-        print(f"SKIPPED (browser): {reason}")
-        pytest.skip(reason)
+    skip_without_browser()
     port = _free_port()
     # slower than real time so the run is still going while Studio starts and subscribes
     proc = subprocess.Popen(
@@ -66,6 +60,6 @@ def test_live_run_shows_whole_in_foxglove(tmp_path: Path) -> None:
         proc.communicate()
     assert report.errors == []
     assert report.problems == [] and report.problem_count == 0, report.problems
-    assert set(LINKS) <= set(report.frames), report.frames
+    assert set(ROBOT_LINKS) <= set(report.frames), report.frames
     assert report.three_d_drawn, "the 3D panel drew nothing"
     assert report.image_drawn, "the image panel drew nothing"

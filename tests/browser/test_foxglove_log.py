@@ -10,24 +10,14 @@ import sys
 from pathlib import Path
 
 import pytest
+from foxglove import ROBOT_LINKS, open_in_studio, serving, skip_without_browser
 
 from bt_grasp.recording.reader import open_log
-from bt_grasp.robot_description import ARM_JOINTS
-from foxglove import missing_reason, open_in_studio, serving
 
 ROOT = Path(__file__).resolve().parents[2]
-LAYOUT = ROOT / "foxglove" / "bt_grasp.layout.json"
-LINKS = ("base_link", "shoulder_link", "upper_arm_link", "forearm_link", "wrist_1_link", "wrist_2_link",
-         "wrist_3_link", "gripper_palm", "left_finger", "right_finger", "tcp")
+LAYOUT = ROOT / "bt_grasp" / "foxglove_layouts" / "bt_grasp.layout.json"
 
 pytestmark = [pytest.mark.sim, pytest.mark.slow]
-
-
-def _skip_without_browser() -> None:
-    reason = missing_reason()
-    if reason is not None:
-        print(f"SKIPPED (browser): {reason}")
-        pytest.skip(reason)
 
 
 def end_time_iso(log_path: Path) -> str:
@@ -40,7 +30,7 @@ def end_time_iso(log_path: Path) -> str:
 
 @pytest.fixture(scope="module")
 def pick_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    _skip_without_browser()
+    skip_without_browser()
     folder = tmp_path_factory.mktemp("foxglove-log")
     log = folder / "pick.mcap"
     proc = subprocess.run(
@@ -58,8 +48,7 @@ def test_recorded_pick_shows_whole_in_foxglove(pick_log: Path, tmp_path: Path) -
         report = open_in_studio(url, tmp_path, wait_s=25, screenshot=tmp_path / "studio.png")
     assert report.errors == []
     assert report.problems == [] and report.problem_count == 0, report.problems
-    assert set(LINKS) <= set(report.frames), report.frames
+    assert set(ROBOT_LINKS) <= set(report.frames), report.frames
     assert {"world", "camera_color_optical_frame"} <= set(report.frames)
     assert report.three_d_drawn, "the 3D panel drew nothing"
     assert report.image_drawn, "the image panel drew nothing"
-    assert len(ARM_JOINTS) == 6

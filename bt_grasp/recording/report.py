@@ -1,0 +1,275 @@
+"""`bt-grasp replay LOG --report report.html`: one self-contained page about one run (no network needed).
+
+The page holds: the summary; the tree as it ended, each node with its final status, attempts, failures and
+retries; a Gantt of the leaves' statuses over simulated time; every failure with its reason, where it
+propagated and what ran next (the recovery); injected faults; joint-angle and gripper-opening plots; the
+camera frames with the detected boxes drawn in. Figures are PNGs embedded as data URIs (and written to
+``png_dir`` too when given).
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from bt_grasp.recording import replay, report_figures, topics
+from bt_grasp.recording.reader import RunLog
+from bt_grasp.recording.schemas import as_matrix
+
+_CAMERA_FRAMES = ("camera_color_optical_frame", "camera")  # format 2, format 1
+_MAX_FRAMES = 12
+
+
+@dataclass
+class Report:
+    html_path: Path
+    figures: dict[str, bytes] = field(default_factory=dict)
+    pngs: list[Path] = field(default_factory=list)
+
+
+def _esc(value: Any) -> str:
+    return html.escape("" if value is None else str(value))
+
+
+def _img(png: bytes, alt: str) -> str:
+    return f'<img alt="{_esc(alt)}" src="data:image/png;base64,{base64.b64encode(png).decode()}">'
+
+
+def _badge(status: str) -> str:
+    return f'<span class="st st-{_esc(status)}">{_esc(status)}</span>'
+
+
+# -- data from the log ------------------------------------------------------------------------------------
+
+
+def _leaf_rows(run: RunLog) -> tuple[list[str], dict[int, str]]:
+    leaves = [info for _, info in sorted(run.nodes.items()) if info.is_leaf]
+    names = [info.name for info in leaves]
+    labels = {info.uid: (info.name if names.count(info.name) == 1 else f"{info.name} ({info.path})")
+              for info in leaves}
+    return list(labels.values()), labels
+
+
+def _bars(run: RunLog, labels: dict[int, str]) -> list[report_figures.Bar]:
+    end_s = run.ticks[-1].stamp_ns * 1e-9 if run.ticks else 0.0
+    open_bar: dict[int, tuple[float, str]] = {}
+    bars: list[report_figures.Bar] = []
+    for ch in replay.status_changes(run):
+        if ch.uid not in labels:
+            continue
+        t = ch.stamp_ns * 1e-9
+        if ch.uid in open_bar:
+            start, status = open_bar.pop(ch.uid)
+            bars.append(report_figures.Bar(labels[ch.uid], start, t - start, status))
+        if ch.new in report_figures.STATUS_COLOURS:
+            open_bar[ch.uid] = (t, ch.new)
+    for uid, (start, status) in open_bar.items():
+        bars.append(report_figures.Bar(labels[uid], start, end_s - start, status))
+    return bars
+
+
+def _joint_series(run: RunLog) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], list[str]]:
+    times, q, width = [], [], []
+    names: list[str] = []
+    for msg in run.iter_messages(topics.JOINT_STATE):
+        m = msg.message
+        times.append(msg.log_time_ns * 1e-9)
+        q.append(m.get("position", []))
+        width.append(m.get("gripper_width_m") if m.get("gripper_width_m") is not None else np.nan)
+        names = list(m.get("name", names))
+    n = max((len(row) for row in q), default=0)
+    Q = np.array([row + [np.nan] * (n - len(row)) for row in q], dtype=np.float64).reshape(len(times), n)
+    return np.array(times), Q, np.array(width, dtype=np.float64), names
+
+
+def _timed(run: RunLog, topic: str) -> list[tuple[int, Any]]:
+    return [(m.log_time_ns, m.message) for m in run.iter_messages(topic)]
+
+
+def _last_before(items: list[tuple[int, Any]], stamp_ns: int) -> Any:
+    found = None
+    for t, value in items:
+        if t > stamp_ns:
+            break
+        found = value
+    return found
+
+
+def _camera_poses(run: RunLog) -> list[tuple[int, NDArray[np.float64]]]:
+    from bt_grasp.geometry import make_T
+
+    out = []
+    for t, msg in _timed(run, topics.TF):
+        for tf in msg.transforms:
+            if tf.child_frame_id in _CAMERA_FRAMES:
+                q, p = tf.rotation, tf.translation
+                R = _quat_to_R(q.x, q.y, q.z, q.w)
+                out.append((t, make_T(R, [p.x, p.y, p.z])))
+    return out
+
+
+def _quat_to_R(x: float, y: float, z: float, w: float) -> NDArray[np.float64]:
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ])
+
+
+def _boxes(update: Any) -> list[tuple[NDArray[np.float64], tuple[float, float, float], str]]:
+    from bt_grasp.geometry import make_T
+
+    boxes = []
+    for entity in getattr(update, "entities", []):
+        label = next((kv.value for kv in entity.metadata if kv.key == "label"), entity.id)
+        for cube in entity.cubes:
+            q, p = cube.pose.orientation, cube.pose.position
+            T = make_T(_quat_to_R(q.x, q.y, q.z, q.w), [p.x, p.y, p.z])
+            boxes.append((as_matrix(T), (cube.size.x, cube.size.y, cube.size.z), label))
+    return boxes
+
+
+def _frames(run: RunLog) -> list[tuple[str, bytes]]:
+    images = [im for im in run.images() if im.kind == "color"]
+    if len(images) > _MAX_FRAMES:  # the first ones (Perceive's), then evenly spaced, and the last
+        keep = sorted(set(np.linspace(0, len(images) - 1, _MAX_FRAMES).round().astype(int).tolist()))
+        images = [images[i] for i in keep]
+    if not images:
+        return []
+    detections = _timed(run, topics.DETECTIONS)
+    calibrations = _timed(run, topics.CALIBRATION)
+    poses = _camera_poses(run)
+    out = []
+    for im in images:
+        update = _last_before(detections, im.stamp_ns)
+        calib = _last_before(calibrations, im.stamp_ns) or (calibrations[0][1] if calibrations else None)
+        K = np.array(calib.K, dtype=np.float64).reshape(3, 3) if calib is not None and len(calib.K) == 9 else None
+        T_base_camera = _last_before(poses, im.stamp_ns)
+        T_camera_base = np.linalg.inv(T_base_camera) if T_base_camera is not None else None
+        caption = f"t = {im.stamp_ns * 1e-9:.2f} s"
+        png = report_figures.frame_with_boxes(im.pixels, K, T_camera_base, _boxes(update) if update else [], caption)
+        out.append((caption, png))
+    return out
+
+
+# -- the page ----------------------------------------------------------------------------------------------
+
+
+def _tree_html(node: dict[str, Any], counts: dict[int, tuple[int, int, int]]) -> str:
+    attempts, failures, retries = counts.get(int(node["uid"]), (0, 0, 0))
+    extra = []
+    if attempts:
+        extra.append(f"{attempts} attempt{'s' if attempts != 1 else ''}")
+    if failures:
+        extra.append(f"{failures} failure{'s' if failures != 1 else ''}")
+    if retries:
+        extra.append(f"{retries} retr{'ies' if retries != 1 else 'y'}")
+    reason = f' <span class="reason">{_esc(node["failure_reason"])}</span>' if node.get("failure_reason") else ""
+    head = (f'<span class="node">{_esc(node.get("name"))}</span> <span class="type">{_esc(node.get("type"))}'
+            f"</span> {_badge(node['status'])}{reason}"
+            + (f' <span class="counts">{_esc(", ".join(extra))}</span>' if extra else ""))
+    children = "".join(_tree_html(c, counts) for c in node.get("children", []))
+    return f"<li>{head}" + (f"<ul>{children}</ul>" if children else "") + "</li>"
+
+
+_CSS = """
+body{font-family:system-ui,-apple-system,'Segoe UI',sans-serif;margin:24px auto;max-width:1100px;color:#222}
+h1{margin-bottom:4px} h2{border-bottom:1px solid #ddd;padding-bottom:4px;margin-top:32px}
+table{border-collapse:collapse} td,th{padding:3px 10px;text-align:left;border-bottom:1px solid #eee;vertical-align:top}
+.st{padding:1px 6px;border-radius:4px;color:#fff;font-size:12px;font-weight:600}
+.st-SUCCESS{background:#3aa657}.st-FAILURE{background:#d64545}.st-RUNNING{background:#4a7fd6}
+.st-IDLE{background:#999}.st-SKIPPED{background:#bbb}
+.tree ul{list-style:none;padding-left:22px;border-left:1px dashed #bbb;margin:2px 0}
+.tree>ul{border-left:none;padding-left:0}.tree li{margin:3px 0}
+.type{color:#777;font-size:12px}.counts{color:#a15c00;font-size:12px}.reason{color:#d64545;font-weight:600}
+img{max-width:100%;border:1px solid #ddd;margin:6px 0}
+.frames{display:grid;grid-template-columns:repeat(auto-fill,minmax(320px,1fr));gap:10px}
+.ok{color:#3aa657;font-weight:700}.bad{color:#d64545;font-weight:700}
+"""
+
+
+def build_report(run: RunLog, html_path: Path, png_dir: Path | None = None) -> Report:
+    """Write the report page (and the PNG figures to ``png_dir``); returns what was written."""
+    report = Report(Path(html_path))
+    s = replay.summary(run)
+    rows, labels = _leaf_rows(run)
+    failures = replay.failures(run)
+    report.figures["gantt"] = report_figures.gantt(
+        rows, _bars(run, labels), [(f.stamp_ns * 1e-9, labels[f.uid]) for f in failures if f.uid in labels])
+    fail_s = [f.stamp_ns * 1e-9 for f in failures]
+    t, Q, width, names = _joint_series(run)
+    if t.size:
+        report.figures["joints"] = report_figures.series(t, Q, names, "Joint angles", "rad", fail_s)
+        if np.isfinite(width).any():
+            report.figures["gripper"] = report_figures.series(t, width, ["opening"], "Gripper opening", "m", fail_s)
+    frames = _frames(run)
+    for i, (_, png) in enumerate(frames):
+        report.figures[f"frame_{i:02d}"] = png
+
+    result = run.result or {}
+    success = result.get("success")
+    verdict = ('<span class="ok">SUCCESS</span>' if success else '<span class="bad">FAILURE</span>'
+               if success is not None else "<span>unfinished (no result recorded)</span>")
+    summary_rows = [
+        ("outcome", verdict),
+        ("reason", _esc(result.get("reason"))), ("failed leaf", _esc(result.get("failed_leaf"))),
+        ("tree", _esc(s["tree"])), ("scene", _esc(s["scene"])), ("seed", _esc(s["seed"])),
+        ("ticks", _esc(s["ticks"])), ("simulated time", f"{s['sim_duration_s']:.2f} s"),
+        ("wall time", _esc(f"{result['wall_time_s']:.2f} s" if result.get("wall_time_s") is not None else "")),
+        ("retries", _esc(s["retries"])),
+        ("fault plan", _esc(s["fault_plan"] or run.metadata.get("inject", "") or "none")),
+        ("log", _esc(run.path.name) + (" (truncated: the run did not finish)" if run.truncated else "")),
+    ]
+    parts = [f"<h1>Run report: {_esc(Path(s['tree']).name or run.path.name)}</h1>",
+             f"<p>{verdict} &middot; {_esc(run.path.name)} &middot; bt_grasp log format "
+             f"{_esc(run.metadata.get('log_format', '1'))}</p>",
+             "<h2>Summary</h2><table>" + "".join(f"<tr><th>{k}</th><td>{v}</td></tr>" for k, v in summary_rows)
+             + "</table>"]
+    parts.append("<h2>Failures and recovery</h2>")
+    if failures:
+        items = []
+        for f in failures:
+            recovery = ", ".join(f"{c.name} {c.new} (t={c.stamp_ns * 1e-9:.2f} s)" for c in f.recovery) or "nothing"
+            items.append(f"<tr><td>{f.stamp_ns * 1e-9:.2f} s</td><td>tick {f.tick}</td><td>{_esc(f.name)}</td>"
+                         f'<td class="reason">{_esc(f.reason)}</td><td>{_esc(" > ".join(f.propagated_to))}</td>'
+                         f"<td>{_esc(recovery)}</td></tr>")
+        parts.append("<table><tr><th>time</th><th>tick</th><th>leaf</th><th>reason</th><th>propagated to</th>"
+                     "<th>what ran next (recovery)</th></tr>" + "".join(items) + "</table>")
+    else:
+        parts.append("<p>No leaf failed.</p>")
+    if run.faults:
+        parts.append("<h3>Injected faults</h3><table>" + "".join(
+            f"<tr><td>{f['stamp_ns'] * 1e-9:.2f} s</td><td>tick {_esc(f.get('tick'))}</td>"
+            f"<td>{_esc(f.get('fault'))}</td></tr>" for f in run.faults) + "</table>")
+    last_tick = run.ticks[-1].tick if run.ticks else None
+    if last_tick is not None:
+        tree = replay.tree_at(run, last_tick)
+        parts.append(f"<h2>The tree at the end (tick {last_tick})</h2>"
+                     f'<div class="tree"><ul>{_tree_html(tree, replay.attempts(run))}</ul></div>')
+    parts.append("<h2>Leaf statuses over time</h2>" + _img(report.figures["gantt"], "Gantt of leaf statuses"))
+    if "joints" in report.figures:
+        parts.append("<h2>Arm</h2>" + _img(report.figures["joints"], "joint angles"))
+    if "gripper" in report.figures:
+        parts.append(_img(report.figures["gripper"], "gripper opening"))
+    parts.append("<h2>Camera frames with detections</h2>")
+    if frames:
+        parts.append('<div class="frames">' + "".join(_img(png, cap) for cap, png in frames) + "</div>")
+    else:
+        parts.append("<p>No camera frame in this log.</p>")
+    page = ("<!doctype html><html><head><meta charset=\"utf-8\"><title>bt_grasp run report</title>"
+            f"<style>{_CSS}</style></head><body>" + "\n".join(parts) + "</body></html>\n")
+    report.html_path.parent.mkdir(parents=True, exist_ok=True)
+    report.html_path.write_text(page, encoding="utf-8")
+    if png_dir is not None:
+        png_dir.mkdir(parents=True, exist_ok=True)
+        for name, png in report.figures.items():
+            path = png_dir / f"{name}.png"
+            path.write_bytes(png)
+            report.pngs.append(path)
+    return report

@@ -1,0 +1,118 @@
+"""The run report's figures (matplotlib, drawn off-screen): leaf-status Gantt, joints, gripper opening, and
+camera frames with the detections projected into them. Each function returns PNG bytes."""
+
+from __future__ import annotations
+
+import io
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+STATUS_COLOURS = {"RUNNING": "#4a7fd6", "SUCCESS": "#3aa657", "FAILURE": "#d64545", "SKIPPED": "#b0b0b0"}
+
+
+@dataclass(frozen=True)
+class Bar:
+    """A leaf in one status from ``start_s`` for ``length_s`` of simulated time."""
+
+    row: str
+    start_s: float
+    length_s: float
+    status: str
+
+
+def _pyplot() -> Any:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _png(fig: Any) -> bytes:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
+    _pyplot().close(fig)
+    return buf.getvalue()
+
+
+def gantt(rows: Sequence[str], bars: Sequence[Bar], failures: Sequence[tuple[float, str]]) -> bytes:
+    """One row per leaf (tree order, top to bottom); a red tick where a leaf failed."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(10, 0.42 * max(len(rows), 3) + 1.2))
+    index = {name: i for i, name in enumerate(rows)}
+    for status, colour in STATUS_COLOURS.items():
+        spans: dict[int, list[tuple[float, float]]] = {}
+        for bar in bars:
+            if bar.status == status and bar.row in index:
+                spans.setdefault(index[bar.row], []).append((bar.start_s, max(bar.length_s, 0.004)))
+        for i, span in spans.items():
+            ax.broken_barh(span, (i - 0.35, 0.7), facecolors=colour)
+    for t, row in failures:
+        if row in index:
+            ax.plot([t], [index[row]], marker="v", color="black", markersize=7)
+    ax.set_yticks(range(len(rows)))
+    ax.set_yticklabels(rows)
+    ax.invert_yaxis()
+    ax.set_xlabel("simulated time (s)")
+    ax.grid(axis="x", alpha=0.3)
+    handles = [plt.Rectangle((0, 0), 1, 1, color=c) for c in STATUS_COLOURS.values()]
+    ax.legend(handles, list(STATUS_COLOURS), loc="upper center", bbox_to_anchor=(0.5, -0.18), ncol=4, frameon=False)
+    ax.set_title("Leaf statuses over simulated time (\u25bc: a FAILURE)")
+    return _png(fig)
+
+
+def series(t_s: NDArray[np.float64], values: NDArray[np.float64], labels: Sequence[str], title: str,
+           ylabel: str, failures_s: Sequence[float] = ()) -> bytes:
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(10, 3.2))
+    values = values.reshape(len(t_s), -1)
+    for j in range(values.shape[1]):
+        ax.plot(t_s, values[:, j], label=labels[j] if j < len(labels) else str(j), linewidth=1.3)
+    for t in failures_s:
+        ax.axvline(t, color="#d64545", linestyle="--", linewidth=0.8)
+    ax.set_xlabel("simulated time (s)")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.grid(alpha=0.3)
+    if values.shape[1] > 1:
+        ax.legend(fontsize=8, ncol=min(values.shape[1], 6), loc="upper center", bbox_to_anchor=(0.5, -0.22),
+                  frameon=False)
+    return _png(fig)
+
+
+_BOX_EDGES = ((0, 1), (1, 3), (3, 2), (2, 0), (4, 5), (5, 7), (7, 6), (6, 4), (0, 4), (1, 5), (2, 6), (3, 7))
+
+
+def frame_with_boxes(rgb: NDArray[np.uint8], K: NDArray[np.float64] | None,
+                     T_camera_base: NDArray[np.float64] | None,
+                     boxes: Sequence[tuple[NDArray[np.float64], tuple[float, float, float], str]],
+                     caption: str) -> bytes:
+    """The camera frame with each detected box (pose in the base frame, size, label) projected onto it."""
+    img = np.ascontiguousarray(rgb[:, :, ::-1]).copy()  # BGR for OpenCV
+    if K is not None and T_camera_base is not None:
+        signs = np.array([[x, y, z] for x in (-0.5, 0.5) for y in (-0.5, 0.5) for z in (-0.5, 0.5)])
+        for T_base_box, size, label in boxes:
+            corners_box = signs * np.asarray(size)
+            corners = (T_base_box[:3, :3] @ corners_box.T).T + T_base_box[:3, 3]
+            cam = (T_camera_base[:3, :3] @ corners.T).T + T_camera_base[:3, 3]
+            if np.any(cam[:, 2] <= 0.01):
+                continue
+            uv = (K @ cam.T).T
+            px = (uv[:, :2] / uv[:, 2:3]).round().astype(int)
+            for a, b in _BOX_EDGES:
+                cv2.line(img, tuple(px[a]), tuple(px[b]), (40, 220, 255), 1, cv2.LINE_AA)
+            top = px[np.argmin(px[:, 1])]
+            cv2.putText(img, label, (int(top[0]) - 20, int(top[1]) - 6), cv2.FONT_HERSHEY_SIMPLEX, 0.45,
+                        (40, 220, 255), 1, cv2.LINE_AA)
+    cv2.putText(img, caption, (8, img.shape[0] - 10), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (255, 255, 255), 2, cv2.LINE_AA)
+    cv2.putText(img, caption, (8, img.shape[0] - 10), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (0, 0, 0), 1, cv2.LINE_AA)
+    ok, buf = cv2.imencode(".png", img)
+    if not ok:
+        raise ValueError("OpenCV could not encode a report frame")
+    return bytes(buf.tobytes())
