@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import pytest
+
+from bt_grasp.tree.exceptions import TreeRuntimeError
+
 from .harness import F, Harness, R, S
 
 
@@ -221,3 +225,11 @@ def test_switch_default_is_the_last_child() -> None:
     h = Harness(f'<Switch3 variable="x" case_1="1" case_2="2" case_3="3">{children}</Switch3>')
     # tick 1: "x" matches no case -> the default (D)
     assert h.tick() == S and h["D"].ticks == 1 and h["A"].ticks == 0
+
+
+@pytest.mark.parametrize("control", ["IfThenElse", "WhileDoElse"])
+def test_a_skipped_condition_is_a_tick_error(control: str) -> None:
+    # BT.CPP throws a logic error here too; bt_grasp names the node
+    h = Harness(f'<{control}><Check name="c" _skipIf="true"/><Stub name="a"/><Stub name="b"/></{control}>')
+    with pytest.raises(TreeRuntimeError, match="the condition \\(first child\\) was skipped"):
+        h.tick()

@@ -202,3 +202,20 @@ def test_repeat_yields_after_each_synchronous_cycle() -> None:
     )
     # one control period: three root executions (BT.CPP's wake-up), so the condition is checked 3 times
     assert h.tick() == S and h.tree.runs == 3 and h["ok"].ticks == 3 and h["A"].ticks == 3
+
+
+def test_precondition_checks_again_after_a_halt() -> None:
+    # a deliberate deviation: BT.CPP 4.10 keeps "child running" through a halt and would resume unchecked
+    xml = (
+        '<ReactiveSequence><Check name="ok"/>'
+        '<Precondition if="go == 1"><Stub name="X"/></Precondition></ReactiveSequence>'
+    )
+    h = Harness(xml)
+    h.tree.root_blackboard.set("go", 1)
+    h["ok"].returns(S, F, S)
+    h["X"].returns(R)
+    # tick 1: go == 1 -> X RUNNING; tick 2: ok FAILURE -> the Precondition is halted (X halted)
+    assert h.tick() == R and h.tick() == F and h["X"].halted == 1
+    h.tree.root_blackboard.set("go", 0)
+    # tick 3: the condition is checked again (false) -> else (FAILURE); X is not resumed
+    assert h.tick() == F and h["X"].ticks == 1
