@@ -7,7 +7,9 @@ from typing import Any
 
 from bt_grasp.behaviours import calibration_leaves, gripper, motion_leaves, objects, perceive, place, viewing
 from bt_grasp.errors import TreeFileError
+from bt_grasp.perception.results import Detection
 from bt_grasp.scene_config import Scene
+from bt_grasp.tree.builtins.loops import loop_spec
 from bt_grasp.tree.registry import NodeRegistry, builtin_registry
 
 ROBOT_LEAVES = (
@@ -28,6 +30,7 @@ ROBOT_LEAVES = (
     objects.SelectObject,
     objects.ObjectPose,
     objects.ObjectCount,
+    objects.ObjectInfo,
     objects.FixturePose,
     place.Place,
     place.PlaceOn,
@@ -36,9 +39,18 @@ ROBOT_LEAVES = (
 )
 
 
+#: BT.CPP's LoopNode over an object list (from PerceiveAll): pops each perceived object into ``value``
+LOOP_OBJECTS = loop_spec(
+    "LoopObjects", Detection,
+    description="Pops each perceived object of queue (an object list, e.g. from PerceiveAll) into value "
+                "and ticks the child once per object; if_empty once the list is exhausted.",
+)
+
+
 def register_robot_leaves(registry: NodeRegistry) -> NodeRegistry:
     for cls in ROBOT_LEAVES:
         registry.register(cls.bt_spec)  # type: ignore[attr-defined]
+    registry.register(LOOP_OBJECTS)
     return registry
 
 

@@ -151,6 +151,33 @@ class ObjectPose(Leaf):
 
 @leaf(
     None,
+    name="ObjectInfo",
+    ports=[
+        PortSpec("object", PortDirection.INPUT, object, "{object}", "a perceived object"),
+        PortSpec("color", PortDirection.OUTPUT, object, "{object_color}", "its colour name ('object' if none)"),
+        PortSpec("shape", PortDirection.OUTPUT, object, "{object_shape}", "box or round"),
+        PortSpec("size", PortDirection.OUTPUT, object, "{object_size}", "its footprint's long side, m"),
+        PortSpec("height", PortDirection.OUTPUT, object, "{object_height}", "its height, m"),
+    ],
+)
+class ObjectInfo(Leaf):
+    """A perceived object's colour, shape and size as plain values (for Switch, scripts, other ports).
+    FAILURE: BAD_INPUT (``object`` is not a perceived object)."""
+
+    def update(self) -> Status:
+        det: Any = self.ports.get("object") if self.ports.has("object") else None
+        if not is_detection(det):
+            return self.fail(FailureReason.BAD_INPUT.value, "'object' is not a perceived object: run SelectObject")
+        self.ports.set("color", str(det.label))
+        self.ports.set("shape", str(det.shape))
+        self.ports.set("size", float(max(det.size_m[0], det.size_m[1])))
+        self.ports.set("height", float(det.size_m[2]))
+        self.feedback_message = f"{det.label} {det.shape}"
+        return Status.SUCCESS
+
+
+@leaf(
+    None,
     name="ObjectCount",
     kind=NodeKind.CONDITION,
     ports=[
@@ -187,6 +214,8 @@ class ObjectCount(Leaf):
     name="FixturePose",
     ports=[
         PortSpec("fixture", PortDirection.INPUT, str, description="a fixture's name in the scene file"),
+        PortSpec("slot", PortDirection.INPUT, int, -1, "a tray's or bin's slot, row by row from 0 (-1: centre)"),
+        PortSpec("slot_size", PortDirection.INPUT, float, 0.10, "the side of one square slot, m"),
         PortSpec("pose", PortDirection.OUTPUT, object, "{pose}", "its centre on its surface (base frame)"),
     ],
     needs_robot=True,
@@ -194,8 +223,10 @@ class ObjectCount(Leaf):
 class FixturePose(RobotLeaf):
     """Where a fixture (tray, bin, marker, wall) is, from the scene file (installation data, not
     perception): its centre in x, y, its yaw, and z = the surface an object set on it rests on (a tray's
-    floor). An unknown name in a tree file is a load error. FAILURE: BAD_INPUT (unknown name from the
-    blackboard)."""
+    floor). With ``slot`` >= 0, the centre of that square slot of a tray or bin (slots of ``slot_size`` in
+    rows along the container's x, so several objects set down in it do not land on each other). An unknown
+    name in a tree file is a load error. FAILURE: BAD_INPUT (unknown name from the blackboard, a slot
+    beyond the container's or a slot of something that is not a container)."""
 
     def check_scene(self, scene: Any) -> str | None:
         """A problem with the literal ``fixture`` port for this scene (checked before the run), or None."""
@@ -208,12 +239,33 @@ class FixturePose(RobotLeaf):
         fixture = self.cell.scene.fixture(name)
         if fixture is None:
             return self.failed(FailureReason.BAD_INPUT, str(_fixture_problem(self.cell.scene, name)))
-        world = Pose(fixture.center_xy_m[0], fixture.center_xy_m[1], float(fixture.surface_z_m),
-                     float(fixture.yaw_deg), "world")
+        offset = _slot_offset(fixture, int(self.ports.get("slot")), float(self.ports.get("slot_size")))
+        if isinstance(offset, str):
+            return self.failed(FailureReason.BAD_INPUT, offset)
+        yaw = math.radians(float(fixture.yaw_deg))
+        x = fixture.center_xy_m[0] + math.cos(yaw) * offset[0] - math.sin(yaw) * offset[1]
+        y = fixture.center_xy_m[1] + math.sin(yaw) * offset[0] + math.cos(yaw) * offset[1]
+        world = Pose(x, y, float(fixture.surface_z_m), float(fixture.yaw_deg), "world")
         pose = world.in_base(self.cell.scene.T_world_base())
         self.ports.set("pose", pose)
         self.feedback_message = f"{fixture.kind} {name}: {pose}"
         return Status.SUCCESS
+
+
+def _slot_offset(fixture: Any, slot: int, size_m: float) -> tuple[float, float] | str:
+    """A slot's centre relative to the container's centre (its own axes), or why there is no such slot."""
+    if slot < 0:
+        return (0.0, 0.0)
+    inner = getattr(fixture, "inner_size_m", None)
+    if inner is None:
+        return f"'{fixture.name}' is a {fixture.kind}, which has no slots (only trays and bins do)"
+    if size_m <= 0:
+        return f"slot_size must be positive, got {size_m}"
+    cols, rows = int(inner[0] // size_m), int(inner[1] // size_m)
+    if slot >= cols * rows:
+        return f"'{fixture.name}' has {cols * rows} slot(s) of {size_m * 100:.0f} cm; slot {slot} does not exist"
+    col, row = slot % cols, slot // cols
+    return ((col - (cols - 1) / 2) * size_m, (row - (rows - 1) / 2) * size_m)
 
 
 def _fixture_problem(scene: Any, name: str) -> str | None:

@@ -10,6 +10,7 @@ from py_trees.common import Status
 
 from bt_grasp.behaviours.base import RobotLeaf
 from bt_grasp.behaviours.cell import Cell
+from bt_grasp.behaviours.fixture_mask import without_fixtures
 from bt_grasp.behaviours.reasons import FailureReason
 from bt_grasp.interfaces import Mount, RGBDFrame
 from bt_grasp.tree.registry import NodeKind, PortDirection, PortSpec, leaf
@@ -48,7 +49,7 @@ def perceive_once(leaf: RobotLeaf, color: str | None, accept_empty: bool = False
     if color and color not in config.color.ranges:
         known = ", ".join(config.color.ranges)
         return leaf.failed(FailureReason.BAD_INPUT, f"unknown colour '{color}'; known: {known}")
-    result = perceive(frame, T_base_camera, config, color or None)
+    result = without_fixtures(perceive(frame, T_base_camera, config, color or None), cell.scene)
     cell.media.perception(result, T_base_camera)
     if accept_empty and result.status.value == "no_objects":
         return result

@@ -42,11 +42,20 @@ _HELD_PORTS = [
     PortSpec("grasp", PortDirection.INPUT, object, "{grasp}", "the grasp holding the object (from PlanGrasp)"),
     PortSpec("held", PortDirection.INPUT, object, "{target}", "the detection of the held object, as grasped"),
     PortSpec("objects", PortDirection.INPUT, object, "{objects}", "objects seen (obstacles while carrying)"),
-    PortSpec("approach", PortDirection.INPUT, float, 0.08, "height of the pre-place pose above the target, m"),
+    PortSpec("approach", PortDirection.INPUT, float, 0.10, "height of the pre-place pose above the target, m"),
     PortSpec("release_gap", PortDirection.INPUT, float, 0.003, "the object's bottom above the surface at release, m"),
     PortSpec("contact_window", PortDirection.INPUT, float, 0.02, "contact this close above the target = set down, m"),
     PortSpec("retreat", PortDirection.INPUT, float, 0.08, "how far to back off upwards after opening, m"),
 ]
+
+
+#: two detections (from different frames) closer than this, centre to centre, are the same object
+SAME_OBJECT_M = 0.02
+
+
+def same_object(a: Any, b: Any) -> bool:
+    """The same object seen twice (e.g. by PerceiveAll, then by Perceive): centres within 2 cm."""
+    return bool(np.linalg.norm(np.subtract(a.centroid_base_m, b.centroid_base_m)) < SAME_OBJECT_M)
 
 
 def table_z_base(cell: Any, x: float, y: float) -> float:
@@ -135,12 +144,12 @@ class _PlaceBase(RobotLeaf):
         margin = 0.004
         held_box = detection_box(held, "held", margin_m=margin)
         held_shape = type(held_box).at("held", held_box.size_m, T_tcp_obj)
-        others = [d for d in object_list(self.input("objects")) or () if d.centroid_base_m != held.centroid_base_m]
+        others = [d for d in object_list(self.input("objects")) or () if not same_object(d, held)]
         obstacles = tuple(detection_box(d, f"object_{i}") for i, d in enumerate(others))
         carry_scene = PlanningScene.from_scene(self.cell.scene, obstacles).with_attached(held_shape, TCP_LINK)
         # the descent may end touching what the object is set on (the support), nothing else
         below = tuple(o for o, d in zip(obstacles, others, strict=True)
-                      if support is None or d.centroid_base_m != support.centroid_base_m)
+                      if support is None or not same_object(d, support))
         descent_scene = PlanningScene.from_scene(self.cell.scene, below).with_attached(held_shape, TCP_LINK)
         pre = _raised(T_place, float(self.input("approach")))
         self.feedback_message = f"placing at {self._target_text}"

@@ -12,7 +12,7 @@ import typer
 
 from bt_grasp.environment import machine_description
 
-bench_app = typer.Typer(help="Benchmarks (planning; perception).", no_args_is_help=True)
+bench_app = typer.Typer(help="Benchmarks (planning; perception; the task suite).", no_args_is_help=True)
 
 
 @bench_app.command("plan")
@@ -95,6 +95,50 @@ def perception(
     from rich.console import Console
 
     Console().print_json(json.dumps(summary))
+
+
+@bench_app.command("tasks")
+def tasks(
+    seeds: int = typer.Option(10, "--seeds", min=1, help="Episodes per task (seeds first-seed .. +N-1)."),
+    first_seed: int = typer.Option(0, "--first-seed", help="The first seed."),
+    task: list[str] = typer.Option([], "--task", help="Only this task (repeatable; default: every shipped task)."),
+    as_json: bool = typer.Option(False, "--json", help="Print exactly one JSON object."),
+) -> None:
+    """Run every shipped task (trees/T.xml on scenes/T.yaml, judged by the scene's goal) over N seeds in one
+    process; print the success rate per task and why the failures failed."""
+    from bt_grasp.errors import InputError
+    from bt_grasp.tasks import TASKS, run_task_bench
+
+    known = {t.name: t for t in TASKS}
+    for name in task:
+        if name not in known:
+            raise InputError("--task", f"unknown task '{name}'; shipped: {', '.join(known)}")
+    chosen = [known[n] for n in task] if task else list(TASKS)
+    from rich.console import Console
+
+    err = Console(stderr=True)
+
+    def progress(name: str, seed: int, ok: bool, why: str) -> None:
+        if not as_json:
+            err.print(f"{name} seed {seed}: {'success' if ok else 'FAILURE ' + why}", highlight=False)
+
+    figures = run_task_bench(chosen, seeds, first_seed, progress=progress)
+    rows = [f.summary() for f in figures]
+    summary = {"tasks": rows, "machine": machine_description()}
+    if as_json:
+        typer.echo(json.dumps(summary))
+        return
+    from rich.table import Table
+
+    table = Table(title=f"bt-grasp bench tasks: {seeds} seed(s) per task from seed {first_seed}")
+    for column in ("task", "success", "rate", "sim s (median)", "wall s (median)", "failures"):
+        table.add_column(column, justify="left" if column in ("task", "failures") else "right")
+    for f in rows:
+        failures = ", ".join(f"{k} x{v}" for k, v in f["failures"].items()) or "-"
+        table.add_row(f["task"], f"{f['successes']}/{f['episodes']}", f"{f['success_rate']:.0%}",
+                      f"{f['sim_time_s_median']:.1f}", f"{f['wall_time_s_median']:.1f}", failures)
+    Console().print(table)
+    Console().print(f"machine: {summary['machine']}")
 
 
 def register(app: typer.Typer) -> None:

@@ -1,0 +1,99 @@
+"""The shipped tasks and ``bt-grasp bench tasks``: every task over N seeds in one process, success per task.
+
+A task is ``trees/T.xml`` on ``scenes/T.yaml`` (which declares the goal the judge checks by physics);
+``bt-grasp run trees/T.xml --scene scenes/T.yaml --seed N`` runs one episode of it with no other flag.
+The benchmark runs the same episodes through the episode API with one warm world per task (the world is
+reset, not rebuilt, between seeds: objects drawn again from the seed, arm home, clock at 0).
+"""
+
+from __future__ import annotations
+
+import statistics
+import time
+from collections import Counter
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+#: repository root (trees/ and scenes/ live there)
+REPO = Path(__file__).resolve().parents[2]
+
+
+@dataclass(frozen=True)
+class Task:
+    name: str
+    tree: Path  # relative to the repository root
+    scene: Path
+
+    def paths(self, root: Path = REPO) -> tuple[Path, Path]:
+        return root / self.tree, root / self.scene
+
+
+TASKS: tuple[Task, ...] = (
+    Task("pick", Path("trees/pick.xml"), Path("scenes/tabletop.yaml")),
+    Task("pick_and_place", Path("trees/pick_and_place.xml"), Path("scenes/pick_and_place.yaml")),
+    Task("stack", Path("trees/stack.xml"), Path("scenes/stack.yaml")),
+    Task("sort_by_color", Path("trees/sort_by_color.xml"), Path("scenes/sort_by_color.yaml")),
+    Task("clear_table", Path("trees/clear_table.xml"), Path("scenes/clear_table.yaml")),
+)
+
+
+@dataclass
+class TaskFigures:
+    """One task's results over its seeds."""
+
+    task: str
+    seeds: list[int] = field(default_factory=list)
+    successes: int = 0
+    failures: Counter[str] = field(default_factory=Counter)  # "reason / failed condition" -> count
+    failed_seeds: list[int] = field(default_factory=list)
+    sim_time_s: list[float] = field(default_factory=list)
+    wall_time_s: list[float] = field(default_factory=list)
+
+    def summary(self) -> dict[str, Any]:
+        n = len(self.seeds)
+        return {
+            "task": self.task,
+            "episodes": n,
+            "successes": self.successes,
+            "success_rate": self.successes / n if n else 0.0,
+            "seeds": f"{self.seeds[0]}..{self.seeds[-1]}" if self.seeds else "",
+            "failures": dict(self.failures),
+            "failed_seeds": self.failed_seeds,
+            "sim_time_s_median": round(statistics.median(self.sim_time_s), 2) if self.sim_time_s else 0.0,
+            "wall_time_s_median": round(statistics.median(self.wall_time_s), 2) if self.wall_time_s else 0.0,
+        }
+
+
+Progress = Callable[[str, int, bool, str], None]
+
+
+def run_task_bench(tasks: Sequence[Task], seeds: int, first_seed: int = 0, root: Path = REPO,
+                   progress: Progress | None = None) -> list[TaskFigures]:
+    """Run every task on seeds ``first_seed .. first_seed + seeds - 1``; returns each task's figures."""
+    from bt_grasp.episode import EpisodeRequest, WarmWorlds, run_episode
+
+    out = []
+    for task in tasks:
+        tree, scene = task.paths(root)
+        figures = TaskFigures(task.name)
+        worlds = WarmWorlds()
+        for seed in range(first_seed, first_seed + seeds):
+            t0 = time.perf_counter()
+            result = run_episode(EpisodeRequest(tree=tree, scene=scene, seed=seed,
+                                                blackboard={"color": "red", "lift_height": 0.15}), worlds=worlds)
+            figures.seeds.append(seed)
+            figures.wall_time_s.append(time.perf_counter() - t0)
+            figures.sim_time_s.append(result.sim_time_s)
+            why = ""
+            if result.success:
+                figures.successes += 1
+            else:
+                why = f"{result.reason or '-'} / {result.judged.failed_condition or '-'}"
+                figures.failures[why] += 1
+                figures.failed_seeds.append(seed)
+            if progress is not None:
+                progress(task.name, seed, result.success, why)
+        out.append(figures)
+    return out
