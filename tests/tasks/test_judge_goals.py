@@ -43,12 +43,20 @@ class Script:
 
     def _to(self, xyz: tuple[float, float, float], yaw: float = 0.0) -> None:
         from bt_grasp.geometry import make_T, rot_z
-        from bt_grasp.sim.charuco import move_until_still
 
-        q0 = self.world.robot.joint_positions()
+        robot = self.world.robot
+        q0 = robot.joint_positions()
         result = self.kin.ik(make_T(rot_z(yaw) @ R_DOWN, list(xyz)), q0)
         assert result.ok, xyz
-        move_until_still(self.world, result.q, max_speed_rad_s=0.6, settle_timeout_s=1.0)
+        # a straight joint-space line at 0.6 rad/s (a stand-in for a planned motion), then wait until still
+        ticks = max(1, int(np.ceil(float(np.max(np.abs(result.q - q0))) / (0.6 * 0.01))))
+        for k in range(1, ticks + 1):
+            robot.set_joint_targets(q0 + (result.q - q0) * k / ticks)
+            self.world.step_tick()
+        for _ in range(100):
+            self.world.step_tick()
+            if float(np.max(np.abs(robot.joint_velocities()))) < 5e-3:
+                break
 
     def _wait(self, seconds: float) -> None:
         for _ in range(int(seconds * 100)):
