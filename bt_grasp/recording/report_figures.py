@@ -12,6 +12,8 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from bt_grasp.recording.projection import BOX_EDGES, box_corners_px
+
 STATUS_COLOURS = {"RUNNING": "#4a7fd6", "SUCCESS": "#3aa657", "FAILURE": "#d64545", "SKIPPED": "#b0b0b0"}
 
 
@@ -86,9 +88,6 @@ def series(t_s: NDArray[np.float64], values: NDArray[np.float64], labels: Sequen
     return _png(fig)
 
 
-_BOX_EDGES = ((0, 1), (1, 3), (3, 2), (2, 0), (4, 5), (5, 7), (7, 6), (6, 4), (0, 4), (1, 5), (2, 6), (3, 7))
-
-
 def frame_with_boxes(rgb: NDArray[np.uint8], K: NDArray[np.float64] | None,
                      T_camera_base: NDArray[np.float64] | None,
                      boxes: Sequence[tuple[NDArray[np.float64], tuple[float, float, float], str]],
@@ -96,16 +95,12 @@ def frame_with_boxes(rgb: NDArray[np.uint8], K: NDArray[np.float64] | None,
     """The camera frame with each detected box (pose in the base frame, size, label) projected onto it."""
     img = np.ascontiguousarray(rgb[:, :, ::-1]).copy()  # BGR for OpenCV
     if K is not None and T_camera_base is not None:
-        signs = np.array([[x, y, z] for x in (-0.5, 0.5) for y in (-0.5, 0.5) for z in (-0.5, 0.5)])
         for T_base_box, size, label in boxes:
-            corners_box = signs * np.asarray(size)
-            corners = (T_base_box[:3, :3] @ corners_box.T).T + T_base_box[:3, 3]
-            cam = (T_camera_base[:3, :3] @ corners.T).T + T_camera_base[:3, 3]
-            if np.any(cam[:, 2] <= 0.01):
+            corners = box_corners_px(T_camera_base, K, T_base_box, size)
+            if corners is None:
                 continue
-            uv = (K @ cam.T).T
-            px = (uv[:, :2] / uv[:, 2:3]).round().astype(int)
-            for a, b in _BOX_EDGES:
+            px = corners.round().astype(int)
+            for a, b in BOX_EDGES:
                 cv2.line(img, tuple(px[a]), tuple(px[b]), (40, 220, 255), 1, cv2.LINE_AA)
             top = px[np.argmin(px[:, 1])]
             cv2.putText(img, label, (int(top[0]) - 20, int(top[1]) - 6), cv2.FONT_HERSHEY_SIMPLEX, 0.45,

@@ -20,16 +20,20 @@ from foxglove_schemas_protobuf.CompressedImage_pb2 import CompressedImage
 from foxglove_schemas_protobuf.CubePrimitive_pb2 import CubePrimitive
 from foxglove_schemas_protobuf.FrameTransform_pb2 import FrameTransform
 from foxglove_schemas_protobuf.FrameTransforms_pb2 import FrameTransforms
+from foxglove_schemas_protobuf.ImageAnnotations_pb2 import ImageAnnotations
 from foxglove_schemas_protobuf.KeyValuePair_pb2 import KeyValuePair
 from foxglove_schemas_protobuf.Log_pb2 import Log
 from foxglove_schemas_protobuf.PackedElementField_pb2 import PackedElementField
+from foxglove_schemas_protobuf.Point2_pb2 import Point2
 from foxglove_schemas_protobuf.PointCloud_pb2 import PointCloud
+from foxglove_schemas_protobuf.PointsAnnotation_pb2 import PointsAnnotation
 from foxglove_schemas_protobuf.Pose_pb2 import Pose
 from foxglove_schemas_protobuf.Quaternion_pb2 import Quaternion
 from foxglove_schemas_protobuf.RawImage_pb2 import RawImage
 from foxglove_schemas_protobuf.SceneEntity_pb2 import SceneEntity
 from foxglove_schemas_protobuf.SceneEntityDeletion_pb2 import SceneEntityDeletion
 from foxglove_schemas_protobuf.SceneUpdate_pb2 import SceneUpdate
+from foxglove_schemas_protobuf.TextAnnotation_pb2 import TextAnnotation
 from foxglove_schemas_protobuf.TextPrimitive_pb2 import TextPrimitive
 from foxglove_schemas_protobuf.Vector3_pb2 import Vector3
 from google.protobuf.timestamp_pb2 import Timestamp
@@ -38,7 +42,8 @@ from numpy.typing import ArrayLike, NDArray
 #: protobuf classes of every Foxglove schema a bt_grasp log uses, by full name
 PROTOBUF_CLASSES: dict[str, Any] = {
     cls.DESCRIPTOR.full_name: cls
-    for cls in (CompressedImage, RawImage, CameraCalibration, PointCloud, FrameTransforms, SceneUpdate, Log)
+    for cls in (CompressedImage, RawImage, CameraCalibration, PointCloud, FrameTransforms, SceneUpdate, Log,
+                ImageAnnotations)
 }
 
 RGBA = tuple[float, float, float, float]
@@ -265,6 +270,23 @@ def pose_entity(stamp_ns: int, marker: PoseMarker, frame_id: str) -> SceneEntity
     for key, value in {"label": marker.label, **marker.metadata}.items():
         entity.metadata.append(KeyValuePair(key=key, value=str(value)))
     return entity
+
+
+def image_annotations(stamp_ns: int, outlines: Sequence[tuple[NDArray[np.float64], str]],
+                      rgba: RGBA = (0.16, 0.86, 1.0, 1.0)) -> ImageAnnotations:
+    """Closed outlines (pixel polygons) with a label at each one's top-left corner."""
+    ts = timestamp(stamp_ns)
+    msg = ImageAnnotations()
+    for polygon, label in outlines:
+        points = [Point2(x=float(u), y=float(v)) for u, v in polygon]
+        msg.points.append(PointsAnnotation(timestamp=ts, type=PointsAnnotation.LINE_LOOP, points=points,
+                                           outline_color=color(rgba), thickness=2.0))
+        if label:
+            u0, v0 = float(min(p[0] for p in polygon)), float(min(p[1] for p in polygon))
+            msg.texts.append(TextAnnotation(timestamp=ts, position=Point2(x=u0, y=max(v0 - 4.0, 0.0)), text=label,
+                                            font_size=14.0, text_color=color(rgba),
+                                            background_color=color((0.0, 0.0, 0.0, 0.6))))
+    return msg
 
 
 def scene_update(stamp_ns: int, entities: Sequence[SceneEntity]) -> SceneUpdate:

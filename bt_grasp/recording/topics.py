@@ -39,6 +39,8 @@ DEPTH = "/camera/depth"
 CALIBRATION = "/camera/calibration"
 POINTS = "/perception/points"
 DETECTIONS = "/perception/detections"
+#: the detections drawn on the camera image (the image panel's overlay)
+DETECTIONS_2D = "/perception/detections_2d"
 GRASPS = "/perception/grasps"
 LOG = "/log"
 #: the simulator's true object poses, written by the judge's side for offline debugging; nothing in the
@@ -57,6 +59,7 @@ PROTOBUF_TOPICS: dict[str, str] = {
     CALIBRATION: "foxglove.CameraCalibration",
     POINTS: "foxglove.PointCloud",
     DETECTIONS: "foxglove.SceneUpdate",
+    DETECTIONS_2D: "foxglove.ImageAnnotations",
     GRASPS: "foxglove.SceneUpdate",
     LOG: "foxglove.Log",
     JUDGE_OBJECTS: "foxglove.SceneUpdate",

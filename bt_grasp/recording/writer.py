@@ -33,6 +33,7 @@ from pathlib import Path
 from types import TracebackType
 from typing import Any, BinaryIO, Literal
 
+import cv2
 import numpy as np
 from mcap.well_known import MessageEncoding, SchemaEncoding
 from mcap.writer import CompressionType, Writer
@@ -41,6 +42,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from bt_grasp.recording import schemas, topics
 from bt_grasp.recording.jsonable import BlackboardDiffer, NodeDiffer, to_jsonable
+from bt_grasp.recording.projection import box_corners_px
 from bt_grasp.recording.signals import SignalGuard
 
 log = logging.getLogger(__name__)
@@ -182,6 +184,7 @@ class RunRecorder:
         self._last_stamp_ns = 0
         self._sequence: dict[int, int] = {}
         self._closed = False
+        self._camera_K: NDArray[np.float64] | None = None  # the last camera calibration written
         self._taps: list[Callable[[str, int, bytes], None]] = []
         #: called with (kind, payload) after every event written (a failure, a retry, an abort)
         self.event_listeners: list[Callable[[str, Mapping[str, Any]], None]] = []
@@ -371,6 +374,7 @@ class RunRecorder:
         i = intrinsics
         msg = schemas.camera_calibration(self.t(stamp_ns), frame_id, i.width_px, i.height_px, i.fx_px, i.fy_px,
                                          i.cx_px, i.cy_px)
+        self._camera_K = np.array(msg.K, dtype=np.float64).reshape(3, 3)
         self._write(topics.CALIBRATION, stamp_ns, msg.SerializeToString())
 
     def robot_model_update(self) -> Any:
@@ -424,6 +428,24 @@ class RunRecorder:
             if name not in (topics.DETECTIONS, topics.GRASPS):
                 raise ValueError(f"markers go to {topics.DETECTIONS} or {topics.GRASPS}, not {name!r}")
             self._write(name, stamp_ns, schemas.scene_update(self.t(stamp_ns), group).SerializeToString())
+        boxes = [m for m in entities if isinstance(m, schemas.BoxMarker)]
+        if (topic or topics.DETECTIONS) == topics.DETECTIONS:
+            self._write_box_outlines(stamp_ns, boxes)
+
+    def _write_box_outlines(self, stamp_ns: int, boxes: Sequence[schemas.BoxMarker]) -> None:
+        """The boxes drawn on the camera image, where the camera's calibration and pose are known."""
+        T_base_camera = self.static_transforms.get((self.base_frame, CAMERA_FRAME))
+        if self._camera_K is None or T_base_camera is None:
+            return
+        T_camera_base = np.linalg.inv(T_base_camera)
+        outlines = []
+        for box in boxes:
+            corners = box_corners_px(T_camera_base, self._camera_K, schemas.as_matrix(box.T_base_box), box.size_m)
+            if corners is not None:
+                hull = cv2.convexHull(corners.astype(np.float32)).reshape(-1, 2)
+                outlines.append((hull.astype(np.float64), box.label))
+        msg = schemas.image_annotations(self.t(stamp_ns), outlines)
+        self._write(topics.DETECTIONS_2D, stamp_ns, msg.SerializeToString())
 
     # -- motion, logs, events ------------------------------------------------------------------------------
 
