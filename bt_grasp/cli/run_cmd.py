@@ -106,6 +106,10 @@ def run(
         0.0, "--image-hz", min=0.0, help="Extra logged camera frames per simulated second (0: only at a leaf's "
         "failure and at the end; each costs a render)."
     ),
+    resident: bool = typer.Option(
+        False, "--resident", help="Run in this user's resident warm process (started if needed; it exits after "
+        "10 idle minutes): a second run skips the start-up. No live progress, no --live."
+    ),
 ) -> None:
     """Run a task tree on the simulated cell. Exit code 0 on task success (judged by physics), 1 on failure."""
     from bt_grasp.episode.episode import Episode
@@ -133,11 +137,19 @@ def run(
     if realtime is not None and realtime <= 0:
         raise InputError("--realtime", f"the factor must be positive, got {realtime}")
     console = Console(stderr=True)
-    episode = Episode(request)
-    episode.on_live.append(lambda url: console.print(
-        f"live: in Foxglove, Open connection > Foxglove WebSocket > {url} (layout: {layout_path()})",
-        highlight=False))
-    summary = episode.run(on_tick=() if quiet else (live_progress(console),))
+    if resident:
+        from bt_grasp.resident.client import run_resident
+
+        if live is not None:
+            raise InputError("--resident", "a resident run cannot serve --live; drop one of the two")
+        summary, pid = run_resident(request)
+        console.print(f"(ran in the resident process {pid})", highlight=False)
+    else:
+        episode = Episode(request)
+        episode.on_live.append(lambda url: console.print(
+            f"live: in Foxglove, Open connection > Foxglove WebSocket > {url} (layout: {layout_path()})",
+            highlight=False))
+        summary = episode.run(on_tick=() if quiet else (live_progress(console),))
     out = Console()
     print_summary(out, summary)
     if summary_json is not None:

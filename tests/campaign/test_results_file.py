@@ -102,3 +102,28 @@ def test_a_broken_row_in_the_middle_names_its_line(tmp_path: Path) -> None:
     with pytest.raises(InputError) as info:
         read_rows(path)
     assert info.value.message.startswith(f"{path}:2: not a JSON object")
+
+
+def test_parquet_export_round_trips(tmp_path: Path) -> None:
+    import subprocess
+    import sys
+
+    import pyarrow.parquet as pq
+
+    rows = [
+        {"episode": "a", "seed": 1, "success": True, "retries": {}, "mcap": None},
+        {"episode": "b", "seed": 2, "success": False, "retries": {"Perceive": 2}, "mcap": "/x.mcap"},
+    ]
+    path = tmp_path / "r.jsonl"
+    path.write_text("".join(json.dumps(r) + "\n" for r in rows))
+    proc = subprocess.run(
+        [sys.executable, "-m", "bt_grasp.cli.main", "eval", "export", str(path), "--out", str(tmp_path / "r.parquet")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=REPO,
+    )
+    assert proc.returncode == 0, proc.stderr
+    table = pq.read_table(tmp_path / "r.parquet").to_pylist()
+    assert [r["episode"] for r in table] == ["a", "b"]
+    assert json.loads(table[1]["retries"]) == {"Perceive": 2} and table[0]["mcap"] is None
