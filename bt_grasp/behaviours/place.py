@@ -165,7 +165,7 @@ class _PlaceBase(RobotLeaf):
         def compute(q: NDArray[np.float64]) -> Any:
             out = fn(q)
             if isinstance(out, PathFailure) and out.reason is FailureReason.COLLISION:
-                return PathFailure(FailureReason.PLACE_BLOCKED, f"the place target is occupied: {out.sentence}")
+                return PathFailure(FailureReason.PLACE_BLOCKED, f"the place target is blocked: {out.sentence}")
             return out
 
         return compute
