@@ -118,9 +118,8 @@ def tasks(
 
     err = Console(stderr=True)
 
-    def progress(name: str, seed: int, ok: bool, why: str) -> None:
-        if not as_json:
-            err.print(f"{name} seed {seed}: {'success' if ok else 'FAILURE ' + why}", highlight=False)
+    def progress(name: str, seed: int, ok: bool, why: str) -> None:  # stderr: stdout stays one JSON object
+        err.print(f"{name} seed {seed}: {'success' if ok else 'FAILURE ' + why}", highlight=False)
 
     figures = run_task_bench(chosen, seeds, first_seed, progress=progress)
     rows = [f.summary() for f in figures]

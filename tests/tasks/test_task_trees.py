@@ -58,3 +58,15 @@ def test_yaml_twin_ticks_like_the_xml(task) -> None:  # type: ignore[no-untyped-
     assert len(a) == len(b) and len(a) > 10
     for tick, (x, y) in enumerate(zip(a, b, strict=True), start=1):
         assert x == y, f"tick {tick} differs"
+
+
+def test_bench_tasks_refuses_an_unknown_task_in_one_line() -> None:
+    import subprocess
+    import sys
+
+    proc = subprocess.run([sys.executable, "-m", "bt_grasp.cli.main", "bench", "tasks", "--task", "juggle"],
+                          capture_output=True, text=True, timeout=120, cwd=REPO)
+    assert proc.returncode == 2
+    assert proc.stderr.strip().splitlines() == [
+        "error: --task: unknown task 'juggle'; shipped: pick, pick_and_place, stack, sort_by_color, clear_table"
+    ]
