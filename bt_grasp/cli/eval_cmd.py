@@ -54,7 +54,9 @@ def run(
     out: Path = typer.Option(..., "--out", help="Folder for the results (NAME.jsonl) and kept MCAP logs."),
     workers: int = typer.Option(0, "--workers", min=0, help="Local worker processes (0 = one per core)."),
     ray: str | None = typer.Option(
-        None, "--ray", help="Run on a Ray cluster: its address (host:port), or 'auto', or 'local' to start one here."
+        None, "--ray", metavar="ADDRESS",
+        help="Run on a Ray cluster: its head's host:port, 'auto' (the cluster this machine belongs to) or 'local' "
+        "(start a throw-away one here).",
     ),
     keep_logs: str = typer.Option(
         "failures", "--keep-logs", help="Which episodes keep their MCAP log: failures|all|none."
