@@ -61,7 +61,9 @@ def one_worker(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict[str, 
     for row in rows:
         assert (row["mcap"] is not None) == (not row["success"])
         if row["mcap"]:
-            assert Path(row["mcap"]).stat().st_size > 0
+            replay = subprocess.run([*BT, "replay", row["mcap"], "--failures"], capture_output=True, text=True,
+                                    timeout=300, cwd=REPO, env=_env())
+            assert replay.returncode == 0 and str(row["failure_reason"]) in replay.stdout, replay.stderr
     assert (out / "tiny.parquet").exists()
     return _identity(rows)
 
