@@ -25,12 +25,14 @@ class RecorderSink:
 
     def frame(self, frame: RGBDFrame, T_base_camera: NDArray[np.float64] | None) -> None:
         stamp = self.now_ns()
+        if T_base_camera is not None:  # the camera frame as this capture saw it (also for a later viewer)
+            self.recorder.static_transforms[(BASE_FRAME, CAMERA_FRAME)] = np.asarray(T_base_camera, dtype=np.float64)
+        if not self.recorder.active:  # a live view nobody watches: no encoding, no cloud
+            return
         self.recorder.write_color_image(stamp, frame.color, CAMERA_FRAME)
         self.recorder.write_camera_calibration(stamp, CAMERA_FRAME, frame.intrinsics)
         self.recorder.write_depth(stamp, frame.depth_m, CAMERA_FRAME)
         if T_base_camera is not None:
-            # the camera frame as this capture saw it, repeated with every /tf until the next one
-            self.recorder.static_transforms[(BASE_FRAME, CAMERA_FRAME)] = np.asarray(T_base_camera, dtype=np.float64)
             self.recorder.write_transforms(stamp, [(BASE_FRAME, CAMERA_FRAME, T_base_camera)])
             self._write_cloud(stamp, frame, T_base_camera)
 

@@ -41,6 +41,7 @@ class LogExtras:
         self._next_image_ns = 0
         self._failed = False
         self.captures = 0
+        self._camera_from: object = None
         recorder.event_listeners.append(self._on_event)
 
     def start(self) -> None:
@@ -54,17 +55,18 @@ class LogExtras:
         now = self.world.now_ns()
         self._update_camera_frame()
         periodic = self.period_ns > 0 and now >= self._next_image_ns
-        if self._failed or periodic:
+        if (self._failed or periodic) and self.recorder.active:
             self.capture("failure" if self._failed else "periodic")
             if self._failed:
                 self.write_truth()
-            self._failed = False
+        self._failed = False
         if periodic:
             self._next_image_ns = now + self.period_ns
 
     def finish(self) -> None:
         self._update_camera_frame()
-        self.capture("end")
+        if self.recorder.active:
+            self.capture("end")
         self.write_truth()
 
     def _update_camera_frame(self) -> None:
@@ -72,6 +74,9 @@ class LogExtras:
         calibration = self.cell.calibration
         if calibration is None:
             return
+        if calibration is self._camera_from and calibration.mount != "eye-in-hand":
+            return  # eye-to-hand: fixed until the calibration changes
+        self._camera_from = calibration
         T_base_tool = None
         if calibration.mount == "eye-in-hand":
             q = self.cell.robot.joint_positions()

@@ -40,7 +40,11 @@ class _Listener:  # implements foxglove.ServerListener (a Protocol with defaults
         self._server = server
 
     def on_subscribe(self, client: Any, channel: Any) -> None:
+        self._server.subscribed(+1)
         self._server.resend(str(channel.topic))
+
+    def on_unsubscribe(self, client: Any, channel: Any) -> None:
+        self._server.subscribed(-1)
 
 
 class LiveServer:
@@ -58,6 +62,7 @@ class LiveServer:
         self._latched: dict[str, tuple[int, bytes]] = {}
         self._lock = threading.Lock()
         self.dropped_errors = 0
+        self._subscriptions = 0
         try:
             self._server = foxglove.start_server(
                 name=name, host=host, port=port, context=self._context,
@@ -80,7 +85,16 @@ class LiveServer:
             schema = fg.Schema(name=spec.schema_name, encoding=spec.schema_encoding, data=spec.schema_data)
             self._channels[spec.topic] = fg.Channel(spec.topic, schema=schema,
                                                     message_encoding=spec.message_encoding, context=self._context)
-        recorder.add_tap(self._tap)
+        recorder.add_tap(self._tap, wanted=lambda: self._subscriptions > 0)
+
+    def subscribed(self, change: int) -> None:
+        with self._lock:
+            self._subscriptions = max(0, self._subscriptions + change)
+
+    @property
+    def watched(self) -> bool:
+        """Whether a viewer subscribes to anything now (with nobody watching, the run skips the live work)."""
+        return self._subscriptions > 0
 
     def _tap(self, topic: str, time_ns: int, data: bytes) -> None:
         channel = self._channels.get(topic)

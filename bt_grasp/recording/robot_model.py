@@ -106,6 +106,16 @@ class RobotModel:
         pin.framesForwardKinematics(self.model, self.data, q)
         return {name: self.data.oMf[i].homogeneous for name, i in self.links}
 
+    def link_xyzquat(self, q_arm: Sequence[float], gripper_width_m: float | None) -> list[tuple[str, list[float]]]:
+        """(link, [x, y, z, qx, qy, qz, qw]) of every link in the base frame: what /tf needs, with no matrix."""
+        q = pin.neutral(self.model)
+        q[self._arm_idx] = np.asarray(q_arm, dtype=np.float64)[: len(self._arm_idx)]
+        if gripper_width_m is not None:
+            q[self._finger_idx] = 0.5 * float(gripper_width_m)
+        pin.framesForwardKinematics(self.model, self.data, q)
+        oMf = self.data.oMf
+        return [(name, pin.SE3ToXYZQUAT(oMf[i]).tolist()) for name, i in self.links]
+
     def scene_update(self, stamp_ns: int) -> SceneUpdate:
         """One entity per link, in the link's frame, that stays until replaced (lifetime 0)."""
         by_link: dict[str, SceneEntity] = {}

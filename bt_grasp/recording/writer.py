@@ -44,6 +44,7 @@ from bt_grasp.recording import schemas, topics
 from bt_grasp.recording.jsonable import BlackboardDiffer, NodeDiffer, to_jsonable
 from bt_grasp.recording.projection import box_corners_px
 from bt_grasp.recording.signals import SignalGuard
+from bt_grasp.recording.tf_encoding import FrameTransformsEncoder
 
 log = logging.getLogger(__name__)
 
@@ -185,7 +186,10 @@ class RunRecorder:
         self._sequence: dict[int, int] = {}
         self._closed = False
         self._camera_K: NDArray[np.float64] | None = None  # the last camera calibration written
+        self._tf_encoder = FrameTransformsEncoder()
+        self._static_cache: dict[tuple[str, str], tuple[Any, list[float], list[float]]] = {}
         self._taps: list[Callable[[str, int, bytes], None]] = []
+        self._demand: list[Callable[[], bool]] = []
         #: called with (kind, payload) after every event written (a failure, a retry, an abort)
         self.event_listeners: list[Callable[[str, Mapping[str, Any]], None]] = []
         self._robot_model = robot_model
@@ -277,10 +281,17 @@ class RunRecorder:
         for tap in self._taps:
             tap(topic, t, data)
 
-    def add_tap(self, tap: Callable[[str, int, bytes], None]) -> None:
+    def add_tap(self, tap: Callable[[str, int, bytes], None], wanted: Callable[[], bool] | None = None) -> None:
         """Also hand every message written to ``tap(topic, time_ns, data)`` (a live server); it must not
-        block and must not raise."""
+        block and must not raise. ``wanted()`` says whether anyone receives the tap's messages now: a recorder
+        with no file and no tap wanted skips the per-tick work (see ``active``)."""
         self._taps.append(tap)
+        self._demand.append(wanted if wanted is not None else (lambda: True))
+
+    @property
+    def active(self) -> bool:
+        """Whether per-tick data (ticks, arm states, images, clouds) reaches anyone: a file, or a viewer."""
+        return self.to_file or any(wanted() for wanted in self._demand)
 
     def t(self, stamp_ns: int) -> int:
         """The file's time of simulated time ``stamp_ns``."""
@@ -319,6 +330,11 @@ class RunRecorder:
         "failure_reason", "ticked"}``. ``blackboard``: the full current blackboard. ``robot``:
         ``{"q_rad": [6], "qd_rad_s": [6], "gripper_width_m": float, "T_base_tcp": 4x4}`` or None.
         """
+        if not self.active:  # a live view nobody watches: the next watched tick is written in full
+            self._last_tick = int(tick)
+            self._nodes.reset()
+            self._blackboard = BlackboardDiffer(self._blackboard._max)
+            return
         changed_nodes = self._nodes.diff(nodes)
         bb_changed, bb_removed = self._blackboard.diff(blackboard)
         leaves = [n for n in nodes if n.get("kind") in _LEAF_KINDS]
@@ -338,6 +354,8 @@ class RunRecorder:
 
     def write_robot_state(self, stamp_ns: int, robot: Mapping[str, Any]) -> None:
         """The arm state on /robot/joint_state (JSON, for plots) and base->tool on /tf (for the 3D view)."""
+        if not self.active:
+            return
         q = np.asarray(robot["q_rad"], dtype=np.float64).ravel()
         qd = robot.get("qd_rad_s")
         state: dict[str, Any] = _ticked(self._last_tick, {
@@ -353,15 +371,33 @@ class RunRecorder:
             M = schemas.as_matrix(T)
             state["tcp_xyz_m"] = M[:3, 3].tolist()
             state["tcp_quat_xyzw"] = list(schemas.quat_xyzw(M))
-        self._write_json(topics.JOINT_STATE, stamp_ns, to_jsonable(state))
-        frames: list[tuple[str, str, ArrayLike]] = [(p, c, T_pc) for (p, c), T_pc in self.static_transforms.items()]
+        try:  # plain floats and lists: straight to JSON; NaN or inf (allow_nan=False) take the careful path
+            data = _dumps(state)
+        except ValueError:
+            data = _dumps(to_jsonable(state))
+        self._write(topics.JOINT_STATE, stamp_ns, data)
+        frames = self._static_xyzquat()
         if self._robot_model is not None:  # every link of the robot description, for the 3D view
-            links = self._robot_model.link_poses(q, None if width is None else float(width))
-            frames += [(self.base_frame, name, L) for name, L in links.items()]
+            base = self.base_frame
+            frames += [(base, name, v[:3], v[3:])
+                       for name, v in self._robot_model.link_xyzquat(q, None if width is None else float(width))]
         elif T is not None:
-            frames.append((self.base_frame, self.tool_frame, M))
+            x, y, z, w = schemas.quat_xyzw(M)
+            frames.append((self.base_frame, self.tool_frame, M[:3, 3].tolist(), [x, y, z, w]))
         if frames:
-            self.write_transforms(stamp_ns, frames)
+            self._write(topics.TF, stamp_ns, self._tf_encoder.encode_xyzquat(self.t(stamp_ns), frames))
+
+    def _static_xyzquat(self) -> list[tuple[str, str, Sequence[float], Sequence[float]]]:
+        """The static transforms as (parent, child, xyz, quaternion), converted once per change."""
+        out: list[tuple[str, str, Sequence[float], Sequence[float]]] = []
+        for (parent, child), T in self.static_transforms.items():
+            cached = self._static_cache.get((parent, child))
+            if cached is None or cached[0] is not T:
+                M = schemas.as_matrix(T)
+                cached = (T, M[:3, 3].tolist(), list(schemas.quat_xyzw(M)))
+                self._static_cache[(parent, child)] = cached
+            out.append((parent, child, cached[1], cached[2]))
+        return out
 
     # -- sensors and perception ----------------------------------------------------------------------------
 
@@ -401,7 +437,8 @@ class RunRecorder:
 
     def write_transforms(self, stamp_ns: int, transforms: Sequence[tuple[str, str, ArrayLike]]) -> None:
         """(parent, child, T_parent_child) triples on /tf, e.g. ("base", "camera", T_base_camera)."""
-        self._write(topics.TF, stamp_ns, schemas.frame_transforms(self.t(stamp_ns), transforms).SerializeToString())
+        self._write(topics.TF, stamp_ns, self._tf_encoder.encode(self.t(stamp_ns), [
+            (parent, child, schemas.as_matrix(T)) for parent, child, T in transforms]))
 
     def write_markers(
         self,
