@@ -7,7 +7,8 @@ interleaved, ``--reps`` times: no log; --log (the format-2 log: every link's pos
 camera frames at failures and at the end); --log --image-hz 2; --live with no viewer connected. Reports the
 median wall time of the tick loop (world building excluded) and of the whole episode (inputs, world,
 tree, ticks, judge; with ``--fresh`` a new world each time, as ``bt-grasp run`` does), the overheads against
-no log, and the log's size per simulated minute. Figures depend on the machine and its load: the script prints the load average too.
+no log, and the log's size per simulated minute. Figures depend on the machine and its load: the script
+prints the load average too.
 """
 
 from __future__ import annotations
