@@ -39,6 +39,7 @@ class WarmEpisodeBackend:
             tree=episode.tree_file,
             scene=episode.scene_file,
             seed=episode.seed,
+            goal=episode.goal,
             calibration=episode.calibration_file,
             log=log,
             max_ticks=episode.max_ticks,

@@ -21,6 +21,7 @@ from pydantic import Field, field_validator, model_validator
 
 from bt_grasp.config import KeyPath, StrictModel, read_yaml, validate
 from bt_grasp.errors import ConfigError, InputError
+from bt_grasp.scene_goals import Goal
 
 NO_FAULTS = "none"
 MAX_EPISODES = 1_000_000
@@ -33,8 +34,9 @@ class SeedRange(StrictModel):
 
 class SceneEntry(StrictModel):
     file: str  # scene YAML, relative to the campaign file
-    calibration: str | None = None  # calibration YAML for this scene (else the campaign's)
+    calibration: str | None = None  # calibration YAML for this scene (else the campaign's, else the scene's own)
     name: str | None = None  # label in results and reports (default: the file's stem)
+    goal: Goal | None = None  # what the judge checks (default: the scene's declared goal, else a pick)
 
 
 class FaultPlanEntry(StrictModel):
@@ -91,6 +93,7 @@ class SceneRef:
     name: str
     file: Path
     calibration: Path | None
+    goal: Goal | None = None
 
 
 @dataclass(frozen=True)
@@ -111,6 +114,7 @@ class Episode:
     inject: tuple[str, ...]
     max_ticks: int
     inputs_digest: str  # content hash of every input file of this episode
+    goal: Goal | None = None  # the campaign's goal for this scene (None: the scene's declared goal, else a pick)
 
     @property
     def blackboard(self) -> dict[str, Any]:
@@ -120,7 +124,16 @@ class Episode:
     def key(self) -> str:
         """Stable id: the same inputs (file contents included) give the same key."""
         text = json.dumps(
-            [self.tree, self.scene, self.seed, self.fault_plan, self.params, self.max_ticks, self.inputs_digest],
+            [
+                self.tree,
+                self.scene,
+                self.seed,
+                self.fault_plan,
+                self.params,
+                self.max_ticks,
+                self.inputs_digest,
+                self.goal.model_dump(mode="json") if self.goal is not None else None,
+            ],
             sort_keys=True,
         )
         return hashlib.sha256(text.encode()).hexdigest()[:16]
@@ -169,6 +182,7 @@ class Campaign:
                 inject=plan.inject,
                 max_ticks=self.max_ticks,
                 inputs_digest=digest,
+                goal=scene.goal,
             )
 
 
@@ -208,7 +222,7 @@ def load_campaign(path: str | Path, *, check_inputs: bool = True) -> Campaign:
         calibration = _scene_calibration(path, lines, ("scenes", i), scene_file, override)
         if calibration is not None:
             digests[calibration] = _digest(calibration)
-        scenes.append(SceneRef(item.name or Path(item.file).stem, scene_file, calibration))
+        scenes.append(SceneRef(item.name or Path(item.file).stem, scene_file, calibration, item.goal))
     plans: list[FaultPlanRef] = []
     for i, plan in enumerate(parsed.fault_plans):
         if isinstance(plan, str):
@@ -268,6 +282,39 @@ def _check_inputs(campaign: Campaign, lines: dict[KeyPath, int]) -> None:
     for i, plan in enumerate(campaign.fault_plans):
         if not plan.is_none:
             checked(("fault_plans", i), "fault plan", lambda p=plan: load_fault_plan(p.file, p.inject))
+    _check_combinations(campaign, lines)
+
+
+def _check_combinations(campaign: Campaign, lines: dict[KeyPath, int]) -> None:
+    """Every tree x scene x fault plan x parameter set passes the episode API's own input checks (goal names,
+    tree leaves against the scene, fault plans against the tree), once, before the first episode runs."""
+    from bt_grasp.episode import EpisodeRequest, load_inputs
+
+    seed = campaign.seeds[0]
+    for (ti, tree), (si, scene), (fi, plan), (bi, params) in itertools.product(
+        enumerate(campaign.trees),
+        enumerate(campaign.scenes),
+        enumerate(campaign.fault_plans),
+        enumerate(campaign.blackboard),
+    ):
+        request = EpisodeRequest(
+            tree=campaign.base / tree,
+            scene=scene.file,
+            seed=seed,
+            goal=scene.goal,
+            calibration=scene.calibration,
+            faults=plan.file,
+            inject=plan.inject,
+            blackboard=params,
+            max_ticks=campaign.max_ticks,
+        )
+        try:
+            load_inputs(request)
+        except InputError as exc:
+            where = f"trees[{ti}] on scenes[{si}] with fault_plans[{fi}] and blackboard[{bi}]"
+            raise ConfigError(
+                campaign.source, f"{where} cannot run: {exc.message}", _line(lines, ("scenes", si))
+            ) from None
 
 
 def _scene_calibration(

@@ -24,6 +24,7 @@ BAD = REPO / "tests/data/bad_campaigns"
         ("repeated_seed.yaml", 4, "repeats a seed"),
         ("bad_fault_plan.yaml", 7, "fault_plans[1] (fault plan) does not load"),
         ("negative_count.yaml", 4, "greater than or equal to 1"),
+        ("goal_colour.yaml", 4, "cannot run: --color: the pick goal's colour 'purple' is not the colour of any object"),
     ],
 )
 def test_bad_campaign_names_file_and_line(name: str, line: int, fragment: str) -> None:
