@@ -24,6 +24,8 @@ from bt_grasp.goals import Goal, PickGoal, goal_for_run
 if TYPE_CHECKING:
     from bt_grasp.behaviours.cell import Cell
     from bt_grasp.episode.instruments import TimedPlanner
+    from bt_grasp.faults.injector import Injector
+    from bt_grasp.faults.physics import PhysicsHook
     from bt_grasp.faults.plan import FaultPlan
     from bt_grasp.perception.calibration_file import CalibrationFile
     from bt_grasp.recording.live import LiveServer
@@ -158,6 +160,7 @@ class Episode:
         recorder = self._open_recorder()
         observers: list[TickCallback] = []
         extras = None
+        injector: Injector | None = None
         try:
             if recorder is not None:
                 from bt_grasp.episode.observers import LogExtras
@@ -169,7 +172,6 @@ class Episode:
                 from bt_grasp.episode.observers import RealtimePacer
 
                 observers.append(RealtimePacer(world, request.realtime))
-            injector = None
             if self.inputs.fault_plan is not None:
                 from bt_grasp.faults.injector import install_faults
 
@@ -220,11 +222,24 @@ class Episode:
                     extras.finish()
                 recorder.write_result(world.now_ns(), result.to_json())
         finally:
+            if injector is not None:
+                injector.close()  # a reused world starts the next episode as built
             if recorder is not None:
                 recorder.close()
             if self.live is not None:
                 self.live.close()
         return result
+
+    @property
+    def physics(self) -> PhysicsHook:
+        """The simulator's hook for physical faults (pushes, a weakened grip)."""
+        from bt_grasp.sim.disturbances import SimDisturbances
+
+        return SimDisturbances(self.world)
+
+    @property
+    def fault_seed_sequence(self) -> np.random.SeedSequence:
+        return self.world.fault_seed_sequence
 
     def _open_recorder(self) -> RunRecorder | None:
         request = self.request

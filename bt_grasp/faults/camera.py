@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from bt_grasp.faults.episode import Episode
-from bt_grasp.interfaces import Camera, CameraIntrinsics, RGBDFrame
+from bt_grasp.interfaces import Camera, CameraIntrinsics, Mount, RGBDFrame
 
 #: changes a frame (or drops it: returns None) and says what it did
 FrameEffect = Callable[[RGBDFrame], tuple[RGBDFrame | None, dict[str, Any]]]
@@ -34,7 +34,7 @@ class FaultyCamera:
         return self.inner.intrinsics
 
     @property
-    def mount(self) -> str:
+    def mount(self) -> Mount:
         return self.inner.mount
 
     def add(self, episode: Episode, effect: FrameEffect | None, frames: int | None) -> None:

@@ -5,7 +5,6 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
@@ -14,8 +13,10 @@ from bt_grasp.faults.calibration import OffsetCalibration, offset_transform
 from bt_grasp.faults.camera import FaultyCamera, depth_burst, depth_hole
 from bt_grasp.faults.episode import Episode
 from bt_grasp.faults.model import FaultKind
+from bt_grasp.faults.physics import PhysicsHook
 from bt_grasp.faults.robot import FaultyRobot
 from bt_grasp.faults.services import FaultyKinematics, FaultyPlanner
+from bt_grasp.faults.site import FaultableCell
 
 log = logging.getLogger(__name__)
 
@@ -30,10 +31,10 @@ class Timer:
 
 @dataclass
 class Wrapped:
-    """The interfaces as the leaves see them once faults are installed, and the world behind them."""
+    """The interfaces as the leaves see them once faults are installed, and the physics hook behind them."""
 
-    cell: Any
-    world: Any
+    cell: FaultableCell
+    physics: PhysicsHook
     camera: FaultyCamera
     robot: FaultyRobot
     planner: FaultyPlanner
@@ -104,7 +105,7 @@ def _leaf_timeout(ep: Episode, w: Wrapped, index: int) -> None:
 
 def _gripper_slip(ep: Episode, w: Wrapped, index: int) -> None:
     p = ep.params
-    details, restore = physics.weaken_grip(w.world, p.friction, p.force_n)
+    details, restore = w.physics.weaken_grip(p.friction, p.force_n)
     ep.fire(effect="grip weakened", duration_s=p.duration_s, **details)
 
     def recover() -> None:
@@ -117,8 +118,8 @@ def _gripper_slip(ep: Episode, w: Wrapped, index: int) -> None:
 
 def _object_nudge(ep: Episode, w: Wrapped, index: int) -> None:
     p = ep.params
-    name = physics.choose_object(w.world, p.object, w.color)
-    details = physics.push_object(w.world, name, p.dx_m, p.dy_m)
+    name = physics.choose_object(w.physics, p.object, w.color)
+    details = physics.push_object(w.physics, name, p.dx_m, p.dy_m)
     ep.fire(effect="object pushed", dx_m=p.dx_m, dy_m=p.dy_m, **details)
     ep.finish()
 

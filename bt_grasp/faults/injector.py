@@ -2,8 +2,9 @@
 
 The injector never touches tree results or blackboard entries. It wraps ``cell.camera``, ``cell.robot``,
 ``cell.planner`` and ``cell.kinematics`` (and, when an offset fires,
-``cell.calibration``), and it changes physics through the world. Leaf entries are seen by wrapping each
-leaf's ``initialise``: the wrapper only arms a fault; the fault then acts on the interfaces.
+``cell.calibration``), and it changes physics through the simulator's physics hook. Leaf entries are seen
+through each leaf's pre-tick hook (``BtNode.bt_pre_tick``): it only arms a fault; the fault then acts on
+the interfaces. Nothing of a leaf is replaced.
 """
 
 from __future__ import annotations
@@ -23,6 +24,8 @@ from bt_grasp.faults.model import FaultKind
 from bt_grasp.faults.plan import Fault, FaultPlan
 from bt_grasp.faults.robot import FaultyRobot
 from bt_grasp.faults.services import FaultyKinematics, FaultyPlanner
+from bt_grasp.faults.site import FaultSite
+from bt_grasp.tree.node import BtStatus
 
 log = logging.getLogger(__name__)
 
@@ -74,13 +77,16 @@ class Injector:
             self._hook(node)
 
     def _hook(self, node: Any) -> None:
-        original: Callable[[], None] = node.initialise
+        """Watch the leaf's entries through the tree's pre-tick hook (kept chained if one is set)."""
+        previous: Callable[[Any], None] | None = node.bt_pre_tick
 
-        def initialise(_node: Any = node, _original: Callable[[], None] = original) -> None:
-            self._entered(_node)
-            _original()
+        def pre_tick(entering: Any) -> None:
+            if previous is not None:
+                previous(entering)
+            if entering.bt_state is not BtStatus.RUNNING:  # the tick starts a new attempt of the leaf
+                self._entered(entering)
 
-        node.initialise = initialise
+        node.bt_pre_tick = pre_tick
 
     # --- triggers ---------------------------------------------------------------------------------------
     def _entered(self, node: Any) -> None:
@@ -114,6 +120,13 @@ class Injector:
             self._after_tick(tick)
         finally:
             self._in_after_tick = False
+
+    def close(self) -> None:
+        """The episode ended: undo what is still pending (a weakened grip's friction), so a world reused for
+        the next episode starts as built."""
+        pending, self.wrapped.timers = self.wrapped.timers, []
+        for timer in pending:
+            timer.action()
 
     def _current_tick(self) -> int:
         """The tick a firing belongs to: the one running, or the one just finished (in after_tick)."""
@@ -193,18 +206,17 @@ def leaves_of(nodes: Sequence[Any]) -> list[Any]:
     return [n for n in nodes if _is_leaf(n)]
 
 
-def _fault_rngs(world: Any, plan: FaultPlan) -> dict[int, np.random.Generator]:
-    """One generator per fault, derived from the world's fault stream (independent of the plan's length)."""
-    seq: np.random.SeedSequence = world.fault_seed_sequence
+def _fault_rngs(seq: np.random.SeedSequence, plan: FaultPlan) -> dict[int, np.random.Generator]:
+    """One generator per fault, derived from the run's fault stream (independent of the plan's length)."""
     return {
         i: np.random.default_rng(np.random.SeedSequence(seq.entropy, spawn_key=(*seq.spawn_key, i)))
         for i in range(len(plan.faults))
     }
 
 
-def install_faults(plan: FaultPlan, prepared: Any, recorder: FaultRecorder | None) -> Injector:
+def install_faults(plan: FaultPlan, site: FaultSite, recorder: FaultRecorder | None) -> Injector:
     """Wrap the prepared run's cell and tree for ``plan``; call before the leaves' ``setup``."""
-    cell, world = prepared.cell, prepared.world
+    cell = site.cell
     camera = FaultyCamera(cell.camera)
     robot = FaultyRobot(cell.robot, cell.clock)
     planner = FaultyPlanner(cell.planner)
@@ -212,12 +224,13 @@ def install_faults(plan: FaultPlan, prepared: Any, recorder: FaultRecorder | Non
     cell.camera, cell.robot = camera, robot
     cell.planner, cell.kinematics = planner, kinematics
     color = None
-    root_blackboard = getattr(prepared.tree, "root_blackboard", None)
-    if root_blackboard is not None and root_blackboard.has("color"):
+    root_blackboard = site.tree.root_blackboard
+    if root_blackboard.has("color"):
         color = root_blackboard.get("color")
-    wrapped = Wrapped(cell, world, camera, robot, planner, kinematics, _fault_rngs(world, plan), color=color)
-    leaves = leaves_of(prepared.tree.nodes())
-    check_fault_plan(plan, leaves, list(world.objects))
+    rngs = _fault_rngs(site.fault_seed_sequence, plan)
+    wrapped = Wrapped(cell, site.physics, camera, robot, planner, kinematics, rngs, color=color)
+    leaves = leaves_of(list(site.tree.nodes()))
+    check_fault_plan(plan, leaves, list(site.physics.object_names()))
     injector = Injector(plan, wrapped, leaves, recorder)
     log.info("installed %d fault(s) on %d leaves", len(plan.faults), len(leaves))
     return injector

@@ -143,6 +143,9 @@ class BtNode(py_trees.behaviour.Behaviour):
         self.bt_status_extra = "IDLE"
         #: called after every executeTick as ``listener(node, status_before, result)`` (runners, recorders)
         self.bt_listener: Callable[[BtNode, BtStatus, BtStatus], None] | None = None
+        #: called just before the node's own tick runs (after its pre-conditions let it), as ``hook(node)``:
+        #: where BT.CPP has ``setPreTickFunction``; fault injectors watch leaf entries here
+        self.bt_pre_tick: Callable[[BtNode], None] | None = None
         self._bt_blackboard: Blackboard = ctx.blackboard
         self._bt_enums: Mapping[str, int] = ctx.enums
         self._bt_conditions: Conditions = ctx.conditions
@@ -165,6 +168,8 @@ class BtNode(py_trees.behaviour.Behaviour):
         before = self.bt_state
         result: BtStatus | None = self._check_preconditions() if self._bt_pre else None
         if result is None:
+            if self.bt_pre_tick is not None:
+                self.bt_pre_tick(self)
             result = self.bt_tick()
         if self._bt_has_post and result.completed:
             self._run_postconditions(result)

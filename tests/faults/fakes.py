@@ -126,85 +126,56 @@ class FakeNode:
         self.bt_path = f"Main/{name}"
         self.bt_kind = SimpleNamespace(value=kind)
         self.bt_state = BtStatus.IDLE
+        self.bt_pre_tick: Any = None
         self.initialised = 0
 
     def initialise(self) -> None:
         self.initialised += 1
 
     def enter(self) -> None:
-        """What a tick does to a leaf that was not RUNNING: ``initialise`` (then ``update``)."""
+        """What a tick does to a leaf that was not RUNNING: the pre-tick hook, ``initialise`` (then ``update``)."""
+        if self.bt_pre_tick is not None:
+            self.bt_pre_tick(self)
         self.initialise()
 
 
-class FakeMaterial:
-    def __init__(self, friction: float) -> None:
-        self.static_friction = friction
-        self.dynamic_friction = friction
+class FakePhysics:
+    """The simulator's physics hook as a record: pad friction, finger force limit, object velocities."""
 
-    def set_static_friction(self, value: float) -> None:
-        self.static_friction = value
-
-    def set_dynamic_friction(self, value: float) -> None:
-        self.dynamic_friction = value
-
-
-class FakeJoint:
-    def __init__(self, name: str) -> None:
-        self.name, self.stiffness, self.damping, self.force_limit = name, 4000.0, 150.0, 40.0
-
-    def set_drive_properties(self, stiffness: float, damping: float, force_limit: float) -> None:
-        self.stiffness, self.damping, self.force_limit = stiffness, damping, force_limit
-
-
-class FakeBody:
     def __init__(self) -> None:
-        self.velocity: list[float] | None = None
-        self.woken = False
+        self.colors = {"red_box": "red", "blue_box": "blue"}
+        self.friction = {"red_box": 0.8, "blue_box": 0.4}
+        self.table_friction = 0.6
+        self.pad_friction = 1.0
+        self.force_limit_n = 40.0
+        self.velocities: dict[str, tuple[float, float, float]] = {}
 
-    def wake_up(self) -> None:
-        self.woken = True
+    def object_names(self) -> tuple[str, ...]:
+        return tuple(self.colors)
 
-    def get_linear_velocity(self) -> list[float]:
-        return self.velocity or [0.0, 0.0, 0.0]
+    def object_color(self, name: str) -> str | None:
+        return self.colors.get(name)
 
-    def set_linear_velocity(self, v: list[float]) -> None:
-        self.velocity = list(v)
+    def sliding_friction(self, name: str) -> float:
+        return 0.5 * (self.friction[name] + self.table_friction)
 
+    def set_velocity(self, name: str, velocity_m_s: tuple[float, float, float]) -> None:
+        self.velocities[name] = velocity_m_s
 
-class FakeEntity:
-    def __init__(self, name: str) -> None:
-        self.name = name
-        self.body = FakeBody()
+    def weaken_grip(self, friction: float | None, force_n: float | None) -> tuple[dict[str, float], Any]:
+        details: dict[str, float] = {}
+        old = self.pad_friction
+        if friction is not None:
+            details["pad_friction_before"] = old
+            self.pad_friction = friction
+        if force_n is not None:
+            details["force_limit_before_n"] = self.force_limit_n
+            self.force_limit_n = force_n
 
-    def get_name(self) -> str:
-        return self.name
+        def restore() -> None:
+            self.pad_friction = old
 
-    def get_components(self) -> list[Any]:
-        return [object(), self.body]
-
-
-@dataclass
-class FakeWorld:
-    fault_seed_sequence: np.random.SeedSequence
-    objects: dict[str, FakeEntity]
-    config: Any
-    robot: Any
-
-
-def fake_world(seed: int = 0) -> FakeWorld:
-    pads = {n: FakeMaterial(1.0) for n in ("left_finger", "right_finger")}
-    links = {n: SimpleNamespace(get_collision_shapes=lambda m=m: [SimpleNamespace(physical_material=m)])
-             for n, m in pads.items()}
-    joints = [FakeJoint("left_finger_joint"), FakeJoint("right_finger_joint")]
-    robot = SimpleNamespace(links=links, articulation=SimpleNamespace(get_active_joints=lambda: joints), pads=pads,
-                            joints=joints)
-    config = SimpleNamespace(
-        objects=[SimpleNamespace(name="red_box", color="red", friction=0.8),
-                 SimpleNamespace(name="blue_box", color="blue", friction=0.4)],
-        table=SimpleNamespace(friction=0.6),
-    )
-    objects = {"red_box": FakeEntity("red_box"), "blue_box": FakeEntity("blue_box")}
-    return FakeWorld(np.random.SeedSequence(seed).spawn(3)[2], objects, config, robot)
+        return details, restore
 
 
 class FakeTree:
@@ -227,10 +198,11 @@ class FakeRecorder:
 
 @dataclass
 class Rig:
-    """A prepared run made of fakes, plus handles on the originals."""
+    """A prepared run made of fakes (what ``install_faults`` needs), plus handles on the originals."""
 
     cell: FakeCell
-    world: FakeWorld
+    physics: FakePhysics
+    fault_seed_sequence: np.random.SeedSequence
     tree: FakeTree
     camera: FakeCamera
     robot: FakeRobot
@@ -248,4 +220,5 @@ def rig(leaves: tuple[str, ...] = ("Perceive", "PlanGrasp", "Approach", "Grasp",
     nodes = {n: FakeNode(n) for n in leaves}
     control = FakeNode("pick", kind="Control")
     tree = FakeTree([control, *nodes.values()], color)
-    return Rig(cell, fake_world(seed), tree, camera, robot, planner, kin, clock, nodes)
+    fault_seeds = np.random.SeedSequence(seed).spawn(3)[2]
+    return Rig(cell, FakePhysics(), fault_seeds, tree, camera, robot, planner, kin, clock, nodes)
