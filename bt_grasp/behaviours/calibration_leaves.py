@@ -28,7 +28,7 @@ class LoadCalibration(RobotLeaf):
     def update(self) -> Status:
         from bt_grasp.perception.calibration_file import load_calibration
 
-        file = self.input("file")
+        file = self.input_str("file")
         if not file:
             return self.failed(
                 FailureReason.CALIBRATION_MISSING, "no calibration file given (run with --calibration FILE)"
@@ -59,7 +59,7 @@ class Calibrate(RobotLeaf):
     def initialise(self) -> None:
         from bt_grasp.behaviours.calibration_job import CalibrationJob
 
-        self.job = CalibrationJob(self.cell, int(self.input("poses")))
+        self.job = CalibrationJob(self.cell, self.input_int("poses"))
 
     def update(self) -> Status:
         outcome = self.job.update()
@@ -71,7 +71,7 @@ class Calibrate(RobotLeaf):
         self.run = outcome
         self.cell.calibration = outcome.calibration
         self.ports.set("calibration", outcome.calibration)
-        file = self.input("file")
+        file = self.input_str("file")
         if file:
             from bt_grasp.perception.calibration_file import save_calibration
 

@@ -5,11 +5,14 @@ footprint are not objects to pick. Flat markers are kept: an object on a marker 
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from bt_grasp.scene_config import Scene
+
+if TYPE_CHECKING:
+    from bt_grasp.perception.results import Detection, PerceptionResult
 
 #: a detection whose centre lies this close outside a fixture's outer footprint still counts as the fixture
 FIXTURE_MARGIN_M = 0.02
@@ -29,13 +32,13 @@ def inside_fixture(scene: Scene, xy_world: tuple[float, float]) -> str | None:
     return None
 
 
-def without_fixtures(result: Any, scene: Scene) -> Any:
+def without_fixtures(result: PerceptionResult, scene: Scene) -> PerceptionResult:
     """The perception result without detections inside a fixture (None when the scene has no fixtures)."""
     if not scene.fixtures or not result.ok:
         return result
     T_world_base = scene.T_world_base()
 
-    def keep(det: Any) -> bool:
+    def keep(det: Detection) -> bool:
         p = T_world_base @ np.array([*det.centroid_base_m, 1.0])
         return inside_fixture(scene, (float(p[0]), float(p[1]))) is None
 

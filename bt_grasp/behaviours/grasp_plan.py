@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -22,6 +22,14 @@ if TYPE_CHECKING:  # perception's package import loads open3d: only the types ar
 
 #: the arm counts as where a plan started while no joint is further than this from the plan's start
 MOVED_RAD = 1e-3
+
+
+@runtime_checkable
+class GraspPose(Protocol):
+    """Anything that says where the tool grasps: a GraspCandidate or a GraspPlan."""
+
+    @property
+    def T_base_tcp_grasp(self) -> Mat4: ...
 
 
 @dataclass(frozen=True, eq=False)

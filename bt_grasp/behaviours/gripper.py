@@ -69,7 +69,7 @@ class Grasp(_GripperMove):
     """Close the fingers with a bounded force; FAILURE (GRASP_EMPTY) when they close on nothing."""
 
     def command(self) -> None:
-        self.cell.robot.close_gripper(float(self.input("force")))
+        self.cell.robot.close_gripper(self.input_float("force"))
 
     def update(self) -> Status:
         width = self.cell.robot.gripper_width_m()

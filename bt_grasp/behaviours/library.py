@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 from collections.abc import Iterable
-from typing import Any
 
 from bt_grasp.behaviours import calibration_leaves, gripper, motion_leaves, objects, perceive, place, viewing
 from bt_grasp.errors import TreeFileError
 from bt_grasp.perception.results import Detection
 from bt_grasp.scene_config import Scene
 from bt_grasp.tree.builtins.loops import loop_spec
+from bt_grasp.tree.leaf import Leaf
+from bt_grasp.tree.node import BtNode
 from bt_grasp.tree.registry import NodeRegistry, builtin_registry
 
 ROBOT_LEAVES = (
@@ -59,12 +60,12 @@ def robot_registry() -> NodeRegistry:
     return register_robot_leaves(builtin_registry())
 
 
-def check_tree_against_scene(nodes: Iterable[Any], scene: Scene) -> None:
+def check_tree_against_scene(nodes: Iterable[BtNode], scene: Scene) -> None:
     """Literal ports that name scene things (a fixture, a place pose) must fit the scene: TreeFileError with
     the node's file:line before anything runs. A leaf says how with ``check_scene(scene) -> str | None``."""
     for node in nodes:
         check = getattr(node, "check_scene", None)
         problem = check(scene) if check is not None else None
-        if problem:
+        if problem and isinstance(node, Leaf):
             ctx = node.ctx
             raise TreeFileError(ctx.source or "tree", f"{node.name}: {problem}", where=ctx.line or None)

@@ -8,13 +8,16 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from bt_grasp.behaviours.cell import Cell
 from bt_grasp.behaviours.reasons import FailureReason
+
+if TYPE_CHECKING:
+    from bt_grasp.motion.executor import TrajectoryExecutor
 
 
 @dataclass(frozen=True)
@@ -40,7 +43,7 @@ class MotionJob:
         self.cell = cell
         self.segments = list(segments)
         self.index = 0
-        self.executor: Any = None
+        self.executor: TrajectoryExecutor | None = None
         self.current = ""
         self._executed_t: list[float] = []
         self._executed_q: list[NDArray[np.float64]] = []
@@ -80,7 +83,7 @@ class MotionJob:
             self.executor.cancel()
             self.executor = None
 
-    def _start(self, name: str, path: NDArray[np.float64]) -> Any:
+    def _start(self, name: str, path: NDArray[np.float64]) -> TrajectoryExecutor:
         from bt_grasp.motion.executor import TrajectoryExecutor
         from bt_grasp.motion.trajectory import time_parametrize
 

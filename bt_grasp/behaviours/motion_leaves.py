@@ -228,17 +228,18 @@ class PlanGrasp(RobotLeaf):
         """Synthesise and rank the candidates (first tick); a FAILURE status when there is nothing to try."""
         from bt_grasp.perception.grasps import synthesize_grasps
 
-        target = self.input("target")
+        target = self.input_detection("target")
         if target is None:
             return self.failed(FailureReason.NO_DETECTION, "no target on the blackboard: run Perceive first")
         self._target: Detection = target
-        self._objects: tuple[Detection, ...] = tuple(self.input("objects") or ())
+        self._objects: tuple[Detection, ...] = self.input_detections("objects")
         result = synthesize_grasps(target, self._objects, self.cell.grasp_settings)
         if not result.ok:
             return self.failed(FailureReason.NOTHING_TO_GRASP, f"{result.status.value}: {result.message}")
         self.cell.media.grasps(result.candidates)
         self._total = len(result.candidates)
-        self._candidates = list(result.candidates[int(self.input("skip") or 0) :])
+        skip = self.input_int("skip") if self.input("skip") is not None else 0
+        self._candidates = list(result.candidates[skip:])
         self._q = self.cell.robot.joint_positions()
         self._scene = planning_scene(self, target, self._objects)
         return None
@@ -280,11 +281,12 @@ class Approach(_MovingLeaf):
 
     def segments(self) -> list[Segment] | Status:
         from bt_grasp.behaviours.grasp_plan import GraspPlan
+        from bt_grasp.perception.results import GraspCandidate
 
         grasp = self.input("grasp")
-        if grasp is None:
+        if not isinstance(grasp, GraspPlan | GraspCandidate):
             return self.failed(FailureReason.BAD_INPUT, "no grasp on the blackboard: run PlanGrasp first")
-        target, objects = self.input("target"), tuple(self.input("objects") or ())
+        target, objects = self.input_detection("target"), self.input_detections("objects")
         free = planning_scene(self, target, objects)
         touching = planning_scene(self, target, objects, allow_target=True)
         T_grasp = grasp.T_base_tcp_grasp
@@ -316,7 +318,7 @@ class Lift(_MovingLeaf):
     """Lift straight up; FAILURE (SLIPPED) when the fingers lose the object on the way."""
 
     def segments(self) -> list[Segment] | Status:
-        height = float(self.input("height"))
+        height = self.input_float("height")
         if not 0.0 < height < 0.6:
             return self.failed(FailureReason.BAD_INPUT, f"lift height {height} m is outside (0, 0.6)")
         self.feedback_message = f"lifting {height * 100:.0f} cm"
@@ -348,7 +350,7 @@ class Retreat(_MovingLeaf):
     """Back off straight up from wherever the tool is."""
 
     def segments(self) -> list[Segment] | Status:
-        height = float(self.input("height"))
+        height = self.input_float("height")
         from bt_grasp.motion.planning_scene import PlanningScene
 
         return [Segment("retreat", cartesian_fn(self, straight_up(height), PlanningScene.from_scene(self.cell.scene)))]
@@ -383,6 +385,6 @@ class MoveAbove(_MovingLeaf):
 
         T = np.eye(4)
         T[:3, :3] = np.diag([1.0, -1.0, -1.0])
-        T[:3, 3] = [float(self.input("x")), float(self.input("y")), float(self.input("height"))]
+        T[:3, 3] = [self.input_float("x"), self.input_float("y"), self.input_float("height")]
         T = np.linalg.inv(self.cell.scene.T_world_base()) @ T
         return [Segment("move above", plan_to_pose_fn(self, T, PlanningScene.from_scene(self.cell.scene)))]

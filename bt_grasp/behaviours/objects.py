@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, TypeGuard
 
 import numpy as np
 from py_trees.common import Status
@@ -21,29 +21,35 @@ from bt_grasp.pose import Pose
 from bt_grasp.tree.leaf import Leaf
 from bt_grasp.tree.registry import NodeKind, PortDirection, PortSpec, leaf
 
+if TYPE_CHECKING:
+    from bt_grasp.perception.results import Detection
+    from bt_grasp.scene_config import Scene
+    from bt_grasp.scene_fixtures import Fixture
+
 _OBJECTS_IN = PortSpec("objects", PortDirection.INPUT, object, "{objects}", "an object list (from PerceiveAll)")
 ORDERS = ("first", "nearest", "farthest", "largest", "smallest")
 SHAPES = ("", "box", "round")
 
 
-def is_detection(value: Any) -> bool:
+def is_detection(value: object) -> TypeGuard[Detection]:
     return all(hasattr(value, a) for a in ("centroid_base_m", "size_m", "yaw_rad", "label"))
 
 
-def object_list(value: Any) -> tuple[Any, ...] | None:
+def object_list(value: object) -> tuple[Detection, ...] | None:
     """The value as a tuple of detections, or None when it is not an object list."""
     if is_detection(value):
         return (value,)
-    if isinstance(value, Sequence) and not isinstance(value, str) and all(is_detection(v) for v in value):
-        return tuple(value)
+    if isinstance(value, Sequence) and not isinstance(value, str):
+        items = tuple(value)
+        return tuple(v for v in items if is_detection(v)) if all(is_detection(v) for v in items) else None
     return None
 
 
-def footprint_m2(det: Any) -> float:
+def footprint_m2(det: Detection) -> float:
     return float(det.size_m[0] * det.size_m[1])
 
 
-def matches(det: Any, color: str, shape: str, min_size_m: float, max_size_m: float) -> bool:
+def matches(det: Detection, color: str, shape: str, min_size_m: float, max_size_m: float) -> bool:
     """Colour (its label), shape, and the footprint's long side within [min_size_m, max_size_m]."""
     if color and det.label != color:
         return False
@@ -137,7 +143,7 @@ class ObjectPose(Leaf):
     FAILURE: BAD_INPUT (``object`` is not a perceived object)."""
 
     def update(self) -> Status:
-        det: Any = self.ports.get("object") if self.ports.has("object") else None
+        det: object = self.ports.get("object") if self.ports.has("object") else None
         if not is_detection(det):
             return self.fail(FailureReason.BAD_INPUT.value, "'object' is not a perceived object: run SelectObject")
         x, y, z = (float(v) for v in det.centroid_base_m)
@@ -165,7 +171,7 @@ class ObjectInfo(Leaf):
     FAILURE: BAD_INPUT (``object`` is not a perceived object)."""
 
     def update(self) -> Status:
-        det: Any = self.ports.get("object") if self.ports.has("object") else None
+        det: object = self.ports.get("object") if self.ports.has("object") else None
         if not is_detection(det):
             return self.fail(FailureReason.BAD_INPUT.value, "'object' is not a perceived object: run SelectObject")
         self.ports.set("color", str(det.label))
@@ -228,7 +234,7 @@ class FixturePose(RobotLeaf):
     name in a tree file is a load error. FAILURE: BAD_INPUT (unknown name from the blackboard, a slot
     beyond the container's or a slot of something that is not a container)."""
 
-    def check_scene(self, scene: Any) -> str | None:
+    def check_scene(self, scene: Scene) -> str | None:
         """A problem with the literal ``fixture`` port for this scene (checked before the run), or None."""
         if self.ports.key("fixture") is not None:
             return None
@@ -252,7 +258,7 @@ class FixturePose(RobotLeaf):
         return Status.SUCCESS
 
 
-def _slot_offset(fixture: Any, slot: int, size_m: float) -> tuple[float, float] | str:
+def _slot_offset(fixture: Fixture, slot: int, size_m: float) -> tuple[float, float] | str:
     """A slot's centre relative to the container's centre (its own axes), or why there is no such slot."""
     if slot < 0:
         return (0.0, 0.0)
@@ -268,7 +274,7 @@ def _slot_offset(fixture: Any, slot: int, size_m: float) -> tuple[float, float] 
     return ((col - (cols - 1) / 2) * size_m, (row - (rows - 1) / 2) * size_m)
 
 
-def _fixture_problem(scene: Any, name: str) -> str | None:
+def _fixture_problem(scene: Scene, name: str) -> str | None:
     if scene.fixture(name) is not None:
         return None
     known = ", ".join(f.name for f in scene.fixtures) or "none"

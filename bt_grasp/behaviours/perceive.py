@@ -72,7 +72,7 @@ class Perceive(RobotLeaf):
     """Capture one RGB-D frame and find the target object on the table (base frame, via the calibration)."""
 
     def update(self) -> Status:
-        result = perceive_once(self, self.input("color"))
+        result = perceive_once(self, self.input_str("color"))
         if isinstance(result, Status):
             return result
         best = result.best
@@ -92,7 +92,7 @@ class ObjectVisible(RobotLeaf):
     """SUCCESS when the camera sees an object (of the colour) on the table."""
 
     def update(self) -> Status:
-        result = perceive_once(self, self.input("color"))
+        result = perceive_once(self, self.input_str("color"))
         if isinstance(result, Status):
             return result
         self.feedback_message = f"{len(result.detections)} object(s) visible"

@@ -16,15 +16,16 @@ It then runs, one control period per tick:
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 from py_trees.common import Status
 
 from bt_grasp.behaviours.base import RobotLeaf
+from bt_grasp.behaviours.grasp_plan import GraspPose
 from bt_grasp.behaviours.gripper import EMPTY_WIDTH_M
-from bt_grasp.behaviours.motion_job import MotionJob, PathFailure, Segment
+from bt_grasp.behaviours.motion_job import MotionJob, PathFailure, PathFn, Segment
 from bt_grasp.behaviours.motion_leaves import _MovingLeaf, cartesian_fn, detection_box, plan_to_pose_fn
 from bt_grasp.behaviours.objects import is_detection, object_list
 from bt_grasp.behaviours.reasons import FailureReason
@@ -32,6 +33,11 @@ from bt_grasp.geometry import Mat4, inv, make_T, rot_z
 from bt_grasp.pose import Pose
 from bt_grasp.robot_description import MAX_OPENING_M, TCP_LINK
 from bt_grasp.tree.registry import PortDirection, PortSpec, leaf
+
+if TYPE_CHECKING:
+    from bt_grasp.behaviours.cell import Cell
+    from bt_grasp.perception.results import Detection
+    from bt_grasp.scene_config import Scene
 
 #: the tool points down: tcp z along base -z
 R_DOWN = np.diag([1.0, -1.0, -1.0])
@@ -53,18 +59,18 @@ _HELD_PORTS = [
 SAME_OBJECT_M = 0.02
 
 
-def same_object(a: Any, b: Any) -> bool:
+def same_object(a: Detection, b: Detection) -> bool:
     """The same object seen twice (e.g. by PerceiveAll, then by Perceive): centres within 2 cm."""
     return bool(np.linalg.norm(np.subtract(a.centroid_base_m, b.centroid_base_m)) < SAME_OBJECT_M)
 
 
-def table_z_base(cell: Any, x: float, y: float) -> float:
+def table_z_base(cell: Cell, x: float, y: float) -> float:
     """The table top's height in the base frame under (x, y) (installation data)."""
     T_base_world = inv(cell.scene.T_world_base())
     return float((T_base_world @ np.array([x, y, 0.0, 1.0]))[2])
 
 
-def held_offset(grasp: Any, held: Any) -> Mat4:
+def held_offset(grasp: GraspPose, held: Detection) -> Mat4:
     """T_tcp_object: the held object's centre in the tool frame, as it was grasped."""
     T_base_obj = make_T(rot_z(float(held.yaw_rad)), list(held.centroid_base_m))
     return inv(np.asarray(grasp.T_base_tcp_grasp, dtype=float)) @ T_base_obj
@@ -104,7 +110,7 @@ def _raised(T: Mat4, dz: float) -> Mat4:
 class _PlaceBase(RobotLeaf):
     """Carry, descend, open, retreat. Subclasses say where the object goes (:meth:`target_pose`)."""
 
-    def target_pose(self) -> tuple[Pose, Any] | str:
+    def target_pose(self) -> tuple[Pose, Detection | None] | str:
         """(object pose in the base frame with z = surface height, the support detection or None)."""
         raise NotImplementedError
 
@@ -124,7 +130,7 @@ class _PlaceBase(RobotLeaf):
         from bt_grasp.motion.planning_scene import PlanningScene
 
         grasp, held = self.input("grasp"), self.input("held")
-        if grasp is None or not hasattr(grasp, "T_base_tcp_grasp"):
+        if not isinstance(grasp, GraspPose):
             return self.failed(FailureReason.BAD_INPUT, "no grasp on the blackboard: run PlanGrasp first")
         if not is_detection(held):
             return self.failed(FailureReason.BAD_INPUT, "'held' is not the detection of the grasped object")
@@ -137,7 +143,7 @@ class _PlaceBase(RobotLeaf):
         surface = pose.z_m if pose.z_m is not None else table_z_base(self.cell, pose.x_m, pose.y_m)
         T_tcp_obj = held_offset(grasp, held)
         height = float(held.size_m[2])
-        gap = float(self.input("release_gap"))
+        gap = self.input_float("release_gap")
         T_place = tool_pose_for(pose, T_tcp_obj, np.asarray(grasp.T_base_tcp_grasp), height, gap, surface)
         self._T_place = T_place
         self._target_text = f"{pose.x_m:.3f};{pose.y_m:.3f};{surface:.3f}"
@@ -151,7 +157,7 @@ class _PlaceBase(RobotLeaf):
         below = tuple(o for o, d in zip(obstacles, others, strict=True)
                       if support is None or not same_object(d, support))
         descent_scene = PlanningScene.from_scene(self.cell.scene, below).with_attached(held_shape, TCP_LINK)
-        pre = _raised(T_place, float(self.input("approach")))
+        pre = _raised(T_place, self.input_float("approach"))
         self.feedback_message = f"placing at {self._target_text}"
         return [
             Segment("carry", self._blocked_if_collision(plan_to_pose_fn(self, pre, carry_scene))),
@@ -159,10 +165,10 @@ class _PlaceBase(RobotLeaf):
         ]
 
     @staticmethod
-    def _blocked_if_collision(fn: Any) -> Any:
+    def _blocked_if_collision(fn: PathFn) -> PathFn:
         """A target that collides with what is seen there is an occupied target: PLACE_BLOCKED."""
 
-        def compute(q: NDArray[np.float64]) -> Any:
+        def compute(q: NDArray[np.float64]) -> NDArray[np.float64] | PathFailure:
             out = fn(q)
             if isinstance(out, PathFailure) and out.reason is FailureReason.COLLISION:
                 return PathFailure(FailureReason.PLACE_BLOCKED, f"the place target is blocked: {out.sentence}")
@@ -189,7 +195,7 @@ class _PlaceBase(RobotLeaf):
                 self.job.cancel()
                 above = self._tcp_z() - float(self._T_place[2, 3])
                 touched = self.job.current == "descend" and outcome.reason is FailureReason.TRACKING_ERROR
-                if touched and above <= float(self.input("contact_window")):
+                if touched and above <= self.input_float("contact_window"):
                     self.feedback_message = f"touched down {above * 1e3:.0f} mm above the target"
                 elif touched:
                     return self.failed(FailureReason.PLACE_BLOCKED,
@@ -211,7 +217,7 @@ class _PlaceBase(RobotLeaf):
 
             scene = PlanningScene.from_scene(self.cell.scene)
             self.job = MotionJob(self.cell, [Segment("retreat", cartesian_fn(self, straight_up(
-                float(self.input("retreat"))), scene))])
+                self.input_float("retreat")), scene))])
             self.phase = "retreat"
         outcome = self.job.update()
         if outcome is None:
@@ -242,7 +248,7 @@ class Place(_PlaceBase):
     PLAN_FAILED, TRACKING_ERROR, TIMEOUT (the fingers did not open), BAD_INPUT.
     """
 
-    def check_scene(self, scene: Any) -> str | None:
+    def check_scene(self, scene: Scene) -> str | None:
         """A literal pose off the table or out of reach is a load error (checked before the run)."""
         if self.ports.key("pose") is not None:
             return None
@@ -254,7 +260,7 @@ class Place(_PlaceBase):
         problem = place_xy_problem(scene, xy)
         return f"Place pose {problem}" if problem else None
 
-    def target_pose(self) -> tuple[Pose, Any] | str:
+    def target_pose(self) -> tuple[Pose, Detection | None] | str:
         pose = self.input("pose")
         if not isinstance(pose, Pose):
             return f"'pose' is not a pose: {pose!r}"
@@ -277,7 +283,7 @@ class PlaceOn(_PlaceBase):
     FAILURE: as Place; BAD_INPUT when ``object`` is not a perceived object.
     """
 
-    def target_pose(self) -> tuple[Pose, Any] | str:
+    def target_pose(self) -> tuple[Pose, Detection | None] | str:
         support = self.input("object")
         if not is_detection(support):
             return "'object' is not a perceived object: run SelectObject first"

@@ -14,7 +14,7 @@ With an eye-to-hand camera the leaf has nothing to move: it succeeds and says so
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -26,6 +26,10 @@ from bt_grasp.behaviours.motion_leaves import _MovingLeaf, plan_to_pose_fn
 from bt_grasp.behaviours.reasons import FailureReason
 from bt_grasp.geometry import inv, make_T, rot_z
 from bt_grasp.tree.registry import PortDirection, PortSpec, leaf
+
+if TYPE_CHECKING:
+    from bt_grasp.perception.results import Detection
+    from bt_grasp.scene_config import Scene
 
 #: camera-to-point distance of the survey view and of a close view, m
 SURVEY_DISTANCE_M = 0.62
@@ -57,7 +61,7 @@ def tool_pose_for_view(point_base: NDArray[np.float64], distance_m: float, T_too
     return make_T(R_tool, tool_position)
 
 
-def view_point(leaf: RobotLeaf, view: str, target: Any) -> tuple[NDArray[np.float64], float] | str:
+def view_point(leaf: RobotLeaf, view: str, target: Detection | None) -> tuple[NDArray[np.float64], float] | str:
     """(point in the base frame, default distance) for the ports, or a sentence saying what is wrong."""
     if target is not None:
         c = np.asarray(target.centroid_base_m, dtype=float)
@@ -89,7 +93,7 @@ def view_point(leaf: RobotLeaf, view: str, target: Any) -> tuple[NDArray[np.floa
 class LookAt(_MovingLeaf):
     """Move the wrist camera to look at the work area, a point or a detection (eye-in-hand views)."""
 
-    def check_scene(self, scene: Any) -> str | None:
+    def check_scene(self, scene: Scene) -> str | None:
         """A literal view that is not a point, or that the arm cannot reach with the scene's nominal camera
         mount, is a load error (file:line before anything runs)."""
         if scene.camera.mount != "eye-in-hand" or self.ports.key("view") is not None:
@@ -124,11 +128,11 @@ class LookAt(_MovingLeaf):
             self.cell.media.log("INFO", self.name, "eye-to-hand camera: nothing to move")
             self.feedback_message = "fixed camera: nothing to move"
             return Status.SUCCESS
-        found = view_point(self, str(self.input("view") or "workspace"), self.input("target") or None)
+        found = view_point(self, self.input_str("view") or "workspace", self.input_detection("target"))
         if isinstance(found, str):
             return self.failed(FailureReason.BAD_INPUT, found)
         point, default_distance = found
-        distance = float(self.input("distance") or 0.0) or default_distance
+        distance = (self.input_float("distance") if self.input("distance") is not None else 0.0) or default_distance
         if not 0.3 <= distance <= 1.5:
             return self.failed(FailureReason.BAD_INPUT, f"view distance {distance} m is outside [0.3, 1.5]")
         kin = self.cell.kinematics

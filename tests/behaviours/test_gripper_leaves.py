@@ -37,21 +37,20 @@ def _run(robot: FakeRobot, ticks: int) -> tuple[list[str], object]:
 
 
 def test_grasp_on_object_succeeds_and_reports_width() -> None:
-    # ticks 1..7: the fingers close from 85 mm to the 50 mm object (5 mm per tick) -> RUNNING
-    # then 5 ticks with the width unchanged -> settled -> Grasp SUCCESS, IsGrasped SUCCESS on the same tick
+    # tick 1: the fingers still at 85 mm (the width has not changed since the command: still 1) -> RUNNING
+    # ticks 2..8: they close 5 mm per tick to the 50 mm object (still 0) -> RUNNING
+    # ticks 9..13: the width unchanged (still 1..5) -> settled on tick 13: Grasp SUCCESS, IsGrasped SUCCESS
     robot = FakeRobot(object_width_m=0.05)
     statuses, tree = _run(robot, 40)
-    assert statuses[-1] == "SUCCESS"
-    assert statuses[:-1] == ["RUNNING"] * (len(statuses) - 1)
-    assert 12 <= len(statuses) <= 14
+    assert statuses == ["RUNNING"] * 12 + ["SUCCESS"]
     assert abs(tree.blackboard_values()["w"] - 0.05) < 1e-9
 
 
 def test_grasp_on_nothing_fails_with_grasp_empty() -> None:
-    # the fingers close to 0 in 17 ticks, settle for 5 more: FAILURE with GRASP_EMPTY on the blackboard
+    # the fingers close to 0 on ticks 2..18 (17 x 5 mm), settle on ticks 19..23: FAILURE with GRASP_EMPTY
     robot = FakeRobot(object_width_m=0.0)
     statuses, tree = _run(robot, 60)
-    assert statuses[-1] == "FAILURE"
+    assert statuses == ["RUNNING"] * 22 + ["FAILURE"]
     values = tree.blackboard_values()
     assert values["failure_reason"] == "GRASP_EMPTY"
     assert values["failed_leaf"] == "Grasp"
