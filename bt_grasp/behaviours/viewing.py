@@ -25,6 +25,7 @@ from bt_grasp.behaviours.motion_job import Segment
 from bt_grasp.behaviours.motion_leaves import _MovingLeaf, plan_to_pose_fn
 from bt_grasp.behaviours.reasons import FailureReason
 from bt_grasp.geometry import inv, make_T, rot_z
+from bt_grasp.interfaces import Mount
 from bt_grasp.tree.registry import PortDirection, PortSpec, leaf
 
 if TYPE_CHECKING:
@@ -96,7 +97,7 @@ class LookAt(_MovingLeaf):
     def check_scene(self, scene: Scene) -> str | None:
         """A literal view that is not a point, or that the arm cannot reach with the scene's nominal camera
         mount, is a load error (file:line before anything runs)."""
-        if scene.camera.mount != "eye-in-hand" or self.ports.key("view") is not None:
+        if scene.camera.mount != Mount.EYE_IN_HAND or self.ports.key("view") is not None:
             return None
         view = str(self.ports.get("view"))
         if view == "workspace" or self.ports.key("target") is not None:
@@ -124,7 +125,7 @@ class LookAt(_MovingLeaf):
         calibration = self.cell.calibration
         if calibration is None:
             return self.failed(FailureReason.CALIBRATION_MISSING, "no camera calibration loaded")
-        if calibration.mount != "eye-in-hand":
+        if calibration.mount != Mount.EYE_IN_HAND:
             self.cell.media.log("INFO", self.name, "eye-to-hand camera: nothing to move")
             self.feedback_message = "fixed camera: nothing to move"
             return Status.SUCCESS

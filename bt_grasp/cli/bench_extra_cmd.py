@@ -15,6 +15,7 @@ from rich.table import Table
 
 from bt_grasp.cli.bench_cmd import bench_app
 from bt_grasp.environment import machine_description
+from bt_grasp.interfaces import Mount
 
 
 def run_pick_bench(
@@ -36,7 +37,7 @@ def run_pick_bench(
     work = Path(tempfile.mkdtemp(prefix="bt_grasp_bench_"))
     if calibration is None:
         calibration = save_calibration(
-            calibrate_in_sim(scene, "eye-to-hand", first_seed).run.calibration, work / "calibration.yaml"
+            calibrate_in_sim(scene, Mount.EYE_TO_HAND, first_seed).run.calibration, work / "calibration.yaml"
         )
     report: dict[str, Any] = {
         "machine": machine_description(), "scene": str(scene), "calibration": str(calibration), "trees": {}

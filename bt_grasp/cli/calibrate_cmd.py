@@ -109,7 +109,7 @@ class SimBenchBackend:
         from bt_grasp.sim.oracle import GroundTruthOracle
         from bt_grasp.sim.world import World
 
-        world = World(scene, seed, camera_mount="eye-to-hand")
+        world = World(scene, seed, camera_mount=Mount.EYE_TO_HAND)
         world.step(world.steps_per_tick * 10)
         oracle = GroundTruthOracle(world)
         return world.camera.capture(), {name: oracle.T_base_object(name) for name in oracle.object_names()}
@@ -118,7 +118,7 @@ class SimBenchBackend:
         from bt_grasp.sim.oracle import GroundTruthOracle
         from bt_grasp.sim.world import World
 
-        world = World(scene, seed, camera_mount="eye-to-hand")
+        world = World(scene, seed, camera_mount=Mount.EYE_TO_HAND)
         world.step(world.steps_per_tick * 10)
         oracle = GroundTruthOracle(world)
         frames = world.camera.capture_variants(noises, seed)

@@ -8,6 +8,8 @@ from pathlib import Path
 import typer
 from rich.console import Console
 
+from bt_grasp.interfaces import Mount
+
 
 def demo(
     seed: int = typer.Option(0, "--seed", help="Seed of the scene, the calibration and the run."),
@@ -30,7 +32,7 @@ def demo(
     console.rule("1/3  what the camera sees")
     render(scene, seed, out / "render", None)
     console.rule("2/3  hand-eye calibration (eye-to-hand, ChArUco board on the gripper)")
-    result = calibrate_in_sim(scene, "eye-to-hand", seed)
+    result = calibrate_in_sim(scene, Mount.EYE_TO_HAND, seed)
     calibration_path = save_calibration(result.run.calibration, out / "calibration.yaml")
     chosen = result.run.solution.chosen
     true_mm, true_deg = result.true_error_per_method[result.run.solution.method]

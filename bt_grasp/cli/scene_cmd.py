@@ -8,6 +8,8 @@ from pathlib import Path
 
 import typer
 
+from bt_grasp.interfaces import Mount
+
 scene_app = typer.Typer(help="Inspect scene files.", no_args_is_help=True)
 
 
@@ -34,7 +36,7 @@ def render(
     from bt_grasp.errors import InputError
     from bt_grasp.scene_config import load_scene
 
-    if mount not in (None, "eye-to-hand", "eye-in-hand"):
+    if mount is not None and mount not in tuple(Mount):
         raise InputError("--mount", f"expected eye-to-hand or eye-in-hand, got '{mount}'")
     config = load_scene(scene)
     from bt_grasp.sim.world import World
@@ -65,7 +67,7 @@ def render(
         "model": cam.model,
         "depth_range_m": [lo, hi],
         "depth_invalid_fraction": float(1.0 - valid.mean()),
-        "mount_config": (cam.eye_to_hand if frame.mount == "eye-to-hand" else cam.eye_in_hand).model_dump(),
+        "mount_config": (cam.eye_to_hand if frame.mount == Mount.EYE_TO_HAND else cam.eye_in_hand).model_dump(),
         "stamp_ns": frame.stamp_ns,
     }
     (out / "camera.json").write_text(json.dumps(info, indent=2) + "\n")

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from bt_grasp.interfaces import Mount
 from bt_grasp.recording import topics
 from bt_grasp.recording.scene_entities import Solid, judge_update
 from bt_grasp.recording.writer import BASE_FRAME, CAMERA_FRAME
@@ -78,7 +79,7 @@ class LogExtras:
             return  # eye-to-hand: fixed until the calibration changes
         self._camera_from = calibration
         T_base_tool = None
-        if calibration.mount == "eye-in-hand":
+        if calibration.mount == Mount.EYE_IN_HAND:
             q = self.cell.robot.joint_positions()
             T_base_tool = self.cell.kinematics.fk_link(q, calibration.tool_link)
         T = np.asarray(calibration.T_base_camera_at(T_base_tool), dtype=np.float64)

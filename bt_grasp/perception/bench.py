@@ -20,7 +20,7 @@ from typing import Any, Literal, Protocol
 import numpy as np
 
 from bt_grasp.geometry import Mat4
-from bt_grasp.interfaces import RGBDFrame
+from bt_grasp.interfaces import Mount, RGBDFrame
 from bt_grasp.perception.config import PerceptionConfig
 from bt_grasp.perception.grasps import synthesize_grasps
 from bt_grasp.perception.pipeline import perceive
@@ -96,7 +96,7 @@ def run_perception_bench(scenes: int, seed: int, *, backend: BenchBackend, calib
     base = backend.base_scene()
     calib_report: dict[str, Any] = {}
     if calibrate:
-        for mount in ("eye-to-hand", "eye-in-hand"):
+        for mount in Mount:
             for noise in (True, False):
                 scene = base.model_copy(update={"camera": base.camera.model_copy(
                     update={"noise": base.camera.noise.model_copy(update={"enabled": noise})})})
@@ -104,7 +104,7 @@ def run_perception_bench(scenes: int, seed: int, *, backend: BenchBackend, calib
                 calib_report[f"{mount}/{'noise' if noise else 'no_noise'}"] = {
                     k: {"true_error_mm": round(v[0], 4), "true_error_deg": round(v[1], 5)} for k, v in errors.items()
                 }
-    T_base_camera, _ = backend.calibrate(base, "eye-to-hand", seed, calibration_poses)
+    T_base_camera, _ = backend.calibrate(base, Mount.EYE_TO_HAND, seed, calibration_poses)
     config = PerceptionConfig.for_scene(base)
     rng = np.random.default_rng(seed)
     centroid_mm: list[float] = []

@@ -32,12 +32,12 @@ from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
 from bt_grasp.geometry import Mat4, inv, make_T, rotation_angle_rad, transform_points
-from bt_grasp.interfaces import CameraIntrinsics
+from bt_grasp.interfaces import CameraIntrinsics, Mount
 
 log = logging.getLogger(__name__)
 
-EYE_TO_HAND = "eye-to-hand"
-EYE_IN_HAND = "eye-in-hand"
+EYE_TO_HAND = Mount.EYE_TO_HAND
+EYE_IN_HAND = Mount.EYE_IN_HAND
 MOUNTS = (EYE_TO_HAND, EYE_IN_HAND)
 
 HAND_EYE_METHODS: dict[str, int] = {

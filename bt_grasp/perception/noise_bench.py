@@ -16,7 +16,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from bt_grasp.geometry import Mat4
-from bt_grasp.interfaces import RGBDFrame
+from bt_grasp.interfaces import Mount, RGBDFrame
 from bt_grasp.perception.bench import DETECTED_WITHIN_M, random_scene, yaw_error_deg
 from bt_grasp.perception.config import PerceptionConfig
 from bt_grasp.perception.pipeline import perceive
@@ -59,7 +59,7 @@ def run_noise_sweep(scenes: int, seed: int, *, backend: SweepBackend, adapt: boo
     """Run the sweep; returns a JSON-able summary with one row per level."""
     t0 = time.perf_counter()
     base = backend.base_scene()
-    T_base_camera, _ = backend.calibrate(base, "eye-to-hand", seed, calibration_poses)
+    T_base_camera, _ = backend.calibrate(base, Mount.EYE_TO_HAND, seed, calibration_poses)
     config = PerceptionConfig.for_scene(base)
     config = config.model_copy(update={"noise": config.noise.model_copy(update={"adapt": adapt})})
     noises = [level_noise(base.camera.noise, lv) for lv in levels]

@@ -22,7 +22,7 @@ from bt_grasp.geometry import Mat4
 from bt_grasp.interfaces import RGBDFrame
 from bt_grasp.perception import cloud as pc
 from bt_grasp.perception import noise_adapt
-from bt_grasp.perception.color import blobs, classify, color_mask, pixel_matches, to_hsv
+from bt_grasp.perception.color import blobs, classify, color_mask, to_hsv
 from bt_grasp.perception.config import PerceptionConfig, SegmentationSettings
 from bt_grasp.perception.results import Detection, PerceptionResult, PerceptionStatus
 from bt_grasp.perception.segment import (
@@ -231,7 +231,3 @@ def _rank(
         return sorted(detections, key=lambda d: float(np.abs(np.asarray(d.size_m) - hint).sum()))
     return sorted(detections, key=lambda d: (-d.confidence, d.size_m[1]))
 
-
-def pixel_color_fraction(hsv_values: NDArray[np.uint8], config: PerceptionConfig, color: str) -> float:
-    """Fraction of the given HSV pixels inside a named colour's boxes (for diagnostics and tests)."""
-    return float(pixel_matches(hsv_values, config.color.ranges[color]).mean()) if len(hsv_values) else 0.0

@@ -44,7 +44,7 @@ class SimCamera:
         self._component.set_fovy(np.deg2rad(config.vfov_deg), compute_x=True)
         self._component.near = config.near_m
         self._component.far = config.far_m
-        if mount == "eye-to-hand":
+        if mount == Mount.EYE_TO_HAND:
             e2h = config.eye_to_hand
             T_world_cv = look_at_cv(np.array(e2h.position_m), np.array(e2h.look_at_m), np.deg2rad(e2h.roll_deg))
             entity = sapien.Entity()
@@ -52,7 +52,7 @@ class SimCamera:
             entity.add_component(self._component)
             entity.set_pose(to_pose(sapien_cam_from_cv(T_world_cv)))
             scene.add_entity(entity)
-        elif mount == "eye-in-hand":
+        elif mount == Mount.EYE_IN_HAND:
             if parent_link is None:
                 raise ValueError("an eye-in-hand camera needs the link it is mounted on")
             eih = config.eye_in_hand

@@ -151,10 +151,6 @@ class LoadedTree:
         """Leaves whose spec needs the robot (``needs_robot``), after substitution."""
         return [n for n in self.nodes() if n.bt_spec.needs_robot]
 
-    def behaviour_tree(self) -> py_trees.trees.BehaviourTree:
-        """A py_trees ``BehaviourTree`` over the same root (for visitors and tick handlers)."""
-        return py_trees.trees.BehaviourTree(self.root)
-
     @property
     def btcpp_xml(self) -> str:
         """The expanded tree as BT.CPP writes it for Groot2 (``_uid`` and ``_fullpath`` attributes)."""
