@@ -199,9 +199,14 @@ def build_report(run: RunLog, html_path: Path, png_dir: Path | None = None) -> R
     report = Report(Path(html_path))
     s = replay.summary(run)
     rows, labels = _leaf_rows(run)
-    failures = replay.failures(run)
+    every_failure = replay.failures(run)
+    # leaves that failed with a reason (a condition answering "no" is control flow, not a failure to explain)
+    failures = [f for f in every_failure if f.reason] or every_failure
+    bars = _bars(run, labels)
+    shown = {bar.row for bar in bars}
+    rows = [row for row in rows if row in shown]  # leaves that never ran would be empty rows
     report.figures["gantt"] = report_figures.gantt(
-        rows, _bars(run, labels), [(f.stamp_ns * 1e-9, labels[f.uid]) for f in failures if f.uid in labels])
+        rows, bars, [(f.stamp_ns * 1e-9, labels[f.uid]) for f in failures if f.uid in labels])
     fail_s = [f.stamp_ns * 1e-9 for f in failures]
     t, Q, width, names = _joint_series(run)
     if t.size:

@@ -64,8 +64,8 @@ def gantt(rows: Sequence[str], bars: Sequence[Bar], failures: Sequence[tuple[flo
     ax.set_xlabel("simulated time (s)")
     ax.grid(axis="x", alpha=0.3)
     handles = [plt.Rectangle((0, 0), 1, 1, color=c) for c in STATUS_COLOURS.values()]
-    ax.legend(handles, list(STATUS_COLOURS), loc="upper center", bbox_to_anchor=(0.5, -0.18), ncol=4, frameon=False)
-    ax.set_title("Leaf statuses over simulated time (\u25bc: a FAILURE)")
+    ax.legend(handles, list(STATUS_COLOURS), loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=4, frameon=False)
+    ax.set_title("Leaf statuses over simulated time (\u25bc: a FAILURE)", pad=24)
     return _png(fig)
 
 
