@@ -13,6 +13,11 @@ class TreeRuntimeError(BtGraspError):
 
     exit_code = 2
 
+    def __init__(self, message: str, *, located: bool = False) -> None:
+        super().__init__(message)
+        #: the message already names the node (file:line, type and path) where the error happened
+        self.located = located
+
 
 class ScriptSyntaxError(ValueError):
     """A BT.CPP script does not parse. ``column`` is 1-based within the script text."""

@@ -137,6 +137,8 @@ class BtNode(py_trees.behaviour.Behaviour):
         self.bt_path = ctx.path
         self.bt_kind = ctx.kind
         self.bt_spec = ctx.spec
+        #: ``file:line: `` of the node's declaration, for tick errors ("" when unknown)
+        self.bt_where = f"{ctx.source}:{ctx.line}: " if ctx.source and ctx.line else ""
         #: the attributes exactly as written in the tree file (ports, name, pre/post conditions)
         self.bt_attributes: dict[str, str] = dict(ctx.attributes)
         self.bt_state = BtStatus.IDLE
@@ -164,15 +166,23 @@ class BtNode(py_trees.behaviour.Behaviour):
 
     # ---- BT.CPP's TreeNode machinery --------------------------------------------------------------
     def execute_tick(self) -> BtStatus:
-        """BT.CPP ``executeTick``: pre-conditions, ``bt_tick``, post-conditions, store the status."""
+        """BT.CPP ``executeTick``: pre-conditions, ``bt_tick``, post-conditions, store the status. A tick error
+        is reported once, by the innermost node, with its file, line, type and path (BT.CPP's
+        ``NodeExecutionError``)."""
         before = self.bt_state
-        result: BtStatus | None = self._check_preconditions() if self._bt_pre else None
-        if result is None:
-            if self.bt_pre_tick is not None:
-                self.bt_pre_tick(self)
-            result = self.bt_tick()
-        if self._bt_has_post and result.completed:
-            self._run_postconditions(result)
+        try:
+            result: BtStatus | None = self._check_preconditions() if self._bt_pre else None
+            if result is None:
+                if self.bt_pre_tick is not None:
+                    self.bt_pre_tick(self)
+                result = self.bt_tick()
+            if self._bt_has_post and result.completed:
+                self._run_postconditions(result)
+        except TreeRuntimeError as exc:
+            if exc.located:
+                raise
+            message = str(exc).removeprefix(f"{self.bt_path}: ")
+            raise TreeRuntimeError(f"{self.bt_where}{self.bt_type} '{self.bt_path}': {message}", located=True) from None
         if result is BtStatus.SKIPPED:
             self.bt_status_extra = "SKIPPED"
         else:

@@ -70,6 +70,7 @@ def is_text_port_type(kind: type) -> bool:
     malformed text (e.g. ``bt_grasp.tasks.pose.Pose`` for ``"0.35;-0.25;0.0;90"``)."""
     return callable(getattr(kind, "from_port_text", None))
 
+
 #: attribute names a port may not use (BT.CPP reserves the same ones)
 RESERVED_ATTRIBUTES: frozenset[str] = frozenset(
     {"ID", "name", "_description", "_autoremap", "_uid", "_fullpath"}

@@ -116,3 +116,13 @@ def test_condition_script_error_is_a_load_error() -> None:
     xml = '<root BTCPP_format="4"><BehaviorTree ID="M">\n<AlwaysSuccess _skipIf="a =="/></BehaviorTree></root>'
     with pytest.raises(TreeFileError, match=r"t.xml:2: _skipIf: script"):
         load_tree_from_string(xml, builtin_registry(), source="t.xml")
+
+
+def test_a_tick_error_names_file_line_node_and_script() -> None:
+    xml = '<root BTCPP_format="4"><BehaviorTree ID="M">\n<Sequence>\n<Script code="n := 5; n /= 2"/>\n</Sequence></BehaviorTree></root>'
+    tree = load_tree_from_string(xml, builtin_registry(), source="t.xml")
+    with pytest.raises(TreeRuntimeError) as info:
+        tree.tick()
+    assert str(info.value) == (
+        "t.xml:3: Script 'Script::2': Error in script [n := 5; n /= 2]: Invalid floating point to integer conversion"
+    )
