@@ -119,7 +119,10 @@ def test_condition_script_error_is_a_load_error() -> None:
 
 
 def test_a_tick_error_names_file_line_node_and_script() -> None:
-    xml = '<root BTCPP_format="4"><BehaviorTree ID="M">\n<Sequence>\n<Script code="n := 5; n /= 2"/>\n</Sequence></BehaviorTree></root>'
+    xml = (
+        '<root BTCPP_format="4"><BehaviorTree ID="M">\n<Sequence>\n'
+        '<Script code="n := 5; n /= 2"/>\n</Sequence></BehaviorTree></root>'
+    )
     tree = load_tree_from_string(xml, builtin_registry(), source="t.xml")
     with pytest.raises(TreeRuntimeError) as info:
         tree.tick()
