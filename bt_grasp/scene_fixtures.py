@@ -140,7 +140,10 @@ class Wall(_FixtureBase):
         return (self._box("slab", (x, y, z), (0.0, 0.0, z / 2)),)
 
 
+# the conveyor lives in its own module, which builds on _FixtureBase above (hence the late import)
+from bt_grasp.scene_conveyor import Conveyor  # noqa: E402
+
 #: what ``fixtures:`` entries may be; the ``kind`` key selects the model
-Fixture = Annotated[Tray | Bin | Marker | Wall, Field(discriminator="kind")]
-FIXTURE_KINDS: tuple[str, ...] = ("tray", "bin", "marker", "wall")
+Fixture = Annotated[Tray | Bin | Marker | Wall | Conveyor, Field(discriminator="kind")]
+FIXTURE_KINDS: tuple[str, ...] = ("tray", "bin", "marker", "wall", "conveyor")
 CONTAINER_KINDS: tuple[str, ...] = ("tray", "bin")

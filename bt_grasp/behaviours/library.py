@@ -4,7 +4,16 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
-from bt_grasp.behaviours import calibration_leaves, gripper, motion_leaves, objects, perceive, place, viewing
+from bt_grasp.behaviours import (
+    calibration_leaves,
+    follow,
+    gripper,
+    motion_leaves,
+    objects,
+    perceive,
+    place,
+    viewing,
+)
 from bt_grasp.errors import TreeFileError
 from bt_grasp.perception.results import Detection
 from bt_grasp.scene_config import Scene
@@ -37,6 +46,7 @@ ROBOT_LEAVES = (
     place.PlaceOn,
     place.MoveTo,
     viewing.LookAt,
+    follow.FollowTarget,
 )
 
 

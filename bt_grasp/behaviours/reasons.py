@@ -18,6 +18,7 @@ class FailureReason(enum.StrEnum):
     TIMEOUT = "TIMEOUT"
     CALIBRATION_MISSING = "CALIBRATION_MISSING"
     CALIBRATION_FAILED = "CALIBRATION_FAILED"
+    TARGET_LOST = "TARGET_LOST"  # a followed target left the camera's view
     BAD_INPUT = "BAD_INPUT"  # a port held something of the wrong kind
     NOT_HOLDING = "NOT_HOLDING"  # Place/PlaceOn started with nothing between the fingers
     DROPPED = "DROPPED"  # the held object left the fingers while it was carried

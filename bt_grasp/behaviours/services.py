@@ -7,7 +7,7 @@ wrap them (``bt_grasp.faults``); tests provide stand-ins. Statuses come back as 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Literal, Protocol
 
 import numpy as np
@@ -72,6 +72,10 @@ class MediaSink(Protocol):
 
     def log(self, level: str, name: str, message: str) -> None: ...
 
+    def servo(self, name: str, values: Mapping[str, float | bool | str]) -> None:
+        """One control step of a visual-servoing leaf: its measurement, error and command (numbers by name)."""
+        ...
+
 
 class NullSink:
     """A MediaSink that keeps nothing (a run without a log, a test)."""
@@ -90,4 +94,7 @@ class NullSink:
         return None
 
     def log(self, level: str, name: str, message: str) -> None:
+        return None
+
+    def servo(self, name: str, values: Mapping[str, float | bool | str]) -> None:
         return None

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -72,3 +72,6 @@ class RecorderSink:
 
     def log(self, level: str, name: str, message: str) -> None:
         self.recorder.write_log(self.now_ns(), level, name, message)
+
+    def servo(self, name: str, values: Mapping[str, float | bool | str]) -> None:
+        self.recorder.write_event(self.now_ns(), "servo", {"leaf": name, **values})

@@ -13,6 +13,7 @@ from bt_grasp.clock import ManualClock
 from bt_grasp.interfaces import Mount
 from bt_grasp.scene_config import Scene, load_scene
 from bt_grasp.sim.camera import SimCamera
+from bt_grasp.sim.conveyor import belts_for, on_supports
 from bt_grasp.sim.device import create_scene
 from bt_grasp.sim.fixtures import build_fixture
 from bt_grasp.sim.objects import PlacedObject, build_object, draw_poses
@@ -47,9 +48,10 @@ class World:
         self._build_table()
         self.robot = SimRobot(self.scene, scene_config.robot, scene_config.T_world_base())
         self.fixtures = {f.name: build_fixture(self.scene, f) for f in scene_config.fixtures}
-        self.placed: list[PlacedObject] = draw_poses(
+        self.belts = belts_for(self.scene, scene_config.fixtures)
+        self.placed: list[PlacedObject] = on_supports(draw_poses(
             scene_config.objects, self._object_rng, 0.0, str(source), scene_config.object_gap_m
-        )
+        ), scene_config.fixtures)
         self.objects = {p.spec.name: build_object(self.scene, p) for p in self.placed}
         self._build_lights()
         mount = self.camera_mount
@@ -93,9 +95,11 @@ class World:
         self._seed_streams(seed)
         self.clock.restart()
         self.robot.reset(np.asarray(scene_config.robot.home_q_rad, dtype=float))
-        self.placed = draw_poses(
+        self.placed = on_supports(draw_poses(
             scene_config.objects, self._object_rng, 0.0, str(source), scene_config.object_gap_m
-        )
+        ), scene_config.fixtures)
+        for belt in self.belts:
+            belt.reset()
         self.objects = {p.spec.name: build_object(self.scene, p) for p in self.placed}
         self.camera.reseed(self.camera_rng)
         self._physics_steps = 0
@@ -159,6 +163,8 @@ class World:
         dt_ns = round(self.dt_s * 1e9)
         for _ in range(n):
             self.robot.before_physics_step()
+            for belt in self.belts:
+                belt.before_step(self.dt_s)
             self.scene.step()
             self.clock.advance_ns(dt_ns)
         self._physics_steps += n
