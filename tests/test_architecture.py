@@ -22,7 +22,7 @@ FORBIDDEN = {
 }
 LEAF_MODULES = (
     "errors", "clock", "geometry", "interfaces", "config", "scene_config", "robot_description", "colors",
-    "scene_fixtures", "scene_goals",
+    "scene_fixtures", "scene_goals", "scene_conveyor",
 )
 
 

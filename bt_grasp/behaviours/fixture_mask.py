@@ -1,6 +1,7 @@
 """Perception sees the fixtures' walls (a tray's rim, a bin) and whatever was already put in them; the robot
 knows from the scene file (installation data) where the fixtures stand, so detections inside a fixture's
-footprint are not objects to pick. Flat markers are kept: an object on a marker is still on the table."""
+footprint are not objects to pick. Flat markers are kept: an object on a marker is still on the table; so
+is a conveyor's belt (it brings the objects to pick)."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from bt_grasp.scene_config import Scene
+from bt_grasp.scene_fixtures import Conveyor
 
 if TYPE_CHECKING:
     from bt_grasp.perception.results import Detection, PerceptionResult
@@ -21,6 +23,8 @@ FIXTURE_MARGIN_M = 0.02
 def inside_fixture(scene: Scene, xy_world: tuple[float, float]) -> str | None:
     """The name of the solid fixture whose footprint (plus the margin) holds a world point, or None."""
     for fixture in scene.fixtures:
+        if isinstance(fixture, Conveyor):  # a belt carries the objects to pick: they are not "in" it
+            continue
         parts = [p for p in fixture.parts() if p.solid]
         if not parts:
             continue

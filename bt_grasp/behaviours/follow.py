@@ -72,17 +72,17 @@ class FollowTarget(RobotLeaf):
     def initialise(self) -> None:
         self._early: Status | None = None
         self._track: TargetTrack | None = None
-        self._pid = PidLaw(Gains(float(self.input("kp")), float(self.input("ki")), float(self.input("kd"))))
+        self._pid = PidLaw(Gains(self.input_float("kp"), self.input_float("ki"), self.input_float("kd")))
         self._last_capture_s = float("-inf")
         self._converged_since: float | None = None
         self._measurements = 0
-        color = str(self.input("color") or "")
+        color = self.input_str("color")
         config = self.cell.perception_config
         if color not in config.color.ranges:
             self._early = self.failed(FailureReason.BAD_INPUT, f"unknown colour '{color}'; known: "
                                       f"{', '.join(config.color.ranges)}")
             return
-        if float(self.input("rate")) <= 0 or float(self.input("tolerance")) <= 0:
+        if self.input_float("rate") <= 0 or self.input_float("tolerance") <= 0:
             self._early = self.failed(FailureReason.BAD_INPUT, "rate and tolerance must be positive")
             return
         previous = self.input("track")
@@ -152,10 +152,10 @@ class FollowTarget(RobotLeaf):
         assert track is not None
         t = self.now_s()
         measurement = None
-        if t - self._last_capture_s >= 1.0 / float(self.input("rate")) - 1e-9:
+        if t - self._last_capture_s >= 1.0 / self.input_float("rate") - 1e-9:
             self._last_capture_s = t
             measurement = self._measure(t)
-        if t - track.last_time_s > float(self.input("lost_after")):
+        if t - track.last_time_s > self.input_float("lost_after"):
             self._stop()
             return self.failed(FailureReason.TARGET_LOST,
                                f"the {track.color} target has been out of view for {t - track.last_time_s:.2f} s")
@@ -168,7 +168,7 @@ class FollowTarget(RobotLeaf):
         dt = 1.0 / self.cell.scene.physics.control_rate_hz
         position, velocity = track.predict(t)
         support_z = position[2] - track.height_m / 2
-        goal_z = max(position[2] + float(self.input("standoff")), support_z + MIN_TCP_ABOVE_SUPPORT_M)
+        goal_z = max(position[2] + self.input_float("standoff"), support_z + MIN_TCP_ABOVE_SUPPORT_M)
         desired = np.array([position[0], position[1], goal_z])
         q = robot.joint_positions()
         T_now = kin.fk(q)
@@ -194,11 +194,11 @@ class FollowTarget(RobotLeaf):
         self._record(t, position, velocity, T_now[:3, 3], error, u, measurement)
         err = float(np.linalg.norm(error))
         self.feedback_message = f"error {err * 1e3:.1f} mm, target speed {np.linalg.norm(velocity) * 100:.1f} cm/s"
-        if err < float(self.input("tolerance")) and self._turned():
+        if err < self.input_float("tolerance") and self._turned():
             self._converged_since = t if self._converged_since is None else self._converged_since
         else:
             self._converged_since = None
-        hold = float(self.input("converged_time"))
+        hold = self.input_float("converged_time")
         if hold >= 0 and self._converged_since is not None and t - self._converged_since >= hold - 1e-9:
             return Status.SUCCESS
         return Status.RUNNING
