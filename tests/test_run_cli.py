@@ -199,3 +199,13 @@ def test_injected_fault_failure_resimulates_tick_for_tick(tmp_path: Path) -> Non
     assert resim.returncode == 0, resim.stdout + resim.stderr
     report = json.loads(resim.stdout)
     assert report["reproduced"] is True and report["success_new"] is False
+
+
+def test_live_and_realtime_take_an_optional_value():
+    from bt_grasp.cli.run_cmd import fill_optional_values
+
+    assert fill_optional_values(["run", "t.xml", "--live", "--scene", "s.yaml"]) == [
+        "run", "t.xml", "--live=8765", "--scene", "s.yaml"]
+    assert fill_optional_values(["run", "--live", "9000", "--realtime"]) == ["run", "--live", "9000", "--realtime=1.0"]
+    # a path after the flag stays the positional tree argument
+    assert fill_optional_values(["run", "--realtime", "t.xml"]) == ["run", "--realtime=1.0", "t.xml"]

@@ -57,8 +57,13 @@ def _register() -> None:
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI; returns the process exit code."""
     _register()
+    from bt_grasp.cli.run_cmd import fill_optional_values
+
+    args = sys.argv[1:] if argv is None else list(argv)
+    if args[:1] == ["run"]:
+        args = fill_optional_values(args)
     try:
-        rv = app(args=argv, standalone_mode=False)
+        rv = app(args=args, standalone_mode=False)
     except BtGraspError as exc:
         typer.echo(f"error: {exc}", err=True)
         code = exc.exit_code

@@ -25,6 +25,33 @@ if TYPE_CHECKING:
 #: so that a run without --live does not load the WebSocket server)
 LIVE_DEFAULT_PORT = 8765
 
+#: options whose value may be left out (``--live`` alone means ``--live 8765``); click/typer have no such
+#: option type, so :func:`fill_optional_values` writes the default in before parsing
+OPTIONAL_VALUES = {"--live": str(LIVE_DEFAULT_PORT), "--realtime": "1.0"}
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def fill_optional_values(args: list[str]) -> list[str]:
+    """``--live`` / ``--realtime`` followed by no number get their default value (``--live=8765``).
+
+    A following token is taken as the value only when it is a number, so ``--live trees/pick.xml`` keeps the
+    tree as the positional argument.
+    """
+    out: list[str] = []
+    for i, token in enumerate(args):
+        if token in OPTIONAL_VALUES and (i + 1 >= len(args) or not _is_number(args[i + 1])):
+            out.append(f"{token}={OPTIONAL_VALUES[token]}")
+        else:
+            out.append(token)
+    return out
+
 
 def judged_phrase(summary: EpisodeResult) -> str:
     """The judge's view in a few words: the goal and what was measured."""
@@ -94,12 +121,12 @@ def run(
     ),
     quiet: bool = typer.Option(False, "--quiet", help="No live progress."),
     live: int | None = typer.Option(
-        None, "--live", is_flag=False, flag_value=str(LIVE_DEFAULT_PORT), metavar="[PORT]",
+        None, "--live", metavar="[PORT]",
         help=f"Serve the run live to Foxglove (WebSocket on 127.0.0.1, port {LIVE_DEFAULT_PORT} unless given).",
     ),
     live_host: str = typer.Option("127.0.0.1", "--live-host", help="Address the live server binds to."),
     realtime: float | None = typer.Option(
-        None, "--realtime", is_flag=False, flag_value="1.0", metavar="[FACTOR]",
+        None, "--realtime", metavar="[FACTOR]",
         help="Pace wall time to simulated time (FACTOR simulated seconds per wall second; default 1).",
     ),
     image_hz: float = typer.Option(
