@@ -12,7 +12,7 @@ import time
 from pathlib import Path
 
 import pytest
-from foxglove import ROBOT_LINKS, open_in_studio, serving, skip_without_browser
+from studio_driver import ROBOT_LINKS, open_in_studio, serving, skip_without_browser
 
 ROOT = Path(__file__).resolve().parents[2]
 LAYOUT = ROOT / "bt_grasp" / "foxglove_layouts" / "bt_grasp.layout.json"

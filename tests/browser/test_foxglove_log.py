@@ -10,7 +10,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from foxglove import ROBOT_LINKS, open_in_studio, serving, skip_without_browser
+from studio_driver import ROBOT_LINKS, open_in_studio, serving, skip_without_browser
 
 from bt_grasp.recording.reader import open_log
 

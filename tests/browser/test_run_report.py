@@ -12,7 +12,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
-from foxglove import render_page, skip_without_browser
+from studio_driver import render_page, skip_without_browser
 
 from bt_grasp.recording.reader import open_log
 
