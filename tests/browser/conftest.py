@@ -1,4 +1,4 @@
-"""Browser tests: a real Foxglove Studio web build in headless Chromium (see foxglove.py)."""
+"""Browser tests: a real Foxglove Studio web build in headless Chromium (see studio_driver.py)."""
 
 from __future__ import annotations
 
