@@ -58,6 +58,7 @@ def test_same_seed_same_scene_and_images(tabletop_scene_path: Path) -> None:
     pa = [GroundTruthOracle(a).T_world_object(n) for n in a.objects]
     pb = [GroundTruthOracle(b).T_world_object(n) for n in b.objects]
     pc = [GroundTruthOracle(c).T_world_object(n) for n in c.objects]
+    assert len(pa) == len(config.objects) > 0  # all() over no objects would prove nothing
     assert all(np.array_equal(x, y) for x, y in zip(pa, pb, strict=True))
     assert not all(np.allclose(x, y) for x, y in zip(pa, pc, strict=True))
     ca, da = a.camera.render_true()
