@@ -17,6 +17,7 @@ from bt_grasp.behaviours.base import RobotLeaf
 from bt_grasp.behaviours.gripper import EMPTY_WIDTH_M
 from bt_grasp.behaviours.motion_job import MotionJob, PathFailure, PathFn, Segment
 from bt_grasp.behaviours.reasons import FailureReason
+from bt_grasp.goals import DEFAULT_LIFT_HEIGHT_M
 from bt_grasp.tree.registry import PortDirection, PortSpec, leaf
 
 if TYPE_CHECKING:
@@ -311,7 +312,7 @@ def planned_path_fn(plan: GraspPlan, replan: PathFn) -> PathFn:
 @leaf(
     None,
     name="Lift",
-    ports=[PortSpec("height", PortDirection.INPUT, float, 0.15, "how far to lift, m")],
+    ports=[PortSpec("height", PortDirection.INPUT, float, DEFAULT_LIFT_HEIGHT_M, "how far to lift, m")],
     needs_robot=True,
 )
 class Lift(_MovingLeaf):
