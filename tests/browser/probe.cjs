@@ -93,7 +93,10 @@ async function main() {
         const is3d = [...el.querySelectorAll("button")].some((b) => b.getAttribute("title") === "Switch to 2D camera");
         const r = c.getBoundingClientRect();
         if (r.width < 50 || r.height < 50) continue;
-        out.push({ kind: is3d ? "3d" : "other", text: el.innerText.slice(0, 200),
+        const text = el.innerText.trim();
+        const kind = is3d ? "3d" : text.startsWith("/camera/") ? "image" : text.startsWith("State Transitions") ? "state"
+          : "other";
+        out.push({ kind, text: el.innerText.slice(0, 200),
                    x: r.left, y: r.top, width: r.width, height: r.height });
       }
       return out;

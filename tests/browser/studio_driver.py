@@ -173,6 +173,7 @@ class StudioReport:
     frames: list[str] = field(default_factory=list)
     image_drawn: bool = False
     three_d_drawn: bool = False
+    state_transitions_drawn: bool = False
     errors: list[str] = field(default_factory=list)
     raw: dict[str, Any] = field(default_factory=dict)
 
@@ -205,11 +206,24 @@ def open_in_studio(url: str, workdir: Path, *, wait_s: float = 25.0, screenshot:
         problems=[p for p in raw.get("problems", []) if p != "No problems found"],
         problem_count=int(raw.get("problemCount", 0)),
         frames=raw.get("frames", []),
-        image_drawn=any(_drawn(Path(p["file"])) for p in panels if p["kind"] != "3d" and "file" in p),
+        image_drawn=any(_drawn(Path(p["file"])) for p in panels if p["kind"] == "image" and "file" in p),
         three_d_drawn=any(_drawn(Path(p["file"])) for p in panels if p["kind"] == "3d" and "file" in p),
+        state_transitions_drawn=any(_coloured(Path(p["file"])) for p in panels if p["kind"] == "state" and "file" in p),
         errors=raw.get("errors", []),
         raw=raw,
     )
+
+
+def _coloured(png: Path) -> bool:
+    """True when a panel's screenshot holds saturated colour (the State Transitions bars), not just text."""
+    import cv2
+    import numpy as np
+
+    img = cv2.imread(str(png))
+    if img is None:
+        return False
+    hsv = cv2.cvtColor(img, cv2.COLOR_BGR2HSV)
+    return float(np.mean(hsv[:, :, 1] > 120)) > 0.02
 
 
 def _drawn(png: Path) -> bool:

@@ -63,3 +63,4 @@ def test_live_run_shows_whole_in_foxglove(tmp_path: Path) -> None:
     assert set(ROBOT_LINKS) <= set(report.frames), report.frames
     assert report.three_d_drawn, "the 3D panel drew nothing"
     assert report.image_drawn, "the image panel drew nothing"
+    assert report.state_transitions_drawn, "State Transitions drew no leaf status from /bt/tick.leaves"
