@@ -140,5 +140,37 @@ def tasks(
     Console().print(f"machine: {summary['machine']}")
 
 
+@bench_app.command("follow")
+def follow(
+    seeds: int = typer.Option(3, "--seeds", min=1, help="Episodes per mount and belt speed."),
+    speeds: str = typer.Option("0.02,0.05,0.10", "--speeds", help="Belt speeds, m/s, comma-separated."),
+    mounts: str = typer.Option("eye-to-hand,eye-in-hand", "--mounts", help="Camera mounts, comma-separated."),
+    pick_seeds: int = typer.Option(0, "--pick-seeds", min=0,
+                                   help="Also pick from the conveyor this many seeds per speed (eye-to-hand)."),
+    pick_mount: str = typer.Option("eye-to-hand", "--pick-mount", help="Camera mount of the pick episodes."),
+    as_json: bool = typer.Option(False, "--json", help="Print exactly one JSON object."),
+) -> None:
+    """Visual following on the conveyor: tracking error against the simulator's truth, and the pick rate."""
+    from bt_grasp.episode.follow_bench import SCENES, run_conveyor_pick_bench, run_tracking_bench
+    from bt_grasp.errors import InputError
+
+    try:
+        speed_list = [float(v) for v in speeds.split(",") if v.strip()]
+    except ValueError:
+        raise InputError("--speeds", f"expected numbers separated by commas, got '{speeds}'") from None
+    mount_list = [m.strip() for m in mounts.split(",") if m.strip()]
+    for m in [*mount_list, pick_mount]:
+        if m not in SCENES:
+            raise InputError("--mounts", f"unknown mount '{m}'; known: {', '.join(SCENES)}")
+    repo = Path.cwd()
+    say = None if as_json else typer.echo
+    summary: dict[str, object] = {"tracking": run_tracking_bench(repo, speed_list, seeds, mount_list, progress=say)}
+    if pick_seeds:
+        summary["picks"] = [run_conveyor_pick_bench(repo, v, pick_seeds, pick_mount, progress=say)
+                            for v in speed_list]
+    summary["machine"] = machine_description()
+    typer.echo(json.dumps(summary, indent=None if as_json else 1))
+
+
 def register(app: typer.Typer) -> None:
     app.add_typer(bench_app, name="bench")

@@ -12,7 +12,6 @@ from __future__ import annotations
 import numpy as np
 import sapien
 
-from bt_grasp.geometry import make_T
 from bt_grasp.scene_conveyor import SLAT_PITCH_M, SLAT_THICKNESS_M
 from bt_grasp.scene_fixtures import Conveyor
 from bt_grasp.sim.fixtures import BUILDERS, FIXTURE_FRICTION
@@ -48,6 +47,10 @@ class ConveyorBelt:
         self._count = int(np.ceil(spec.length_m / SLAT_PITCH_M)) + 1
         self._sign = 1.0 if spec.direction == "forward" else -1.0
         self._T_world_fixture = spec.T_world_fixture(spec.height_m - SLAT_THICKNESS_M / 2)
+        self._k = np.arange(self._count, dtype=float)
+        self._origin = self._T_world_fixture[:3, 3].copy()
+        self._axis = self._T_world_fixture[:3, 0].copy()
+        self._q = to_pose(self._T_world_fixture).q
         material = sapien.physx.PhysxMaterial(spec.friction, spec.friction, 0.0)
         render = sapien.render.RenderMaterial(base_color=[*_SLAT_RGB, 1.0], roughness=0.9, metallic=0.0)
         half = [(SLAT_PITCH_M - _SLAT_GAP_M) / 2, spec.width_m / 2, SLAT_THICKNESS_M / 2]
@@ -63,25 +66,30 @@ class ConveyorBelt:
             self._bodies.append(entity.find_component_by_type(sapien.physx.PhysxRigidDynamicComponent))
         self.travel_m = 0.0  # how far the belt has moved since the episode started
 
-    def _local_x(self, k: int, travel_m: float) -> float:
-        """Slat k's centre along the belt after the belt moved ``travel_m`` (wrapped onto the chain)."""
-        u = (k * SLAT_PITCH_M + self._sign * travel_m) % (self._count * SLAT_PITCH_M)
-        return u - self.spec.length_m / 2 - SLAT_PITCH_M / 2
+    def _local_x(self, travel_m: float) -> np.ndarray:
+        """Every slat's centre along the belt after the belt moved ``travel_m`` (wrapped onto the chain)."""
+        u = (self._k * SLAT_PITCH_M + self._sign * travel_m) % (self._count * SLAT_PITCH_M)
+        return np.asarray(u - self.spec.length_m / 2 - SLAT_PITCH_M / 2)
 
     def _pose(self, k: int, travel_m: float) -> sapien.Pose:
-        return to_pose(self._T_world_fixture @ make_T(translation=[self._local_x(k, travel_m), 0.0, 0.0]))
+        return self._pose_at(float(self._local_x(travel_m)[k]))
+
+    def _pose_at(self, x_local: float) -> sapien.Pose:
+        return sapien.Pose(self._origin + x_local * self._axis, self._q)
 
     def before_step(self, dt_s: float) -> None:
         """Move every slat by speed * dt: kinematic targets (carrying objects), or a jump back under the
         upstream end for the slat whose turn it is (nothing rides on it there)."""
-        before = self.travel_m
+        x_old = self._local_x(self.travel_m)
         self.travel_m += self.spec.speed_m_s * dt_s
+        x_new = self._local_x(self.travel_m)
+        wrapped = np.abs(x_new - x_old) > SLAT_PITCH_M
         for k, (entity, body) in enumerate(zip(self.slats, self._bodies, strict=True)):
-            x_old, x_new = self._local_x(k, before), self._local_x(k, self.travel_m)
-            if abs(x_new - x_old) > SLAT_PITCH_M:  # wrapped round: back to the start under the belt
-                entity.set_pose(self._pose(k, self.travel_m))
+            pose = self._pose_at(float(x_new[k]))
+            if wrapped[k]:  # wrapped round: back to the start under the belt
+                entity.set_pose(pose)
             else:
-                body.set_kinematic_target(self._pose(k, self.travel_m))
+                body.set_kinematic_target(pose)
 
     def reset(self) -> None:
         self.travel_m = 0.0

@@ -1,0 +1,124 @@
+"""Benchmarks of visual following on the conveyor, judged against the simulator's truth (bench only).
+
+* ``run_tracking_bench``: ``trees/follow_conveyor.xml`` (FollowTarget at a 15 cm standoff, never ending) on
+  the conveyor scenes of both mounts at several belt speeds; the tracking error of a tick is the horizontal
+  distance between the followed object's true centre and the tool's (tcp's) z axis, taken while
+  FollowTarget runs, from 3 s after it started (the approach from the home or view pose is excluded) to the
+  end of the episode (8 s of simulated time).
+* ``run_conveyor_pick_bench``: ``trees/pick_from_conveyor.xml``, success judged by physics (held and lifted).
+
+The belt speed is the only change to the shipped scene files (a copy with ``speed_m_s`` set is written to a
+temporary folder; its calibration path is made absolute).
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from bt_grasp.episode.episode import Episode
+from bt_grasp.episode.request import EpisodeRequest
+from bt_grasp.tree.loader import LoadedTree
+
+SCENES = {"eye-to-hand": "scenes/conveyor.yaml", "eye-in-hand": "scenes/conveyor_eye_in_hand.yaml"}
+FOLLOW_TREE = "trees/follow_conveyor.xml"
+PICK_TREE = "trees/pick_from_conveyor.xml"
+_SETTLE_S = 3.0
+_FOLLOW_TICKS = 800
+
+
+def scene_at_speed(repo: Path, mount: str, speed_m_s: float, folder: Path) -> Path:
+    """A copy of the mount's conveyor scene with the belt at ``speed_m_s``."""
+    source = repo / SCENES[mount]
+    data = yaml.safe_load(source.read_text())
+    for fixture in data.get("fixtures", []):
+        if fixture.get("kind") == "conveyor":
+            fixture["speed_m_s"] = float(speed_m_s)
+    data["calibration"] = str((source.parent / data["calibration"]).resolve())
+    path = folder / f"{source.stem}_{round(speed_m_s * 1000)}mm_s.yaml"
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    return path
+
+
+def _pct(values: Sequence[float], q: float) -> float:
+    return float(np.percentile(values, q)) if len(values) else float("nan")
+
+
+def _follow_errors(episode: Episode, target: str) -> tuple[list[float], Callable[[int, LoadedTree], None]]:
+    from bt_grasp.sim.oracle import GroundTruthOracle
+
+    oracle = GroundTruthOracle(episode.world)
+    errors: list[float] = []
+    started: list[float] = []
+
+    def on_tick(tick: int, tree: LoadedTree) -> None:
+        running = [n for n in tree.nodes() if n.bt_type == "FollowTarget" and n.status.name == "RUNNING"]
+        if not running:
+            return
+        now = episode.world.now_ns() * 1e-9
+        if not started:
+            started.append(now)
+        if now - started[0] < _SETTLE_S:
+            return
+        T_tcp = oracle.T_world_tcp()
+        p = oracle.T_world_object(target)[:3, 3] - T_tcp[:3, 3]
+        axis = T_tcp[:3, 2]
+        errors.append(float(np.linalg.norm(p - (p @ axis) * axis)))
+
+    return errors, on_tick
+
+
+def run_tracking_bench(repo: Path, speeds_m_s: Sequence[float], seeds: int, mounts: Sequence[str] = tuple(SCENES),
+                       color: str = "red", target: str = "red_box",
+                       progress: Callable[[str], None] | None = None) -> dict[str, object]:
+    t0 = time.perf_counter()
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for mount in mounts:
+            for speed in speeds_m_s:
+                scene = scene_at_speed(repo, mount, speed, Path(tmp))
+                errors: list[float] = []
+                lost = 0
+                for seed in range(seeds):
+                    request = EpisodeRequest(tree=repo / FOLLOW_TREE, scene=scene, seed=seed,
+                                             max_ticks=_FOLLOW_TICKS, blackboard={"color": color})
+                    episode = Episode(request)
+                    sample, on_tick = _follow_errors(episode, target)
+                    result = episode.run([on_tick])
+                    lost += int(result.reason == "TARGET_LOST")
+                    errors.extend(sample)
+                    if progress is not None:
+                        progress(f"{mount} {speed * 100:.0f} cm/s seed {seed}: {len(sample)} samples, "
+                                 f"median {_pct(sample, 50) * 1e3:.1f} mm, {result.reason or 'running'}")
+                mm = [e * 1e3 for e in errors]
+                rows.append({"mount": mount, "speed_cm_s": round(speed * 100, 1), "episodes": seeds,
+                             "samples": len(mm), "median_mm": _pct(mm, 50), "p95_mm": _pct(mm, 95),
+                             "max_mm": max(mm) if mm else float("nan"), "target_lost": lost})
+    return {"rows": rows, "elapsed_s": time.perf_counter() - t0}
+
+
+def run_conveyor_pick_bench(repo: Path, speed_m_s: float, seeds: int, mount: str = "eye-to-hand",
+                            color: str = "red", first_seed: int = 0,
+                            progress: Callable[[str], None] | None = None) -> dict[str, object]:
+    t0 = time.perf_counter()
+    ok = 0
+    reasons: dict[str, int] = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        scene = scene_at_speed(repo, mount, speed_m_s, Path(tmp))
+        for seed in range(first_seed, first_seed + seeds):
+            request = EpisodeRequest(tree=repo / PICK_TREE, scene=scene, seed=seed,
+                                     blackboard={"color": color, "lift_height": 0.15})
+            result = Episode(request).run()
+            ok += int(result.success)
+            if not result.success:
+                key = f"{result.reason}@{result.failed_leaf}"
+                reasons[key] = reasons.get(key, 0) + 1
+            if progress is not None:
+                progress(f"{mount} {speed_m_s * 100:.0f} cm/s seed {seed}: {result.success} {result.reason or ''}")
+    return {"mount": mount, "speed_cm_s": round(speed_m_s * 100, 1), "episodes": seeds, "successes": ok,
+            "success_rate": ok / max(seeds, 1), "failures": reasons, "elapsed_s": time.perf_counter() - t0}
