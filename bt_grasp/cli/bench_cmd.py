@@ -142,7 +142,7 @@ def tasks(
 
 @bench_app.command("follow")
 def follow(
-    seeds: int = typer.Option(3, "--seeds", min=1, help="Episodes per mount and belt speed."),
+    seeds: int = typer.Option(3, "--seeds", min=0, help="Tracking episodes per mount and belt speed (0: none)."),
     speeds: str = typer.Option("0.02,0.05,0.10", "--speeds", help="Belt speeds, m/s, comma-separated."),
     mounts: str = typer.Option("eye-to-hand,eye-in-hand", "--mounts", help="Camera mounts, comma-separated."),
     pick_seeds: int = typer.Option(0, "--pick-seeds", min=0,
@@ -164,7 +164,9 @@ def follow(
             raise InputError("--mounts", f"unknown mount '{m}'; known: {', '.join(SCENES)}")
     repo = Path.cwd()
     say = None if as_json else typer.echo
-    summary: dict[str, object] = {"tracking": run_tracking_bench(repo, speed_list, seeds, mount_list, progress=say)}
+    summary: dict[str, object] = {}
+    if seeds:
+        summary["tracking"] = run_tracking_bench(repo, speed_list, seeds, mount_list, progress=say)
     if pick_seeds:
         summary["picks"] = [run_conveyor_pick_bench(repo, v, pick_seeds, pick_mount, progress=say)
                             for v in speed_list]
