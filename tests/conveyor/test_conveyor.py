@@ -131,3 +131,13 @@ def test_pick_from_the_conveyor_succeeds_by_physics_and_logs_the_servo(scene: st
     servo = [e for e in run.events if e.get("kind") == "servo"]
     assert servo and {"follow", "descend", "hold"} <= {e["payload"]["leaf"] for e in servo}
     assert any("meas_x_m" in e["payload"] for e in servo)
+
+
+def test_the_benchmark_changes_only_the_belt_speed(tmp_path: Path) -> None:
+    from bt_grasp.episode.follow_bench import scene_at_speed
+
+    path = scene_at_speed(REPO, "eye-in-hand", 0.1, tmp_path)
+    scene, original = load_scene(path), load_scene(REPO / "scenes/conveyor_eye_in_hand.yaml")
+    assert scene.fixtures[0].speed_m_s == 0.1  # type: ignore[union-attr]
+    assert scene.model_copy(update={"fixtures": original.fixtures, "calibration": original.calibration}) == original
+    assert Path(str(scene.calibration)).is_file()
