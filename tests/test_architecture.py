@@ -77,6 +77,7 @@ def test_oracle_is_used_only_by_the_judge_and_benchmarks() -> None:
         "bt_grasp/judge",
         "bt_grasp/motion/bench",
         "bt_grasp/perception/bench",
+        "bt_grasp/episode/follow_bench",
     )
     assert [u for u in users if not u.startswith(allowed_prefixes)] == []
 
