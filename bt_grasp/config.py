@@ -7,7 +7,6 @@ the line, the key path and what was expected.
 
 from __future__ import annotations
 
-import difflib
 import re
 from pathlib import Path
 from typing import Any, TypeVar
@@ -15,7 +14,7 @@ from typing import Any, TypeVar
 import yaml
 from pydantic import BaseModel, ConfigDict, ValidationError
 
-from bt_grasp.errors import ConfigError
+from bt_grasp.errors import ConfigError, did_you_mean
 
 M = TypeVar("M", bound=BaseModel)
 
@@ -119,8 +118,7 @@ def validate(model: type[M], data: Any, source: str | Path, lines: dict[KeyPath,
         if kind == "extra_forbidden":
             parent = model
             allowed = _allowed_keys(parent, loc[:-1])
-            close = difflib.get_close_matches(str(loc[-1]), allowed, n=1)
-            hint = f"; did you mean '{close[0]}'?" if close else ""
+            hint = did_you_mean(str(loc[-1]), allowed)
             hint += f" (expected one of: {', '.join(allowed)})" if allowed else ""
             problem = f"unknown key '{loc[-1]}'{hint}"
         elif kind == "missing":

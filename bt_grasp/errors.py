@@ -63,3 +63,19 @@ class RenderDeviceError(BtGraspError):
 
 class SimulationError(BtGraspError):
     """The simulator reached a state it cannot continue from."""
+
+
+def closest_names(name: str, candidates: list[str] | tuple[str, ...], n: int = 1) -> list[str]:
+    """The known names closest to ``name``, best first: a case-insensitive match, else difflib's (cutoff 0.6)."""
+    import difflib
+
+    lowered = {c.lower(): c for c in candidates}
+    if name.lower() in lowered:
+        return [lowered[name.lower()]]
+    return difflib.get_close_matches(name, list(candidates), n=n, cutoff=0.6)
+
+
+def did_you_mean(name: str, candidates: list[str] | tuple[str, ...]) -> str:
+    """``"; did you mean 'x'?"`` for the closest known name, or ``""`` (the one place this hint is made)."""
+    close = closest_names(name, candidates)
+    return f"; did you mean '{close[0]}'?" if close else ""

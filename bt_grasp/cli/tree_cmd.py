@@ -7,9 +7,7 @@ from __future__ import annotations
 
 import json
 import logging
-import math
 from pathlib import Path
-from typing import Any
 
 import typer
 
@@ -130,18 +128,6 @@ def _parse_substitutions(values: list[str]) -> dict[str, str]:
     return rules
 
 
-def _jsonable(value: Any) -> Any:
-    if isinstance(value, bool | int | str) or value is None:
-        return value
-    if isinstance(value, float):
-        return value if math.isfinite(value) else str(value)
-    if isinstance(value, list | tuple):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
-    return repr(value)
-
-
 @tree_app.command("run")
 def run_cmd(
     file: Path = typer.Argument(..., help="XML or YAML tree file."),
@@ -183,7 +169,9 @@ def run_cmd(
         raise _fail(exc) from None
     values = tree.blackboard_values()
     if as_json:  # typed: integers and reals stay numbers
-        blackboard = {k: _jsonable(v) for k, v in values.items()}
+        from bt_grasp.recording.jsonable import to_jsonable
+
+        blackboard = {k: to_jsonable(v) for k, v in values.items()}
         typer.echo(json.dumps({"status": status.value, "ticks": tree.ticks, "blackboard": blackboard}))
     else:  # as BT.CPP prints values: a real with six decimals
         finished = "" if status.completed else f" (not finished after {tree.ticks} ticks)"

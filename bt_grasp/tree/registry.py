@@ -14,11 +14,12 @@ process-global registry: every caller builds (or copies) its own.
 
 from __future__ import annotations
 
-import difflib
 import enum
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, TypeVar
+
+from bt_grasp.errors import closest_names
 
 if TYPE_CHECKING:
     import py_trees
@@ -217,10 +218,7 @@ class NodeRegistry:
 
     def nearest(self, name: str, n: int = 3) -> list[str]:
         """Known names closest to ``name`` (for "did you mean ...?"), best first."""
-        by_lower = {k.lower(): k for k in self._specs}
-        if name.lower() in by_lower:
-            return [by_lower[name.lower()]]
-        return difflib.get_close_matches(name, list(self._specs), n=n, cutoff=0.6)
+        return closest_names(name, list(self._specs), n)
 
     def copy(self) -> NodeRegistry:
         return NodeRegistry(self._specs.values(), self.enums)

@@ -6,10 +6,9 @@ or runs a node.
 
 from __future__ import annotations
 
-import difflib
 from dataclasses import dataclass, field
 
-from bt_grasp.errors import TreeFileError
+from bt_grasp.errors import TreeFileError, did_you_mean
 from bt_grasp.tree.builtins import REMOVED_V3_NAMES
 from bt_grasp.tree.exceptions import PortValueError, ScriptSyntaxError
 from bt_grasp.tree.formats.document import Document, ModelDecl, NodeDecl
@@ -47,11 +46,6 @@ class ResolvedNode:
 def article(kind: str) -> str:
     return ("an " if kind[:1] in "AEIOU" else "a ") + kind
 
-
-def did_you_mean(name: str, candidates: list[str] | tuple[str, ...]) -> str:
-    lowered = {c.lower(): c for c in candidates}
-    close = [lowered[name.lower()]] if name.lower() in lowered else difflib.get_close_matches(name, candidates, n=1)
-    return f"; did you mean '{close[0]}'?" if close else ""
 
 
 def parse_conditions(decl: NodeDecl) -> Conditions:
