@@ -3,7 +3,7 @@
 None of these may change the run: they draw from no run random stream, step nothing and are read by no
 leaf. ``LogExtras`` adds to the log (and the live view) what the leaves do not send: camera frames when a
 leaf fails, at the end and optionally at a fixed simulated rate (rendered noise-free with
-``render_true()``, which steps nothing and draws no noise), the camera's frame from the calibration the
+``render_color()``, which steps nothing and draws no noise), the camera's frame from the calibration the
 run holds, and the judge's true object poses on ``/judge/true_objects`` (simulator truth: judge side only).
 ``RealtimePacer`` sleeps so wall time follows simulated time (pacing only; no decision reads it).
 """
@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from bt_grasp.interfaces import Mount
 from bt_grasp.interfaces import Mount
 from bt_grasp.recording import topics
 from bt_grasp.recording.scene_entities import Solid, judge_update
@@ -75,7 +76,7 @@ class LogExtras:
         calibration = self.cell.calibration
         if calibration is None:
             return
-        if calibration is self._camera_from and calibration.mount != "eye-in-hand":
+        if calibration is self._camera_from and calibration.mount != Mount.EYE_IN_HAND:
             return  # eye-to-hand: fixed until the calibration changes
         self._camera_from = calibration
         T_base_tool = None
@@ -89,7 +90,7 @@ class LogExtras:
         """A noise-free colour frame with its calibration: no noise drawn, nothing stepped."""
         stamp = self.world.now_ns()
         started = time.perf_counter()
-        color, _depth = self.world.camera.render_true()
+        color = self.world.camera.render_color()
         self.recorder.write_color_image(stamp, color, CAMERA_FRAME)
         self.recorder.write_camera_calibration(stamp, CAMERA_FRAME, self.world.camera.intrinsics)
         took_ms = 1e3 * (time.perf_counter() - started)

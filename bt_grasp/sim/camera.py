@@ -92,6 +92,13 @@ class SimCamera:
         depth[depth < 0] = 0.0
         return color, depth
 
+    def render_color(self) -> NDArray[np.uint8]:
+        """Noise-free colour only (no depth read back): the log's extra frames. Steps nothing, draws nothing."""
+        self._scene.update_render()
+        self._component.take_picture()
+        rgba = self._component.get_picture("Color")
+        return np.clip(np.round(rgba[..., :3] * 255.0), 0, 255).astype(np.uint8)
+
     def reseed(self, rng: np.random.Generator) -> None:
         """Draw the noise of the next captures from ``rng`` (a new episode in a reused world)."""
         self._rng = rng
