@@ -18,7 +18,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from bt_grasp.interfaces import Mount
-from bt_grasp.interfaces import Mount
 from bt_grasp.recording import topics
 from bt_grasp.recording.scene_entities import Solid, judge_update
 from bt_grasp.recording.writer import BASE_FRAME, CAMERA_FRAME
