@@ -189,7 +189,7 @@ class Episode:
             if injector is not None:
                 injector.before_run()
             runner = TreeRunner(self.tree, world, steps_per_tick=world.steps_per_tick, recorder=recorder,
-                                robot_state=robot_state_reader(cell), on_tick=tick_hook)
+                                robot_state=_when_watched(recorder, robot_state_reader(cell)), on_tick=tick_hook)
             outcome = runner.run(request.max_ticks)
             # a placement goal's "resting for 1 s after release" needs the world to run on a little
             for _ in range(judge.settle_ticks(self.inputs.goal)):
@@ -320,6 +320,13 @@ def robot_state_reader(cell: Cell) -> Callable[[], RobotState]:
         }
 
     return read
+
+
+def _when_watched(recorder: RunRecorder | None, read: Callable[[], RobotState]) -> Callable[[], RobotState]:
+    """The arm state only when the recorder passes it on (a live view nobody watches reads nothing)."""
+    if recorder is None or recorder.to_file:
+        return read
+    return lambda: read() if recorder.active else {}
 
 
 def run_episode(request: EpisodeRequest, *, worlds: WorldSource | None = None,

@@ -354,7 +354,7 @@ class RunRecorder:
 
     def write_robot_state(self, stamp_ns: int, robot: Mapping[str, Any]) -> None:
         """The arm state on /robot/joint_state (JSON, for plots) and base->tool on /tf (for the 3D view)."""
-        if not self.active:
+        if not self.active or "q_rad" not in robot:  # nobody watches, or a state read while nobody did
             return
         q = np.asarray(robot["q_rad"], dtype=np.float64).ravel()
         qd = robot.get("qd_rad_s")
