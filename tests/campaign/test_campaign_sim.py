@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os
+import secrets
 import shutil
 import signal
 import subprocess
@@ -31,9 +32,9 @@ def _env() -> dict[str, str]:
     return env
 
 
-def _eval(*args: str, timeout: float = 600) -> subprocess.CompletedProcess[str]:
+def _eval(*args: str, timeout: float = 600, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [*BT, "eval", "run", *args], capture_output=True, text=True, timeout=timeout, cwd=REPO, env=_env()
+        [*BT, "eval", "run", *args], capture_output=True, text=True, timeout=timeout, cwd=REPO, env=env or _env()
     )
 
 
@@ -61,8 +62,14 @@ def one_worker(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict[str, 
     for row in rows:
         assert (row["mcap"] is not None) == (not row["success"])
         if row["mcap"]:
-            replay = subprocess.run([*BT, "replay", row["mcap"], "--failures"], capture_output=True, text=True,
-                                    timeout=300, cwd=REPO, env=_env())
+            replay = subprocess.run(
+                [*BT, "replay", row["mcap"], "--failures"],
+                capture_output=True,
+                text=True,
+                timeout=300,
+                cwd=REPO,
+                env=_env(),
+            )
             assert replay.returncode == 0 and str(row["failure_reason"]) in replay.stdout, replay.stderr
     assert (out / "tiny.parquet").exists()
     return _identity(rows)
@@ -74,8 +81,10 @@ def _differences(got: dict[str, dict[str, Any]], want: dict[str, dict[str, Any]]
     for key in sorted(set(got) & set(want)):
         cols = sorted(c for c in set(got[key]) | set(want[key]) if got[key].get(c) != want[key].get(c))
         if cols:
-            out.append(f"{got[key]['tree']} seed {got[key]['seed']} {got[key]['fault_plan']}: " + ", ".join(
-                f"{c}: {got[key].get(c)!r} != {want[key].get(c)!r}" for c in cols))
+            out.append(
+                f"{got[key]['tree']} seed {got[key]['seed']} {got[key]['fault_plan']}: "
+                + ", ".join(f"{c}: {got[key].get(c)!r} != {want[key].get(c)!r}" for c in cols)
+            )
     return out
 
 
@@ -134,9 +143,18 @@ def test_two_workers_one_killed_then_resumed_match_one_worker(
     assert _differences(_identity(rows), one_worker) == []
 
 
+#: Ray 2.60 turns token authentication on by itself when ~/.ray/auth_token exists: the test's cluster, its
+#: nodes and the campaign's driver all get one explicit token instead (hermetic, and how a real cluster runs)
+RAY_TOKEN = {"RAY_AUTH_MODE": "token", "RAY_AUTH_TOKEN": secrets.token_hex(32)}
+
+
+def _ray_env() -> dict[str, str]:
+    return {**_env(), **RAY_TOKEN}
+
+
 def _start(args: list[str], err: Path) -> subprocess.Popen[bytes]:
     with err.open("wb") as f:
-        return subprocess.Popen(args, env=_env(), start_new_session=True, stdout=subprocess.DEVNULL, stderr=f)
+        return subprocess.Popen(args, env=_ray_env(), start_new_session=True, stdout=subprocess.DEVNULL, stderr=f)
 
 
 def _ray_cluster(tmp_path: Path) -> tuple[str, list[subprocess.Popen[bytes]]]:
@@ -202,7 +220,7 @@ def _wait_for_nodes(address: str, n: int) -> None:
         f"while len([x for x in ray.nodes() if x['Alive']]) < {n} and time.monotonic() - t < 120: time.sleep(0.5)\n"
         "print(len([x for x in ray.nodes() if x['Alive']]))\n"
     )
-    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300, env=_env())
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300, env=_ray_env())
     if out.returncode != 0 or out.stdout.strip() != str(n):
         pytest.skip(f"Ray cannot start here: {n} nodes not up within 120 s ({out.stderr.strip()[-300:]})")
 
@@ -211,7 +229,9 @@ def test_two_node_ray_cluster_matches_local_run(one_worker: dict[str, dict[str, 
     address, procs = _ray_cluster(tmp_path)
     try:
         _wait_for_nodes(address, 2)
-        proc = _eval(str(TINY), "--out", str(tmp_path / "out"), "--ray", address, "--keep-logs", "failures")
+        proc = _eval(
+            str(TINY), "--out", str(tmp_path / "out"), "--ray", address, "--keep-logs", "failures", env=_ray_env()
+        )
         assert proc.returncode == 0, proc.stderr
     finally:
         _stop(procs)
