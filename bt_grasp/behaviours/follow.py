@@ -130,7 +130,8 @@ class FollowTarget(RobotLeaf):
         top = expected + np.array([0.0, 0.0, track.height_m / 2])
         footprint = Footprint(track.length_m, track.width_m, track.yaw_rad)
         m = measure_blob(frame, T_base_camera, track.color, self.cell.perception_config,
-                         top_z_hint_m=track.top_z_m, expected_base_m=top, footprint=footprint)
+                         top_z_hint_m=track.top_z_m, expected_base_m=top, footprint=footprint,
+                         support_z_m=track.top_z_m - track.height_m)
         if m is None:
             return None
         # the object rides on a flat support: its height stays what the full perception measured; a blob

@@ -5,9 +5,11 @@ object at the camera rate needs far less: the HSV mask of its colour, the connec
 where the target is expected, and where its top face is.
 
 * With valid depth on the blob (the usual case: eye-to-hand, or a wrist camera beyond the D435's 0.28 m
-  minimum range), the blob's pixels are back-projected into the base frame; the top face is the points
-  within ``top_band_m`` of the blob's 90 % height quantile and the target's (x, y) is their median: a slanted
-  view sees side faces too, which lie below the top and are left out.
+  minimum range), the blob's pixels are back-projected into the base frame and, when the support's height
+  is known (the track's), described by the pipeline's own robust footprint (``segment.object_geometry``:
+  top face, quantile rectangle); otherwise the target's (x, y) is the median of the points within
+  ``top_band_m`` of the blob's 90 % height quantile. The plain top band is pulled 3-4 mm towards a slanted
+  camera by the upper rims of the side faces; the footprint's centre is not (measured: 1.7 mm median).
 * A blob cut by the image border is no measurement (its centre would be pulled inwards).
 * Without depth (a wrist camera closer than the minimum range), the blob's pixel rays are intersected with
   the plane of the target's top face, whose height the full perception gave. Side faces facing the camera
@@ -30,6 +32,7 @@ from bt_grasp.interfaces import RGBDFrame
 from bt_grasp.perception import cloud as pc
 from bt_grasp.perception.color import color_mask, to_hsv
 from bt_grasp.perception.config import PerceptionConfig
+from bt_grasp.perception.segment import Plane, object_geometry
 
 #: fewest blob pixels with depth for a depth measurement; fewer: the top-plane intersection is used
 _MIN_DEPTH_PIXELS = 40
@@ -111,7 +114,8 @@ def _top_centre_from_hits(hits: NDArray[np.float64], camera_xy: NDArray[np.float
 
 def measure_blob(frame: RGBDFrame, T_base_camera: Mat4, color: str, config: PerceptionConfig, *,
                  top_z_hint_m: float | None, expected_base_m: NDArray[np.float64] | None = None,
-                 top_band_m: float = 0.012, footprint: Footprint | None = None) -> BlobMeasurement | None:
+                 top_band_m: float = 0.012, footprint: Footprint | None = None,
+                 support_z_m: float | None = None) -> BlobMeasurement | None:
     """The target's top-face centre from its colour blob; None when no blob of the colour is in view."""
     hsv = to_hsv(frame.color)
     mask = color_mask(hsv, config.color.ranges[color], config.color)
@@ -131,6 +135,10 @@ def measure_blob(frame: RGBDFrame, T_base_camera: Mat4, color: str, config: Perc
     T = np.asarray(T_base_camera, dtype=float)
     if int(with_depth.sum()) >= max(_MIN_DEPTH_PIXELS, _MIN_DEPTH_SHARE * len(rows)):
         pts = pc.to_base(pc.depth_to_cloud(depth, frame.intrinsics, with_depth), T).points
+        if support_z_m is not None:  # the pipeline's robust footprint on the support plane (side faces ignored)
+            geo = object_geometry(pts, Plane(np.array([0.0, 0.0, 1.0]), -float(support_z_m)), config.segmentation)
+            return BlobMeasurement((float(geo.centre_base_m[0]), float(geo.centre_base_m[1])),
+                                   float(support_z_m + geo.height_m), uv, len(rows), True)
         level = float(np.quantile(pts[:, 2], _TOP_QUANTILE))
         top = pts[np.abs(pts[:, 2] - level) < top_band_m]
         if len(top) >= 10:
