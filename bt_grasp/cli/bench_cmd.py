@@ -148,6 +148,7 @@ def follow(
     pick_seeds: int = typer.Option(0, "--pick-seeds", min=0,
                                    help="Also pick from the conveyor this many seeds per speed (eye-to-hand)."),
     pick_mount: str = typer.Option("eye-to-hand", "--pick-mount", help="Camera mount of the pick episodes."),
+    first_seed: int = typer.Option(0, "--first-seed", min=0, help="First seed of the pick episodes."),
     as_json: bool = typer.Option(False, "--json", help="Print exactly one JSON object."),
 ) -> None:
     """Visual following on the conveyor: tracking error against the simulator's truth, and the pick rate."""
@@ -168,8 +169,8 @@ def follow(
     if seeds:
         summary["tracking"] = run_tracking_bench(repo, speed_list, seeds, mount_list, progress=say)
     if pick_seeds:
-        summary["picks"] = [run_conveyor_pick_bench(repo, v, pick_seeds, pick_mount, progress=say)
-                            for v in speed_list]
+        summary["picks"] = [run_conveyor_pick_bench(repo, v, pick_seeds, pick_mount, first_seed=first_seed,
+                                                    progress=say) for v in speed_list]
     summary["machine"] = machine_description()
     typer.echo(json.dumps(summary, indent=None if as_json else 1))
 

@@ -156,5 +156,5 @@ def measure_blob(frame: RGBDFrame, T_base_camera: Mat4, color: str, config: Perc
         return None
     s = (top_z_hint_m - origin[2]) / rays[ok, 2]
     hits = origin[None, :] + s[:, None] * rays[ok]
-    return BlobMeasurement((float(np.median(hits[:, 0])), float(np.median(hits[:, 1]))), float(top_z_hint_m), uv,
-                           len(rows), False)
+    return BlobMeasurement(_top_centre_from_hits(hits, origin[:2], footprint), float(top_z_hint_m), uv, len(rows),
+                           False)
