@@ -107,7 +107,8 @@ def _print_foxglove(console: Console, run: RunLog) -> None:
         "It shows the arm, point cloud, detections and grasps in 3D, the camera with detections drawn, each "
         "leaf's status over time (State Transitions on /bt/tick.leaves.*), joint and gripper plots and the log.\n"
         + (f"The timeline starts at the run's real start ({_utc(origin)}); simulated time runs on from there."
-           if origin else "This log is format 1: its timeline starts at 1970-01-01 (simulated time from 0).")
+           if origin else "This log is format 1: its timeline starts at 1970-01-01 (simulated time from 0)."),
+        soft_wrap=True,  # paths stay whole, to be copied
     )
 
 

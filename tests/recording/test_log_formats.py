@@ -51,3 +51,25 @@ def test_an_unknown_format_is_refused_in_one_sentence(tmp_path: Path) -> None:
     message = str(info.value)
     assert "log format 99" in message and "reads formats 1 and 2" in message
     assert message.count(". ") == 0
+
+
+def test_replay_reports_and_explains_foxglove_for_an_old_log(tmp_path: Path) -> None:
+    import os
+    import subprocess
+    import sys
+
+    root = Path(__file__).resolve().parents[2]
+
+    def cli(*args: str) -> subprocess.CompletedProcess[str]:
+        return subprocess.run([sys.executable, "-m", "bt_grasp.cli.main", *args], capture_output=True, text=True,
+                              timeout=120, env={**os.environ, "PYTHONPATH": str(root)})
+
+    html = tmp_path / "report.html"
+    made = cli("replay", str(OLD), "--report", str(html), "--report-dir", str(tmp_path / "png"))
+    assert made.returncode == 0, made.stdout + made.stderr
+    page = html.read_text()
+    assert "<script" not in page and "http://" not in page and "https://" not in page  # self-contained
+    assert "Leaf statuses over time" in page and "data:image/png;base64," in page
+    assert (tmp_path / "png" / "gantt.png").stat().st_size > 1000
+    told = cli("replay", str(OLD), "--foxglove")
+    assert told.returncode == 0 and "bt_grasp.layout.json" in told.stdout and "format 1" in told.stdout
