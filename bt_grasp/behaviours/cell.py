@@ -106,7 +106,7 @@ def make_cell(
         scene=scene,
         seed=seed,
         perception_config=PerceptionConfig.for_scene(scene),
-        planner_options=PlannerOptions(seed=seed + 1, time_limit_s=2.0),
+        planner_options=PlannerOptions(seed=seed + 1),
         calibration=calibration,
         board=board,
     )

@@ -12,6 +12,8 @@ import typer
 
 from bt_grasp.environment import machine_description
 
+PLAN_BUDGET_DEFAULT = 40_000  # = PlannerOptions().max_state_checks (kept literal: the CLI imports lazily)
+
 bench_app = typer.Typer(help="Benchmarks (planning; perception; the task suite).", no_args_is_help=True)
 
 
@@ -20,7 +22,8 @@ def plan(
     problems: int = typer.Option(60, "--problems", min=1, help="Number of tabletop problems."),
     seed: int = typer.Option(0, "--seed", help="Seed of the problem set (same seed, same problems)."),
     planner: str = typer.Option("RRTConnect", "--planner", help="OMPL planner name."),
-    time_limit_s: float = typer.Option(1.0, "--time-limit", help="Planner time limit per problem, s."),
+    budget: int = typer.Option(PLAN_BUDGET_DEFAULT, "--budget", min=1,
+                               help="The search's work budget per problem: state validity checks."),
     scene: Path = typer.Option(Path("scenes/tabletop.yaml"), "--scene", help="Scene file (table, mount)."),
     as_json: bool = typer.Option(False, "--json", help="Print exactly one JSON object."),
     export: Path = typer.Option(None, "--export", help="Also write the problems as JSON (for tools/)."),
@@ -34,7 +37,7 @@ def plan(
     if planner not in PLANNERS:
         raise InputError("--planner", f"unknown planner '{planner}'; known: {', '.join(PLANNERS)}")
     config = load_scene(scene)
-    options = PlannerOptions(planner=planner, time_limit_s=time_limit_s)
+    options = PlannerOptions(planner=planner, max_state_checks=budget)
     if export is not None:
         export.write_text(json.dumps([p.to_json() for p in make_problems(config, problems, seed)], indent=1))
     report = run_plan_bench(config, problems, seed, options)

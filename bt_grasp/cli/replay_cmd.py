@@ -126,15 +126,19 @@ def _resim(console: Console, log: Path, as_json: bool) -> None:
         _json(console, report.to_json())
     elif report.reproduced:
         console.print(
-            f"[green]reproduced[/]: {report.ticks_new} ticks, the same status for every node at every tick "
+            f"[green]reproduced[/]: {report.ticks_new} ticks, the same fingerprint (every node's status and "
+            f"reason, blackboard, joints, gripper at every tick; final object poses) {report.digest_new[:16]} "
             f"(success {report.success_new}); new log {report.new_log}"
         )
     else:
         d = report.divergence
-        console.print(f"[red]diverged[/] at tick {d.tick} ({d.kind}); recorded {report.ticks_recorded} ticks, "
-                      f"new {report.ticks_new}")
-        for diff in d.differences[:20]:
-            console.print(f"  {diff}")
+        if d is not None:
+            console.print(f"[red]diverged[/] at tick {d.tick} ({d.kind}); recorded {report.ticks_recorded} "
+                          f"ticks, new {report.ticks_new}")
+            for diff in d.differences[:20]:
+                console.print(f"  {diff}")
+        if report.fingerprint_difference is not None:
+            console.print(f"[red]fingerprints differ[/]: {report.fingerprint_difference.describe()}")
     if not report.reproduced:
         raise typer.Exit(1)
 

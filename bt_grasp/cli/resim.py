@@ -2,7 +2,10 @@
 
 The tree, scene, calibration and fault plan are taken from the log's attachments (the exact bytes the run
 used), the seed, blackboard, injections and tick limit from its metadata; the new run is recorded to a
-temporary MCAP file and its tick stream compared with the recorded one.
+temporary MCAP file and compared with the recorded one by their run fingerprints
+(``bt_grasp.recording.fingerprint``: per tick every node's status and failure reason, the blackboard, the
+joints to 1e-6 rad and the gripper width; the final object poses), plus the node-status stream comparison
+that names the first differing node statuses.
 """
 
 from __future__ import annotations
@@ -25,10 +28,13 @@ class ResimReport:
     success_recorded: bool | None
     success_new: bool
     new_log: str
+    fingerprint_difference: Any = None  # bt_grasp.recording.fingerprint.FingerprintDifference | None
+    digest_recorded: str = ""
+    digest_new: str = ""
 
     @property
     def reproduced(self) -> bool:
-        return self.divergence is None
+        return self.divergence is None and self.fingerprint_difference is None
 
     def to_json(self) -> dict[str, Any]:
         from dataclasses import asdict
@@ -40,6 +46,12 @@ class ResimReport:
             "success_recorded": self.success_recorded,
             "success_new": self.success_new,
             "first_divergence": asdict(self.divergence) if self.divergence is not None else None,
+            "fingerprint": {
+                "recorded": self.digest_recorded,
+                "new": self.digest_new,
+                "first_difference": None if self.fingerprint_difference is None
+                else asdict(self.fingerprint_difference),
+            },
             "new_log": self.new_log,
         }
 
@@ -70,6 +82,7 @@ def recorded_goal(log_path: Path, meta: dict[str, str]) -> Goal | None:
 def resimulate(log_path: Path, workdir: Path | None = None) -> ResimReport:
     from bt_grasp.episode import EpisodeRequest, run_episode
     from bt_grasp.recording.compare import compare_tick_streams
+    from bt_grasp.recording.fingerprint import fingerprint_of_log
     from bt_grasp.recording.reader import open_log
 
     run = open_log(log_path)
@@ -112,5 +125,13 @@ def resimulate(log_path: Path, workdir: Path | None = None) -> ResimReport:
     summary = run_episode(request)
     new_run = open_log(new_log)
     divergence = compare_tick_streams(run.ticks, new_run.ticks, stop_at_shorter=run.truncated)
+    recorded_print, new_print = fingerprint_of_log(run), fingerprint_of_log(new_run)
+    # a truncated log never reached its end: compare the ticks it has; a log from before final poses were
+    # recorded has none: compare the ticks and the run length only
+    final_known = bool(recorded_print.final_objects)
+    difference = recorded_print.first_difference(new_print, compare_final=not run.truncated)
+    if difference is not None and difference.tick is None and not final_known:
+        difference = None
     recorded_success = run.result.get("success") if isinstance(run.result, dict) else None
-    return ResimReport(len(run.ticks), len(new_run.ticks), divergence, recorded_success, summary.success, str(new_log))
+    return ResimReport(len(run.ticks), len(new_run.ticks), divergence, recorded_success, summary.success,
+                       str(new_log), difference, recorded_print.digest, new_print.digest)

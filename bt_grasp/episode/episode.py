@@ -210,7 +210,7 @@ class Episode:
                 sim_time_s=outcome.sim_time_s,
                 wall_time_s=outcome.wall_time_s,
                 retries=outcome.retries,
-                judged=judged(verdict),
+                judged=judged(verdict, judge.object_poses()),
                 log=str(request.log) if request.log else None,
                 seed=request.seed,
                 faults_fired=injector.fired if injector is not None else 0,
@@ -289,7 +289,7 @@ def goal_entries(goal: Goal) -> dict[str, BlackboardValue]:
     return {}
 
 
-def judged(verdict: Verdict) -> Judged:
+def judged(verdict: Verdict, object_poses: dict[str, list[list[float]]] | None = None) -> Judged:
     failed = verdict.failed
     return Judged(
         goal=verdict.goal,
@@ -301,6 +301,7 @@ def judged(verdict: Verdict) -> Judged:
         in_gripper=verdict.in_gripper,
         lifted_objects=verdict.lifted_objects,
         objects_in_workspace=verdict.objects_in_workspace,
+        object_poses=dict(object_poses or {}),
     )
 
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from bt_grasp.episode.instruments import PlanningStats
 from bt_grasp.goals import Goal
@@ -29,8 +29,11 @@ class Judged:
     in_gripper: bool = False
     lifted_objects: tuple[str, ...] = ()
     objects_in_workspace: tuple[str, ...] = ()
+    #: every object's final T_world_object (4x4): the end of the run's fingerprint (recording/fingerprint.py)
+    object_poses: dict[str, list[list[float]]] = field(default_factory=dict)
 
     def to_json(self) -> dict[str, JsonValue]:
+        poses: dict[str, JsonValue] = {n: [list(row) for row in T] for n, T in self.object_poses.items()}
         return {
             "source": "simulator ground truth (judge only)",
             "goal": goal_json(self.goal),
@@ -42,6 +45,7 @@ class Judged:
             "in_gripper": self.in_gripper,
             "lifted_objects": list(self.lifted_objects),
             "objects_in_workspace": list(self.objects_in_workspace),
+            "object_poses": poses,
         }
 
 

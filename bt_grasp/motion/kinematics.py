@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import enum
 import logging
+from collections.abc import Iterator
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
@@ -192,6 +193,43 @@ class ArmKinematics:
                     q[j] = candidate
         return q
 
+    def iter_ik_solutions(
+        self,
+        T_base_tcp_goal: Mat4,
+        q_current: NDArray[np.float64],
+        *,
+        seeds: int,
+        rng: np.random.Generator,
+        options: IKOptions | None = None,
+        tried: list[IKResult] | None = None,
+    ) -> Iterator[Vec]:
+        """Distinct solutions in the order the seeds find them (``q_current`` first, then ``rng``'s draws).
+
+        A fixed amount of work per seed (``options.max_iterations``), ``seeds`` seeds at most: the caller
+        stops whenever it has enough. The input must be valid (see :meth:`ik_solutions`). ``tried``, when
+        given, receives one :class:`IKResult` per seed (for the best-error report of a failure).
+        """
+        opts = options or IKOptions()
+        q_cur = np.asarray(q_current, dtype=float).reshape(-1)
+        oMdes = pin.SE3(np.asarray(T_base_tcp_goal, dtype=float))
+        found: list[Vec] = []
+        for k in range(seeds):
+            q0 = q_cur if k == 0 else rng.uniform(self.lower_rad, self.upper_rad)
+            q, pe, re, iters, ok = self._solve_from(oMdes, q0, opts)
+            if tried is not None:
+                tried.append(IKResult(IKStatus.OK if ok else IKStatus.UNREACHABLE, q, pe, re, iters))
+            if not ok:
+                continue
+            q = self._unwrap_towards(q, q_cur)
+            if all(np.max(np.abs(q - s)) > opts.distinct_tol_rad for s in found):
+                found.append(q)
+                yield q
+
+    def beyond_reach_m(self, T_base_tcp_goal: Mat4) -> float:
+        """How far the tcp position lies beyond a proven reach bound (<= 0: maybe reachable)."""
+        reach = float(np.linalg.norm(np.asarray(T_base_tcp_goal)[:3, 3] - self._shoulder_xyz_m))
+        return reach - self.reach_bound_m
+
     def ik_solutions(
         self,
         T_base_tcp_goal: Mat4,
@@ -211,7 +249,6 @@ class ArmKinematics:
         ``stop_if_current_converges`` stops when the first seed (``q_current``) converges: that solution is
         reached continuously from ``q_current`` and is, in practice, the closest one.
         """
-        opts = options or IKOptions()
         q_cur = np.asarray(q_current, dtype=float).reshape(-1)
         if q_cur.shape != (6,) or not np.all(np.isfinite(q_cur)) or not is_rigid_transform(T_base_tcp_goal):
             bad = IKResult(IKStatus.INVALID_INPUT, np.full(6, np.nan), float("inf"), float("inf"), 0)
@@ -219,35 +256,29 @@ class ArmKinematics:
         if seeds < 1:
             raise ValueError("ik needs at least one seed")
         rng = rng if rng is not None else np.random.default_rng(0)
-        reach = float(np.linalg.norm(np.asarray(T_base_tcp_goal)[:3, 3] - self._shoulder_xyz_m))
-        if reach > self.reach_bound_m:
-            beyond_m = reach - self.reach_bound_m
+        beyond_m = self.beyond_reach_m(T_base_tcp_goal)
+        if beyond_m > 0:
             return [], IKResult(IKStatus.UNREACHABLE, q_cur.copy(), beyond_m, float("inf"), 0)
-        oMdes = pin.SE3(np.asarray(T_base_tcp_goal, dtype=float))
-        solutions: list[tuple[Vec, float, float]] = []
-        best_fail: tuple[Vec, float, float] | None = None
-        total_iters = 0
-        for k in range(seeds):
-            q0 = q_cur if k == 0 else rng.uniform(self.lower_rad, self.upper_rad)
-            q, pe, re, iters, ok = self._solve_from(oMdes, q0, opts)
-            total_iters += iters
-            if ok:
-                q = self._unwrap_towards(q, q_cur)
-                if all(np.max(np.abs(q - s[0])) > opts.distinct_tol_rad for s in solutions):
-                    solutions.append((q, pe, re))
-                if max_solutions is not None and len(solutions) >= max_solutions:
-                    break
-                if k == 0 and stop_if_current_converges:
-                    break
-            elif best_fail is None or pe + re < best_fail[1] + best_fail[2]:
-                best_fail = (q, pe, re)
+        tried: list[IKResult] = []
+        solutions: list[Vec] = []
+        for q in self.iter_ik_solutions(T_base_tcp_goal, q_cur, seeds=seeds, rng=rng, options=options,
+                                        tried=tried):
+            solutions.append(q)
+            if max_solutions is not None and len(solutions) >= max_solutions:
+                break
+            if len(tried) == 1 and stop_if_current_converges:
+                break
+        total_iters = sum(t.iterations for t in tried)
         if not solutions:
-            assert best_fail is not None
-            q, pe, re = best_fail
-            return [], IKResult(IKStatus.UNREACHABLE, q, pe, re, total_iters)
-        solutions.sort(key=lambda s: float(np.linalg.norm(s[0] - q_cur)))
-        q, pe, re = solutions[0]
-        return [s[0] for s in solutions], IKResult(IKStatus.OK, q, pe, re, total_iters)
+            worst = min(tried, key=lambda t: t.position_error_m + t.rotation_error_rad)
+            return [], IKResult(IKStatus.UNREACHABLE, worst.q, worst.position_error_m, worst.rotation_error_rad,
+                                total_iters)
+        solutions.sort(key=lambda s: float(np.linalg.norm(s - q_cur)))
+        closest = solutions[0]
+        match = min((t for t in tried if t.ok), key=lambda t: float(np.max(np.abs(
+            self._unwrap_towards(t.q, q_cur) - closest))))
+        return solutions, IKResult(IKStatus.OK, closest, match.position_error_m, match.rotation_error_rad,
+                                   total_iters)
 
     def ik(
         self,

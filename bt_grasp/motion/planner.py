@@ -9,9 +9,14 @@ Collision checking along edges: OMPL's motion validator checks states at most
 ``edge_resolution_rad`` apart (L2 in joint space, hence also on every joint); the simplified path is then
 re-checked at ``final_resolution_rad`` (max joint step, 0.01 rad by default) before it is returned.
 
-Reproducibility: ``ompl.util.RNG.setSeed(seed)`` reseeds OMPL's seed generator before every plan, and
-every OMPL object that draws numbers is created after it, so the same request and seed give the same
-path (OMPL logs "Random number generation already started" on reseeding; it reseeds all the same).
+Determinism (same request, same seed, same result on any machine at any load): no decision reads the
+clock. The search ends on a work budget (``max_state_checks`` validity checks, through an OMPL termination
+condition, ``budget.py``), simplification makes fixed passes (or spends its own check budget), IK runs a
+fixed number of iterations per seed from a fixed seed list, and the re-search at a finer resolution happens
+at most ``max_refinements`` times. ``ompl.util.RNG.setSeed(seed)`` reseeds OMPL's seed generator before
+every search and every OMPL object that draws numbers is created after it (OMPL logs "Random number
+generation already started" on reseeding; it reseeds all the same). The one clock read is the safety net
+(``safety_limit_s``), which fails the request as ``SAFETY_TIMEOUT`` and logs a warning.
 """
 
 from __future__ import annotations
@@ -22,7 +27,7 @@ import math
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -31,8 +36,9 @@ from ompl import geometric as og
 from ompl import util as ou
 
 from bt_grasp.geometry import Mat4
+from bt_grasp.motion.budget import WorkBudget
 from bt_grasp.motion.collision import FINE_RESOLUTION_RAD, CollisionChecker, collision_checker
-from bt_grasp.motion.kinematics import IKStatus, default_kinematics
+from bt_grasp.motion.kinematics import default_kinematics, is_rigid_transform
 from bt_grasp.motion.planning_scene import PlanningScene
 from bt_grasp.robot_description import MAX_OPENING_M
 
@@ -55,45 +61,56 @@ PLANNERS: dict[str, Callable[[ob.SpaceInformation], ob.Planner]] = {
 
 class PlanStatus(enum.Enum):
     OK = "ok"
-    IK_UNREACHABLE = "ik_unreachable"  # no IK solution for the goal pose
+    IK_UNREACHABLE = "ik_unreachable"  # no IK solution for the goal pose (proven beyond reach, or none found
+    #                                    from the whole IK seed budget)
     START_IN_COLLISION = "start_in_collision"  # or within the margin of the scene
-    GOAL_IN_COLLISION = "goal_in_collision"  # every IK solution (or the goal configuration) collides
-    NO_PATH = "no_path"  # the planner gave up, or its path failed the fine re-check
+    GOAL_IN_COLLISION = "goal_in_collision"  # every IK solution of the seed budget (or the goal q) collides
+    NO_PATH = "no_path"  # the planner proved nothing and ended without a path, or the path failed the re-check
     INVALID_INPUT = "invalid_input"  # NaN, wrong shape, out of limits, bad options, unknown planner
-    TIMEOUT = "timeout"  # no exact solution within the time limit
+    BUDGET_EXHAUSTED = "budget_exhausted"  # the search spent its whole work budget without an exact path
+    SAFETY_TIMEOUT = "safety_timeout"  # the wall-clock safety net fired (never the normal end of a search)
+    TIMEOUT = "timeout"  # kept for compatibility (fault plans name it); the planner itself never returns it
 
 
 @dataclass(frozen=True)
 class PlannerOptions:
-    """How to plan. Times are wall-clock seconds of computation, not simulated time."""
+    """How to plan. Every limit that decides an outcome counts work, never time (see ``budget.py``).
+
+    The defaults were chosen on ``bt-grasp bench plan`` (docs/motion.md, "Budgets").
+    """
 
     planner: str = "RRTConnect"  # a key of PLANNERS
-    time_limit_s: float = 1.0  # for the planner's search (asymptotically optimal planners use all of it)
+    max_state_checks: int = 40_000  # the search's work budget: state validity checks (incl. along edges)
     seed: int = 1  # OMPL's RNG seed and the IK seeds' generator (OMPL treats 0 as "random": avoid it)
-    simplify: str = "shortcut"  # "none" | "shortcut" (bounded, ~ms) | "full" (OMPL's simplifySolution)
-    simplify_time_s: float = 0.5  # time given to "full" simplification (OMPL may overrun it)
+    simplify: str = "shortcut"  # "none" | "shortcut" (fixed passes) | "full" (OMPL's simplify, on a budget)
+    simplify_state_checks: int = 4_000  # the work budget of "full" simplification
     edge_resolution_rad: float = 0.025  # collision checks along edges during the search
     final_resolution_rad: float = FINE_RESOLUTION_RAD  # re-check of the returned path
+    max_refinements: int = 2  # searches again at half the edge resolution when the re-check fails
     margin_m: float = 0.01  # minimum clearance to scene shapes (not applied to self-collision)
     range_rad: float | None = 1.0  # the tree planners' step size; None lets OMPL choose (~6 rad here)
     joint_window_rad: float | None = math.pi  # search only within this of the start/goal span per joint
-    ik_seeds: int = 10  # IK starts for plan_to_pose (q_start first)
-    max_goal_configs: int = 3  # distinct collision-free IK solutions handed to the planner
+    ik_seeds: int = 40  # the IK seed budget of plan_to_pose (q_start first, then seeded random starts)
+    max_goal_configs: int = 3  # stop seeding IK once this many distinct collision-free solutions exist
+    safety_limit_s: float = 30.0  # wall-clock safety net per request: SAFETY_TIMEOUT, logged; never a budget
 
     def problem(self) -> str | None:
         """Why these options are unusable, or None."""
         if self.planner not in PLANNERS:
             return f"unknown planner '{self.planner}'; known: {', '.join(PLANNERS)}"
-        for name in ("time_limit_s", "edge_resolution_rad", "final_resolution_rad", "simplify_time_s"):
+        for name in ("safety_limit_s", "edge_resolution_rad", "final_resolution_rad"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 return f"{name} must be a positive number, got {value}"
+        for name in ("max_state_checks", "simplify_state_checks", "ik_seeds", "max_goal_configs"):
+            if int(getattr(self, name)) < 1:
+                return f"{name} must be >= 1, got {getattr(self, name)}"
+        if self.max_refinements < 0:
+            return f"max_refinements must be >= 0, got {self.max_refinements}"
         if not (math.isfinite(self.margin_m) and self.margin_m >= 0):
             return f"margin_m must be >= 0, got {self.margin_m}"
         if self.simplify not in ("none", "shortcut", "full"):
             return f"simplify must be 'none', 'shortcut' or 'full', got '{self.simplify}'"
-        if self.ik_seeds < 1 or self.max_goal_configs < 1:
-            return "ik_seeds and max_goal_configs must be >= 1"
         if self.seed < 1:
             return "seed must be >= 1 (OMPL reads 0 as 'seed from the clock')"
         return None
@@ -101,7 +118,11 @@ class PlannerOptions:
 
 @dataclass(frozen=True)
 class PlanResult:
-    """A planned joint path (N, 6) from the start to a goal configuration, or why there is none."""
+    """A planned joint path (N, 6) from the start to a goal configuration, or why there is none.
+
+    The ``*_time_s`` fields are wall-clock measurements for benchmarks and logs only; no decision reads
+    them and no message quotes them (messages are part of a run's recorded, reproducible output).
+    """
 
     status: PlanStatus
     path: Vec = field(default_factory=lambda: np.zeros((0, 6)))
@@ -111,6 +132,8 @@ class PlanResult:
     planner: str = ""
     message: str = ""
     goal_q: Vec | None = None
+    state_checks: int = 0  # validity checks the search spent (its budget's unit)
+    goal_configs: int = 0  # collision-free IK goals handed to the search (plan_to_pose)
 
     @property
     def ok(self) -> bool:
@@ -124,7 +147,7 @@ class PlanResult:
         return float(np.sum(np.linalg.norm(np.diff(self.path, axis=0), axis=1)))
 
 
-def _fail(status: PlanStatus, message: str, **kw: float | str) -> PlanResult:
+def _fail(status: PlanStatus, message: str, **kw: float | str | int) -> PlanResult:
     log.info("plan failed: %s: %s", status.value, message)
     return PlanResult(status=status, message=message, **kw)  # type: ignore[arg-type]
 
@@ -146,6 +169,17 @@ def _ompl_console_silenced() -> Iterator[None]:
         ou.restorePreviousOutputHandler()
 
 
+@dataclass(frozen=True)
+class GoalSet:
+    """The collision-free IK goals of a pose, closest to the start first, and what seeding found."""
+
+    goals: list[Vec]
+    solutions: int  # distinct IK solutions found (free or not)
+    seeds_used: int
+    first_colliding: Vec | None = None
+    best_error: tuple[float, float] = (float("inf"), float("inf"))  # m, rad (when none converged)
+
+
 class MotionPlanner:
     """Plans arm motions for a gripper opening (the collision model's fingers sit at that opening)."""
 
@@ -157,37 +191,61 @@ class MotionPlanner:
         return collision_checker(scene, float(margin_m), self.opening_m)
 
     # --- pose goals ---------------------------------------------------------------------------------
+    def goal_set(self, q0: Vec, T_base_tcp_goal: Mat4, checker: CollisionChecker, opts: PlannerOptions) -> GoalSet:
+        """Seed IK until ``max_goal_configs`` distinct collision-free solutions exist or ``ik_seeds`` are spent.
+
+        Seeds: ``q0`` first, then uniform draws from a generator seeded with ``opts.seed`` (the same request
+        always tries the same seeds). Every solution is collision-checked as it is found, so a pose whose
+        first solutions collide is not given up while seeds remain.
+        """
+        rng = np.random.default_rng(opts.seed)
+        tried: list = []  # type: ignore[type-arg]
+        free: list[Vec] = []
+        found = 0
+        first_colliding: Vec | None = None
+        for q in self.kin.iter_ik_solutions(T_base_tcp_goal, q0, seeds=opts.ik_seeds, rng=rng, tried=tried):
+            found += 1
+            if checker.is_valid(q):
+                free.append(q)
+                if len(free) >= opts.max_goal_configs:
+                    break
+            elif first_colliding is None:
+                first_colliding = q
+        free.sort(key=lambda g: float(np.linalg.norm(g - q0)))
+        best = min(tried, key=lambda t: t.position_error_m + t.rotation_error_rad, default=None)
+        error = (best.position_error_m, best.rotation_error_rad) if best is not None else (float("inf"),) * 2
+        return GoalSet(free, found, len(tried), first_colliding, error)
+
     def plan_to_pose(self, q_start: NDArray[np.float64], T_base_tcp_goal: Mat4, scene: PlanningScene,
                      options: PlannerOptions | None = None) -> PlanResult:
-        """IK for the tcp pose (several collision-free solutions), then a joint-space plan to any of them."""
+        """IK for the tcp pose (a set of collision-free solutions), then a joint-space plan to any of them."""
         opts = options or PlannerOptions()
         problem = opts.problem()
         q0 = _valid_q(q_start)
         if problem is not None or q0 is None:
             return _fail(PlanStatus.INVALID_INPUT, problem or f"bad start configuration {q_start!r}")
+        if not is_rigid_transform(T_base_tcp_goal):
+            return _fail(PlanStatus.INVALID_INPUT, "the goal pose is not a finite rigid transform")
+        beyond_m = self.kin.beyond_reach_m(T_base_tcp_goal)
+        if beyond_m > 0:
+            return _fail(PlanStatus.IK_UNREACHABLE, f"the goal lies {beyond_m * 1e3:.0f} mm beyond the arm's reach")
         t0 = time.perf_counter()
-        rng = np.random.default_rng(opts.seed)
-        # a few more solutions than goals: some may collide (IK stops once it has that many)
-        solutions, best = self.kin.ik_solutions(T_base_tcp_goal, q0, seeds=opts.ik_seeds, rng=rng,
-                                                max_solutions=2 * opts.max_goal_configs)
-        ik_time = time.perf_counter() - t0
-        if best.status is IKStatus.INVALID_INPUT:
-            return _fail(PlanStatus.INVALID_INPUT, "the goal pose is not a finite rigid transform",
-                         ik_time_s=ik_time)
-        if not solutions:
-            return _fail(PlanStatus.IK_UNREACHABLE,
-                         f"no IK solution (best error {best.position_error_m * 1e3:.1f} mm, "
-                         f"{np.rad2deg(best.rotation_error_rad):.2f} deg)", ik_time_s=ik_time)
         checker = self.checker(scene, opts.margin_m)
-        goals = [q for q in solutions if checker.is_valid(q)][: opts.max_goal_configs]
+        found = self.goal_set(q0, T_base_tcp_goal, checker, opts)
         ik_time = time.perf_counter() - t0
-        if not goals:
-            pairs = checker.colliding_pairs(solutions[0])
+        if found.solutions == 0:
+            pe, re = found.best_error
+            return _fail(PlanStatus.IK_UNREACHABLE,
+                         f"no IK solution from {found.seeds_used} seeds (best error {pe * 1e3:.1f} mm, "
+                         f"{np.rad2deg(re):.2f} deg)", ik_time_s=ik_time)
+        if not found.goals:
+            q_bad = found.first_colliding
+            pairs = checker.colliding_pairs(q_bad) if q_bad is not None else []
             return _fail(PlanStatus.GOAL_IN_COLLISION,
-                         f"all {len(solutions)} IK solutions collide (closest: {pairs or 'within margin'})",
-                         ik_time_s=ik_time)
-        result = self._plan(q0, goals, checker, opts)
-        return _with(result, ik_time_s=ik_time)
+                         f"all {found.solutions} IK solutions from {found.seeds_used} seeds collide "
+                         f"(first: {pairs or 'within margin'})", ik_time_s=ik_time)
+        result = self._plan(q0, found.goals, checker, opts)
+        return replace(result, ik_time_s=ik_time, goal_configs=len(found.goals))
 
     # --- joint goals --------------------------------------------------------------------------------
     def plan_to_joints(self, q_start: NDArray[np.float64], q_goal: NDArray[np.float64], scene: PlanningScene,
@@ -202,7 +260,7 @@ class MotionPlanner:
         checker = self.checker(scene, opts.margin_m)
         if not checker.is_valid(q1):
             return _fail(PlanStatus.GOAL_IN_COLLISION, f"goal collides: {checker.colliding_pairs(q1)}")
-        return self._plan(q0, [q1], checker, opts)
+        return replace(self._plan(q0, [q1], checker, opts), goal_configs=1)
 
     # --- the search ---------------------------------------------------------------------------------
     def _plan(self, q0: Vec, goals: list[Vec], checker: CollisionChecker, opts: PlannerOptions) -> PlanResult:
@@ -217,25 +275,28 @@ class MotionPlanner:
                 path = np.stack([q0, goal])  # the straight line is free: no search needed
                 return PlanResult(PlanStatus.OK, path, time.perf_counter() - t0, planner="direct",
                                   goal_q=goal.copy(), message="straight joint-space line")
+        budget = WorkBudget.start(opts.max_state_checks, opts.safety_limit_s)
         resolution = opts.edge_resolution_rad
-        while True:
-            result = self._search(q0, goals, checker, opts, resolution, t0)
+        for refinement in range(opts.max_refinements + 1):
+            result = self._search(q0, goals, checker, opts, resolution, budget.sub(opts.max_state_checks))
+            result = replace(result, planning_time_s=time.perf_counter() - t0)
             if result.status is not PlanStatus.NO_PATH or "re-check" not in result.message:
                 return result
-            if time.perf_counter() - t0 > opts.time_limit_s or resolution <= opts.final_resolution_rad:
+            if refinement == opts.max_refinements or resolution <= opts.final_resolution_rad:
                 return result
             resolution /= 2  # the path grazed an obstacle between checked states: search more finely
             log.debug("re-check failed; searching again at %.4f rad", resolution)
+        raise AssertionError("unreachable")  # pragma: no cover
 
     def _search(self, q0: Vec, goals: list[Vec], checker: CollisionChecker, opts: PlannerOptions,
-                resolution_rad: float, t0: float) -> PlanResult:
+                resolution_rad: float, budget: WorkBudget) -> PlanResult:
         lower, upper = self.kin.lower_rad, self.kin.upper_rad
         if opts.joint_window_rad is not None:
             span = np.stack([q0, *goals])
             lower = np.maximum(lower, span.min(axis=0) - opts.joint_window_rad)
             upper = np.minimum(upper, span.max(axis=0) + opts.joint_window_rad)
         with _ompl_console_silenced():
-            ou.RNG.setSeed(opts.seed)
+            ou.RNG.setSeed(opts.seed)  # every OMPL object below draws from streams seeded from here
             space = ob.RealVectorStateSpace(6)
             bounds = ob.RealVectorBounds(6)
             for j in range(6):
@@ -243,11 +304,7 @@ class MotionPlanner:
                 bounds.setHigh(j, float(upper[j]))
             space.setBounds(bounds)
             ss = og.SimpleSetup(space)
-
-            def valid(state: object) -> bool:
-                return not checker.in_collision(np.array([state[i] for i in range(6)]))  # type: ignore[index]
-
-            ss.setStateValidityChecker(valid)
+            ss.setStateValidityChecker(budget.wrap(lambda q: not checker.in_collision(q)))
             si = ss.getSpaceInformation()
             si.setStateValidityCheckingResolution(resolution_rad / space.getMaximumExtent())
             start = space.allocState()
@@ -265,26 +322,33 @@ class MotionPlanner:
             if opts.range_rad is not None and hasattr(planner, "setRange"):
                 planner.setRange(float(opts.range_rad))
             ss.setPlanner(planner)
-            remaining = opts.time_limit_s - (time.perf_counter() - t0)
-            status = ss.solve(max(remaining, 1e-3))
+            status = ss.solve(budget.ptc())
             kind = status.getStatus()
+            checks = budget.spent
+            if budget.safety_hit:
+                return _fail(PlanStatus.SAFETY_TIMEOUT,
+                             f"{opts.planner}: the {opts.safety_limit_s:g} s wall-clock safety net stopped the "
+                             f"search", planner=opts.planner, state_checks=checks)
             if kind != ob.PlannerStatus.EXACT_SOLUTION:
-                elapsed = time.perf_counter() - t0
                 mapped = {
-                    ob.PlannerStatus.TIMEOUT: PlanStatus.TIMEOUT,
-                    ob.PlannerStatus.APPROXIMATE_SOLUTION: PlanStatus.TIMEOUT,
+                    ob.PlannerStatus.TIMEOUT: PlanStatus.BUDGET_EXHAUSTED,
+                    ob.PlannerStatus.APPROXIMATE_SOLUTION: PlanStatus.BUDGET_EXHAUSTED,
                     ob.PlannerStatus.INVALID_START: PlanStatus.START_IN_COLLISION,
                     ob.PlannerStatus.INVALID_GOAL: PlanStatus.GOAL_IN_COLLISION,
                 }.get(kind, PlanStatus.NO_PATH)
-                return _fail(mapped, f"{opts.planner}: {status.asString()} after {elapsed:.3f} s",
-                             planning_time_s=elapsed, planner=opts.planner)
+                return _fail(mapped, f"{opts.planner}: {status.asString()} after {checks} of "
+                             f"{opts.max_state_checks} state checks", planner=opts.planner, state_checks=checks)
             ts = time.perf_counter()
             p = ss.getSolutionPath()
+            simplifier = ss.getPathSimplifier()
             if opts.simplify == "full":
-                ss.simplifySolution(opts.simplify_time_s)
-                p = ss.getSolutionPath()
-            elif opts.simplify == "shortcut":
-                simplifier = ss.getPathSimplifier()
+                simplify_budget = budget.sub(opts.simplify_state_checks)
+                ss.setStateValidityChecker(simplify_budget.wrap(lambda q: not checker.in_collision(q)))
+                simplifier.simplify(p, simplify_budget.ptc())
+                if simplify_budget.safety_hit:
+                    return _fail(PlanStatus.SAFETY_TIMEOUT, f"the {opts.safety_limit_s:g} s wall-clock safety "
+                                 "net stopped the simplification", planner=opts.planner, state_checks=checks)
+            elif opts.simplify == "shortcut":  # fixed passes: their work depends on the path, not the clock
                 simplifier.reduceVertices(p)
                 simplifier.ropeShortcutPath(p)
                 simplifier.reduceVertices(p)
@@ -292,20 +356,13 @@ class MotionPlanner:
             path = np.array([[p.getState(k)[j] for j in range(6)] for k in range(p.getStateCount())])
         path[0] = q0  # exact start (OMPL copies it; keep the caller's bits)
         check = checker.check_path(path, opts.final_resolution_rad)
-        elapsed = time.perf_counter() - t0
         if not check.ok:
             return _fail(PlanStatus.NO_PATH,
                          f"path failed the {opts.final_resolution_rad} rad re-check at segment "
-                         f"{check.first_invalid_segment}", planning_time_s=elapsed, planner=opts.planner)
+                         f"{check.first_invalid_segment}", planner=opts.planner, state_checks=checks)
         goal = min(goals, key=lambda g: float(np.linalg.norm(g - path[-1])))
-        return PlanResult(PlanStatus.OK, path, elapsed, simplify_time_s=simplify_time, planner=opts.planner,
-                          goal_q=goal.copy())
-
-
-def _with(result: PlanResult, **changes: float) -> PlanResult:
-    from dataclasses import replace
-
-    return replace(result, **changes)  # type: ignore[arg-type]
+        return PlanResult(PlanStatus.OK, path, simplify_time_s=simplify_time, planner=opts.planner,
+                          goal_q=goal.copy(), state_checks=checks)
 
 
 _DEFAULT: dict[float, MotionPlanner] = {}

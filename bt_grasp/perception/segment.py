@@ -54,22 +54,49 @@ class Plane:
         return (float(self.normal[0]), float(self.normal[1]), float(self.normal[2]), float(self.offset))
 
 
+def _ransac_plane(points: NDArray[np.float64], distance_m: float, iterations: int, seed: int
+                  ) -> tuple[Vec, float, NDArray[np.intp]] | None:
+    """The plane through three sampled points with the most inliers; samples drawn from ``seed``'s stream.
+
+    Open3D's ``segment_plane`` samples in OpenMP threads and gives other planes under load even with a fixed
+    seed (isl-org/Open3D#7270): a run must not depend on thread scheduling, so this sampling is sequential
+    and seeded, and the inlier counting vectorised.
+    """
+    rng = np.random.default_rng(seed)
+    triplets = rng.integers(0, len(points), size=(iterations, 3))
+    p0, p1, p2 = points[triplets[:, 0]], points[triplets[:, 1]], points[triplets[:, 2]]
+    normals = np.cross(p1 - p0, p2 - p0)
+    norms = np.linalg.norm(normals, axis=1)
+    keep = norms > 1e-12  # repeated or collinear samples define no plane
+    if not np.any(keep):
+        return None
+    normals = normals[keep] / norms[keep, None]
+    offsets = -np.einsum("ij,ij->i", normals, p0[keep])
+    counts = np.zeros(len(normals), dtype=np.int64)
+    for start in range(0, len(normals), 32):
+        stop = start + 32
+        counts[start:stop] = (np.abs(points @ normals[start:stop].T + offsets[start:stop]) < distance_m).sum(axis=0)
+    best = int(np.argmax(counts))  # the first of equals: deterministic
+    inliers = np.nonzero(np.abs(points @ normals[best] + offsets[best]) < distance_m)[0]
+    return normals[best], float(offsets[best]), inliers
+
+
 def fit_table_plane(pcd: o3d.geometry.PointCloud, settings: SegmentationSettings, seed: int = 0) -> Plane | None:
     """RANSAC plane, refined by least squares on its inliers; None when no near-horizontal plane exists."""
     if len(pcd.points) < 50:
         return None
-    o3d.utility.random.seed(seed)
-    model, inliers = pcd.segment_plane(settings.plane_distance_m, 3, settings.plane_iterations)
-    normal = np.asarray(model[:3], dtype=float)
-    scale = np.linalg.norm(normal)
-    if scale == 0 or len(inliers) < 50:
+    points = np.asarray(pcd.points)
+    found = _ransac_plane(points, settings.plane_distance_m, settings.plane_iterations, seed)
+    if found is None:
         return None
-    normal, offset = normal / scale, float(model[3]) / scale
+    normal, offset, inliers = found
+    if len(inliers) < 50:
+        return None
     if normal[2] < 0:
         normal, offset = -normal, -offset
     if np.degrees(np.arccos(np.clip(normal[2], -1.0, 1.0))) > settings.plane_max_tilt_deg:
         return None
-    pts = np.asarray(pcd.points)[np.asarray(inliers)]
+    pts = points[inliers]
     centre = pts.mean(axis=0)
     _, _, vt = np.linalg.svd(pts - centre, full_matrices=False)
     refined = vt[2] if vt[2] @ normal > 0 else -vt[2]

@@ -112,6 +112,10 @@ class Judge:
     def rises(self) -> dict[str, float]:
         return {n: float(self._oracle.T_world_object(n)[2, 3] - z) for n, z in self._start_z.items()}
 
+    def object_poses(self) -> dict[str, list[list[float]]]:
+        """Every object's ``T_world_object`` now (4x4 lists): the end of a run's fingerprint."""
+        return {n: self._oracle.T_world_object(n).tolist() for n in self._oracle.object_names()}
+
     def objects_in_workspace(self) -> tuple[str, ...]:
         """Objects still inside the scene's work area."""
         ws = self._world.config.workspace

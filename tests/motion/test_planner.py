@@ -48,7 +48,7 @@ def test_obstacle_between_start_and_goal_forces_a_detour(detour: tuple) -> None:
 @pytest.mark.parametrize("planner", ["PRM", "BITstar"])
 def test_other_planners_by_name(detour: tuple, planner: str) -> None:
     qa, qb, scene = detour
-    result = plan_to_joints(qa, qb, scene, PlannerOptions(planner=planner, time_limit_s=1.0))
+    result = plan_to_joints(qa, qb, scene, PlannerOptions(planner=planner))
     assert result.status is PlanStatus.OK, result.message
     assert result.planner == planner
     assert collision_checker(scene, 0.01).check_path(result.path, 0.01).ok
@@ -76,11 +76,19 @@ def test_nan_start_is_invalid_input(table_scene: PlanningScene) -> None:
 
 
 @pytest.mark.parametrize("limit", [0.0, -1.0, float("nan")])
-def test_bad_time_limit_is_invalid_input(table_scene: PlanningScene, limit: float) -> None:
+def test_bad_safety_limit_is_invalid_input(table_scene: PlanningScene, limit: float) -> None:
     result = plan_to_pose(HOME_Q, make_T(TOP_DOWN_R, [0.5, 0.0, 0.1]), table_scene,
-                          PlannerOptions(time_limit_s=limit))
+                          PlannerOptions(safety_limit_s=limit))
     assert result.status is PlanStatus.INVALID_INPUT
-    assert "time_limit_s" in result.message
+    assert "safety_limit_s" in result.message
+
+
+@pytest.mark.parametrize("budget", [0, -5])
+def test_bad_budget_is_invalid_input(table_scene: PlanningScene, budget: int) -> None:
+    result = plan_to_pose(HOME_Q, make_T(TOP_DOWN_R, [0.5, 0.0, 0.1]), table_scene,
+                          PlannerOptions(max_state_checks=budget))
+    assert result.status is PlanStatus.INVALID_INPUT
+    assert "max_state_checks" in result.message
 
 
 def test_unknown_planner_is_invalid_input(table_scene: PlanningScene) -> None:
@@ -113,7 +121,40 @@ def test_far_pose_is_ik_unreachable(table_scene: PlanningScene) -> None:
     assert result.status is PlanStatus.IK_UNREACHABLE
 
 
-def test_too_short_time_limit_is_timeout(detour: tuple) -> None:
+def test_too_small_budget_is_budget_exhausted(detour: tuple) -> None:
     qa, qb, scene = detour
-    result = plan_to_joints(qa, qb, scene, PlannerOptions(time_limit_s=1e-4))
-    assert result.status is PlanStatus.TIMEOUT, result.message
+    result = plan_to_joints(qa, qb, scene, PlannerOptions(max_state_checks=20))
+    assert result.status is PlanStatus.BUDGET_EXHAUSTED, result.message
+    assert result.state_checks >= 20 and "20 state checks" in result.message
+
+
+def test_the_search_ends_on_its_budget_not_the_clock(detour: tuple, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A machine ten times slower (every collision check delayed) plans exactly the same path."""
+    import time
+
+    from bt_grasp.motion.collision import CollisionChecker
+
+    qa, qb, scene = detour
+    options = PlannerOptions(seed=3)
+    fast = plan_to_joints(qa, qb, scene, options)
+    inner = CollisionChecker.in_collision
+
+    def slow(self: CollisionChecker, q: np.ndarray) -> bool:
+        end = time.perf_counter() + 3e-4  # busy, like a loaded core
+        while time.perf_counter() < end:
+            pass
+        return inner(self, q)
+
+    monkeypatch.setattr(CollisionChecker, "in_collision", slow)
+    slowed = plan_to_joints(qa, qb, scene, options)
+    assert fast.ok and slowed.ok
+    assert slowed.planning_time_s > fast.planning_time_s
+    assert fast.state_checks == slowed.state_checks
+    np.testing.assert_array_equal(fast.path, slowed.path)
+
+
+def test_the_safety_net_is_a_named_failure(detour: tuple) -> None:
+    qa, qb, scene = detour
+    result = plan_to_joints(qa, qb, scene, PlannerOptions(safety_limit_s=1e-6))
+    assert result.status is PlanStatus.SAFETY_TIMEOUT, result.message
+    assert "safety net" in result.message
