@@ -158,3 +158,29 @@ def test_the_safety_net_is_a_named_failure(detour: tuple) -> None:
     result = plan_to_joints(qa, qb, scene, PlannerOptions(safety_limit_s=1e-6))
     assert result.status is PlanStatus.SAFETY_TIMEOUT, result.message
     assert "safety net" in result.message
+
+
+def test_ik_goal_seeding_goes_on_past_colliding_solutions(scene_config) -> None:  # type: ignore[no-untyped-def]
+    """Bench problem 2: the first three IK solutions its seeds find collide; the fourth is free."""
+    from bt_grasp.motion.bench import make_problems
+    from bt_grasp.motion.planner import default_planner
+
+    problem = make_problems(scene_config, 3, seed=0)[2]
+    scene = problem.scene(scene_config)
+    planner = default_planner()
+    options = PlannerOptions(max_goal_configs=1)
+    found = planner.goal_set(problem.q_start, problem.T_base_tcp_goal, planner.checker(scene, 0.01), options)
+    assert found.solutions == 4 and len(found.goals) == 1  # stopped at the first free one
+    result = plan_to_pose(problem.q_start, problem.T_base_tcp_goal, scene)
+    assert result.ok, result.message
+    assert collision_checker(scene, 0.01).check_path(result.path, 0.005).ok
+
+
+def test_a_pose_whose_every_ik_solution_collides_is_goal_in_collision(scene_config) -> None:  # type: ignore[no-untyped-def]
+    """Bench problem 18: all eight solutions of the UR5 collide; the whole seed budget says so."""
+    from bt_grasp.motion.bench import make_problems
+
+    problem = make_problems(scene_config, 19, seed=0)[18]
+    result = plan_to_pose(problem.q_start, problem.T_base_tcp_goal, problem.scene(scene_config))
+    assert result.status is PlanStatus.GOAL_IN_COLLISION
+    assert "all 8 IK solutions from 40 seeds collide" in result.message
