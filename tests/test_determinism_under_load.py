@@ -44,8 +44,8 @@ def two_runs(busy: None, tmp_path_factory: pytest.TempPathFactory) -> list[Path]
     logs = [folder / f"pick_{k}.mcap" for k in (1, 2)]
     procs = [subprocess.Popen([*BT, *PICK, "--log", str(log)], cwd=REPO, stdout=subprocess.PIPE,
                               stderr=subprocess.PIPE, text=True) for log in logs]
-    for proc in procs:
-        out, err = proc.communicate(timeout=600)
+    outputs = [proc.communicate(timeout=600) for proc in procs]
+    for proc, (out, err) in zip(procs, outputs, strict=True):
         assert proc.returncode == 0, out + err
     return logs
 
