@@ -46,14 +46,14 @@ log = logging.getLogger(__name__)
 
 Vec = NDArray[np.float64]
 
+#: single-threaded OMPL planners only: PRM and PRMstar grow their roadmap in a second thread, so the states they
+#: check depend on thread scheduling (and a Python termination condition deadlocks with that thread)
 PLANNERS: dict[str, Callable[[ob.SpaceInformation], ob.Planner]] = {
     "RRTConnect": og.RRTConnect,
     "RRT": og.RRT,
     "RRTstar": og.RRTstar,
     "InformedRRTstar": og.InformedRRTstar,
     "SORRTstar": og.SORRTstar,
-    "PRM": og.PRM,
-    "PRMstar": og.PRMstar,
     "BITstar": og.BITstar,
     "AORRTC": og.AORRTC,
 }

@@ -45,7 +45,7 @@ def test_obstacle_between_start_and_goal_forces_a_detour(detour: tuple) -> None:
     assert checker.check_path(result.path, 0.005).ok  # re-checked finer than the planner's 0.01 rad
 
 
-@pytest.mark.parametrize("planner", ["PRM", "BITstar"])
+@pytest.mark.parametrize("planner", ["AORRTC", "BITstar"])
 def test_other_planners_by_name(detour: tuple, planner: str) -> None:
     qa, qb, scene = detour
     result = plan_to_joints(qa, qb, scene, PlannerOptions(planner=planner))
