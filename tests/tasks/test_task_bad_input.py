@@ -19,8 +19,20 @@ CASES = {
 }
 
 
-@pytest.mark.sim
 @pytest.mark.parametrize("name", sorted(CASES))
+def test_tree_not_fitting_the_scene_is_refused_before_anything_is_built(name: str) -> None:
+    from bt_grasp.episode import EpisodeRequest, load_inputs
+    from bt_grasp.errors import InputError
+
+    line, fragment = CASES[name]
+    with pytest.raises(InputError) as info:
+        load_inputs(EpisodeRequest(tree=BAD / name, scene=REPO / "scenes" / "tabletop.yaml"))
+    message = str(info.value)
+    assert message.startswith(f"{BAD / name}:{line}:") and fragment in message and "\n" not in message, message
+
+
+@pytest.mark.sim
+@pytest.mark.parametrize("name", ["place_off_table.xml"])
 def test_tree_not_fitting_the_scene_exits_2(name: str, tmp_path: Path) -> None:
     line, fragment = CASES[name]
     log = tmp_path / "run.mcap"
