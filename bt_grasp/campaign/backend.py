@@ -11,9 +11,8 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
-from typing import Any
-
-from bt_grasp.campaign.episode import EpisodeOutcome, FinalState
+from bt_grasp.campaign.episode import EpisodeOutcome
+from bt_grasp.campaign.fingerprint import run_fingerprint
 from bt_grasp.campaign.spec import Episode
 
 
@@ -30,10 +29,9 @@ class WarmEpisodeBackend:
         import bt_grasp.behaviours
         import bt_grasp.episode.episode  # noqa: F401
 
-    def run(self, episode: Episode, log: Path | None) -> EpisodeOutcome:
+    def run(self, episode: Episode, log: Path) -> EpisodeOutcome:
         from bt_grasp.episode import Episode as EpisodeRun
         from bt_grasp.episode import EpisodeRequest
-        from bt_grasp.recording.jsonable import to_jsonable
 
         request = EpisodeRequest(
             tree=episode.tree_file,
@@ -51,20 +49,7 @@ class WarmEpisodeBackend:
         t0 = time.perf_counter()
         prepared = EpisodeRun(request, self.worlds)
         setup_s = time.perf_counter() - t0
-        stream: list[dict[str, Any]] = []
-
-        def record(tick: int, tree: Any) -> None:
-            stream.append({node.bt_path: node.bt_state.value for node in tree.nodes()})
-
-        result = prepared.run([record])
-        world = prepared.world
-        final = FinalState(
-            q_rad=tuple(float(v) for v in world.robot.joint_positions()),
-            gripper_width_m=float(world.robot.gripper_width_m()),
-            object_poses={},  # the temporary fingerprint has no object poses: only the judge may read them
-        )
-        # JSON form (no repr with memory addresses): the same run gives the same text in any process
-        blackboard = {k: to_jsonable(v) for k, v in sorted(prepared.tree.blackboard_values().items())}
+        result = prepared.run()
         judge = result.judged.to_json()
         return EpisodeOutcome(
             success=result.success,
@@ -79,10 +64,7 @@ class WarmEpisodeBackend:
             retries=result.retries,
             faults_fired=result.faults_fired,
             judge=judge,
-            stream=stream,
-            failures=[{"leaf": result.failed_leaf, "reason": result.reason}] if result.reason else [],
-            final=final,
-            blackboard=blackboard,
+            fingerprint=run_fingerprint(log),
         )
 
 

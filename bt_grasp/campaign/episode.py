@@ -6,20 +6,11 @@ A campaign worker only needs: "run these inputs on my warm simulator and tell me
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
 
 from bt_grasp.campaign.spec import Episode
-
-
-@dataclass(frozen=True)
-class FinalState:
-    """What the run left behind, for the run fingerprint: the arm, the gripper, every object's pose."""
-
-    q_rad: tuple[float, ...]
-    gripper_width_m: float
-    object_poses: dict[str, tuple[float, ...]]  # name -> (x, y, z, qw, qx, qy, qz), world frame (judge only)
 
 
 @dataclass(frozen=True)
@@ -38,10 +29,7 @@ class EpisodeOutcome:
     retries: dict[str, int]
     faults_fired: int
     judge: dict[str, Any]
-    stream: list[dict[str, Any]]  # per tick: node path -> status
-    failures: list[dict[str, Any]]  # every leaf FAILURE with its reason, in order
-    final: FinalState
-    blackboard: dict[str, Any] = field(default_factory=dict)  # final values, as text
+    fingerprint: str  # the run fingerprint's digest (bt_grasp.recording.fingerprint)
 
 
 class EpisodeBackend(Protocol):
@@ -50,6 +38,6 @@ class EpisodeBackend(Protocol):
     def warm_up(self) -> None:
         """Pay the one-time start-up (imports, renderer) before the first episode."""
 
-    def run(self, episode: Episode, log: Path | None) -> EpisodeOutcome:
-        """Run one episode to the end; write its MCAP log to ``log`` when given."""
+    def run(self, episode: Episode, log: Path) -> EpisodeOutcome:
+        """Run one episode to the end, recording it to ``log`` (the fingerprint is taken from it)."""
         ...

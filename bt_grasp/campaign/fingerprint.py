@@ -1,35 +1,17 @@
-"""TEMPORARY run fingerprint, used only for the campaign's ``fingerprint`` column.
+"""The campaign's ``fingerprint`` column: the project's run fingerprint (``bt_grasp.recording.fingerprint``).
 
-The motion-determinism issue (13) defines the project's one run fingerprint; when it lands on main this
-module is replaced by a call to it. Until then: a hash of the per-tick statuses, every failure reason, the
-final blackboard, the final joints rounded to 1e-6 rad, the gripper width and the final object poses.
+Computed from the episode's MCAP log, the same way ``bt-grasp replay --resim`` compares a recorded run with
+its re-simulation, so a campaign row and a log can be compared directly. Workers therefore record every
+episode; a log the ``--keep-logs`` policy does not keep is deleted once its fingerprint is taken.
 """
 
 from __future__ import annotations
 
-import hashlib
-import json
-from typing import Any
-
-from bt_grasp.campaign.episode import EpisodeOutcome
-
-_ROUND = 6  # 1e-6 rad / m
+from pathlib import Path
 
 
-def _r(values: Any) -> list[float]:
-    return [round(float(v), _ROUND) + 0.0 for v in values]
+def run_fingerprint(log: Path) -> str:
+    from bt_grasp.recording.fingerprint import fingerprint_of_log
+    from bt_grasp.recording.reader import open_log
 
-
-def temporary_run_fingerprint(outcome: EpisodeOutcome) -> str:
-    h = hashlib.sha256()
-    for tick in outcome.stream:
-        h.update(json.dumps(tick, sort_keys=True, default=str).encode())
-    payload = {
-        "failures": [(f.get("tick"), f.get("leaf"), f.get("reason")) for f in outcome.failures],
-        "blackboard": outcome.blackboard,
-        "q_rad": _r(outcome.final.q_rad),
-        "gripper_width_m": round(outcome.final.gripper_width_m, _ROUND) + 0.0,
-        "objects": {k: _r(v) for k, v in sorted(outcome.final.object_poses.items())},
-    }
-    h.update(json.dumps(payload, sort_keys=True, default=str).encode())
-    return h.hexdigest()[:32]
+    return fingerprint_of_log(open_log(log)).digest

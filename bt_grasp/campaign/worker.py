@@ -14,7 +14,6 @@ from typing import Any
 
 from bt_grasp.campaign.environment import environment
 from bt_grasp.campaign.episode import EpisodeBackend, EpisodeOutcome
-from bt_grasp.campaign.fingerprint import temporary_run_fingerprint
 from bt_grasp.campaign.spec import Episode
 
 log = logging.getLogger(__name__)
@@ -62,7 +61,7 @@ def make_row(episode: Episode, outcome: EpisodeOutcome, mcap: Path | None, episo
         "ticks": outcome.ticks,
         "sim_time_s": round(outcome.sim_time_s, 6),
         "judge": outcome.judge,
-        "fingerprint": temporary_run_fingerprint(outcome),
+        "fingerprint": outcome.fingerprint,
         "wall_time_s": round(outcome.wall_time_s, 3),
         "setup_wall_s": round(outcome.setup_wall_s, 3),
         "episode_wall_s": round(episode_wall_s, 3),
@@ -86,10 +85,12 @@ class Worker:
         log.debug("worker %d warm in %.2f s", os.getpid(), self.warm_up_s)
 
     def run(self, episode: Episode) -> dict[str, Any]:
+        """Every episode is recorded (its fingerprint is read from the log); the log stays if the policy says so."""
         t0 = time.perf_counter()
-        mcap = None if self.keep_logs is KeepLogs.NONE else log_path(self.log_dir, episode)
-        outcome = self.backend.run(episode, mcap)
-        if mcap is not None and self.keep_logs is KeepLogs.FAILURES and outcome.success:
-            mcap.unlink(missing_ok=True)
-            mcap = None
-        return make_row(episode, outcome, mcap, time.perf_counter() - t0)
+        path = log_path(self.log_dir, episode)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        outcome = self.backend.run(episode, path)
+        keep = self.keep_logs is KeepLogs.ALL or (self.keep_logs is KeepLogs.FAILURES and not outcome.success)
+        if not keep:
+            path.unlink(missing_ok=True)
+        return make_row(episode, outcome, path if keep else None, time.perf_counter() - t0)

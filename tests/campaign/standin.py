@@ -6,7 +6,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from bt_grasp.campaign.episode import EpisodeOutcome, FinalState
+from bt_grasp.campaign.episode import EpisodeOutcome
 from bt_grasp.campaign.spec import Episode
 
 
@@ -14,7 +14,7 @@ class StandInBackend:
     def warm_up(self) -> None:
         pass
 
-    def run(self, episode: Episode, log: Path | None) -> EpisodeOutcome:
+    def run(self, episode: Episode, log: Path) -> EpisodeOutcome:
         time.sleep(0.4)
         ok = episode.seed % 3 != 0
         return EpisodeOutcome(
@@ -30,9 +30,7 @@ class StandInBackend:
             retries={},
             faults_fired=0,
             judge={},
-            stream=[{"t": episode.seed}],
-            failures=[],
-            final=FinalState(q_rad=(float(episode.seed),), gripper_width_m=0.05, object_poses={}),
+            fingerprint=f"stand-in {episode.key}",
         )
 
 
