@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
+
 from bt_grasp.campaign.episode import EpisodeOutcome
 from bt_grasp.campaign.fingerprint import run_fingerprint
 from bt_grasp.campaign.spec import Episode
