@@ -54,6 +54,9 @@ def plan(
     table.add_column("value", justify="right")
     rows = [
         ("success rate", f"{summary['success_rate']:.1%}"),
+        ("success over feasible (labelled) problems",
+         "n/a (unlabelled problem set)" if summary["success_over_feasible"] is None
+         else f"{summary['success_over_feasible']:.1%} of {summary['feasible_problems']}"),
         ("plan time median (IK + search + re-check)", f"{summary['plan_ms_median']:.1f} ms"),
         ("plan time p95", f"{summary['plan_ms_p95']:.1f} ms"),
         ("IK time median", f"{summary['ik_ms_median']:.2f} ms"),

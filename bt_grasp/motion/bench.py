@@ -82,6 +82,8 @@ class BenchReport:
     def summary(self) -> dict[str, object]:
         ok = self._ok()
         statuses = Counter(o.status.value for o in self.outcomes)
+        labels = feasibility_labels(self.seed)
+        feasible = [o for o in self.outcomes if labels.get(o.index) is True]
 
         def pct(values: list[float], q: float) -> float:
             return round(float(np.percentile(values, q)), 3) if values else float("nan")
@@ -100,7 +102,24 @@ class BenchReport:
             "traj_duration_s_median": pct([o.traj_duration_s for o in ok], 50),
             "direct_fraction": round(sum(o.direct for o in ok) / len(ok), 4) if ok else 0.0,
             "statuses": dict(sorted(statuses.items())),
+            # over the problems labelled feasible once by a larger-budget search (motion/data/bench_plan_labels.json)
+            "labelled_problems": sum(1 for o in self.outcomes if o.index in labels),
+            "feasible_problems": len(feasible),
+            "success_over_feasible": round(sum(o.status is PlanStatus.OK for o in feasible) / len(feasible), 4)
+            if feasible else None,
         }
+
+
+def feasibility_labels(seed: int) -> dict[int, bool]:
+    """Problem index -> feasible (True) or not proven (False), for the labelled problem-set seed; else {}."""
+    import json
+    from importlib.resources import files
+
+    data = json.loads(files("bt_grasp.motion").joinpath("data/bench_plan_labels.json").read_text())
+    if int(data["seed"]) != seed:
+        return {}
+    not_proven = set(data["not_proven"])
+    return {i: i not in not_proven for i in range(int(data["labelled"]))}
 
 
 def _random_start(rng: np.random.Generator, scene: PlanningScene, home: NDArray[np.float64]) -> NDArray[np.float64]:

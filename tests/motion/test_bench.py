@@ -49,3 +49,14 @@ def test_cli_rejects_an_unknown_planner(capsys: pytest.CaptureFixture[str]) -> N
 
     assert main(["bench", "plan", "--problems", "2", "--planner", "Nope"]) == 2
     assert "Nope" in capsys.readouterr().err
+
+
+def test_labels_count_success_over_feasible_problems(scene_config) -> None:  # type: ignore[no-untyped-def]
+    from bt_grasp.motion.bench import feasibility_labels
+
+    labels = feasibility_labels(0)
+    assert len(labels) == 60 and [i for i, ok in labels.items() if not ok] == [16, 18, 31]
+    assert feasibility_labels(1) == {}
+    summary = run_plan_bench(scene_config, count=3, seed=0).summary()
+    assert summary["labelled_problems"] == 3 and summary["feasible_problems"] == 3
+    assert summary["success_over_feasible"] == 1.0
