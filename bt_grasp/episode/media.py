@@ -27,8 +27,12 @@ class RecorderSink:
         stamp = self.now_ns()
         if T_base_camera is not None:  # the camera frame as this capture saw it (also for a later viewer)
             self.recorder.static_transforms[(BASE_FRAME, CAMERA_FRAME)] = np.asarray(T_base_camera, dtype=np.float64)
-        if not self.recorder.active:  # a live view nobody watches: no encoding, no cloud
+        if not self.recorder.active:  # a live view nobody watches: no encoding, no cloud until someone does
+            self.recorder.when_watched("camera", lambda: self._write_frame(stamp, frame, T_base_camera))
             return
+        self._write_frame(stamp, frame, T_base_camera)
+
+    def _write_frame(self, stamp: int, frame: RGBDFrame, T_base_camera: NDArray[np.float64] | None) -> None:
         self.recorder.write_color_image(stamp, frame.color, CAMERA_FRAME)
         self.recorder.write_camera_calibration(stamp, CAMERA_FRAME, frame.intrinsics)
         self.recorder.write_depth(stamp, frame.depth_m, CAMERA_FRAME)

@@ -190,6 +190,7 @@ class RunRecorder:
         self._static_cache: dict[tuple[str, str], tuple[Any, list[float], list[float]]] = {}
         self._taps: list[Callable[[str, int, bytes], None]] = []
         self._demand: list[Callable[[], bool]] = []
+        self._when_watched: dict[str, Callable[[], None]] = {}
         #: called with (kind, payload) after every event written (a failure, a retry, an abort)
         self.event_listeners: list[Callable[[str, Mapping[str, Any]], None]] = []
         self._robot_model = robot_model
@@ -288,6 +289,11 @@ class RunRecorder:
         self._taps.append(tap)
         self._demand.append(wanted if wanted is not None else (lambda: True))
 
+    def when_watched(self, key: str, write: Callable[[], None]) -> None:
+        """Keep ``write`` (the latest one per ``key``) for the first tick a viewer watches: a frame captured
+        while nobody watched is sent then, so a viewer that joins mid-run still sees the last picture."""
+        self._when_watched[key] = write
+
     @property
     def active(self) -> bool:
         """Whether per-tick data (ticks, arm states, images, clouds) reaches anyone: a file, or a viewer."""
@@ -335,6 +341,10 @@ class RunRecorder:
             self._nodes.reset()
             self._blackboard = BlackboardDiffer(self._blackboard._max)
             return
+        if self._when_watched:  # what was captured while nobody watched
+            pending, self._when_watched = self._when_watched, {}
+            for write in pending.values():
+                write()
         changed_nodes = self._nodes.diff(nodes)
         bb_changed, bb_removed = self._blackboard.diff(blackboard)
         leaves = [n for n in nodes if n.get("kind") in _LEAF_KINDS]

@@ -1,6 +1,7 @@
 """A run served live (`bt-grasp run ... --live PORT`) watched in a real Foxglove Studio through its
 "Foxglove WebSocket" data source: no problem for any topic, the 3D panel knows every link and draws, the image
-panel draws (the latched topics reach a viewer that joins mid-run)."""
+panel draws. The viewer joins only after the run has printed tick 100, i.e. after Perceive (tick 1) captured the
+only picture while nobody watched: the latched topics must reach a viewer that joins mid-run."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ import os
 import socket
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -38,26 +40,47 @@ def _wait_for_port(port: int, proc: subprocess.Popen[str], timeout_s: float) -> 
     raise AssertionError(f"nothing listens on {port} after {timeout_s} s")
 
 
+def _wait_for_line(proc: subprocess.Popen[str], prefix: str, timeout_s: float) -> None:
+    """Read the run's progress (stderr) until a line starts with ``prefix`` (a reader thread: it may stay
+    silent)."""
+    found = threading.Event()
+
+    def read() -> None:
+        assert proc.stderr is not None
+        for line in proc.stderr:
+            if line.startswith(prefix):
+                found.set()
+                return
+
+    threading.Thread(target=read, daemon=True).start()
+    if not found.wait(timeout_s):
+        raise AssertionError(f"the run printed no line starting {prefix!r} within {timeout_s} s")
+
+
 def test_live_run_shows_whole_in_foxglove(tmp_path: Path) -> None:
     skip_without_browser()
     port = _free_port()
-    # slower than real time so the run is still going while Studio starts and subscribes
+    # slower than real time (10 ms of simulated time per tick: tick 100 after 20 s, the pick's end after
+    # about 150 s) so the run is still going while Studio starts, subscribes and is looked at
     proc = subprocess.Popen(
         [sys.executable, "-m", "bt_grasp.cli.main", "run", str(ROOT / "trees/pick.xml"),
-         "--scene", str(ROOT / "scenes/tabletop.yaml"), "--live", str(port), "--realtime", "0.1",
-         "--max-ticks", "600", "--quiet"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
-        env={**os.environ, "PYTHONPATH": str(ROOT)},
+         "--scene", str(ROOT / "scenes/tabletop.yaml"), "--live", str(port), "--realtime", "0.05",
+         "--max-ticks", "1000"],
+        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
+        env={**os.environ, "PYTHONPATH": str(ROOT), "PYTHONUNBUFFERED": "1", "COLUMNS": "200"},
     )
     try:
         _wait_for_port(port, proc, 120)
+        _wait_for_line(proc, "tick   100", 120)  # Perceive (tick 1) is over; nobody has watched yet
         with serving(tmp_path, LAYOUT) as server:
             report = open_in_studio(server.url_for_websocket(), tmp_path, wait_s=25,
                                     screenshot=tmp_path / "live.png", ws_bridge=f"ws://127.0.0.1:{port}")
         assert proc.poll() is None, "the run ended before the viewer looked: the test proves nothing"
     finally:
         proc.kill()
-        proc.communicate()
+        proc.wait()
+        if proc.stderr is not None:
+            proc.stderr.close()
     assert report.errors == []
     assert report.problems == [] and report.problem_count == 0, report.problems
     assert set(ROBOT_LINKS) <= set(report.frames), report.frames

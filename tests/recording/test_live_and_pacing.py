@@ -70,3 +70,35 @@ def test_taps_see_every_message_with_the_files_time(tmp_path: Any) -> None:
         rec.add_tap(lambda topic, t, data: seen.append((topic, t)))
         rec.write_log(100, "INFO", "x", "y")
     assert seen == [(topics.LOG, 5_100)]
+
+
+def test_a_frame_captured_while_nobody_watched_reaches_the_first_viewer() -> None:
+    """A live-only run skips encoding while nobody watches; the last capture is sent at the first watched tick
+    (stamped with its capture time), so a viewer joining after Perceive still sees the picture."""
+    import numpy as np
+
+    from bt_grasp.episode.media import RecorderSink
+    from bt_grasp.interfaces import CameraIntrinsics, Mount, RGBDFrame
+
+    watching = {"now": False}
+    seen: list[tuple[str, int]] = []
+    recorder = RunRecorder(None, metadata={}, handle_signals=False)
+    recorder.add_tap(lambda topic, t, data: seen.append((topic, t)), wanted=lambda: watching["now"])
+    now = {"ns": 30_000_000}
+    sink = RecorderSink(recorder, lambda: now["ns"])
+    intr = CameraIntrinsics(8, 6, 10.0, 10.0, 4.0, 3.0)
+    depth = np.full((6, 8), 0.5, dtype=np.float32)
+    for shade in (10, 200):  # two captures while unwatched: only the last one is kept
+        frame = RGBDFrame(np.full((6, 8, 3), shade, dtype=np.uint8), depth, intr, now["ns"], Mount.EYE_TO_HAND)
+        sink.frame(frame, np.eye(4))
+        now["ns"] += 10_000_000
+    recorder.write_tick(5, now["ns"], [], {})
+    assert [t for t, _ in seen if t == topics.COLOR] == []  # nobody watched: nothing encoded
+    watching["now"] = True
+    recorder.write_tick(6, now["ns"] + 10_000_000, [], {})
+    colour = [(t, stamp) for t, stamp in seen if t in (topics.COLOR, topics.CALIBRATION, topics.POINTS)]
+    at = recorder.t(40_000_000)  # the second capture's time, not the tick's
+    assert sorted(colour) == sorted([(topics.COLOR, at), (topics.CALIBRATION, at), (topics.POINTS, at)])
+    recorder.write_tick(7, now["ns"] + 20_000_000, [], {})
+    assert sum(1 for t, _ in seen if t == topics.COLOR) == 1  # sent once, not at every tick
+    recorder.close()
