@@ -116,16 +116,12 @@ class SimBenchBackend:
 
     def capture_levels(self, scene: Any, seed: int, noises: Any) -> tuple[list[Any], dict[str, np.ndarray]]:
         from bt_grasp.sim.oracle import GroundTruthOracle
+        from bt_grasp.sim.render_keeper import keep_renderer_warm
         from bt_grasp.sim.world import World
 
-        # one warm world for the whole sweep, reset per scene (as a fresh one would be): building a world per
-        # scene costs ~25 s on a loaded 2-core machine, the reset ~0.1 s
-        world: World | None = getattr(self, "_warm", None)
-        if world is not None and world.can_reset_to(scene, Mount.EYE_TO_HAND):
-            world.reset(scene, seed)
-        else:
-            world = World(scene, seed, camera_mount=Mount.EYE_TO_HAND)
-            self._warm = world
+        # a world per scene beside a renderer kept warm for the sweep: its first picture costs ~0.1 s
+        keep_renderer_warm()
+        world = World(scene, seed, camera_mount=Mount.EYE_TO_HAND)
         world.step(world.steps_per_tick * 10)
         oracle = GroundTruthOracle(world)
         frames = world.camera.capture_variants(noises, seed)

@@ -1,13 +1,14 @@
-"""Where an episode's simulated world comes from: built fresh, or a warm one reset for the next episode.
+"""Where an episode's simulated world comes from: built fresh, alone or beside a warm renderer.
 
-Building a World and rendering its first frame costs seconds (the renderer compiles its shaders on the
-first capture); an evaluation worker pays that once with :class:`WarmWorlds` and resets the same world
-(objects drawn again, arm home, clock at 0) for every following episode whose scene differs only in its
-objects.
+Building a World is cheap (~0.05 s); its first picture is not (seconds on a CPU Vulkan driver: the renderer's
+one-time set-up), unless the renderer is already warm in the process. :class:`WarmWorlds` keeps it warm
+(``bt_grasp.sim.render_keeper``) and builds every episode's world afresh, so an evaluation worker pays the
+set-up once and no simulation state ever carries over from one episode to the next.
 """
 
 from __future__ import annotations
 
+import gc
 import logging
 from pathlib import Path
 from typing import TYPE_CHECKING, Protocol
@@ -36,25 +37,26 @@ class FreshWorlds:
 
 
 class WarmWorlds:
-    """Keeps one world between episodes: reset when only the objects differ, rebuilt otherwise.
+    """A fresh World per episode beside a renderer kept warm for the process (campaign workers, the resident).
 
-    ``built`` and ``resets`` count what happened (a worker can report its warm-start rate).
+    The previous episode's world is released before the next is built. A world is never reused: PhysX keeps
+    internal state across a reset (the order of its contact pairs among others), and a reset world could give
+    the same episode a different tick stream (``bt_grasp.sim.render_keeper`` has the evidence). ``built``
+    counts the worlds built.
     """
 
     def __init__(self) -> None:
         self.world: World | None = None
         self.built = 0
-        self.resets = 0
 
     def world_for(self, scene: Scene, seed: int, source: Path) -> World:
-        if self.world is not None and self.world.can_reset_to(scene):
-            self.world.reset(scene, seed, source=source)
-            self.resets += 1
-            return self.world
+        from bt_grasp.sim.render_keeper import keep_renderer_warm
         from bt_grasp.sim.world import World
 
-        if self.world is not None:
-            log.info("scene %s differs in more than its objects: building a new world", source)
+        keep_renderer_warm()
+        if self.world is not None:  # release the previous episode's scene before building the next
+            self.world = None
+            gc.collect()
         self.world = World(scene, seed, source=source)
         self.built += 1
         return self.world

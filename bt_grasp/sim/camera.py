@@ -99,11 +99,6 @@ class SimCamera:
         rgba = self._component.get_picture("Color")
         return np.clip(np.round(rgba[..., :3] * 255.0), 0, 255).astype(np.uint8)
 
-    def reseed(self, rng: np.random.Generator) -> None:
-        """Draw the noise of the next captures from ``rng`` (a new episode in a reused world)."""
-        self._rng = rng
-        self.captures = 0
-
     def capture(self) -> RGBDFrame | None:
         color, depth = self.render_true()
         noise = self._config.noise

@@ -68,7 +68,6 @@ def attach_board_to_link(world: World, spec: BoardSpec, link_name: str = "grippe
     body.set_name("charuco_board")
     entity = world.robot.links[link_name].entity
     entity.add_component(body)
-    world.episode_fixtures.append(lambda: entity.remove_component(body))
     return T
 
 
@@ -83,7 +82,6 @@ def place_board_on_table(world: World, spec: BoardSpec, T_world_board: Mat4 | No
     entity.add_component(body)
     entity.set_pose(to_pose(T))
     world.scene.add_entity(entity)
-    world.episode_fixtures.append(lambda: world.scene.remove_entity(entity))
     return T
 
 

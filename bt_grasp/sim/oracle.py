@@ -59,8 +59,7 @@ class GroundTruthOracle:
     def fingers_touching(self, name: str) -> set[str]:
         """Names of the finger links in contact (with a non-zero impulse) with the object."""
         if self._world.physics_steps == 0:
-            # no step since a reset: PhysX still holds the previous episode's contacts, whose bodies were
-            # removed (reading them crashes); a fresh world has no contacts before its first step either
+            # no contacts exist before the first physics step
             return set()
         robot = self._world.robot
         left, right = robot.links["left_finger"], robot.links["right_finger"]

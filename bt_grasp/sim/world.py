@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -27,7 +26,8 @@ _STREAM_OBJECTS, _STREAM_CAMERA, _STREAM_FAULTS = 0, 1, 2
 class World:
     """SAPIEN scene + robot + camera + objects. Time passes only through :meth:`step`.
 
-    Implements :class:`bt_grasp.interfaces.Stepper`. ``world.robot`` and ``world.camera`` implement the
+    Built afresh for every episode (never reset: ``bt_grasp.sim.render_keeper`` says why). Implements
+    :class:`bt_grasp.interfaces.Stepper`. ``world.robot`` and ``world.camera`` implement the
     robot and camera interfaces; true object poses are reachable only through
     :class:`bt_grasp.sim.oracle.GroundTruthOracle`.
     """
@@ -39,8 +39,6 @@ class World:
         self._seed_streams(seed)
         self.clock = ManualClock()
         self.camera_mount = Mount(camera_mount or scene_config.camera.mount)
-        #: undoes what was added for one episode only (a calibration board), newest first, at reset()
-        self.episode_fixtures: list[Callable[[], None]] = []
         physics = scene_config.physics
         self.scene = create_scene()
         self.scene.set_timestep(physics.timestep_s)
@@ -68,42 +66,6 @@ class World:
         self._object_rng = np.random.default_rng(seeds[_STREAM_OBJECTS])
         self.camera_rng = np.random.default_rng(seeds[_STREAM_CAMERA])
         self.fault_seed_sequence = seeds[_STREAM_FAULTS]
-
-    # --- reuse ---------------------------------------------------------------------------------------
-    def can_reset_to(self, scene_config: Scene, camera_mount: str | None = None) -> bool:
-        """True when ``scene_config`` differs from this world's only in what ``reset`` redoes: its objects (and
-        what is not built: workspace, goal, calibration file name)."""
-        keep = {"objects", "workspace", "name", "goal", "calibration", "object_gap_m", "version"}
-        same = self.config.model_dump(exclude=keep) == scene_config.model_dump(exclude=keep)
-        return same and Mount(camera_mount or scene_config.camera.mount) == self.camera_mount
-
-    def reset(self, scene_config: Scene, seed: int, *, source: str | Path = "scene") -> None:
-        """Start a new episode in this warm world, as if built anew for ``(scene_config, seed)``.
-
-        The simulator, renderer (its compiled shaders), table, robot, camera and lights stay; every object is
-        removed and drawn again from the seed's stream, episode fixtures (a calibration board) are removed, the
-        arm goes home with the gripper open, the clock restarts at 0 and the camera's noise stream is reseeded.
-        Raises ValueError when the scene differs in more than its objects (build a new World then).
-        """
-        if not self.can_reset_to(scene_config):
-            raise ValueError("the scene differs from this world's in more than its objects: build a new World")
-        while self.episode_fixtures:
-            self.episode_fixtures.pop()()
-        for entity in self.objects.values():
-            self.scene.remove_entity(entity)
-        self.config = scene_config
-        self._seed_streams(seed)
-        self.clock.restart()
-        self.robot.reset(np.asarray(scene_config.robot.home_q_rad, dtype=float))
-        self.placed = on_supports(draw_poses(
-            scene_config.objects, self._object_rng, 0.0, str(source), scene_config.object_gap_m
-        ), scene_config.fixtures)
-        for belt in self.belts:
-            belt.reset()
-        self.objects = {p.spec.name: build_object(self.scene, p) for p in self.placed}
-        self.camera.reseed(self.camera_rng)
-        self._physics_steps = 0
-        log.debug("world reset: seed %d, %d objects", self.seed, len(self.objects))
 
     @classmethod
     def from_file(cls, path: str | Path, seed: int, *, camera_mount: str | None = None) -> World:
@@ -155,7 +117,7 @@ class World:
 
     @property
     def physics_steps(self) -> int:
-        """Physics steps since this world was built or last reset."""
+        """Physics steps since this world was built."""
         return self._physics_steps
 
     def step(self, n: int = 1) -> None:
