@@ -1,6 +1,7 @@
 """A grasp together with the motion planned to reach it: what PlanGrasp hands to Approach on the blackboard.
 
-PlanGrasp keeps a candidate only once its approach could be planned; the path travels with the grasp so
+PlanGrasp keeps a candidate only once its whole approach was found collision-free (the planned path to the
+pre-grasp pose and the straight descent to the grasp pose); the path travels with the grasp so
 Approach executes it instead of planning the same motion again. Approach plans anew only when the plan no
 longer fits: the arm moved since (measured joints differ) or the scene it was planned in changed (other
 detections on the blackboard).
@@ -35,13 +36,16 @@ class GraspPose(Protocol):
 @dataclass(frozen=True, eq=False)
 class GraspPlan:
     """``candidate`` plus ``approach_path`` (N, 6): a collision-free joint path from ``q_start`` to the
-    pre-grasp pose, planned among ``target`` and ``objects`` (the scene as perceived)."""
+    pre-grasp pose, planned among ``target`` and ``objects`` (the scene as perceived), and ``descent_path``
+    (M, 6): the straight tool line from the approach's end down to the grasp pose, checked with the fingers
+    open against the same scene (the target itself may be touched)."""
 
     candidate: GraspCandidate
     q_start: NDArray[np.float64]
     approach_path: NDArray[np.float64]
     target: Detection
     objects: tuple[Detection, ...]
+    descent_path: NDArray[np.float64] | None = None
 
     # the grasp's poses, read the same way from a plan as from a candidate
     @property

@@ -192,10 +192,13 @@ _GRASP = PortSpec("grasp", PortDirection.INPUT, object, "{grasp}", "the grasp to
     needs_robot=True,
 )
 class PlanGrasp(RobotLeaf):
-    """Rank top-down grasps of the target and keep the first whose approach can be planned.
+    """Rank top-down grasps of the target and keep the first whose whole approach is collision-free.
 
-    One candidate per tick (IK of the pre-grasp and grasp poses, then the approach plan: tens of ms, more
-    than a control period), RUNNING while candidates remain; the kept plan travels with the grasp.
+    One candidate per tick (IK of the pre-grasp and grasp poses, the approach plan to the pre-grasp pose, then
+    the straight descent from where that plan ends to the grasp pose with the fingers open, checked against
+    the perceived scene as Approach will move it: tens of ms, more than a control period), RUNNING while
+    candidates remain; the kept plan (with its descent) travels with the grasp. A candidate whose descent is
+    blocked is passed over here, not found blocked later in Approach.
     """
 
     def initialise(self) -> None:
@@ -243,6 +246,7 @@ class PlanGrasp(RobotLeaf):
         self._candidates = list(result.candidates[skip:])
         self._q = self.cell.robot.joint_positions()
         self._scene = planning_scene(self, target, self._objects)
+        self._descent_scene = planning_scene(self, target, self._objects, allow_target=True)
         return None
 
     def _try(self, rank: int, candidate: GraspCandidate) -> GraspPlan | None:
@@ -263,7 +267,14 @@ class PlanGrasp(RobotLeaf):
             sentence = f"candidate {rank}: {plan.status.value} ({plan.message})"
             self._last = PathFailure(plan_reason(plan.status), sentence)
             return None
-        return GraspPlan(candidate, q.copy(), np.asarray(plan.path, dtype=float), self._target, self._objects)
+        path = np.asarray(plan.path, dtype=float)
+        descent = self.cell.planner.straight_line(path[-1], candidate.T_base_tcp_grasp, self._descent_scene)
+        if not descent.ok:
+            sentence = f"candidate {rank}: the straight descent fails ({descent.status.value}): {descent.message}"
+            self._last = PathFailure(cartesian_reason(descent.status), sentence)
+            return None
+        return GraspPlan(candidate, q.copy(), path, self._target, self._objects,
+                         descent_path=np.asarray(descent.path, dtype=float))
 
 
 @leaf(
@@ -292,11 +303,12 @@ class Approach(_MovingLeaf):
         touching = planning_scene(self, target, objects, allow_target=True)
         T_grasp = grasp.T_base_tcp_grasp
         to_pregrasp = plan_to_pose_fn(self, grasp.T_base_tcp_pregrasp, free)
+        descend = cartesian_fn(self, lambda _T: T_grasp, touching)
         if isinstance(grasp, GraspPlan) and grasp.planned_in(target, objects):
             to_pregrasp = planned_path_fn(grasp, to_pregrasp)
         return [
             Segment("to pre-grasp", to_pregrasp),
-            Segment("descend", cartesian_fn(self, lambda _T: T_grasp, touching)),
+            Segment("descend", descend),
         ]
 
 

@@ -17,6 +17,7 @@ from bt_grasp.geometry import Mat4
 from bt_grasp.interfaces import RGBDFrame
 
 if TYPE_CHECKING:  # types only: importing motion/perception costs ~1 s (pinocchio, open3d)
+    from bt_grasp.motion.cartesian import CartesianResult
     from bt_grasp.motion.collision import CollisionChecker
     from bt_grasp.motion.kinematics import KinematicModel
     from bt_grasp.motion.planner import PlannerOptions, PlanResult
@@ -40,6 +41,11 @@ class Planner(Protocol):
         self, q_start: NDArray[np.float64], q_goal: NDArray[np.float64], scene: PlanningScene,
         options: PlannerOptions | None = None,
     ) -> PlanResult: ...
+
+    def straight_line(self, q_start: NDArray[np.float64], T_base_tcp_goal: Mat4, scene: PlanningScene
+                      ) -> CartesianResult:
+        """Joint waypoints moving the tool on a straight line to the goal pose, collision-checked in ``scene``."""
+        ...
 
     def checker(self, scene: PlanningScene, margin_m: float) -> CollisionChecker: ...
 

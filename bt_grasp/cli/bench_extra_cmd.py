@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import statistics
-import tempfile
 import time
 from pathlib import Path
 from typing import Any
@@ -15,65 +13,6 @@ from rich.table import Table
 
 from bt_grasp.cli.bench_cmd import bench_app
 from bt_grasp.environment import machine_description
-from bt_grasp.interfaces import Mount
-
-
-def run_pick_bench(
-    trees: list[Path], scene: Path, seeds: int, first_seed: int, calibration: Path | None, log_dir: Path | None,
-    warm: bool = False,
-) -> dict[str, Any]:
-    from bt_grasp.episode import (
-        EpisodeRequest,
-        EpisodeResult,
-        FreshWorlds,
-        WarmWorlds,
-        WorldSource,
-        run_episode,
-    )
-    from bt_grasp.episode.calibration import calibrate_in_sim
-    from bt_grasp.goals import DEFAULT_LIFT_HEIGHT_M, goal_from_options
-    from bt_grasp.perception.calibration_file import save_calibration
-
-    work = Path(tempfile.mkdtemp(prefix="bt_grasp_bench_"))
-    if calibration is None:
-        calibration = save_calibration(
-            calibrate_in_sim(scene, Mount.EYE_TO_HAND, first_seed).run.calibration, work / "calibration.yaml"
-        )
-    report: dict[str, Any] = {
-        "machine": machine_description(), "scene": str(scene), "calibration": str(calibration), "trees": {}
-    }
-    worlds: WorldSource = WarmWorlds() if warm else FreshWorlds()
-    report["worlds"] = "warm (one world reset per episode)" if warm else "fresh (a new world per episode)"
-    for tree in trees:
-        runs: list[EpisodeResult] = []
-        for seed in range(first_seed, first_seed + seeds):
-            log = (log_dir / f"{tree.stem}_seed{seed}.mcap") if log_dir is not None else None
-            request = EpisodeRequest(
-                tree=tree,
-                scene=scene,
-                seed=seed,
-                goal=goal_from_options("pick", "red"),
-                calibration=calibration,
-                log=log,
-                blackboard={"color": "red", "lift_height": DEFAULT_LIFT_HEIGHT_M},
-            )
-            runs.append(run_episode(request, worlds=worlds))
-        ok = [r for r in runs if r.success]
-        report["trees"][str(tree)] = {
-            "runs": len(runs),
-            "successes": len(ok),
-            "success_rate": len(ok) / len(runs),
-            "failures": {r.seed: f"{r.reason} ({r.failed_leaf})" for r in runs if not r.success},
-            "sim_time_s_median": round(statistics.median(r.sim_time_s for r in runs), 3),
-            "wall_time_s_median": round(statistics.median(r.wall_time_s for r in runs), 3),
-            "ticks_median": statistics.median(r.ticks for r in runs),
-            "retries_total": sum(sum(r.retries.values()) for r in runs),
-            "plan_calls_per_pick_mean": round(statistics.mean(r.planning.calls for r in runs), 2),
-            "plan_pose_calls_per_pick_mean": round(statistics.mean(r.planning.pose_calls for r in runs), 2),
-            "plan_wall_s_per_pick_median": round(statistics.median(r.planning.wall_s for r in runs), 4),
-            "plan_wall_s_per_pick_mean": round(statistics.mean(r.planning.wall_s for r in runs), 4),
-        }
-    return report
 
 
 @bench_app.command("pick")
@@ -90,6 +29,8 @@ def pick(
     warm: bool = typer.Option(False, "--warm", help="Reuse one warm world (reset per episode) instead of new ones."),
 ) -> None:
     """Pick success over seeded episodes, judged by physics (object held 15 cm up at the end)."""
+    from bt_grasp.episode.pick_bench import run_pick_bench
+
     report = run_pick_bench(trees, scene, seeds, first_seed, calibration, log_dir, warm)
     if as_json:
         typer.echo(json.dumps(report))

@@ -15,6 +15,7 @@ from numpy.typing import NDArray
 if TYPE_CHECKING:  # motion loads pinocchio and ompl: only the types are needed to import this
     from bt_grasp.behaviours.services import Planner
     from bt_grasp.geometry import Mat4
+    from bt_grasp.motion.cartesian import CartesianResult
     from bt_grasp.motion.collision import CollisionChecker
     from bt_grasp.motion.planner import PlannerOptions, PlanResult
     from bt_grasp.motion.planning_scene import PlanningScene
@@ -46,6 +47,10 @@ class TimedPlanner:
 
     def checker(self, scene: PlanningScene, margin_m: float) -> CollisionChecker:
         return self.inner.checker(scene, margin_m)
+
+    def straight_line(self, q_start: NDArray[np.float64], T_base_tcp_goal: Mat4, scene: PlanningScene
+                      ) -> CartesianResult:
+        return self.inner.straight_line(q_start, T_base_tcp_goal, scene)
 
     def plan_to_pose(self, q_start: NDArray[np.float64], T_base_tcp_goal: Mat4, scene: PlanningScene,
                      options: PlannerOptions | None = None) -> PlanResult:

@@ -8,6 +8,7 @@ from numpy.typing import NDArray
 from bt_grasp.behaviours.services import Planner
 from bt_grasp.faults.episode import Episode
 from bt_grasp.geometry import Mat4
+from bt_grasp.motion.cartesian import CartesianResult
 from bt_grasp.motion.collision import CollisionChecker
 from bt_grasp.motion.kinematics import IKOptions, IKResult, IKStatus, KinematicModel
 from bt_grasp.motion.planner import PlannerOptions, PlanResult, PlanStatus
@@ -37,7 +38,8 @@ class _FailingCalls:
 
 class FaultyPlanner:
     """The motion planner (a :class:`bt_grasp.behaviours.services.Planner`), but ``plan_to_pose``/
-    ``plan_to_joints`` fail while a planner fault is armed; ``checker`` is the real planner's."""
+    ``plan_to_joints`` fail while a planner fault is armed; ``checker`` and ``straight_line`` are the real
+    planner's."""
 
     def __init__(self, inner: Planner) -> None:
         self.inner = inner
@@ -45,6 +47,10 @@ class FaultyPlanner:
 
     def checker(self, scene: PlanningScene, margin_m: float) -> CollisionChecker:
         return self.inner.checker(scene, margin_m)
+
+    def straight_line(self, q_start: NDArray[np.float64], T_base_tcp_goal: Mat4, scene: PlanningScene
+                      ) -> CartesianResult:
+        return self.inner.straight_line(q_start, T_base_tcp_goal, scene)
 
     def _failure(self, episode: Episode) -> PlanResult:
         status = PlanStatus(episode.params.status)

@@ -37,6 +37,7 @@ from ompl import util as ou
 
 from bt_grasp.geometry import Mat4
 from bt_grasp.motion.budget import WorkBudget
+from bt_grasp.motion.cartesian import CartesianResult
 from bt_grasp.motion.collision import FINE_RESOLUTION_RAD, CollisionChecker, collision_checker
 from bt_grasp.motion.kinematics import default_kinematics, is_rigid_transform
 from bt_grasp.motion.planning_scene import PlanningScene
@@ -189,6 +190,13 @@ class MotionPlanner:
 
     def checker(self, scene: PlanningScene, margin_m: float) -> CollisionChecker:
         return collision_checker(scene, float(margin_m), self.opening_m)
+
+    def straight_line(self, q_start: NDArray[np.float64], T_base_tcp_goal: Mat4, scene: PlanningScene
+                      ) -> CartesianResult:
+        """A straight tool line from ``fk(q_start)`` (``bt_grasp.motion.cartesian.cartesian_path``)."""
+        from bt_grasp.motion.cartesian import cartesian_path
+
+        return cartesian_path(q_start, T_base_tcp_goal, scene, kin=self.kin)
 
     # --- pose goals ---------------------------------------------------------------------------------
     def goal_set(self, q0: Vec, T_base_tcp_goal: Mat4, checker: CollisionChecker, opts: PlannerOptions) -> GoalSet:

@@ -7,6 +7,7 @@ from numpy.typing import NDArray
 
 from bt_grasp.behaviours.cell import Cell, make_cell
 from bt_grasp.clock import ManualClock
+from bt_grasp.motion.cartesian import CartesianResult, CartesianStatus
 from bt_grasp.motion.kinematics import IKResult, IKStatus
 from bt_grasp.motion.planner import PlanResult, PlanStatus
 from bt_grasp.perception.results import Detection
@@ -95,11 +96,24 @@ class FakeKinematics:
 
 
 class FakePlanner:
-    """Plans a two-point joint path; ``statuses`` scripts the outcome of successive calls (then OK)."""
+    """Plans a two-point joint path; ``statuses`` scripts the outcome of successive calls (then OK), and
+    ``descents`` the outcome of successive straight lines (then OK)."""
 
-    def __init__(self, statuses: tuple[PlanStatus, ...] = ()) -> None:
+    def __init__(self, statuses: tuple[PlanStatus, ...] = (),
+                 descents: tuple[CartesianStatus, ...] = ()) -> None:
         self.statuses = list(statuses)
+        self.descents = list(descents)
         self.pose_calls: list[NDArray[np.float64]] = []
+        self.line_calls: list[NDArray[np.float64]] = []
+
+    def straight_line(self, q_start: NDArray[np.float64], T: NDArray[np.float64], scene: object
+                      ) -> CartesianResult:
+        q = np.asarray(q_start, dtype=float)
+        self.line_calls.append(q.copy())
+        status = self.descents.pop(0) if self.descents else CartesianStatus.OK
+        if status is not CartesianStatus.OK:
+            return CartesianResult(status, message="waypoint 18/21 collides: gripper_palm vs object_1 (scripted)")
+        return CartesianResult(CartesianStatus.OK, path=np.stack([q, q + 0.05]), fraction=1.0)
 
     def _result(self, q_start: NDArray[np.float64]) -> PlanResult:
         status = self.statuses.pop(0) if self.statuses else PlanStatus.OK

@@ -1,6 +1,7 @@
 """PlanGrasp and Approach, tick by tick, with stand-in kinematics and planner (no simulator).
 
-PlanGrasp tries one ranked candidate per tick (IK of pre-grasp and grasp, then the approach plan) and hands
+PlanGrasp tries one ranked candidate per tick (IK of pre-grasp and grasp, the approach plan, then the straight
+descent from the plan's end) and hands
 Approach a GraspPlan; Approach executes its path and plans again only when the arm moved or the scene changed.
 """
 
@@ -14,6 +15,7 @@ from bt_grasp.behaviours import robot_registry
 from bt_grasp.behaviours.cell import Cell
 from bt_grasp.behaviours.grasp_plan import GraspPlan
 from bt_grasp.clock import ManualClock
+from bt_grasp.motion.cartesian import CartesianStatus
 from bt_grasp.motion.planner import PlanStatus
 from bt_grasp.perception.results import Detection
 from bt_grasp.tree.loader import LoadedTree, load_tree_from_string
@@ -98,6 +100,32 @@ def test_no_candidate_reachable_fails_after_trying_each(
     assert _ticks(tree, 10) == ["RUNNING", "RUNNING", "RUNNING", "FAILURE"]
     values = tree.blackboard_values()
     assert values["failure_reason"] == reason and values["failed_leaf"] == "PlanGrasp"
+
+
+def test_a_candidate_whose_straight_descent_is_blocked_is_passed_over() -> None:
+    # tick 1: candidate 0 plans to its pre-grasp pose, but the straight descent from there collides with a
+    #         neighbour -> RUNNING (not SUCCESS: Approach would only find it blocked later)
+    # tick 2: candidate 1 plans and descends freely -> SUCCESS, with both paths in the GraspPlan
+    planner = FakePlanner(descents=(CartesianStatus.COLLISION,))
+    tree, _, _ = _setup(PLAN, FakeKinematics(), planner)
+    assert _ticks(tree, 10) == ["RUNNING", "SUCCESS"]
+    assert len(planner.pose_calls) == 2 and len(planner.line_calls) == 2
+    plan = tree.root_blackboard.get("grasp")
+    assert isinstance(plan, GraspPlan) and plan.descent_path is not None
+    assert np.allclose(planner.line_calls[1], plan.approach_path[-1])  # the descent starts where the path ends
+    assert np.allclose(plan.descent_path[0], plan.approach_path[-1])
+    assert "candidate 1" in tree.find("PlanGrasp").feedback_message
+
+
+def test_every_descent_blocked_fails_plan_failed_naming_the_descent() -> None:
+    # the four candidates' descents all collide: RUNNING x3, then FAILURE (PLAN_FAILED, as every planning
+    # failure of PlanGrasp other than IK) whose message says the descent was blocked
+    planner = FakePlanner(descents=(CartesianStatus.COLLISION,) * 4)
+    tree, _, _ = _setup(PLAN, FakeKinematics(), planner)
+    assert _ticks(tree, 10) == ["RUNNING", "RUNNING", "RUNNING", "FAILURE"]
+    values = tree.blackboard_values()
+    assert values["failure_reason"] == "PLAN_FAILED" and values["failed_leaf"] == "PlanGrasp"
+    assert "straight descent fails (collision)" in tree.find("PlanGrasp").feedback_message
 
 
 def test_no_target_and_nothing_graspable() -> None:

@@ -11,6 +11,7 @@ from numpy.typing import NDArray
 
 from bt_grasp.clock import ManualClock
 from bt_grasp.interfaces import CameraIntrinsics, RGBDFrame
+from bt_grasp.motion.cartesian import CartesianResult, CartesianStatus
 from bt_grasp.motion.kinematics import IKResult, IKStatus
 from bt_grasp.motion.planner import PlanResult, PlanStatus
 from bt_grasp.tree.node import BtStatus
@@ -84,6 +85,9 @@ class FakePlanner:
 
     def checker(self, scene: Any, margin_m: float) -> str:
         return "checker"
+
+    def straight_line(self, q: Any, T: Any, scene: Any) -> CartesianResult:
+        return CartesianResult(CartesianStatus.OK, path=np.zeros((2, 6)), fraction=1.0)
 
 
 class FakeKinematics:

@@ -1,0 +1,76 @@
+"""Episodes per minute, side by side (`bt-grasp bench eval`): `bench pick`'s loop, then a campaign on each worker
+count; also whether the run fingerprints agree across worker counts."""
+
+from __future__ import annotations
+
+import os
+import statistics
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+
+def _campaign_file(folder: Path, trees: list[Path], scene: Path, seeds: int, first_seed: int) -> Path:
+    path = folder / "bench.yaml"
+    lines = ["name: bench", "trees:", *[f"  - {t.resolve()}" for t in trees], "scenes:", f"  - {scene.resolve()}",
+             f"seeds: {{first: {first_seed}, count: {seeds}}}", "blackboard:", "  - {color: red, lift_height: 0.15}"]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def _campaign_run(campaign_file: Path, out: Path, workers: int) -> dict[str, Any]:
+    from bt_grasp.campaign.backend import warm_backend
+    from bt_grasp.campaign.local import LocalEngine
+    from bt_grasp.campaign.results import read_rows, results_path
+    from bt_grasp.campaign.runner import run_campaign
+    from bt_grasp.campaign.spec import load_campaign
+    from bt_grasp.campaign.worker import KeepLogs
+
+    campaign = load_campaign(campaign_file)
+    t0 = time.perf_counter()
+    run_campaign(campaign, out, lambda: LocalEngine(workers, warm_backend, out / "logs", KeepLogs.NONE))
+    wall = time.perf_counter() - t0
+    rows = read_rows(results_path(out, campaign.name))
+    setups = sorted(r["setup_wall_s"] for r in rows)
+    return {
+        "episodes": len(rows),
+        "successes": sum(1 for r in rows if r["success"]),
+        "wall_s": round(wall, 1),
+        "episodes_per_min": round(60 * len(rows) / wall, 2),
+        # per-episode overhead of a warm worker: inputs loaded, world built, tree wired, up to the first tick
+        # (the first episode of each worker builds its world: listed apart)
+        "setup_s_median_warm": round(statistics.median(setups[workers:]), 3) if len(setups) > workers else None,
+        "setup_s_max_cold": round(max(setups), 3),
+        "fingerprints": {r["episode"]: r["fingerprint"] for r in rows},
+    }
+
+
+def run_eval_bench(trees: list[Path], scene: Path, seeds: int, first_seed: int, workers: list[int]) -> dict[str, Any]:
+    from bt_grasp.environment import machine_description
+    from bt_grasp.episode.pick_bench import run_pick_bench
+    from bt_grasp.scene_config import load_scene
+
+    config = load_scene(scene)
+    calibration = scene.parent / config.calibration if config.calibration else None
+    report: dict[str, Any] = {"machine": machine_description(), "load_before": os.getloadavg(), "runs": {}}
+    n = len(trees) * seeds
+    t0 = time.perf_counter()
+    pick = run_pick_bench(trees, scene, seeds, first_seed, calibration, None)
+    wall = time.perf_counter() - t0
+    report["runs"]["bench pick (one process, a world per episode)"] = {
+        "episodes": n,
+        "successes": sum(t["successes"] for t in pick["trees"].values()),
+        "wall_s": round(wall, 1),
+        "episodes_per_min": round(60 * n / wall, 2),
+    }
+    with tempfile.TemporaryDirectory(prefix="bt_grasp_bench_eval_") as tmp:
+        campaign_file = _campaign_file(Path(tmp), trees, scene, seeds, first_seed)
+        prints = []
+        for w in workers:
+            result = _campaign_run(campaign_file, Path(tmp) / f"w{w}", w)
+            prints.append(result.pop("fingerprints"))
+            report["runs"][f"eval run --workers {w}"] = result
+    report["same_fingerprints_across_worker_counts"] = all(p == prints[0] for p in prints)
+    report["load_after"] = os.getloadavg()
+    return report
