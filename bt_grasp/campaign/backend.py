@@ -13,7 +13,6 @@ import time
 from pathlib import Path
 
 from bt_grasp.campaign.episode import EpisodeOutcome
-from bt_grasp.campaign.fingerprint import run_fingerprint
 from bt_grasp.campaign.spec import Episode
 
 
@@ -30,7 +29,7 @@ class WarmEpisodeBackend:
         import bt_grasp.behaviours
         import bt_grasp.episode.episode  # noqa: F401
 
-    def run(self, episode: Episode, log: Path) -> EpisodeOutcome:
+    def run(self, episode: Episode, log: Path | None) -> EpisodeOutcome:
         from bt_grasp.episode import Episode as EpisodeRun
         from bt_grasp.episode import EpisodeRequest
 
@@ -46,6 +45,7 @@ class WarmEpisodeBackend:
             inject=episode.inject,
             blackboard=episode.blackboard,
             argv=("bt-grasp", "eval", "run", episode.campaign, episode.key),
+            fingerprint=True,
         )
         t0 = time.perf_counter()
         prepared = EpisodeRun(request, self.worlds)
@@ -65,7 +65,7 @@ class WarmEpisodeBackend:
             retries=result.retries,
             faults_fired=result.faults_fired,
             judge=judge,
-            fingerprint=run_fingerprint(log),
+            fingerprint=str(result.fingerprint),
         )
 
 

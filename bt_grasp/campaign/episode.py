@@ -38,6 +38,7 @@ class EpisodeBackend(Protocol):
     def warm_up(self) -> None:
         """Pay the one-time start-up (imports, renderer) before the first episode."""
 
-    def run(self, episode: Episode, log: Path) -> EpisodeOutcome:
-        """Run one episode to the end, recording it to ``log`` (the fingerprint is taken from it)."""
+    def run(self, episode: Episode, log: Path | None) -> EpisodeOutcome:
+        """Run one episode to the end, recording it to ``log`` when one is given; the run fingerprint is
+        computed while it runs (the same digest its log would give)."""
         ...

@@ -8,6 +8,7 @@ import os
 import socket
 import time
 from collections.abc import Callable
+from dataclasses import replace
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -85,12 +86,19 @@ class Worker:
         log.debug("worker %d warm in %.2f s", os.getpid(), self.warm_up_s)
 
     def run(self, episode: Episode) -> dict[str, Any]:
-        """Every episode is recorded (its fingerprint is read from the log); the log stays if the policy says so."""
+        """Run one episode; its fingerprint is computed as it runs. With ``--keep-logs all`` it is recorded as
+        it runs; with ``failures`` a failed episode is run once more with a log (same seed, same run: the
+        second run's fingerprint must equal the first's, else the row says so)."""
         t0 = time.perf_counter()
         path = log_path(self.log_dir, episode)
         path.parent.mkdir(parents=True, exist_ok=True)
-        outcome = self.backend.run(episode, path)
-        keep = self.keep_logs is KeepLogs.ALL or (self.keep_logs is KeepLogs.FAILURES and not outcome.success)
-        if not keep:
-            path.unlink(missing_ok=True)
+        keep = self.keep_logs is KeepLogs.ALL
+        outcome = self.backend.run(episode, path if keep else None)
+        if not outcome.success and self.keep_logs is KeepLogs.FAILURES:
+            again = self.backend.run(episode, path)
+            keep = True
+            if again.fingerprint != outcome.fingerprint:
+                log.warning("%s: the run again with its log differs (fingerprint %s, then %s)", episode.key,
+                            outcome.fingerprint, again.fingerprint)
+                outcome = replace(outcome, fingerprint=f"{outcome.fingerprint} (its log's run: {again.fingerprint})")
         return make_row(episode, outcome, path if keep else None, time.perf_counter() - t0)

@@ -8,10 +8,10 @@ evaluation workers and notebooks call it; it never prints (callbacks see every t
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -34,6 +34,7 @@ if TYPE_CHECKING:
     from bt_grasp.sim.judge import Verdict
     from bt_grasp.sim.world import World
     from bt_grasp.tree.loader import LoadedTree
+    from bt_grasp.tree.runner import TickRecorder
 
 log = logging.getLogger(__name__)
 
@@ -188,8 +189,17 @@ class Episode:
 
             if injector is not None:
                 injector.before_run()
-            runner = TreeRunner(self.tree, world, steps_per_tick=world.steps_per_tick, recorder=recorder,
-                                robot_state=_when_watched(recorder, robot_state_reader(cell)), on_tick=tick_hook)
+            tick_recorder: TickRecorder | None = recorder
+            read_robot = _when_watched(recorder, robot_state_reader(cell))
+            printer = None
+            if request.fingerprint:
+                from bt_grasp.recording.fingerprint import FingerprintRecorder
+
+                printer = FingerprintRecorder()
+                tick_recorder = printer if recorder is None else _Both(recorder, printer)
+                read_robot = robot_state_reader(cell)  # every tick, watched or not
+            runner = TreeRunner(self.tree, world, steps_per_tick=world.steps_per_tick, recorder=tick_recorder,
+                                robot_state=read_robot, on_tick=tick_hook)
             outcome = runner.run(request.max_ticks)
             # a placement goal's "resting for 1 s after release" needs the world to run on a little
             for _ in range(judge.settle_ticks(self.inputs.goal)):
@@ -217,6 +227,8 @@ class Episode:
                 goal=self.inputs.goal,
                 planning=self.planning.stats(),
             )
+            if printer is not None:
+                result = replace(result, fingerprint=printer.finish(result.judged.object_poses).digest)
             if recorder is not None:
                 if extras is not None:
                     extras.finish()
@@ -321,6 +333,26 @@ def robot_state_reader(cell: Cell) -> Callable[[], RobotState]:
         }
 
     return read
+
+
+class _Both:
+    """A TickRecorder that hands every tick to the log's recorder and to the fingerprint."""
+
+    def __init__(self, first: TickRecorder, second: TickRecorder) -> None:
+        self.first, self.second = first, second
+
+    def write_tick(self, tick: int, stamp_ns: int, nodes: list[dict[str, Any]], blackboard: Mapping[str, Any],
+                   robot: Mapping[str, Any] | None = None) -> None:
+        self.first.write_tick(tick, stamp_ns, nodes, blackboard, robot)
+        self.second.write_tick(tick, stamp_ns, nodes, blackboard, robot)
+
+    def write_event(self, stamp_ns: int, kind: str, payload: Mapping[str, Any]) -> None:
+        self.first.write_event(stamp_ns, kind, payload)
+        self.second.write_event(stamp_ns, kind, payload)
+
+    def flush_tick(self) -> None:
+        self.first.flush_tick()
+        self.second.flush_tick()
 
 
 def _when_watched(recorder: RunRecorder | None, read: Callable[[], RobotState]) -> Callable[[], RobotState]:

@@ -43,6 +43,8 @@ class EpisodeRequest:
     #: at a leaf's failure and at the end), a live Foxglove WebSocket view on this port (None: none; 0: any
     #: free port) and host, and wall-clock pacing (simulated seconds per wall second; None: as fast as it goes)
     image_hz: float = 0.0
+    #: compute the run fingerprint while the run goes (``EpisodeResult.fingerprint``), with or without a log
+    fingerprint: bool = False
     live_port: int | None = None
     live_host: str = "127.0.0.1"
     realtime: float | None = None

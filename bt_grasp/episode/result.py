@@ -71,6 +71,9 @@ class EpisodeResult:
     goal: Goal
     planning: PlanningStats
     faults_fired: int = 0
+    #: the run fingerprint's digest (``bt_grasp.recording.fingerprint``) when the request asked for it: the
+    #: same digest ``fingerprint_of_log`` gives for this run's log
+    fingerprint: str | None = None
 
     @property
     def object_lift_m(self) -> float:

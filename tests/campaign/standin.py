@@ -14,7 +14,7 @@ class StandInBackend:
     def warm_up(self) -> None:
         pass
 
-    def run(self, episode: Episode, log: Path) -> EpisodeOutcome:
+    def run(self, episode: Episode, log: Path | None) -> EpisodeOutcome:
         time.sleep(0.4)
         ok = episode.seed % 3 != 0
         return EpisodeOutcome(
