@@ -84,9 +84,17 @@ def main() -> int:
     table = table_box(config)
     kin = default_kinematics()
 
-    # the same problems for MPlib
+    # the same problems for MPlib; its URDF loader joins mesh paths to the URDF's folder, so the copy it reads
+    # names the meshes relative to itself
+    import os
+    import re
+
+    urdf_copy = work / "robot.urdf"
+    text = robot_urdf_path().read_text()
+    urdf_copy.write_text(re.sub(r'filename="(/[^"]+)"',
+                                lambda m: f'filename="{os.path.relpath(m.group(1), work)}"', text))
     spec = {
-        "urdf": str(robot_urdf_path()), "tool_link": "tcp", "arm_joints": list(ARM_JOINTS), "seed": args.seed,
+        "urdf": str(urdf_copy), "tool_link": "tcp", "arm_joints": list(ARM_JOINTS), "seed": args.seed,
         "finger_positions": {FINGER_JOINT: MAX_OPENING_M / 2, MIMIC_FINGER_JOINT: MAX_OPENING_M / 2},
         "problems": [{
             "index": p.index, "q_start": p.q_start.tolist(), "T_base_tcp_goal": p.T_base_tcp_goal.tolist(),
@@ -119,8 +127,10 @@ def main() -> int:
     mplib_version = ""
     for r in range(args.rounds):
         out = work / f"mplib_round{r}.json"
-        subprocess.run([str(python), str(ROOT / "tools/mplib_side.py"), str(work / "problems.json"), str(out),
-                        str(work)], check=True, cwd=work)
+        side = subprocess.run([str(python), str(ROOT / "tools/mplib_side.py"), str(work / "problems.json"),
+                               str(out), str(work)], cwd=work, capture_output=True, text=True)
+        if side.returncode != 0:  # MPlib prints its own notes on stdout: shown only when it failed
+            raise SystemExit(f"MPlib's run failed ({side.returncode}):\n{side.stdout[-2000:]}\n{side.stderr[-2000:]}")
         data = json.loads(out.read_text())
         mplib_version = data["mplib"]
         for entry in data["results"]:
@@ -166,6 +176,17 @@ def main() -> int:
         for _, r in attempts:
             report["planners"][name]["statuses"][r["status"]] += 1
     report["invalid_examples"] = invalid_examples
+    rows = []  # per problem and round, both planners: what each returned and whether its path checks out
+    for p in problems:
+        for k in range(args.rounds):
+            row: dict[str, Any] = {"index": p.index, "kind": p.kind, "obstacles": len(p.obstacles),
+                                   "label": labels.get(p.index)}
+            for name, runs in (("bt_grasp", ours), ("mplib", theirs)):
+                r = runs[p.index][k]
+                ok, why = valid(p, r["path"]) if r["ok"] else (False, "")
+                row[name] = {"status": r["status"], "ms": round(1e3 * r["wall_s"], 1), "valid": ok, "why": why}
+            rows.append(row)
+    (work / "rows.json").write_text(json.dumps(rows, indent=1))
     ours_total = report["planners"]["bt_grasp"]["total_s"]
     theirs_total = report["planners"]["mplib"]["total_s"]
     report["time_ratio_bt_grasp_over_mplib"] = round(ours_total / theirs_total, 3) if theirs_total else math.nan
