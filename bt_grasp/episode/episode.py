@@ -321,15 +321,14 @@ RobotState = dict[str, list[float] | list[list[float]] | float]
 
 
 def robot_state_reader(cell: Cell) -> Callable[[], RobotState]:
-    """What the log records of the robot every tick (measured joints, gripper, tool pose by FK)."""
+    """What the log records of the robot every tick: measured joints and gripper (the recorder computes every
+    link's pose, the tool's among them, from these with one forward kinematics)."""
 
     def read() -> RobotState:
-        q = cell.robot.joint_positions()
         return {
-            "q_rad": q.tolist(),
+            "q_rad": cell.robot.joint_positions().tolist(),
             "qd_rad_s": cell.robot.joint_velocities().tolist(),
             "gripper_width_m": cell.robot.gripper_width_m(),
-            "T_base_tcp": np.asarray(cell.kinematics.fk(q)).tolist(),
         }
 
     return read

@@ -376,21 +376,28 @@ class RunRecorder:
         width = robot.get("gripper_width_m")
         if width is not None:
             state["gripper_width_m"] = float(width)
+        links = None
+        if self._robot_model is not None:  # every link's pose (one FK); the tool pose is among them
+            links = self._robot_model.link_xyzquat(q, None if width is None else float(width))
         T = robot.get("T_base_tcp")
         if T is not None:
             M = schemas.as_matrix(T)
             state["tcp_xyz_m"] = M[:3, 3].tolist()
             state["tcp_quat_xyzw"] = list(schemas.quat_xyzw(M))
+        elif links is not None:
+            tool = next((v for name, v in links if name == self.tool_frame), None)
+            if tool is not None:
+                state["tcp_xyz_m"] = tool[:3]
+                state["tcp_quat_xyzw"] = tool[3:]
         try:  # plain floats and lists: straight to JSON; NaN or inf (allow_nan=False) take the careful path
             data = _dumps(state)
         except ValueError:
             data = _dumps(to_jsonable(state))
         self._write(topics.JOINT_STATE, stamp_ns, data)
         frames = self._static_xyzquat()
-        if self._robot_model is not None:  # every link of the robot description, for the 3D view
+        if links is not None:  # every link of the robot description, for the 3D view
             base = self.base_frame
-            frames += [(base, name, v[:3], v[3:])
-                       for name, v in self._robot_model.link_xyzquat(q, None if width is None else float(width))]
+            frames += [(base, name, v[:3], v[3:]) for name, v in links]
         elif T is not None:
             x, y, z, w = schemas.quat_xyzw(M)
             frames.append((self.base_frame, self.tool_frame, M[:3, 3].tolist(), [x, y, z, w]))
@@ -500,11 +507,17 @@ class RunRecorder:
         self, stamp_ns: int, name: str, times_s: ArrayLike, q_rad: ArrayLike,
         kind: Literal["planned", "executed"] = "planned",
     ) -> None:
+        if not self.active:  # a live view nobody watches (not latched: a later viewer needs no old motion)
+            return
         times = np.asarray(times_s, dtype=np.float64).ravel()
         q = np.asarray(q_rad, dtype=np.float64).reshape(times.size, -1)
         msg = {"name": name, "kind": kind, "times_s": times.tolist(),
-               "points": [{"t_s": float(t), "q_rad": row} for t, row in zip(times.tolist(), q.tolist(), strict=True)]}
-        self._write_json(topics.TRAJECTORY, stamp_ns, to_jsonable(msg, max_array_elements=1 << 30))
+               "points": [{"t_s": t, "q_rad": row} for t, row in zip(times.tolist(), q.tolist(), strict=True)]}
+        try:  # plain floats: straight to JSON; NaN or inf take the careful path
+            data = _dumps(msg)
+        except ValueError:
+            data = _dumps(to_jsonable(msg, max_array_elements=1 << 30))
+        self._write(topics.TRAJECTORY, stamp_ns, data)
 
     def write_log(self, stamp_ns: int, level: str | int, name: str, message: str) -> None:
         self._write(topics.LOG, stamp_ns, schemas.log(self.t(stamp_ns), level, name, message).SerializeToString())
