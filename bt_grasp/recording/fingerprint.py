@@ -43,7 +43,7 @@ from typing import Any
 
 import numpy as np
 
-from bt_grasp.recording.jsonable import to_jsonable
+from bt_grasp.recording.jsonable import BlackboardDiffer, to_jsonable
 
 #: joint positions are compared to this resolution
 JOINT_RESOLUTION_RAD = 1e-6
@@ -175,6 +175,7 @@ class FingerprintRecorder:
         self._nodes: dict[int, tuple[str, str | None]] = {}
         self._paths: dict[int, str] = {}
         self._board: dict[str, str] = {}
+        self._differ = BlackboardDiffer(MAX_ARRAY_ELEMENTS)
         self._ticks: list[TickPrint] = []
 
     def write_tick(self, tick: int, stamp_ns: int, nodes: Sequence[Mapping[str, Any]],
@@ -186,13 +187,15 @@ class FingerprintRecorder:
             self._nodes[uid] = (str(n["status"]), None if reason is None else str(reason))
             if n.get("path"):
                 self._paths.setdefault(uid, str(n["path"]))
-        if full_blackboard:
-            self._board = {}
-        for key, value in blackboard.items():
+        if full_blackboard:  # the whole blackboard, as a run hands it over: convert only what changed
+            changed, removed = self._differ.diff(blackboard)
+        else:  # the changed entries, as a log holds them
+            changed, removed = dict(blackboard), list(bb_removed)
+        for key, value in changed.items():
             if key in INPUT_FILE_KEYS:
                 continue
             self._board[str(key)] = _canonical(to_jsonable(value, MAX_ARRAY_ELEMENTS))
-        for key in bb_removed:
+        for key in removed:
             self._board.pop(key, None)
         q = gripper = None
         if robot is not None:
