@@ -1,10 +1,9 @@
-"""The campaign workers' episode backend, on the episode API (:mod:`bt_grasp.episode`) with a warm world.
+"""The campaign workers' episode backend, on the episode API (:mod:`bt_grasp.episode`) with warm worlds.
 
-:class:`~bt_grasp.episode.WarmWorlds` keeps one simulator + renderer per worker and resets it for each
-episode (objects drawn again from the seed, arm home, clock at 0), so the renderer's start-up is paid once
-per worker. A reset world gives the same run as a world built fresh in a new process (checked episode by
-episode in tests/campaign/test_campaign_sim.py); a second world built beside a first one in the same
-process did not (see docs/campaigns.md), which is why workers reset rather than rebuild.
+:class:`~bt_grasp.episode.WarmWorlds` keeps the renderer warm for the worker process and builds every
+episode's world afresh, so the renderer's start-up is paid once per worker and an episode gives the same run
+as in a fresh process, whatever ran before it (tests/episode/test_warm_world.py; docs/campaigns.md says why a
+world is not reset and reused).
 """
 
 from __future__ import annotations

@@ -2,8 +2,8 @@
 
 A task is ``trees/T.xml`` on ``scenes/T.yaml`` (which declares the goal the judge checks by physics);
 ``bt-grasp run trees/T.xml --scene scenes/T.yaml --seed N`` runs one episode of it with no other flag.
-The benchmark runs the same episodes through the episode API with one warm world per task (the world is
-reset, not rebuilt, between seeds: objects drawn again from the seed, arm home, clock at 0).
+The benchmark runs the same episodes through the episode API with warm worlds (the renderer stays warm; each
+seed's world is built afresh, so every episode runs as ``bt-grasp run`` runs it).
 """
 
 from __future__ import annotations
