@@ -15,7 +15,7 @@ from typing import Any
 from bt_grasp.campaign.episode import EpisodeBackend
 from bt_grasp.campaign.runner import EpisodeError
 from bt_grasp.campaign.spec import Episode
-from bt_grasp.campaign.worker import KeepLogs, Worker
+from bt_grasp.campaign.worker import WORKER_ENV, KeepLogs, Worker
 
 log = logging.getLogger(__name__)
 
@@ -52,6 +52,8 @@ class LocalEngine:
         self.keep_logs = keep_logs
 
     def run(self, episodes: Sequence[Episode]) -> Iterator[dict[str, Any] | EpisodeError]:
+        for key, value in WORKER_ENV.items():  # spawned workers inherit it before they import numpy
+            os.environ.setdefault(key, value)
         pool = ProcessPoolExecutor(
             max_workers=min(self.workers, len(episodes)),
             mp_context=multiprocessing.get_context("spawn"),

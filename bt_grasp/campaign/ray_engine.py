@@ -16,7 +16,7 @@ from typing import Any
 from bt_grasp.campaign.episode import EpisodeBackend
 from bt_grasp.campaign.runner import EpisodeError
 from bt_grasp.campaign.spec import Episode
-from bt_grasp.campaign.worker import KeepLogs, Worker
+from bt_grasp.campaign.worker import WORKER_ENV, KeepLogs, Worker
 from bt_grasp.errors import InputError
 
 log = logging.getLogger(__name__)
@@ -69,7 +69,8 @@ class RayEngine:
         ray = self._connect()
         try:
             slots = self.workers or max(1, int(ray.cluster_resources().get("CPU", 1)))
-            actor_cls = ray.remote(num_cpus=1, max_restarts=2, max_task_retries=2)(EpisodeActor)
+            actor_cls = ray.remote(num_cpus=1, max_restarts=2, max_task_retries=2,
+                                   runtime_env={"env_vars": dict(WORKER_ENV)})(EpisodeActor)
             actors = [
                 actor_cls.remote(self.backend_factory, self.log_dir, self.keep_logs)
                 for _ in range(min(slots, len(episodes)))

@@ -23,6 +23,13 @@ log = logging.getLogger(__name__)
 PLACE_COLUMNS = ("wall_time_s", "setup_wall_s", "episode_wall_s", "mcap", "environment", "worker", "finished_at")
 
 
+#: environment of every worker process (set before it imports numpy). OpenBLAS's second thread spin-waits
+#: after each small linear-algebra call: ~0.2 s of CPU per pick episode that does nothing (same wall time, same
+#: fingerprint without it) but takes a core from the other workers. One thread each: 2 workers on 2 cores went
+#: from 69.9 to 82.5 episodes/min, 1 worker from 45.7 to 50.8 (`bt-grasp bench eval --seeds 50`, idle).
+WORKER_ENV: dict[str, str] = {"OPENBLAS_NUM_THREADS": "1"}
+
+
 class KeepLogs(enum.StrEnum):
     """Which episodes keep their MCAP log."""
 

@@ -36,3 +36,18 @@ class StandInBackend:
 
 def stand_in() -> StandInBackend:
     return StandInBackend()
+
+
+class EnvProbeBackend(StandInBackend):
+    """Reports, as its fingerprint, how many threads the worker's environment gives OpenBLAS."""
+
+    def run(self, episode: Episode, log: Path | None) -> EpisodeOutcome:
+        import os
+        from dataclasses import replace
+
+        outcome = super().run(episode, log)
+        return replace(outcome, fingerprint=f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS')}")
+
+
+def env_probe() -> EnvProbeBackend:
+    return EnvProbeBackend()

@@ -11,6 +11,8 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
+
 REPO = Path(__file__).resolve().parents[2]
 
 SCRIPT = """
@@ -80,3 +82,21 @@ def test_killed_worker_loses_and_duplicates_no_row(tmp_path: Path) -> None:
     rows = [json.loads(x) for x in after.splitlines()]
     assert sorted(r["seed"] for r in rows) == list(range(24)), "each episode exactly once"
     assert all(r["success"] == (r["seed"] % 3 != 0) for r in rows)
+
+
+def test_workers_run_with_one_openblas_thread(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A worker process gets the campaign's worker environment before it imports numpy (OpenBLAS's spinning
+    second thread took a core from the other worker)."""
+    monkeypatch.delenv("OPENBLAS_NUM_THREADS", raising=False)
+    monkeypatch.syspath_prepend(str(REPO / "tests"))
+    from bt_grasp.campaign.local import LocalEngine
+    from bt_grasp.campaign.spec import load_campaign
+    from bt_grasp.campaign.worker import KeepLogs
+    from campaign.standin import env_probe
+
+    campaign_file = tmp_path / "c.yaml"
+    campaign_file.write_text(f"name: c\ntrees: [{REPO / 'trees/pick.xml'}]\n"
+                             f"scenes: [{REPO / 'scenes/tabletop.yaml'}]\nseeds: {{first: 1, count: 1}}\n")
+    episodes = load_campaign(campaign_file, check_inputs=False).episodes()
+    rows = list(LocalEngine(1, env_probe, tmp_path / "logs", KeepLogs.NONE).run(episodes))
+    assert [row["fingerprint"] for row in rows] == ["OPENBLAS_NUM_THREADS=1"]  # type: ignore[index]
