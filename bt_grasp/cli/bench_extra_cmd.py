@@ -26,7 +26,9 @@ def pick(
     calibration: Path | None = typer.Option(None, "--calibration", help="Default: calibrate once first."),
     log_dir: Path | None = typer.Option(None, "--log-dir", help="Keep every run's MCAP log here."),
     as_json: bool = typer.Option(False, "--json"),
-    warm: bool = typer.Option(False, "--warm", help="Reuse one warm world (reset per episode) instead of new ones."),
+    warm: bool = typer.Option(
+        False, "--warm", help="Keep the renderer warm between episodes (each episode's world is still built afresh)."
+    ),
 ) -> None:
     """Pick success over seeded episodes, judged by physics (object held 15 cm up at the end)."""
     from bt_grasp.episode.pick_bench import run_pick_bench
