@@ -34,7 +34,3 @@ def keep_renderer_warm() -> None:
         scene.update_render()
         camera.take_picture()
         _kept = (scene, camera)
-
-
-def renderer_is_warm() -> bool:
-    return _kept is not None
