@@ -20,9 +20,8 @@ def demo(
     """Render what the camera sees, calibrate it (eye-to-hand), run the pick tree and print the summary."""
     from bt_grasp.cli.run_cmd import live_progress, print_summary
     from bt_grasp.cli.scene_cmd import render
-    from bt_grasp.episode import EpisodeRequest, run_episode
+    from bt_grasp.episode import pick_request, run_episode
     from bt_grasp.episode.calibration import calibrate_in_sim
-    from bt_grasp.goals import DEFAULT_LIFT_HEIGHT_M, goal_from_options
     from bt_grasp.perception.calibration_file import save_calibration
     from bt_grasp.scene_config import load_scene
 
@@ -42,16 +41,8 @@ def demo(
         f"{true_mm:.3f} mm / {true_deg:.4f} deg -> {calibration_path}"
     )
     console.rule(f"3/3  {tree}")
-    request = EpisodeRequest(
-        tree=tree,
-        scene=scene,
-        seed=seed,
-        goal=goal_from_options("pick", "red"),
-        calibration=calibration_path,
-        log=out / "pick.mcap",
-        blackboard={"color": "red", "lift_height": DEFAULT_LIFT_HEIGHT_M},
-        argv=("bt-grasp", "demo", "--seed", str(seed)),
-    )
+    request = pick_request(tree, scene, seed, calibration=calibration_path, log=out / "pick.mcap",
+                           argv=("bt-grasp", "demo", "--seed", str(seed)))
     summary = run_episode(request, on_tick=(live_progress(Console(stderr=True)),))
     print_summary(console, summary)
     (out / "summary.json").write_text(json.dumps(summary.to_json(), indent=2) + "\n")

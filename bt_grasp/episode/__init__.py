@@ -9,7 +9,13 @@ evaluation workers and notebooks all call. See docs/episode-api.md.
 """
 
 from bt_grasp.episode.episode import Episode, TickCallback, load_inputs, run_episode
-from bt_grasp.episode.request import DEFAULT_MAX_TICKS, BlackboardValue, EpisodeRequest, parse_assignments
+from bt_grasp.episode.request import (
+    DEFAULT_MAX_TICKS,
+    BlackboardValue,
+    EpisodeRequest,
+    parse_assignments,
+    pick_request,
+)
 from bt_grasp.episode.result import EpisodeResult, Judged
 from bt_grasp.episode.worlds import FreshWorlds, WarmWorlds, WorldSource
 from bt_grasp.goals import ClearGoal, Goal, PickGoal, goal_for_run, goal_from_options
@@ -32,5 +38,6 @@ __all__ = [
     "goal_from_options",
     "load_inputs",
     "parse_assignments",
+    "pick_request",
     "run_episode",
 ]

@@ -16,15 +16,14 @@ def run_pick_bench(
     warm: bool = False,
 ) -> dict[str, Any]:
     from bt_grasp.episode import (
-        EpisodeRequest,
         EpisodeResult,
         FreshWorlds,
         WarmWorlds,
         WorldSource,
+        pick_request,
         run_episode,
     )
     from bt_grasp.episode.calibration import calibrate_in_sim
-    from bt_grasp.goals import DEFAULT_LIFT_HEIGHT_M, goal_from_options
     from bt_grasp.perception.calibration_file import save_calibration
 
     work = Path(tempfile.mkdtemp(prefix="bt_grasp_bench_"))
@@ -42,16 +41,7 @@ def run_pick_bench(
         runs: list[EpisodeResult] = []
         for seed in range(first_seed, first_seed + seeds):
             log = (log_dir / f"{tree.stem}_seed{seed}.mcap") if log_dir is not None else None
-            request = EpisodeRequest(
-                tree=tree,
-                scene=scene,
-                seed=seed,
-                goal=goal_from_options("pick", "red"),
-                calibration=calibration,
-                log=log,
-                blackboard={"color": "red", "lift_height": DEFAULT_LIFT_HEIGHT_M},
-            )
-            runs.append(run_episode(request, worlds=worlds))
+            runs.append(run_episode(pick_request(tree, scene, seed, calibration=calibration, log=log), worlds=worlds))
         ok = [r for r in runs if r.success]
         report["trees"][str(tree)] = {
             "runs": len(runs),

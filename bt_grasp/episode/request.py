@@ -62,3 +62,14 @@ def parse_assignments(items: Sequence[str], source: str = "--set") -> dict[str, 
         parsed = yaml.safe_load(value) if value else ""
         out[key] = parsed if isinstance(parsed, str | int | float | bool) else value
     return out
+
+
+def pick_request(tree: Path, scene: Path, seed: int, *, calibration: Path | None, log: Path | None = None,
+                 argv: tuple[str, ...] = ()) -> EpisodeRequest:
+    """The default pick (`bt-grasp demo`, `bt-grasp bench pick`): the red object lifted the default height,
+    judged as a pick goal, with the tree's ``color`` and ``lift_height`` entries set to match."""
+    from bt_grasp.goals import DEFAULT_LIFT_HEIGHT_M, goal_from_options
+
+    return EpisodeRequest(tree=tree, scene=scene, seed=seed, goal=goal_from_options("pick", "red"),
+                          calibration=calibration, log=log, argv=argv,
+                          blackboard={"color": "red", "lift_height": DEFAULT_LIFT_HEIGHT_M})
