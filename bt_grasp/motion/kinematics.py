@@ -8,7 +8,8 @@ base transform is ``Scene.T_world_base()``.
 
 IK is damped least squares on the SE(3) log error of the tcp (the classic CLIK iteration), projected
 on the joint limits, from several seeds: ``q_current`` first, then random seeds from a caller-given
-generator. An unreachable pose is a result value, never an exception.
+generator. An unreachable pose is a result value, never an exception. For a UR-shaped arm (this one),
+``closed_form_ik`` gives *every* solution of a pose (``analytic_ik.py``); the planner's goal sets use it.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ import enum
 import logging
 from collections.abc import Iterator
 from dataclasses import dataclass
-from functools import cache
+from functools import cache, cached_property
 from pathlib import Path
 from typing import Protocol
 
@@ -26,6 +27,7 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from bt_grasp.geometry import Mat4
+from bt_grasp.motion.analytic_ik import SOLUTION_TOL, URAnalyticIK, ur_analytic_ik
 from bt_grasp.robot_description import (
     ARM_JOINTS,
     FINGER_JOINT,
@@ -224,6 +226,41 @@ class ArmKinematics:
             if all(np.max(np.abs(q - s)) > opts.distinct_tol_rad for s in found):
                 found.append(q)
                 yield q
+
+    @cached_property
+    def _closed_form(self) -> URAnalyticIK | None:
+        placements = [np.array(self.model.jointPlacements[j].translation) for j in range(1, 7)]
+        return ur_analytic_ik(self.fk, placements, np.array(self.model.frames[self._tcp_id].placement.translation))
+
+    @property
+    def has_closed_form_ik(self) -> bool:
+        return self._closed_form is not None
+
+    def closed_form_ik(self, T_base_tcp_goal: Mat4, q_ref: NDArray[np.float64]) -> list[Vec] | None:
+        """Every IK solution of the pose within the joint limits, closest to ``q_ref`` first; None if no closed form.
+
+        Each solution takes, per joint, the whole turn nearest ``q_ref`` (joints of +-2 pi have two; the
+        geometry, hence collision, is the same). At the wrist singularity the last joint keeps ``q_ref``'s
+        angle. The pose's rotation is first projected onto the nearest rotation (a pose built from a measured,
+        slightly tilted frame passes ``is_rigid_transform`` at 1e-4 but is not exactly orthonormal), and every
+        solution is checked through :meth:`fk` (1e-7) before it is returned.
+        """
+        solver = self._closed_form
+        if solver is None:
+            return None
+        q_ref = self._check_q(q_ref)
+        T = np.array(T_base_tcp_goal, dtype=float)
+        U, _, Vt = np.linalg.svd(T[:3, :3])
+        T[:3, :3] = U @ Vt
+        out: list[Vec] = []
+        for q in solver.raw_solutions(T, float(q_ref[5])):
+            q = self._unwrap_towards(np.mod(q + np.pi, 2 * np.pi) - np.pi, q_ref)
+            if not self.within_limits(q) or not np.allclose(self.fk(q), T, atol=SOLUTION_TOL):
+                continue
+            if all(np.max(np.abs(q - s)) > 1e-6 for s in out):
+                out.append(q)
+        out.sort(key=lambda s: float(np.linalg.norm(s - q_ref)))
+        return out
 
     def beyond_reach_m(self, T_base_tcp_goal: Mat4) -> float:
         """How far the tcp position lies beyond a proven reach bound (<= 0: maybe reachable)."""

@@ -176,7 +176,7 @@ class GoalSet:
 
     goals: list[Vec]
     solutions: int  # distinct IK solutions found (free or not)
-    seeds_used: int
+    seeds_used: int  # 0: closed-form IK (every solution)
     first_colliding: Vec | None = None
     best_error: tuple[float, float] = (float("inf"), float("inf"))  # m, rad (when none converged)
 
@@ -200,15 +200,22 @@ class MotionPlanner:
 
     # --- pose goals ---------------------------------------------------------------------------------
     def goal_set(self, q0: Vec, T_base_tcp_goal: Mat4, checker: CollisionChecker, opts: PlannerOptions) -> GoalSet:
-        """Seed IK until ``max_goal_configs`` distinct collision-free solutions exist or ``ik_seeds`` are spent.
+        """The collision-free IK goals of a pose: up to ``max_goal_configs``, closest to ``q0`` first.
 
-        Seeds: ``q0`` first, then uniform draws from a generator seeded with ``opts.seed`` (the same request
-        always tries the same seeds). Every solution is collision-checked as it is found, so a pose whose
-        first solutions collide is not given up while seeds remain.
+        With the arm's closed-form IK (a UR arm: ``analytic_ik.py``), *every* solution of the pose is
+        collision-checked, so no free goal is missed and "in collision" means all of them collide. Without it,
+        seeded IK runs until ``max_goal_configs`` distinct free solutions exist or ``ik_seeds`` are spent:
+        ``q0`` first, then uniform draws from a generator seeded with ``opts.seed`` (the same request always
+        tries the same seeds); every solution is checked as it is found.
         """
+        closed = self.kin.closed_form_ik(T_base_tcp_goal, q0)
+        if closed is not None:
+            free = [q for q in closed if checker.is_valid(q)][: opts.max_goal_configs]
+            colliding = next((q for q in closed if not checker.is_valid(q)), None) if not free else None
+            return GoalSet(free, len(closed), 0, colliding, (0.0, 0.0) if closed else (float("inf"),) * 2)
         rng = np.random.default_rng(opts.seed)
         tried: list = []  # type: ignore[type-arg]
-        free: list[Vec] = []
+        free = []
         found = 0
         first_colliding: Vec | None = None
         for q in self.kin.iter_ik_solutions(T_base_tcp_goal, q0, seeds=opts.ik_seeds, rng=rng, tried=tried):
@@ -241,16 +248,16 @@ class MotionPlanner:
         checker = self.checker(scene, opts.margin_m)
         found = self.goal_set(q0, T_base_tcp_goal, checker, opts)
         ik_time = time.perf_counter() - t0
+        source = f"from {found.seeds_used} seeds" if found.seeds_used else "(closed form: every solution)"
         if found.solutions == 0:
             pe, re = found.best_error
-            return _fail(PlanStatus.IK_UNREACHABLE,
-                         f"no IK solution from {found.seeds_used} seeds (best error {pe * 1e3:.1f} mm, "
-                         f"{np.rad2deg(re):.2f} deg)", ik_time_s=ik_time)
+            error = f" (best error {pe * 1e3:.1f} mm, {np.rad2deg(re):.2f} deg)" if found.seeds_used else ""
+            return _fail(PlanStatus.IK_UNREACHABLE, f"no IK solution {source}{error}", ik_time_s=ik_time)
         if not found.goals:
             q_bad = found.first_colliding
             pairs = checker.colliding_pairs(q_bad) if q_bad is not None else []
             return _fail(PlanStatus.GOAL_IN_COLLISION,
-                         f"all {found.solutions} IK solutions from {found.seeds_used} seeds collide "
+                         f"all {found.solutions} IK solutions {source} collide "
                          f"(first: {pairs or 'within margin'})", ik_time_s=ik_time)
         result = self._plan(q0, found.goals, checker, opts)
         return replace(result, ik_time_s=ik_time, goal_configs=len(found.goals))

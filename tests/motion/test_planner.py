@@ -160,27 +160,50 @@ def test_the_safety_net_is_a_named_failure(detour: tuple) -> None:
     assert "safety net" in result.message
 
 
-def test_ik_goal_seeding_goes_on_past_colliding_solutions(scene_config) -> None:  # type: ignore[no-untyped-def]
-    """Bench problem 2: the first three IK solutions its seeds find collide; the fourth is free."""
+def test_the_goal_set_checks_every_closed_form_solution(scene_config) -> None:  # type: ignore[no-untyped-def]
+    """Bench problem 2: of the pose's 8 IK solutions the closest free one is the goal, whatever collides first."""
     from bt_grasp.motion.bench import make_problems
     from bt_grasp.motion.planner import default_planner
 
     problem = make_problems(scene_config, 3, seed=0)[2]
     scene = problem.scene(scene_config)
     planner = default_planner()
+    checker = planner.checker(scene, 0.01)
+    every = planner.kin.closed_form_ik(problem.T_base_tcp_goal, problem.q_start)
+    assert every is not None and len(every) == 8
+    free = [q for q in every if checker.is_valid(q)]
+    assert 0 < len(free) < 8 and not checker.is_valid(every[0])  # the closest solution collides
+    found = planner.goal_set(problem.q_start, problem.T_base_tcp_goal, checker, PlannerOptions(max_goal_configs=1))
+    assert found.solutions == 8 and found.seeds_used == 0
+    assert len(found.goals) == 1 and np.array_equal(found.goals[0], free[0])
+    result = plan_to_pose(problem.q_start, problem.T_base_tcp_goal, scene)
+    assert result.ok, result.message
+    assert collision_checker(scene, 0.01).check_path(result.path, 0.005).ok
+
+
+def test_seeded_ik_goal_sets_go_on_past_colliding_solutions(scene_config, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """Without a closed form (a non-UR arm), seeding goes on: bench problem 2's first three solutions collide."""
+    from bt_grasp.motion.bench import make_problems
+    from bt_grasp.motion.kinematics import ArmKinematics
+    from bt_grasp.motion.planner import default_planner
+
+    monkeypatch.setattr(ArmKinematics, "closed_form_ik", lambda self, T, q: None)
+    problem = make_problems(scene_config, 3, seed=0)[2]
+    scene = problem.scene(scene_config)
+    planner = default_planner()
     options = PlannerOptions(max_goal_configs=1)
     found = planner.goal_set(problem.q_start, problem.T_base_tcp_goal, planner.checker(scene, 0.01), options)
-    assert found.solutions == 4 and len(found.goals) == 1  # stopped at the first free one
+    assert found.solutions == 4 and len(found.goals) == 1 and found.seeds_used > 1  # stopped at the first free one
     result = plan_to_pose(problem.q_start, problem.T_base_tcp_goal, scene)
     assert result.ok, result.message
     assert collision_checker(scene, 0.01).check_path(result.path, 0.005).ok
 
 
 def test_a_pose_whose_every_ik_solution_collides_is_goal_in_collision(scene_config) -> None:  # type: ignore[no-untyped-def]
-    """Bench problem 18: all eight solutions of the UR5 collide; the whole seed budget says so."""
+    """Bench problem 18: all eight solutions of the UR5 collide; the closed form says so."""
     from bt_grasp.motion.bench import make_problems
 
     problem = make_problems(scene_config, 19, seed=0)[18]
     result = plan_to_pose(problem.q_start, problem.T_base_tcp_goal, problem.scene(scene_config))
     assert result.status is PlanStatus.GOAL_IN_COLLISION
-    assert "all 8 IK solutions from 40 seeds collide" in result.message
+    assert "all 8 IK solutions (closed form: every solution) collide" in result.message
