@@ -100,3 +100,30 @@ def test_scene_render_cli_writes_three_files(tabletop_scene_path: Path, tmp_path
     assert ((r > 150) & (g < 60) & (b < 60)).sum() > 200
     assert ((g > 120) & (r < 80) & (b < 100)).sum() > 200
     assert ((b > 150) & (r < 60) & (g < 100)).sum() > 200
+
+
+def test_an_async_frame_shows_the_scene_when_it_was_started(tabletop_scene_path: Path) -> None:
+    """The log's extra frames are read back while the world steps on: the picture is the moment of the call."""
+    a = World.from_file(tabletop_scene_path, seed=4)
+    b = World.from_file(tabletop_scene_path, seed=4)
+    target = a.robot.joint_positions() + np.array([0.6, -0.3, 0.4, 0.0, 0.5, 0.0])
+    for w in (a, b):
+        w.step(20)
+        w.robot.set_joint_targets(target)
+    picture = a.camera.render_color_async()
+    a.step(60)  # the arm moves while the picture is read back
+    reference = b.camera.render_color()  # b stands where a stood at the call
+    np.testing.assert_array_equal(picture.result(), reference)
+    b.step(60)
+    moved = b.camera.render_color()
+    assert np.abs(moved.astype(int) - reference.astype(int)).max() > 50  # the arm did move in view
+    np.testing.assert_array_equal(a.camera.render_color(), moved)  # a sync render waits, then sees the present
+
+
+def test_the_log_frames_look_like_the_pipelines_frames(world: World) -> None:
+    """The log's colour frames come from a second camera with a cheaper shader: the same picture."""
+    color, _ = world.camera.render_true()
+    log_color = world.camera.render_color(fast_shader=True)
+    assert log_color.shape == color.shape
+    difference = np.abs(log_color.astype(int) - color.astype(int))
+    assert difference.max() <= 8 and (difference.max(axis=-1) > 3).mean() < 1e-4

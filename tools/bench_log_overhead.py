@@ -1,6 +1,7 @@
 """What recording, extra camera frames and the live server cost a pick, measured in one process.
 
     python tools/bench_log_overhead.py [--reps 3] [--seed 0] [--fresh] [--out FILE.json]
+    python tools/bench_log_overhead.py --cli [--reps 8]     # whole one-off `bt-grasp run` commands
 
 Runs the default pick (trees/pick.xml on scenes/tabletop.yaml, one warm world reused) in each configuration,
 interleaved, ``--reps`` times: no log; --log (the format-2 log: every link's pose each tick, robot meshes,
@@ -9,6 +10,10 @@ median wall time of the tick loop (world building excluded) and of the whole epi
 tree, ticks, judge; with ``--fresh`` a new world each time, as ``bt-grasp run`` does), the overheads against
 no log, and the log's size per simulated minute. Figures depend on the machine and its load: the script
 prints the load average too.
+
+``--cli`` times what a user runs: whole ``bt-grasp run trees/pick.xml --scene scenes/tabletop.yaml
+--calibration scenes/tabletop.calibration.yaml`` processes (start-up, renderer, run, log closed), without a
+log, with ``--log``, with ``--log --image-hz 1`` and with ``--live 0``, interleaved, ``--reps`` times each.
 """
 
 from __future__ import annotations
@@ -33,9 +38,55 @@ from bt_grasp.episode.worlds import WarmWorlds  # noqa: E402
 CONFIGS: dict[str, dict[str, Any]] = {
     "no log": {},
     "--log": {"log": True},
+    "--log --image-hz 1": {"log": True, "image_hz": 1.0},
     "--log --image-hz 2": {"log": True, "image_hz": 2.0},
     "--live (no viewer)": {"live_port": 0},
 }
+
+CLI_CONFIGS: dict[str, list[str]] = {
+    "no log": [],
+    "--log": ["--log", "{log}"],
+    "--log --image-hz 1": ["--log", "{log}", "--image-hz", "1"],
+    "--live (no viewer)": ["--live", "0"],
+}
+
+
+def cli_main(reps: int, seed: int, out: Path | None) -> None:
+    """Whole one-off ``bt-grasp run`` processes, interleaved; medians and overheads against no log."""
+    import subprocess
+
+    exe = Path(sys.executable).with_name("bt-grasp")
+    base = [str(exe), "run", "trees/pick.xml", "--scene", "scenes/tabletop.yaml", "--seed", str(seed),
+            "--calibration", "scenes/tabletop.calibration.yaml"]
+    walls: dict[str, list[float]] = {name: [] for name in CLI_CONFIGS}
+    sizes: list[float] = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for rep in range(reps + 1):  # the first round warms the disk caches; not counted
+            for name, extra in CLI_CONFIGS.items():
+                log = Path(tmp) / f"{rep}.mcap"
+                cmd = base + [a.replace("{log}", str(log)) for a in extra]
+                started = time.perf_counter()
+                done = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
+                wall = time.perf_counter() - started
+                if done.returncode != 0:
+                    raise SystemExit(f"{name}: exit {done.returncode}: {done.stderr[-500:]}")
+                if rep == 0:
+                    continue
+                walls[name].append(wall)
+                if log.exists():
+                    if name == "--log":
+                        sizes.append(log.stat().st_size / 1e6)
+                    log.unlink()
+                print(f"{name:22s} rep {rep}: {wall:.2f} s", flush=True)
+    base_s = statistics.median(walls["no log"])
+    rows = {name: {"wall_s_median": round(statistics.median(w), 3), "wall_s_all": [round(x, 3) for x in w],
+                   "overhead_pct": round(100 * (statistics.median(w) / base_s - 1), 1)} for name, w in walls.items()}
+    report = {"command": " ".join(base[1:]), "reps": reps, "load_average": os.getloadavg(), "cpus": os.cpu_count(),
+              "log_mb_median": round(statistics.median(sizes), 2) if sizes else None, "configs": rows}
+    print(json.dumps(report, indent=2))
+    if out is not None:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(json.dumps(report, indent=2) + "\n")
 
 
 def main() -> None:
@@ -45,7 +96,11 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=None)
     parser.add_argument("--fresh", action="store_true",
                         help="build a fresh world per run and time the whole episode (world, tree, ticks, judge)")
+    parser.add_argument("--cli", action="store_true", help="time whole one-off `bt-grasp run` processes instead")
     args = parser.parse_args()
+    if args.cli:
+        cli_main(args.reps, args.seed, args.out)
+        return
     worlds = None if args.fresh else WarmWorlds()
     episode_walls: dict[str, list[float]] = {name: [] for name in CONFIGS}
     walls: dict[str, list[float]] = {name: [] for name in CONFIGS}

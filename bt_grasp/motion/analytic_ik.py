@@ -69,7 +69,7 @@ class URAnalyticIK:
 
     def raw_solutions(self, T_base_tcp: Mat4, q6_singular: float) -> list[Vec]:
         """Up to eight joint vectors (angles in (-pi, pi] up to whole turns) reaching the pose, unverified."""
-        d1, _, _, d4, _, d6 = self.d
+        _, _, _, d4, _, d6 = self.d
         a2, a3 = self.a[1], self.a[2]
         T06 = self.B_inv @ np.asarray(T_base_tcp, dtype=float) @ self.C_inv
         p05 = T06 @ np.array([0.0, 0.0, -d6, 1.0])

@@ -1,9 +1,9 @@
 """Joint-space motion planning with OMPL 2 (nanobind bindings) in a planning scene.
 
 ``plan_to_joints`` plans from a start configuration to a goal configuration; ``plan_to_pose`` first
-solves IK for a tool pose (several distinct, collision-free solutions become the goal states, so the
-planner picks whichever it reaches) and then plans. Both return a :class:`PlanResult` whose status says
-what went wrong; no bad request raises.
+solves IK for a tool pose (every closed-form solution of the UR arm is collision-checked and the free ones
+closest to the start become the goal states, so the planner picks whichever it reaches) and then plans.
+Both return a :class:`PlanResult` whose status says what went wrong; no bad request raises.
 
 Collision checking along edges: OMPL's motion validator checks states at most
 ``edge_resolution_rad`` apart (L2 in joint space, hence also on every joint); the simplified path is then
@@ -11,11 +11,12 @@ re-checked at ``final_resolution_rad`` (max joint step, 0.01 rad by default) bef
 
 Determinism (same request, same seed, same result on any machine at any load): no decision reads the
 clock. The search ends on a work budget (``max_state_checks`` validity checks, through an OMPL termination
-condition, ``budget.py``), simplification makes fixed passes (or spends its own check budget), IK runs a
-fixed number of iterations per seed from a fixed seed list, and the re-search at a finer resolution happens
-at most ``max_refinements`` times. ``ompl.util.RNG.setSeed(seed)`` reseeds OMPL's seed generator before
-every search and every OMPL object that draws numbers is created after it (OMPL logs "Random number
-generation already started" on reseeding; it reseeds all the same). The one clock read is the safety net
+condition, ``budget.py``), simplification makes fixed passes (or spends its own check budget), IK is
+closed-form (or, for an arm without one, a fixed number of iterations per seed from a fixed seed list),
+and the re-search at a finer resolution happens at most ``max_refinements`` times.
+``ompl.util.RNG.setSeed(seed)`` reseeds OMPL's seed generator before every search and every OMPL object
+that draws numbers is created after it (OMPL logs "Random number generation already started" on
+reseeding; it reseeds all the same). The one clock read is the safety net
 (``safety_limit_s``), which fails the request as ``SAFETY_TIMEOUT`` and logs a warning.
 """
 
