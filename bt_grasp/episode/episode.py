@@ -280,6 +280,7 @@ class Episode:
             flush_interval_s=LOG_FLUSH_INTERVAL_S,
             robot_model=default_robot_model(),
             leaf_names=[n["name"] for n in node_records(self.tree.root) if n["kind"] in ("Action", "Condition")],
+            writer_process=True,  # a file log is written by a child process; the tick loop only hands over
         )
         # the frame tree's root: where the robot is bolted (installation data), repeated with every /tf
         recorder.static_transforms[(WORLD_FRAME, BASE_FRAME)] = self.scene.T_world_base()

@@ -21,7 +21,6 @@ through an exception, Ctrl-C or SIGTERM) writes the summary and footer. Not thre
 
 from __future__ import annotations
 
-import json
 import logging
 import os
 import time
@@ -41,10 +40,14 @@ from mcap_protobuf.schema import build_file_descriptor_set
 from numpy.typing import ArrayLike, NDArray
 
 from bt_grasp.recording import schemas, topics
+from bt_grasp.recording.arm_state import ArmStateEncoder
+from bt_grasp.recording.arm_state import dumps as _dumps
+from bt_grasp.recording.arm_state import ticked as _ticked
 from bt_grasp.recording.jsonable import BlackboardDiffer, NodeDiffer, to_jsonable
 from bt_grasp.recording.projection import box_corners_px
 from bt_grasp.recording.signals import SignalGuard
 from bt_grasp.recording.tf_encoding import FrameTransformsEncoder
+from bt_grasp.recording.writer_process import ProcessWriter
 
 log = logging.getLogger(__name__)
 
@@ -93,16 +96,6 @@ class ChannelSpec:
     schema_data: bytes
 
 
-def _ticked(tick: int | None, msg: dict[str, Any]) -> dict[str, Any]:
-    """``msg`` tagged with the last tick written; before the first tick the key is left out (Foxglove's JSON
-    schemas have no nullable types)."""
-    return msg if tick is None else {"tick": tick, **msg}
-
-
-def _dumps(obj: Any) -> bytes:
-    return json.dumps(obj, separators=(",", ":"), allow_nan=False).encode()
-
-
 class RunRecorder:
     """Writes one run to one MCAP file. See the module docstring for the call order.
 
@@ -135,6 +128,10 @@ class RunRecorder:
         robot_model: a :class:`bt_grasp.recording.robot_model.RobotModel`: every link's pose goes on /tf with
             each arm state (write its link entities with ``write_scene(ROBOT_MODEL, 0, robot_model_update())``);
             None writes only the tool frame.
+        writer_process: write the file from a child process (``writer_process.py``): the tick loop only
+            hands data over, and the arm state of a tick with no viewer watching is encoded there too (the
+            same bytes). With ``robot_model``, the child builds the default robot model (the one
+            ``default_robot_model()`` returns). A file log only; ignored without ``path``.
     """
 
     def __init__(
@@ -159,6 +156,7 @@ class RunRecorder:
         max_array_elements: int = 64,
         robot_model: Any = None,
         leaf_names: Sequence[str] = (),
+        writer_process: bool = False,
     ) -> None:
         if compression not in _COMPRESSION:
             raise ValueError(f"unknown compression {compression!r}; expected one of {sorted(_COMPRESSION)}")
@@ -187,7 +185,7 @@ class RunRecorder:
         self._closed = False
         self._camera_K: NDArray[np.float64] | None = None  # the last camera calibration written
         self._tf_encoder = FrameTransformsEncoder()
-        self._static_cache: dict[tuple[str, str], tuple[Any, list[float], list[float]]] = {}
+        self._arm = ArmStateEncoder(self._joint_names, base_frame, tool_frame, robot_model)
         self._taps: list[Callable[[str, int, bytes], None]] = []
         self._demand: list[Callable[[], bool]] = []
         self._when_watched: dict[str, Callable[[], None]] = {}
@@ -200,16 +198,26 @@ class RunRecorder:
         #: viewer that seeks (and reads only the last /tf message) still has the whole frame tree
         self.static_transforms: dict[tuple[str, str], NDArray[np.float64]] = {}
 
-        self._file: BinaryIO = open(self.path, "wb")  # noqa: SIM115 - closed in close()
+        self._process: ProcessWriter | None = None
+        self._sent_statics: dict[tuple[str, str], int] = {}
+        self._file: BinaryIO | None = None
+        if writer_process and self.to_file:
+            arm = {"joint_names": self._joint_names, "base_frame": base_frame, "tool_frame": tool_frame,
+                   "robot_model": robot_model is not None}
+            self._process = ProcessWriter(str(self.path), chunk_size=chunk_size, compression=compression,
+                                          arm_state=arm)
+            self._writer: Writer | ProcessWriter = self._process
+        else:
+            self._file = open(self.path, "wb")  # noqa: SIM115 - closed in close()
+            self._writer = Writer(self._file, chunk_size=chunk_size, compression=_COMPRESSION[compression])
         try:
-            self._start(metadata, attachments or {}, chunk_size, compression)
+            self._start(metadata, attachments or {})
         except BaseException:
-            self._file.close()
+            if self._file is not None:
+                self._file.close()
             raise
 
-    def _start(self, metadata: Mapping[str, str], attachments: Mapping[str, bytes], chunk_size: int,
-               compression: str) -> None:
-        self._writer = Writer(self._file, chunk_size=chunk_size, compression=_COMPRESSION[compression])
+    def _start(self, metadata: Mapping[str, str], attachments: Mapping[str, bytes]) -> None:
         self._writer.start(profile="", library=_library_id())
         meta = {str(k): str(v) for k, v in metadata.items()}
         meta.setdefault("log_format", topics.LOG_FORMAT_VERSION)
@@ -221,7 +229,10 @@ class RunRecorder:
             self._writer.add_attachment(now, 0, name, _media_type(name, bytes(data)), bytes(data))
         self._channels: dict[str, int] = {}
         self._register_channels()
-        self._file.flush()
+        if self._file is not None:
+            self._file.flush()
+        else:
+            self._writer.flush()
 
     # -- set-up ------------------------------------------------------------------------------------------
 
@@ -366,55 +377,32 @@ class RunRecorder:
         """The arm state on /robot/joint_state (JSON, for plots) and base->tool on /tf (for the 3D view)."""
         if not self.active or "q_rad" not in robot:  # nobody watches, or a state read while nobody did
             return
-        q = np.asarray(robot["q_rad"], dtype=np.float64).ravel()
-        qd = robot.get("qd_rad_s")
-        state: dict[str, Any] = _ticked(self._last_tick, {
-            "name": self._joint_names[: q.size],
-            "position": q.tolist(),
-            "velocity": [] if qd is None else np.asarray(qd, dtype=np.float64).ravel().tolist(),
-        })
-        width = robot.get("gripper_width_m")
-        if width is not None:
-            state["gripper_width_m"] = float(width)
-        links = None
-        if self._robot_model is not None:  # every link's pose (one FK); the tool pose is among them
-            links = self._robot_model.link_xyzquat(q, None if width is None else float(width))
-        T = robot.get("T_base_tcp")
-        if T is not None:
-            M = schemas.as_matrix(T)
-            state["tcp_xyz_m"] = M[:3, 3].tolist()
-            state["tcp_quat_xyzw"] = list(schemas.quat_xyzw(M))
-        elif links is not None:
-            tool = next((v for name, v in links if name == self.tool_frame), None)
-            if tool is not None:
-                state["tcp_xyz_m"] = tool[:3]
-                state["tcp_quat_xyzw"] = tool[3:]
-        try:  # plain floats and lists: straight to JSON; NaN or inf (allow_nan=False) take the careful path
-            data = _dumps(state)
-        except ValueError:
-            data = _dumps(to_jsonable(state))
-        self._write(topics.JOINT_STATE, stamp_ns, data)
-        frames = self._static_xyzquat()
-        if links is not None:  # every link of the robot description, for the 3D view
-            base = self.base_frame
-            frames += [(base, name, v[:3], v[3:]) for name, v in links]
-        elif T is not None:
-            x, y, z, w = schemas.quat_xyzw(M)
-            frames.append((self.base_frame, self.tool_frame, M[:3, 3].tolist(), [x, y, z, w]))
-        if frames:
-            self._write(topics.TF, stamp_ns, self._tf_encoder.encode_xyzquat(self.t(stamp_ns), frames))
+        if self._process is not None and not self._taps:  # a file only: the writer process encodes it
+            self._hand_over_arm_state(stamp_ns, robot)
+            return
+        joint_state, tf = self._arm.encode(self.t(stamp_ns), self._last_tick, robot, self.static_transforms)
+        self._write(topics.JOINT_STATE, stamp_ns, joint_state)
+        if tf is not None:
+            self._write(topics.TF, stamp_ns, tf)
 
-    def _static_xyzquat(self) -> list[tuple[str, str, Sequence[float], Sequence[float]]]:
-        """The static transforms as (parent, child, xyz, quaternion), converted once per change."""
-        out: list[tuple[str, str, Sequence[float], Sequence[float]]] = []
-        for (parent, child), T in self.static_transforms.items():
-            cached = self._static_cache.get((parent, child))
-            if cached is None or cached[0] is not T:
-                M = schemas.as_matrix(T)
-                cached = (T, M[:3, 3].tolist(), list(schemas.quat_xyzw(M)))
-                self._static_cache[(parent, child)] = cached
-            out.append((parent, child, cached[1], cached[2]))
-        return out
+    def _hand_over_arm_state(self, stamp_ns: int, robot: Mapping[str, Any]) -> None:
+        assert self._process is not None
+        if self._closed:
+            raise ValueError(f"{self.path}: the recorder is closed")
+        statics = {key: id(T) for key, T in self.static_transforms.items()}
+        if statics != self._sent_statics:
+            self._process.set_statics(self.static_transforms)
+            self._sent_statics = statics
+        channels = (self._channels[topics.JOINT_STATE], self._channels[topics.TF])
+        sequences = []
+        for channel in channels:
+            seq = self._sequence.get(channel, 0) + 1
+            self._sequence[channel] = seq
+            sequences.append(seq)
+        stamp_ns = int(stamp_ns)
+        self._last_stamp_ns = max(self._last_stamp_ns, stamp_ns)
+        self._process.add_arm_state(channels, (sequences[0], sequences[1]), self.t(stamp_ns), self._last_tick,
+                                    robot)
 
     # -- sensors and perception ----------------------------------------------------------------------------
 
@@ -552,14 +540,19 @@ class RunRecorder:
             if now - self._last_flush < self._flush_interval_s:
                 return
             self._last_flush = now
-        with self._guard.busy():
-            self._writer.flush()
+        fsync = False
         if self._fsync_interval_s is not None:
             now = time.monotonic()
             if now - self._last_fsync >= self._fsync_interval_s:
-                if self.to_file:
-                    os.fsync(self._file.fileno())
+                fsync = self.to_file
                 self._last_fsync = now
+        with self._guard.busy():
+            if self._process is not None:
+                self._process.flush(fsync=fsync)
+                return
+            self._writer.flush()
+        if fsync and self._file is not None:
+            os.fsync(self._file.fileno())
 
     def close(self) -> None:
         """Write the summary (indexes, statistics) and footer, fsync and close. Safe to call twice."""
@@ -568,12 +561,17 @@ class RunRecorder:
         self._closed = True
         try:
             with self._guard.busy():
-                self._writer.finish()
-                self._file.flush()
-                if self.to_file:
-                    os.fsync(self._file.fileno())
+                if self._process is not None:
+                    self._process.finish(fsync=True)
+                else:
+                    assert self._file is not None
+                    self._writer.finish()
+                    self._file.flush()
+                    if self.to_file:
+                        os.fsync(self._file.fileno())
         finally:
-            self._file.close()
+            if self._file is not None:
+                self._file.close()
             self._guard.uninstall()
         log.debug("closed %s", self.path)
 

@@ -1,0 +1,257 @@
+"""A run's MCAP file written by a child process, so the tick loop only hands data over.
+
+:class:`ProcessWriter` offers the calls of ``mcap.writer.Writer`` that :class:`RunRecorder` makes, plus
+``add_arm_state``: the arm state of a tick as plain numbers, which the child turns into ``/robot/joint_state``
+and ``/tf`` with the same :class:`ArmStateEncoder` the recorder uses in-process (the same bytes). Calls are
+batched in the parent and handed, at every ``flush()`` (the recorder's tick boundary), to a feeder thread that
+pickles the batch and writes it to the child's stdin while the tick loop goes on. The child
+(``python -m bt_grasp.recording.writer_process``: a fresh interpreter, so nothing of a renderer's threads is
+forked and no caller's ``__main__`` is imported again) owns the file: it writes each batch and ends a chunk at
+each flush, and at ``finish()`` writes the summary, fsyncs and closes. If the parent dies without finishing
+(SIGKILL), the child reads its stdin to the end and finishes the file: the log keeps every batch written to
+the pipe before the kill. The child ignores SIGINT and SIGTERM (a Ctrl-C reaches the whole process group; the
+parent decides when to finish).
+
+Schema and channel ids follow ``mcap.writer.Writer``'s rule (1, 2, ... in registration order) in both
+processes, so the parent names channels without waiting for the child.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import logging
+import os
+import pickle
+import queue
+import signal
+import struct
+import subprocess
+import sys
+import threading
+from collections.abc import Mapping
+from typing import Any, BinaryIO
+
+import numpy as np
+from numpy.typing import NDArray
+
+log = logging.getLogger(__name__)
+
+#: how long ``finish`` waits for the child to write the summary and exit
+FINISH_TIMEOUT_S = 120.0
+
+_Item = tuple[Any, ...]
+_FRAME = struct.Struct("<Q")
+
+
+class WriterProcessError(RuntimeError):
+    """The writer process failed (its message says why) or did not finish in time."""
+
+
+class ProcessWriter:
+    """``mcap.writer.Writer``'s calls, carried out by a child process that owns ``path``."""
+
+    def __init__(self, path: str, *, chunk_size: int, compression: str, arm_state: Mapping[str, Any] | None) -> None:
+        """``compression``: "zstd", "lz4" or "none"; ``arm_state``: the :class:`ArmStateEncoder`'s settings
+        (``joint_names``, ``base_frame``, ``tool_frame``, ``robot_model``: True builds the default robot model
+        in the child) or None when no arm state is handed over."""
+        with open(path, "wb"):  # a path that cannot be written fails here, before the run, not at its end
+            pass
+        settings = {"path": str(path), "chunk_size": int(chunk_size), "compression": compression,
+                    "arm_state": dict(arm_state) if arm_state is not None else None}
+        self._process = subprocess.Popen(
+            [sys.executable, "-m", "bt_grasp.recording.writer_process", json.dumps(settings)],
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+        self._pending: queue.SimpleQueue[bytes | None] = queue.SimpleQueue()
+        self._feeder = threading.Thread(target=self._feed, name="log-writer-feeder", daemon=True)
+        self._feeder.start()
+        self._batch: list[_Item] = []
+        self._schemas = 0
+        self._channels = 0
+        self._finished = False
+        self._broken: str | None = None
+
+    # -- mcap.writer.Writer's calls ---------------------------------------------------------------------
+
+    def start(self, profile: str = "", library: str = "") -> None:
+        self._batch.append(("start", profile, library))
+
+    def add_metadata(self, name: str, data: Mapping[str, str]) -> None:
+        self._batch.append(("metadata", name, dict(data)))
+
+    def add_attachment(self, create_time: int, log_time: int, name: str, media_type: str, data: bytes) -> None:
+        self._batch.append(("attachment", create_time, log_time, name, media_type, bytes(data)))
+
+    def register_schema(self, name: str, encoding: str, data: bytes) -> int:
+        self._schemas += 1
+        self._batch.append(("schema", self._schemas, name, encoding, bytes(data)))
+        return self._schemas
+
+    def register_channel(self, topic: str, message_encoding: str, schema_id: int) -> int:
+        self._channels += 1
+        self._batch.append(("channel", self._channels, topic, message_encoding, schema_id))
+        return self._channels
+
+    def add_message(self, channel_id: int, log_time: int, data: bytes, publish_time: int, sequence: int = 0) -> None:
+        self._batch.append(("m", channel_id, log_time, data, publish_time, sequence))
+
+    def flush(self, fsync: bool = False) -> None:
+        """Send what was added since the last flush; the child writes it and ends the chunk (then fsyncs)."""
+        self._batch.append(("flush",))
+        if fsync:
+            self._batch.append(("fsync",))
+        self._send()
+
+    def finish(self, fsync: bool = True) -> None:
+        """Send the rest, let the child write the summary and footer (and fsync), and wait for it."""
+        if self._finished:
+            return
+        self._finished = True
+        self._batch.append(("finish", fsync))
+        self._send()
+        self._pending.put(None)  # the feeder closes the child's stdin after the last batch
+        self._feeder.join(FINISH_TIMEOUT_S)
+        self._process.stdin = None  # closed by the feeder; communicate() must not touch it
+        try:
+            out, err = self._process.communicate(timeout=FINISH_TIMEOUT_S)
+        except subprocess.TimeoutExpired:
+            self._process.kill()
+            raise WriterProcessError(f"the log writer did not finish within {FINISH_TIMEOUT_S:g} s") from None
+        said = out.decode(errors="replace").strip()
+        if self._process.returncode != 0 or said != "ok":
+            why = said or err.decode(errors="replace").strip()[-500:] or self._broken or "no word"
+            raise WriterProcessError(f"the log writer failed (exit {self._process.returncode}): {why}")
+
+    # -- the arm state -----------------------------------------------------------------------------------
+
+    def add_arm_state(self, channels: tuple[int, int], sequences: tuple[int, int], log_time: int, tick: int | None,
+                      robot: Mapping[str, Any]) -> None:
+        """The child encodes ``robot`` (``ArmStateEncoder.encode``) and writes the joint state and /tf messages
+        on ``channels`` with ``sequences`` at ``log_time``."""
+        self._batch.append(("arm", channels, sequences, log_time, tick, dict(robot)))
+
+    def set_statics(self, statics: Mapping[tuple[str, str], NDArray[np.float64]]) -> None:
+        """The static transforms every later arm state's /tf repeats."""
+        self._batch.append(("statics", {k: np.array(v, dtype=np.float64) for k, v in statics.items()}))
+
+    # -- the hand-over ------------------------------------------------------------------------------------
+
+    def _send(self) -> None:
+        batch, self._batch = self._batch, []
+        self._pending.put(pickle.dumps(batch, protocol=pickle.HIGHEST_PROTOCOL))
+
+    def _feed(self) -> None:
+        """Write each pickled batch to the child's stdin, in order; close it after the last one."""
+        stdin = self._process.stdin
+        assert stdin is not None
+        while True:
+            data = self._pending.get()
+            if data is None:
+                break
+            if self._broken is not None:
+                continue
+            try:
+                stdin.write(_FRAME.pack(len(data)))
+                stdin.write(data)
+                stdin.flush()
+            except OSError as exc:  # the child died: finish() reports it
+                self._broken = f"the pipe to the log writer broke: {exc}"
+        with contextlib.suppress(OSError):
+            stdin.close()
+
+
+def _read_batch(stream: BinaryIO) -> list[_Item] | None:
+    """The next whole batch on ``stream``, or None at its end (a batch cut short by a dead parent is dropped)."""
+    head = stream.read(_FRAME.size)
+    if len(head) < _FRAME.size:
+        return None
+    (size,) = _FRAME.unpack(head)
+    data = stream.read(size)
+    if len(data) < size:
+        return None
+    batch: list[_Item] = pickle.loads(data)
+    return batch
+
+
+def serve(settings: Mapping[str, Any], requests: BinaryIO) -> None:
+    """The child: apply every batch to an ``mcap.writer.Writer`` until "finish", or finish at the input's end."""
+    from mcap.writer import CompressionType, Writer
+
+    from bt_grasp.recording.arm_state import ArmStateEncoder
+
+    kinds = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}
+    encoder = None
+    arm_state = settings.get("arm_state")
+    if arm_state is not None:
+        arm = dict(arm_state)
+        model = None
+        if arm.pop("robot_model", False):
+            from bt_grasp.recording.robot_model import default_robot_model
+
+            model = default_robot_model()
+        encoder = ArmStateEncoder(robot_model=model, **arm)
+    statics: dict[tuple[str, str], NDArray[np.float64]] = {}
+    with open(settings["path"], "wb") as stream:
+        writer = Writer(stream, chunk_size=int(settings["chunk_size"]), compression=kinds[settings["compression"]])
+        while True:
+            batch = _read_batch(requests)
+            if batch is None:  # the parent died without finishing: finish the file with what came whole
+                writer.finish()
+                return
+            for item in batch:
+                kind = item[0]
+                if kind == "m":
+                    writer.add_message(item[1], log_time=item[2], data=item[3], publish_time=item[4], sequence=item[5])
+                elif kind == "arm":
+                    if encoder is None:
+                        raise ValueError("an arm state, but no arm-state settings")
+                    (js_channel, tf_channel), (js_seq, tf_seq), t, tick, robot = item[1:]
+                    joint_state, tf = encoder.encode(t, tick, robot, statics)
+                    writer.add_message(js_channel, log_time=t, data=joint_state, publish_time=t, sequence=js_seq)
+                    if tf is not None:
+                        writer.add_message(tf_channel, log_time=t, data=tf, publish_time=t, sequence=tf_seq)
+                elif kind == "flush":
+                    writer.flush()
+                elif kind == "statics":
+                    statics = item[1]
+                elif kind == "fsync":
+                    stream.flush()
+                    os.fsync(stream.fileno())
+                elif kind == "start":
+                    writer.start(profile=item[1], library=item[2])
+                elif kind == "metadata":
+                    writer.add_metadata(item[1], item[2])
+                elif kind == "attachment":
+                    writer.add_attachment(item[1], item[2], item[3], item[4], item[5])
+                elif kind == "schema":
+                    got = writer.register_schema(name=item[2], encoding=item[3], data=item[4])
+                    if got != item[1]:
+                        raise ValueError(f"schema id {got}, the parent named it {item[1]}")
+                elif kind == "channel":
+                    got = writer.register_channel(item[2], item[3], item[4])
+                    if got != item[1]:
+                        raise ValueError(f"channel id {got}, the parent named it {item[1]}")
+                elif kind == "finish":
+                    writer.finish()
+                    stream.flush()
+                    if item[1]:
+                        os.fsync(stream.fileno())
+                    return
+                else:
+                    raise ValueError(f"unknown request {kind!r}")
+
+
+def main() -> int:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    try:
+        serve(json.loads(sys.argv[1]), sys.stdin.buffer)
+    except Exception as exc:  # the parent raises it at finish()
+        print(f"{type(exc).__name__}: {exc}", flush=True)
+        return 1
+    print("ok", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
