@@ -3,8 +3,9 @@
 None of these may change the run: they draw from no run random stream, step nothing and are read by no
 leaf. ``LogExtras`` adds to the log (and the live view) what the leaves do not send: camera frames when a
 leaf fails, at the end and optionally at a fixed simulated rate (rendered noise-free with
-``render_color_async()``, which steps nothing and draws no noise; the picture is read back on a helper
-thread while the run goes on, and written with the stamp of the moment it shows), the camera's frame from
+``render_color_async()``, which steps nothing and draws no noise; the renderer draws it while the run goes
+on, and it is read back ``READBACK_TICKS`` ticks later and written with the stamp of the moment it shows), the
+camera's frame from
 the calibration the run holds, and the judge's true object poses on ``/judge/true_objects`` (simulator
 truth: judge side only).
 ``RealtimePacer`` sleeps so wall time follows simulated time (pacing only; no decision reads it).
@@ -15,7 +16,6 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Mapping
-from concurrent.futures import Future
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -29,20 +29,26 @@ from bt_grasp.recording.writer import BASE_FRAME, CAMERA_FRAME
 if TYPE_CHECKING:
     from bt_grasp.behaviours.cell import Cell
     from bt_grasp.recording.writer import RunRecorder
+    from bt_grasp.sim.camera import PendingPicture
     from bt_grasp.sim.world import World
     from bt_grasp.tree.loader import LoadedTree
 
 log = logging.getLogger(__name__)
 
+#: an extra frame is read back this many ticks after it was handed to the renderer (a count of ticks, not a
+#: time: the log's bytes do not depend on the machine's speed); by then the renderer has usually drawn it
+READBACK_TICKS = 10
+
 
 @dataclass(frozen=True)
 class _Pending:
-    """A frame being read back: what it shows is the scene at ``stamp_ns``."""
+    """A frame with the renderer: what it shows is the scene at ``stamp_ns``; read back at tick ``due``."""
 
     stamp_ns: int
     why: str
     started: float
-    picture: Future[np.ndarray]
+    due: int
+    picture: PendingPicture
 
 
 class LogExtras:
@@ -57,6 +63,7 @@ class LogExtras:
         self._failed = False
         self.captures = 0
         self._pending: list[_Pending] = []
+        self._tick = 0
         self._camera_from: object = None
         recorder.event_listeners.append(self._on_event)
 
@@ -68,6 +75,7 @@ class LogExtras:
             self._failed = True
 
     def __call__(self, tick: int, tree: LoadedTree) -> None:
+        self._tick = tick
         self._write_ready()
         now = self.world.now_ns()
         self._update_camera_frame()
@@ -109,12 +117,12 @@ class LogExtras:
         # periodic frames through the cheaper shader (its first frame costs ~50 ms more); the few failure and
         # end frames of a run without them through the pipeline's camera, warm since Perceive
         picture = self.world.camera.render_color_async(fast_shader=self.period_ns > 0)
-        self._pending.append(_Pending(self.world.now_ns(), why, started, picture))
+        self._pending.append(_Pending(self.world.now_ns(), why, started, self._tick + READBACK_TICKS, picture))
         self.captures += 1
 
     def _write_ready(self, wait: bool = False) -> None:
         """Write the frames read back by now (all of them with ``wait``), oldest first."""
-        while self._pending and (wait or self._pending[0].picture.done()):
+        while self._pending and (wait or self._pending[0].due <= self._tick or self._pending[0].picture.done()):
             frame = self._pending.pop(0)
             try:
                 color = frame.picture.result()

@@ -9,9 +9,7 @@ integers, so the OpenCV intrinsics use ((W-1)/2, (H-1)/2).
 from __future__ import annotations
 
 import os
-import threading
 from collections.abc import Callable, Sequence
-from concurrent.futures import Future, ThreadPoolExecutor
 
 import numpy as np
 import sapien
@@ -24,17 +22,32 @@ from bt_grasp.scene_config import DepthNoise
 from bt_grasp.sim.noise import apply_color_noise, apply_depth_noise
 from bt_grasp.sim.poses import cv_from_sapien_cam, look_at_cv, sapien_cam_from_cv, to_pose, to_T
 
-_readback_lock = threading.Lock()
-_readback: ThreadPoolExecutor | None = None
 
+class PendingPicture:
+    """A colour picture handed to the renderer, read back at the first :meth:`result` on the caller's thread.
 
-def _readback_thread() -> ThreadPoolExecutor:
-    """One helper thread per process reads pictures back (SAPIEN releases the GIL while it waits)."""
-    global _readback
-    with _readback_lock:
-        if _readback is None:
-            _readback = ThreadPoolExecutor(max_workers=1, thread_name_prefix="camera-readback")
-        return _readback
+    The renderer (lavapipe's threads, or a GPU) draws it meanwhile; reading it back later costs only the copy
+    (~1.5 ms at 640x480), while waiting for it holds the GIL (SAPIEN's ``get_picture``), so a helper thread
+    reading it back would stall the tick loop instead.
+    """
+
+    def __init__(self, camera: SimCamera, component: sapien.render.RenderCameraComponent) -> None:
+        self._camera = camera
+        self._component: sapien.render.RenderCameraComponent | None = component
+        self._color: NDArray[np.uint8] | None = None
+
+    def done(self) -> bool:
+        """Whether the picture was read back already (then :meth:`result` costs nothing)."""
+        return self._color is not None
+
+    def result(self) -> NDArray[np.uint8]:
+        if self._color is None:
+            assert self._component is not None
+            self._color = SimCamera._read_color(self._component)
+            self._component = None
+            if self._camera._in_flight is self:
+                self._camera._in_flight = None
+        return self._color
 
 
 #: SAPIEN's forward "minimal" shader: the same colour picture as the default deferred one (at most 6/255 on one
@@ -91,7 +104,7 @@ class SimCamera:
             cy_px=(h - 1) / 2.0,
         )
         self.captures = 0
-        self._in_flight: Future[NDArray[np.uint8]] | None = None
+        self._in_flight: PendingPicture | None = None
         self._log_component: sapien.render.RenderCameraComponent | None = None
 
     @property
@@ -103,10 +116,10 @@ class SimCamera:
         return self._mount
 
     def _settle(self) -> None:
-        """Wait for a picture still being read back: one render at a time."""
+        """Read back a picture still with the renderer first: one render at a time."""
         pending, self._in_flight = self._in_flight, None
         if pending is not None:
-            pending.exception()  # waits; its owner reads the result (or the error)
+            pending.result()  # kept in the handle for its owner
 
     def render_true(self) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
         """Noise-free colour and depth (0 where nothing was hit). Deterministic for a given scene state."""
@@ -146,21 +159,21 @@ class SimCamera:
         camera.take_picture()
         return self._read_color(camera)
 
-    def render_color_async(self, fast_shader: bool = True) -> Future[NDArray[np.uint8]]:
-        """:meth:`render_color` of the scene as it is now, read back on a helper thread while the caller goes on.
+    def render_color_async(self, fast_shader: bool = True) -> PendingPicture:
+        """:meth:`render_color` of the scene as it is now, drawn by the renderer while the caller goes on.
 
-        The scene's state is copied to the renderer here (``update_render`` + ``take_picture``, on the caller's
-        thread); waiting for the renderer and converting the picture happen on the readback thread, so the world
-        may step meanwhile: the picture is the state at this call (tested against :meth:`render_color`). Any
-        later render of this camera first waits for it. Steps nothing, draws nothing.
+        The scene's state is handed to the renderer here (``update_render`` + ``take_picture``); the picture is
+        read back at the handle's first ``result()`` (best a few ticks later, when the renderer is done), so the
+        world may step meanwhile: the picture is the state at this call (tested against :meth:`render_color`).
+        Any later render of this camera first reads it back. Steps nothing, draws nothing.
         """
         self._settle()
         camera = self._log_camera() if fast_shader else self._component
         self._scene.update_render()
         camera.take_picture()
-        future = _readback_thread().submit(self._read_color, camera)
-        self._in_flight = future
-        return future
+        pending = PendingPicture(self, camera)
+        self._in_flight = pending
+        return pending
 
     @staticmethod
     def _read_color(camera: sapien.render.RenderCameraComponent) -> NDArray[np.uint8]:
