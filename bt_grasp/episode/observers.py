@@ -5,9 +5,8 @@ leaf. ``LogExtras`` adds to the log (and the live view) what the leaves do not s
 leaf fails, at the end and optionally at a fixed simulated rate (rendered noise-free with
 ``render_color_async()``, which steps nothing and draws no noise; the renderer draws it while the run goes
 on, and it is read back ``READBACK_TICKS`` ticks later and written with the stamp of the moment it shows), the
-camera's frame from
-the calibration the run holds, and the judge's true object poses on ``/judge/true_objects`` (simulator
-truth: judge side only).
+camera's frame from the calibration the run holds, and the judge's true object poses on
+``/judge/true_objects`` (simulator truth: judge side only).
 ``RealtimePacer`` sleeps so wall time follows simulated time (pacing only; no decision reads it).
 """
 

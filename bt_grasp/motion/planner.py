@@ -210,10 +210,18 @@ class MotionPlanner:
         tries the same seeds); every solution is checked as it is found.
         """
         closed = self.kin.closed_form_ik(T_base_tcp_goal, q0)
-        if closed is not None:
-            free = [q for q in closed if checker.is_valid(q)][: opts.max_goal_configs]
-            colliding = next((q for q in closed if not checker.is_valid(q)), None) if not free else None
-            return GoalSet(free, len(closed), 0, colliding, (0.0, 0.0) if closed else (float("inf"),) * 2)
+        if closed is not None:  # closest first: each solution checked once, until enough are free
+            free: list[Vec] = []
+            colliding: Vec | None = None
+            for q in closed:
+                if checker.is_valid(q):
+                    free.append(q)
+                    if len(free) == opts.max_goal_configs:
+                        break
+                elif colliding is None:
+                    colliding = q
+            return GoalSet(free, len(closed), 0, None if free else colliding,
+                           (0.0, 0.0) if closed else (float("inf"),) * 2)
         rng = np.random.default_rng(opts.seed)
         tried: list = []  # type: ignore[type-arg]
         free = []

@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bt_grasp.recording import schemas
+from bt_grasp.recording.jsonable import to_jsonable
 from bt_grasp.recording.tf_encoding import FrameTransformsEncoder
 
 
@@ -48,8 +49,6 @@ class ArmStateEncoder:
                statics: Mapping[tuple[str, str], NDArray[np.float64]]) -> tuple[bytes, bytes | None]:
         """(joint-state JSON, FrameTransforms bytes or None) of ``robot`` = ``{"q_rad", "qd_rad_s",
         "gripper_width_m", "T_base_tcp"}`` at the file time ``stamp_file_ns``."""
-        from bt_grasp.recording.jsonable import to_jsonable
-
         q = np.asarray(robot["q_rad"], dtype=np.float64).ravel()
         qd = robot.get("qd_rad_s")
         state: dict[str, Any] = ticked(tick, {

@@ -279,7 +279,8 @@ class RunRecorder:
 
     # -- low level ---------------------------------------------------------------------------------------
 
-    def _write(self, topic: str, stamp_ns: int, data: bytes) -> None:
+    def _next(self, topic: str, stamp_ns: int) -> tuple[int, int, int]:
+        """(channel, sequence number, file time) of the next message on ``topic`` at ``stamp_ns``."""
         if self._closed:
             raise ValueError(f"{self.path}: the recorder is closed")
         channel = self._channels[topic]
@@ -287,7 +288,10 @@ class RunRecorder:
         self._sequence[channel] = seq
         stamp_ns = int(stamp_ns)
         self._last_stamp_ns = max(self._last_stamp_ns, stamp_ns)
-        t = self.time_origin_ns + stamp_ns
+        return channel, seq, self.time_origin_ns + stamp_ns
+
+    def _write(self, topic: str, stamp_ns: int, data: bytes) -> None:
+        channel, seq, t = self._next(topic, stamp_ns)
         with self._guard.busy():
             self._writer.add_message(channel, log_time=t, data=data, publish_time=t, sequence=seq)
         for tap in self._taps:
@@ -387,22 +391,13 @@ class RunRecorder:
 
     def _hand_over_arm_state(self, stamp_ns: int, robot: Mapping[str, Any]) -> None:
         assert self._process is not None
-        if self._closed:
-            raise ValueError(f"{self.path}: the recorder is closed")
+        js_channel, js_seq, t = self._next(topics.JOINT_STATE, stamp_ns)
+        tf_channel, tf_seq, _ = self._next(topics.TF, stamp_ns)
         statics = {key: id(T) for key, T in self.static_transforms.items()}
         if statics != self._sent_statics:
             self._process.set_statics(self.static_transforms)
             self._sent_statics = statics
-        channels = (self._channels[topics.JOINT_STATE], self._channels[topics.TF])
-        sequences = []
-        for channel in channels:
-            seq = self._sequence.get(channel, 0) + 1
-            self._sequence[channel] = seq
-            sequences.append(seq)
-        stamp_ns = int(stamp_ns)
-        self._last_stamp_ns = max(self._last_stamp_ns, stamp_ns)
-        self._process.add_arm_state(channels, (sequences[0], sequences[1]), self.t(stamp_ns), self._last_tick,
-                                    robot)
+        self._process.add_arm_state((js_channel, tf_channel), (js_seq, tf_seq), t, self._last_tick, robot)
 
     # -- sensors and perception ----------------------------------------------------------------------------
 

@@ -153,11 +153,7 @@ class SimCamera:
         ``fast_shader``: through the second camera with the forward shader (about half the CPU per frame once
         warm, ~50 ms more for its first frame in a process); False: through the pipeline's camera.
         """
-        self._settle()
-        camera = self._log_camera() if fast_shader else self._component
-        self._scene.update_render()
-        camera.take_picture()
-        return self._read_color(camera)
+        return self.render_color_async(fast_shader).result()
 
     def render_color_async(self, fast_shader: bool = True) -> PendingPicture:
         """:meth:`render_color` of the scene as it is now, drawn by the renderer while the caller goes on.
