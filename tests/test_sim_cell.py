@@ -127,3 +127,15 @@ def test_the_log_frames_look_like_the_pipelines_frames(world: World) -> None:
     assert log_color.shape == color.shape
     difference = np.abs(log_color.astype(int) - color.astype(int))
     assert difference.max() <= 8 and (difference.max(axis=-1) > 3).mean() < 1e-4
+
+
+def test_the_log_cameras_8_bit_colour_leaves_later_cameras_float(tabletop_scene_path: Path) -> None:
+    """The log camera is made with 8-bit colour, a global renderer setting: restored at once, so a camera made
+    afterwards (the next episode's pipeline camera) still reads float colour and sees the same picture."""
+    a = World.from_file(tabletop_scene_path, seed=2)
+    before, _ = a.camera.render_true()
+    logged = a.camera.render_color(fast_shader=True)
+    assert logged.dtype == np.uint8 and logged.shape == before.shape
+    b = World.from_file(tabletop_scene_path, seed=2)
+    after, _ = b.camera.render_true()
+    np.testing.assert_array_equal(after, before)

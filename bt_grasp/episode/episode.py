@@ -116,6 +116,10 @@ class Episode:
     def __init__(self, request: EpisodeRequest, worlds: WorldSource | None = None) -> None:
         self.request = request
         self.inputs = load_inputs(request)  # bad input stops here: nothing built, nothing written
+        if request.log is not None:
+            from bt_grasp.recording.writer_process import prestart
+
+            prestart()  # the log's writer process starts (and imports) while the world is built, not in the run
         self.scene = self.inputs.scene
         self.tree = self.inputs.tree
         self.world: World = (worlds or FreshWorlds()).world_for(self.scene, request.seed, request.scene)

@@ -17,12 +17,12 @@ from __future__ import annotations
 import dataclasses
 import enum
 import math
+import sys
 from collections.abc import Mapping, Sequence
 from pathlib import PurePath
 from typing import Any
 
 import numpy as np
-from pydantic import BaseModel
 
 JsonValue = Any
 _SCALARS = (str, int, bool, type(None))
@@ -96,7 +96,8 @@ def _is_frozen(value: Any, depth: int = 0) -> bool:
     params = getattr(type(value), "__dataclass_params__", None)
     if params is not None:
         return bool(params.frozen)
-    if isinstance(value, BaseModel):  # pydantic models (the calibration file)
+    pydantic = sys.modules.get("pydantic")  # not imported: nothing can be a pydantic model (the writer process)
+    if pydantic is not None and isinstance(value, pydantic.BaseModel):  # pydantic models (the calibration file)
         return bool(value.model_config.get("frozen", False))
     if isinstance(value, tuple) and depth < 2:
         return all(_is_frozen(v, depth + 1) for v in value)

@@ -11,7 +11,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-import cv2
 import numpy as np
 from foxglove_schemas_protobuf.ArrowPrimitive_pb2 import ArrowPrimitive
 from foxglove_schemas_protobuf.CameraCalibration_pb2 import CameraCalibration
@@ -146,6 +145,8 @@ def compressed_image(
 ) -> CompressedImage:
     if rgb.ndim != 3 or rgb.shape[2] != 3 or rgb.dtype != np.uint8:
         raise ValueError(f"a colour image must be HxWx3 uint8, got {rgb.shape} {rgb.dtype}")
+    import cv2  # here: the log's writer process encodes no image and need not load OpenCV
+
     bgr = np.ascontiguousarray(rgb[:, :, ::-1])
     if fmt == "jpeg":
         ok, buf = cv2.imencode(".jpg", bgr, [cv2.IMWRITE_JPEG_QUALITY, int(jpeg_quality)])

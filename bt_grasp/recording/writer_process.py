@@ -7,10 +7,13 @@ batched in the parent and handed, at every ``flush()`` (the recorder's tick boun
 pickles the batch and writes it to the child's stdin while the tick loop goes on. The child
 (``python -m bt_grasp.recording.writer_process``: a fresh interpreter, so nothing of a renderer's threads is
 forked and no caller's ``__main__`` is imported again) owns the file: it writes each batch and ends a chunk at
-each flush, and at ``finish()`` writes the summary, fsyncs and closes. If the parent dies without finishing
-(SIGKILL), the child reads its stdin to the end and finishes the file: the log keeps every batch written to
-the pipe before the kill. The child ignores SIGINT and SIGTERM (a Ctrl-C reaches the whole process group; the
-parent decides when to finish).
+each flush, and at ``finish()`` writes the summary, fsyncs, closes and says "ok"; then it waits for the next
+file, so a process that records many episodes (benchmarks, evaluation workers, a resident runner) starts the
+child once, and ``prestart()`` starts it ahead of a run, while the world is built (its interpreter start-up and
+imports cost ~0.4 s of CPU: paid during the run, they slowed a pick's tick loop). If the parent dies without
+finishing (SIGKILL), the child reads its stdin to the end and finishes the file: the log keeps every batch
+written to the pipe before the kill. The child ignores SIGINT and SIGTERM (a Ctrl-C reaches the whole process
+group; the parent decides when to finish).
 
 Schema and channel ids follow ``mcap.writer.Writer``'s rule (1, 2, ... in registration order) in both
 processes, so the parent names channels without waiting for the child.
@@ -18,22 +21,27 @@ processes, so the parent names channels without waiting for the child.
 
 from __future__ import annotations
 
+import atexit
 import contextlib
-import json
 import logging
 import os
 import pickle
 import queue
+import selectors
 import signal
 import struct
 import subprocess
 import sys
+import tempfile
 import threading
 from collections.abc import Mapping
-from typing import Any, BinaryIO
+from typing import TYPE_CHECKING, Any, BinaryIO, TextIO
 
 import numpy as np
 from numpy.typing import NDArray
+
+if TYPE_CHECKING:
+    from bt_grasp.recording.arm_state import ArmStateEncoder
 
 log = logging.getLogger(__name__)
 
@@ -48,8 +56,84 @@ class WriterProcessError(RuntimeError):
     """The writer process failed (its message says why) or did not finish in time."""
 
 
+class _Child:
+    """One writer process. It writes one file at a time and, once a file is finished and reported "ok", waits
+    for the next: a process that records many episodes starts (and imports) it once."""
+
+    def __init__(self) -> None:
+        # read only to say why it failed: unlike a pipe nobody reads, it never fills and stalls the child
+        self.stderr = tempfile.TemporaryFile()  # noqa: SIM115 (closed in close(): it lives as long as the child)
+        self.owner = os.getpid()
+        self.process = subprocess.Popen([sys.executable, "-m", "bt_grasp.recording.writer_process"],
+                                        stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self.stderr)
+
+    def alive(self) -> bool:
+        """Running, and this process's own (a forked process must not share another's pipes)."""
+        return self.owner == os.getpid() and self.process.poll() is None
+
+    def reply(self, timeout_s: float) -> str | None:
+        """The child's next line ("ok" or its failure), or None if it said nothing in time."""
+        stdout = self.process.stdout
+        assert stdout is not None
+        with selectors.DefaultSelector() as selector:
+            selector.register(stdout, selectors.EVENT_READ)
+            if not selector.select(timeout_s):
+                return None
+        return stdout.readline().decode(errors="replace").strip()
+
+    def stderr_tail(self) -> str:
+        self.stderr.seek(0)
+        return self.stderr.read().decode(errors="replace").strip()[-500:]
+
+    def close(self, timeout_s: float = 5.0) -> None:
+        """End the process: its input ends, it exits (finishing a file it still held)."""
+        with contextlib.suppress(OSError):
+            if self.process.stdin is not None:
+                self.process.stdin.close()
+        try:
+            self.process.wait(timeout_s)
+        except subprocess.TimeoutExpired:
+            self.process.kill()
+            self.process.wait()
+        for stream in (self.process.stdout, self.stderr):
+            if stream is not None:
+                stream.close()
+
+
+_idle: list[_Child] = []
+_idle_lock = threading.Lock()
+
+
+def prestart() -> None:
+    """Start a writer process now unless one is waiting already, so that the next :class:`ProcessWriter` finds
+    it ready: its interpreter's start-up and imports overlap whatever the caller does next (building a world)
+    instead of the run."""
+    with _idle_lock:
+        _idle[:] = [child for child in _idle if child.alive()]
+        if not _idle:
+            _idle.append(_Child())
+
+
+def _take_child() -> _Child:
+    with _idle_lock:
+        while _idle:
+            child = _idle.pop()
+            if child.alive():
+                return child
+    return _Child()
+
+
+@atexit.register
+def _close_idle() -> None:
+    with _idle_lock:
+        children, _idle[:] = list(_idle), []
+    for child in children:
+        if child.owner == os.getpid():
+            child.close()
+
+
 class ProcessWriter:
-    """``mcap.writer.Writer``'s calls, carried out by a child process that owns ``path``."""
+    """``mcap.writer.Writer``'s calls, carried out by a writer process that owns ``path`` until ``finish()``."""
 
     def __init__(self, path: str, *, chunk_size: int, compression: str, arm_state: Mapping[str, Any] | None) -> None:
         """``compression``: "zstd", "lz4" or "none"; ``arm_state``: the :class:`ArmStateEncoder`'s settings
@@ -59,13 +143,12 @@ class ProcessWriter:
             pass
         settings = {"path": str(path), "chunk_size": int(chunk_size), "compression": compression,
                     "arm_state": dict(arm_state) if arm_state is not None else None}
-        self._process = subprocess.Popen(
-            [sys.executable, "-m", "bt_grasp.recording.writer_process", json.dumps(settings)],
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+        self._child = _take_child()
+        self._process = self._child.process
         self._pending: queue.SimpleQueue[bytes | None] = queue.SimpleQueue()
         self._feeder = threading.Thread(target=self._feed, name="log-writer-feeder", daemon=True)
         self._feeder.start()
-        self._batch: list[_Item] = []
+        self._batch: list[_Item] = [("open", settings)]
         self._schemas = 0
         self._channels = 0
         self._finished = False
@@ -103,24 +186,27 @@ class ProcessWriter:
         self._send()
 
     def finish(self, fsync: bool = True) -> None:
-        """Send the rest, let the child write the summary and footer (and fsync), and wait for it."""
+        """Send the rest, let the child write the summary and footer (and fsync), and wait for its word; the
+        child then waits for the next file."""
         if self._finished:
             return
         self._finished = True
         self._batch.append(("finish", fsync))
         self._send()
-        self._pending.put(None)  # the feeder closes the child's stdin after the last batch
+        self._pending.put(None)  # the feeder stops after the last batch
         self._feeder.join(FINISH_TIMEOUT_S)
-        self._process.stdin = None  # closed by the feeder; communicate() must not touch it
-        try:
-            out, err = self._process.communicate(timeout=FINISH_TIMEOUT_S)
-        except subprocess.TimeoutExpired:
-            self._process.kill()
-            raise WriterProcessError(f"the log writer did not finish within {FINISH_TIMEOUT_S:g} s") from None
-        said = out.decode(errors="replace").strip()
-        if self._process.returncode != 0 or said != "ok":
-            why = said or err.decode(errors="replace").strip()[-500:] or self._broken or "no word"
-            raise WriterProcessError(f"the log writer failed (exit {self._process.returncode}): {why}")
+        said = self._child.reply(FINISH_TIMEOUT_S)
+        if said == "ok":
+            with _idle_lock:
+                _idle.append(self._child)
+            return
+        if said is None and self._child.alive():
+            self._child.process.kill()
+            self._child.close()
+            raise WriterProcessError(f"the log writer did not finish within {FINISH_TIMEOUT_S:g} s")
+        self._child.close()
+        why = said or self._child.stderr_tail() or self._broken or "no word"
+        raise WriterProcessError(f"the log writer failed (exit {self._process.returncode}): {why}")
 
     # -- the arm state -----------------------------------------------------------------------------------
 
@@ -141,7 +227,8 @@ class ProcessWriter:
         self._pending.put(pickle.dumps(batch, protocol=pickle.HIGHEST_PROTOCOL))
 
     def _feed(self) -> None:
-        """Write each pickled batch to the child's stdin, in order; close it after the last one."""
+        """Write each pickled batch to the child's stdin, in order, until the last one (the pipe stays open for
+        the child's next file)."""
         stdin = self._process.stdin
         assert stdin is not None
         while True:
@@ -156,8 +243,6 @@ class ProcessWriter:
                 stdin.flush()
             except OSError as exc:  # the child died: finish() reports it
                 self._broken = f"the pipe to the log writer broke: {exc}"
-        with contextlib.suppress(OSError):
-            stdin.close()
 
 
 def _read_batch(stream: BinaryIO) -> list[_Item] | None:
@@ -173,31 +258,40 @@ def _read_batch(stream: BinaryIO) -> list[_Item] | None:
     return batch
 
 
-def serve(settings: Mapping[str, Any], requests: BinaryIO) -> None:
-    """The child: apply every batch to an ``mcap.writer.Writer`` until "finish", or finish at the input's end."""
-    from mcap.writer import CompressionType, Writer
-
+def _encoder(settings: Mapping[str, Any]) -> ArmStateEncoder | None:
     from bt_grasp.recording.arm_state import ArmStateEncoder
 
-    kinds = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}
-    encoder = None
     arm_state = settings.get("arm_state")
-    if arm_state is not None:
-        arm = dict(arm_state)
-        model = None
-        if arm.pop("robot_model", False):
-            from bt_grasp.recording.robot_model import default_robot_model
+    if arm_state is None:
+        return None
+    arm = dict(arm_state)
+    model = None
+    if arm.pop("robot_model", False):
+        from bt_grasp.recording.robot_model import default_robot_model
 
-            model = default_robot_model()
-        encoder = ArmStateEncoder(robot_model=model, **arm)
+        model = default_robot_model()  # built once per process: its later files reuse it
+    return ArmStateEncoder(robot_model=model, **arm)
+
+
+def write_file(first: list[_Item], requests: BinaryIO) -> bool:
+    """Write one file: ``first`` is the batch that opens it (``("open", settings)`` first), the rest comes from
+    ``requests`` until "finish" (True) or the input's end (False: the parent died; the file is finished with
+    the batches that came whole)."""
+    from mcap.writer import CompressionType, Writer
+
+    kind, settings = first[0]
+    if kind != "open":
+        raise ValueError(f"a file must begin with 'open', not {kind!r}")
+    kinds = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}
+    encoder = _encoder(settings)
     statics: dict[tuple[str, str], NDArray[np.float64]] = {}
+    batch: list[_Item] | None = first[1:]
     with open(settings["path"], "wb") as stream:
         writer = Writer(stream, chunk_size=int(settings["chunk_size"]), compression=kinds[settings["compression"]])
         while True:
-            batch = _read_batch(requests)
             if batch is None:  # the parent died without finishing: finish the file with what came whole
                 writer.finish()
-                return
+                return False
             for item in batch:
                 kind = item[0]
                 if kind == "m":
@@ -236,20 +330,29 @@ def serve(settings: Mapping[str, Any], requests: BinaryIO) -> None:
                     stream.flush()
                     if item[1]:
                         os.fsync(stream.fileno())
-                    return
+                    return True
                 else:
                     raise ValueError(f"unknown request {kind!r}")
+            batch = _read_batch(requests)
+
+
+def serve(requests: BinaryIO, replies: TextIO) -> None:
+    """The child: write file after file, saying "ok" after each, until the input ends."""
+    while True:
+        first = _read_batch(requests)
+        if first is None or not write_file(first, requests):
+            return
+        print("ok", file=replies, flush=True)
 
 
 def main() -> int:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
     try:
-        serve(json.loads(sys.argv[1]), sys.stdin.buffer)
+        serve(sys.stdin.buffer, sys.stdout)
     except Exception as exc:  # the parent raises it at finish()
         print(f"{type(exc).__name__}: {exc}", flush=True)
         return 1
-    print("ok", flush=True)
     return 0
 
 

@@ -101,3 +101,40 @@ def test_a_failing_child_is_reported_with_its_reason(tmp_path: Path) -> None:
     with pytest.raises(WriterProcessError, match="an arm state, but no arm-state settings"):
         writer.finish()
     assert os.path.exists(tmp_path / "bad.mcap")
+
+
+def test_one_writer_process_writes_file_after_file(tmp_path: Path) -> None:
+    """A process that records many episodes starts its writer once: the next file reuses the idle child."""
+    from bt_grasp.recording import writer_process
+
+    writer_process.prestart()
+    first = ProcessWriter(str(tmp_path / "a.mcap"), chunk_size=1 << 20, compression="zstd", arm_state=None)
+    pid = first._process.pid
+    first.start("p")
+    first.finish()
+    second = ProcessWriter(str(tmp_path / "b.mcap"), chunk_size=1 << 20, compression="zstd", arm_state=None)
+    assert second._process.pid == pid  # the same child, waiting since the first file
+    second.start("p")
+    second.finish()
+    assert _finished(tmp_path / "a.mcap") and _finished(tmp_path / "b.mcap")
+
+
+def test_a_failed_writer_process_is_not_reused(tmp_path: Path) -> None:
+    bad = ProcessWriter(str(tmp_path / "bad.mcap"), chunk_size=1 << 20, compression="zstd", arm_state=None)
+    bad.add_arm_state((1, 2), (1, 1), 0, None, {"q_rad": [0.0] * 6})
+    with pytest.raises(WriterProcessError):
+        bad.finish()
+    good = ProcessWriter(str(tmp_path / "good.mcap"), chunk_size=1 << 20, compression="zstd", arm_state=None)
+    assert good._process.pid != bad._process.pid
+    good.start("p")
+    good.finish()
+    assert _finished(tmp_path / "good.mcap")
+
+
+def _finished(path: Path) -> bool:
+    """The file has its summary (written at finish) and the profile the first call named."""
+    from mcap.reader import make_reader
+
+    with path.open("rb") as stream:
+        reader = make_reader(stream)
+        return reader.get_summary() is not None and reader.get_header().profile == "p"
