@@ -35,9 +35,10 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 #: an extra frame is read back this many ticks after it was handed to the renderer (a count of ticks, not a
-#: time: the log's bytes do not depend on the machine's speed); by then the renderer has drawn it on a spare
-#: core (at 10 ticks the tick loop still waited for it: +90% vs +53% of a warm pick's tick loop at 1 Hz, 8 reps)
-READBACK_TICKS = 40
+#: time: the log's bytes do not depend on the machine's speed); by then the renderer has drawn it beside the
+#: run. Measured in one-off runs at 1 Hz: reading back after 40 ticks still waited 8-42 ms a frame for the
+#: renderer, after 70 ticks ~4.5 ms (the copy); a frame reaches a live viewer this much simulated time late.
+READBACK_TICKS = 60
 
 
 @dataclass(frozen=True)
