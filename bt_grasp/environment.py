@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import os
 import platform
+from functools import cache
 from importlib.metadata import PackageNotFoundError, version
 
 #: the libraries whose versions decide a run's numbers (recorded in every log)
 KEY_LIBRARIES = ("bt-grasp", "sapien", "py-trees", "opencv-python-headless", "open3d", "pin", "ompl", "ruckig", "mcap")
 
 
+@cache  # installed versions do not change under a running process; looking one up reads package metadata
 def library_version(name: str) -> str:
     try:
         return version(name)
