@@ -111,6 +111,9 @@ class BlackboardDiffer:
         self._max = max_array_elements
         self._raw: dict[str, Any] = {}
         self._json: dict[str, JsonValue] = {}
+        # whether the remembered value is frozen: decided once (it cannot change while it is the same object,
+        # which ``_raw`` keeps alive), not every tick (the recursion over tuples was a third of write_tick)
+        self._frozen: dict[str, bool] = {}
 
     def diff(self, blackboard: Mapping[str, Any]) -> tuple[dict[str, JsonValue], list[str]]:
         """(changed keys with their JSON values, keys that disappeared since the last call)."""
@@ -119,16 +122,16 @@ class BlackboardDiffer:
             if key in self._raw and self._unchanged(key, value):
                 continue
             converted = to_jsonable(value, self._max)
-            if key in self._json and self._json[key] == converted:
-                self._raw[key] = self._remember(value)
-                continue
-            changed[key] = converted
-            self._json[key] = converted
+            if key not in self._json or self._json[key] != converted:
+                changed[key] = converted
+                self._json[key] = converted
             self._raw[key] = self._remember(value)
+            self._frozen[key] = not isinstance(value, np.ndarray) and _is_frozen(value)
         removed = [key for key in self._raw if key not in blackboard]
         for key in removed:
             del self._raw[key]
             del self._json[key]
+            del self._frozen[key]
         return changed, removed
 
     def _unchanged(self, key: str, value: Any) -> bool:
@@ -140,7 +143,7 @@ class BlackboardDiffer:
                 and last.dtype == value.dtype
                 and bool(np.array_equal(last, value, equal_nan=value.dtype.kind in "fc"))
             )
-        return last is value and _is_frozen(value)
+        return last is value and self._frozen[key]
 
     @staticmethod
     def _remember(value: Any) -> Any:
