@@ -126,7 +126,7 @@ class BlackboardDiffer:
                 changed[key] = converted
                 self._json[key] = converted
             self._raw[key] = self._remember(value)
-            self._frozen[key] = not isinstance(value, np.ndarray) and _is_frozen(value)
+            self._frozen[key] = _is_frozen(value)  # arrays are compared by value instead
         removed = [key for key in self._raw if key not in blackboard]
         for key in removed:
             del self._raw[key]

@@ -104,22 +104,29 @@ _idle: list[_Child] = []
 _idle_lock = threading.Lock()
 
 
+def _drop_dead() -> None:
+    """Forget (and close the pipes of) idle children that ended; the caller holds ``_idle_lock``."""
+    for child in [c for c in _idle if not c.alive()]:
+        _idle.remove(child)
+        if child.owner == os.getpid():
+            child.close()
+
+
 def prestart() -> None:
     """Start a writer process now unless one is waiting already, so that the next :class:`ProcessWriter` finds
     it ready: its interpreter's start-up and imports overlap whatever the caller does next (building a world)
     instead of the run."""
     with _idle_lock:
-        _idle[:] = [child for child in _idle if child.alive()]
+        _drop_dead()
         if not _idle:
             _idle.append(_Child())
 
 
 def _take_child() -> _Child:
     with _idle_lock:
-        while _idle:
-            child = _idle.pop()
-            if child.alive():
-                return child
+        _drop_dead()
+        if _idle:
+            return _idle.pop()
     return _Child()
 
 
