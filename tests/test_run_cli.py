@@ -105,6 +105,13 @@ def test_pick_succeeds_replays_and_resimulates(tmp_path: Path) -> None:
 @pytest.mark.sim
 @pytest.mark.slow
 def test_sigkill_mid_run_leaves_a_readable_log(tmp_path: Path) -> None:
+    """A SIGKILL of `bt-grasp run --log` (the writer process users get) loses no tick flushed before it.
+
+    The run is paced to simulated time (`--realtime`): a pick's ~700 ticks then take ~7 s of wall time at
+    least, so a kill issued when a reader has seen 100 ticks (1 s of simulated time) always lands mid-run,
+    however fast start-up gets or however loaded the machine is (a loaded machine only makes the run slower).
+    The count to compare against is taken by a second reader just before the kill, outside the reader that
+    replays the file afterwards."""
     log = tmp_path / "killed.mcap"
     child = subprocess.Popen(
         [
@@ -119,6 +126,8 @@ def test_sigkill_mid_run_leaves_a_readable_log(tmp_path: Path) -> None:
             str(CALIB),
             "--log",
             str(log),
+            "--realtime",
+            "1.0",
             "--quiet",
         ],
         cwd=REPO,
@@ -126,27 +135,34 @@ def test_sigkill_mid_run_leaves_a_readable_log(tmp_path: Path) -> None:
         stderr=subprocess.DEVNULL,
         start_new_session=True,
     )
-    # poll the live file with the reader until it shows 100 flushed ticks, then kill the run hard
     from bt_grasp.errors import LogFileError
     from bt_grasp.recording.reader import open_log
 
+    def flushed_ticks() -> int:
+        try:
+            return len(open_log(log).ticks) if log.exists() else 0
+        except LogFileError:
+            return 0  # the header is not written yet
+
     seen = 0
     deadline = time.monotonic() + 300
-    while time.monotonic() < deadline and seen < 100:
-        time.sleep(0.5)
-        try:
-            seen = len(open_log(log).ticks) if log.exists() else 0
-        except LogFileError:
-            seen = 0  # the header is not written yet
-    os.killpg(child.pid, signal.SIGKILL)
+    while time.monotonic() < deadline and seen < 100 and child.poll() is None:
+        time.sleep(0.2)
+        seen = flushed_ticks()
+    still_running = child.poll() is None
+    if still_running:
+        seen = flushed_ticks()  # what a reader outside the run saw at the moment of the kill
+        os.killpg(child.pid, signal.SIGKILL)
     child.wait(timeout=30)
+    assert still_running, f"the paced run ended (exit {child.returncode}) before the kill"
     assert seen >= 100, "the run did not get far enough before the deadline"
     proc = _bt("replay", str(log), "--json", timeout=120)
     assert proc.returncode == 0, proc.stderr
     info = json.loads(proc.stdout)
-    assert info["truncated"] is True
-    # every tick flushed before the kill is recovered
+    assert info["truncated"] is True, info
+    # every tick a reader saw flushed before the kill is recovered, and the run was really cut short
     assert info["ticks"] >= seen, info
+    assert info["ticks"] < 500, info
 
 
 @pytest.mark.sim
