@@ -8,7 +8,6 @@ integers, so the OpenCV intrinsics use ((W-1)/2, (H-1)/2).
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -21,6 +20,7 @@ from bt_grasp.scene_config import Camera as CameraConfig
 from bt_grasp.scene_config import DepthNoise
 from bt_grasp.sim.noise import apply_color_noise, apply_depth_noise
 from bt_grasp.sim.poses import cv_from_sapien_cam, look_at_cv, sapien_cam_from_cv, to_pose, to_T
+from bt_grasp.sim.shader_pack import SHADER_DIR
 
 
 class PendingPicture:
@@ -50,11 +50,6 @@ class PendingPicture:
         return self._color
 
 
-#: SAPIEN's forward "minimal" shader: the same colour picture as the default deferred one (at most 6/255 on one
-#: pixel in 300,000, `docs/recording.md`) for about half the CPU (40 vs 70 ms at 640x480 on lavapipe)
-_LOG_SHADER = os.path.join(os.path.dirname(sapien.__file__), "vulkan_shader", "minimal")
-
-
 class SimCamera:
     """Implements :class:`bt_grasp.interfaces.Camera`."""
 
@@ -73,7 +68,7 @@ class SimCamera:
         self._rng = rng
         self._now_ns = now_ns
         w, h = config.width_px, config.height_px
-        self._component = sapien.render.RenderCameraComponent(w, h)
+        self._component = sapien.render.RenderCameraComponent(w, h, SHADER_DIR)
         self._component.set_fovy(np.deg2rad(config.vfov_deg), compute_x=True)
         self._component.near = config.near_m
         self._component.far = config.far_m
@@ -135,8 +130,8 @@ class SimCamera:
         return color, depth
 
     def _log_camera(self) -> sapien.render.RenderCameraComponent:
-        """A second camera at the same place with the same intrinsics and the cheaper forward shader, made on
-        first use: the log's colour-only frames (the pipeline's frames keep the default shader)."""
+        """A second camera at the same place with the same intrinsics and shader pack and 8-bit colour, made on
+        first use: the log's colour-only frames."""
         if self._log_component is None:
             w, h = self._intrinsics.width_px, self._intrinsics.height_px
             # 8-bit colour straight from the renderer: the same values as rounding the float picture (checked:
@@ -144,7 +139,7 @@ class SimCamera:
             # setting read when a camera is made: restored at once, so the pipeline's cameras keep float colour.
             sapien.render.set_picture_format("Color", "r8g8b8a8unorm")
             try:
-                log_camera = sapien.render.RenderCameraComponent(w, h, _LOG_SHADER)
+                log_camera = sapien.render.RenderCameraComponent(w, h, SHADER_DIR)
             finally:
                 sapien.render.set_picture_format("Color", "r32g32b32a32sfloat")
             log_camera.set_fovy(self._component.fovy, compute_x=True)
@@ -157,8 +152,8 @@ class SimCamera:
     def render_color(self, fast_shader: bool = True) -> NDArray[np.uint8]:
         """Noise-free colour only (no depth read back): the log's extra frames. Steps nothing, draws nothing.
 
-        ``fast_shader``: through the second camera with the forward shader (about half the CPU per frame once
-        warm, ~50 ms more for its first frame in a process); False: through the pipeline's camera.
+        ``fast_shader``: through the second camera, which hands back 8-bit colour (no float read-back and
+        conversion); False: through the pipeline's camera. Both draw with bt_grasp's shader pack.
         """
         return self.render_color_async(fast_shader).result()
 

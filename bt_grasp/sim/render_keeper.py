@@ -1,9 +1,10 @@
 """Keeps the renderer's one-time set-up alive for the whole process, so every new world's first picture is cheap.
 
-On a CPU Vulkan driver (lavapipe) the first picture taken in a process costs seconds: the renderer's one-time
-resource set-up runs as shaders that lavapipe compiles (docs/campaigns.md says how this was measured). It is
-kept while any SAPIEN scene lives; a tiny scene with a 16x16 camera that has taken one picture keeps it, and then
-a world built afresh for each episode pays about 0.1 s for its first picture.
+On a CPU Vulkan driver (lavapipe) the first picture taken in a process pays the renderer's one-time set-up:
+with SAPIEN's own shader packs seconds (mostly the BRDF lookup table of image-based lighting), with bt_grasp's
+pack (``bt_grasp.sim.shader_pack``, docs/rendering.md) a few tenths of a second. It is kept while any SAPIEN
+scene lives; a tiny scene with a 16x16 camera that has taken one picture keeps it, and then a world built afresh
+for each episode pays less for its first picture.
 
 Why fresh worlds and not one world reset between episodes: a reset world keeps PhysX's internal state (its
 contact pairs' order among others), and the same episode run again in a reset world gave a different tick
@@ -18,6 +19,7 @@ import threading
 import sapien
 
 from bt_grasp.sim.device import create_scene
+from bt_grasp.sim.shader_pack import SHADER_DIR
 
 _lock = threading.Lock()
 _kept: tuple[sapien.Scene, object] | None = None
@@ -30,7 +32,11 @@ def keep_renderer_warm() -> None:
         if _kept is not None:
             return
         scene = create_scene()
-        camera = scene.add_camera("render_keeper", 16, 16, 1.0, 0.01, 10.0)
+        camera = sapien.render.RenderCameraComponent(16, 16, SHADER_DIR)
+        entity = sapien.Entity()
+        entity.set_name("render_keeper")
+        entity.add_component(camera)
+        scene.add_entity(entity)
         scene.update_render()
         camera.take_picture()
         _kept = (scene, camera)
