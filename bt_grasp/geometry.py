@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial.transform import Rotation
 
 Mat4 = NDArray[np.float64]
 
@@ -26,15 +25,21 @@ def make_T(
 
 def T_from_xyz_rpy(xyz: list[float] | NDArray[np.float64], rpy_rad: list[float] | NDArray[np.float64]) -> Mat4:
     """Transform from a translation (m) and URDF-style roll-pitch-yaw (rad, fixed axes x, y, z)."""
+    from scipy.spatial.transform import Rotation  # on first use: scipy.spatial costs ~0.3 s to import
+
     return make_T(Rotation.from_euler("xyz", rpy_rad).as_matrix(), xyz)
 
 
 def T_from_pos_quat_wxyz(pos: NDArray[np.float64] | list[float], quat_wxyz: NDArray[np.float64] | list[float]) -> Mat4:
     w, x, y, z = (float(v) for v in quat_wxyz)
+    from scipy.spatial.transform import Rotation
+
     return make_T(Rotation.from_quat([x, y, z, w]).as_matrix(), pos)
 
 
 def quat_wxyz(T: Mat4) -> NDArray[np.float64]:
+    from scipy.spatial.transform import Rotation
+
     x, y, z, w = Rotation.from_matrix(T[:3, :3]).as_quat()
     return np.array([w, x, y, z])
 

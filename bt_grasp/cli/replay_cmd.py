@@ -9,15 +9,13 @@ from __future__ import annotations
 import json
 from dataclasses import asdict
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import typer
 from rich.console import Console
 
-from bt_grasp.recording import render, replay
-from bt_grasp.recording.btlog import write_btlog
-from bt_grasp.recording.export import export_frames
-from bt_grasp.recording.reader import RunLog, open_log
+if TYPE_CHECKING:  # the recording package (mcap, cv2) is imported when a log is replayed, not for --help
+    from bt_grasp.recording.reader import RunLog
 
 
 def _json(console: Console, value: Any) -> None:
@@ -42,6 +40,11 @@ def replay_command(
     foxglove: bool = typer.Option(False, "--foxglove", help="Print how to open this log in Foxglove."),
 ) -> None:
     """Replay a recorded run: summary and timeline by default, or the views asked for."""
+    from bt_grasp.recording import render, replay
+    from bt_grasp.recording.btlog import write_btlog
+    from bt_grasp.recording.export import export_frames
+    from bt_grasp.recording.reader import open_log
+
     console = Console(highlight=False)
     run = open_log(log)
     if resim:
@@ -150,6 +153,8 @@ def _asdict(obj: Any) -> dict[str, Any]:
 def _print_views(
     console: Console, name: str, views: dict[str, Any], leaf: str | None, max_rows: int, run: RunLog
 ) -> None:
+    from bt_grasp.recording import render, replay
+
     if "tick" in views:
         view = views["tick"]
         stamp = view["stamp_ns"] * 1e-9 if view["stamp_ns"] is not None else float("nan")
