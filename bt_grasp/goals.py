@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 
+from bt_grasp.defaults import DEFAULT_LIFT_HEIGHT_M as DEFAULT_LIFT_HEIGHT_M
 from bt_grasp.errors import InputError
 from bt_grasp.scene_config import Scene
 from bt_grasp.scene_goals import GOAL_KINDS, ClearGoal, Goal, PickGoal
@@ -17,7 +18,6 @@ from bt_grasp.scene_goals import GOAL_KINDS, ClearGoal, Goal, PickGoal
 __all__ = ["DEFAULT_LIFT_HEIGHT_M", "ClearGoal", "Goal", "PickGoal", "goal_for_run", "goal_from_options"]
 
 #: the lift a pick must reach unless told otherwise, metres (the Lift leaf's default too)
-DEFAULT_LIFT_HEIGHT_M = 0.15
 #: the kinds a command line can ask for (the others need a scene's names: declare them in the scene)
 COMMAND_LINE_KINDS = ("pick", "clear")
 

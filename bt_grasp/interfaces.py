@@ -9,10 +9,11 @@ from __future__ import annotations
 
 import enum
 from dataclasses import dataclass
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
-import numpy as np
-from numpy.typing import NDArray
+if TYPE_CHECKING:  # annotations only: numpy is imported where arrays are made (not for --help)
+    import numpy as np
+    from numpy.typing import NDArray
 
 
 class Mount(enum.StrEnum):
@@ -35,6 +36,8 @@ class CameraIntrinsics:
 
     @property
     def K(self) -> NDArray[np.float64]:
+        import numpy as np
+
         return np.array([[self.fx_px, 0.0, self.cx_px], [0.0, self.fy_px, self.cy_px], [0.0, 0.0, 1.0]])
 
     def to_dict(self) -> dict[str, float | int]:

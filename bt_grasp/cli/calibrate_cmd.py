@@ -10,12 +10,14 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
 import typer
 
 from bt_grasp.interfaces import Mount
+
+if TYPE_CHECKING:  # annotations only
+    import numpy as np
 
 MOUNTS = tuple(m.value for m in Mount)
 

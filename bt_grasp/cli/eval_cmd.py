@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import typer
 from rich.console import Console
 
-from bt_grasp.campaign.runner import EpisodeError, Progress
+if TYPE_CHECKING:  # the campaign package is imported when a campaign runs, not for --help
+    from bt_grasp.campaign.runner import EpisodeError, Progress
 
 eval_app = typer.Typer(
     help="Evaluation campaigns: trees x scenes x seeds x fault plans, resumable.", no_args_is_help=True
@@ -25,6 +26,8 @@ def _duration(seconds: float | None) -> str:
 
 
 def progress_printer(console: Console) -> Any:
+    from bt_grasp.campaign.runner import EpisodeError
+
     def show(progress: Progress, item: dict[str, Any] | EpisodeError | None) -> None:
         finished = progress.already + progress.done
         rate = progress.success_rate

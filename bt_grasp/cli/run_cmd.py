@@ -10,14 +10,13 @@ from typing import TYPE_CHECKING
 import typer
 from rich.console import Console
 
-from bt_grasp.episode.request import DEFAULT_MAX_TICKS, EpisodeRequest, parse_assignments
-from bt_grasp.episode.result import EpisodeResult
+from bt_grasp.defaults import DEFAULT_LIFT_HEIGHT_M, DEFAULT_MAX_TICKS
 from bt_grasp.errors import InputError
-from bt_grasp.goals import DEFAULT_LIFT_HEIGHT_M, goal_from_options
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # the episode package (numpy, pydantic, the simulator) is imported when a run starts
     from bt_grasp.episode import TickCallback
     from bt_grasp.episode.request import BlackboardValue
+    from bt_grasp.episode.result import EpisodeResult
     from bt_grasp.tree.loader import LoadedTree
 
 
@@ -140,6 +139,8 @@ def run(
 ) -> None:
     """Run a task tree on the simulated cell. Exit code 0 on task success (judged by physics), 1 on failure."""
     from bt_grasp.episode.episode import Episode
+    from bt_grasp.episode.request import EpisodeRequest, parse_assignments
+    from bt_grasp.goals import goal_from_options
     from bt_grasp.recording.layout import layout_path
 
     blackboard: dict[str, BlackboardValue] = {"color": color, "lift_height": lift_height}

@@ -8,14 +8,14 @@ from __future__ import annotations
 import json
 import logging
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import typer
 
-from bt_grasp.clock import ManualClock
 from bt_grasp.errors import InputError
-from bt_grasp.tree.node import BtStatus
-from bt_grasp.tree.registry import NodeRegistry, builtin_registry
-from bt_grasp.tree.values import display
+
+if TYPE_CHECKING:  # the tree package (py_trees) is imported when a command reads a tree, not for --help
+    from bt_grasp.tree.registry import NodeRegistry
 
 tree_app = typer.Typer(
     name="tree",
@@ -27,6 +27,8 @@ tree_app = typer.Typer(
 
 def tree_registry() -> NodeRegistry:
     """The built-in nodes plus the robot leaves, when ``bt_grasp.behaviours`` provides ``register(registry)``."""
+    from bt_grasp.tree.registry import builtin_registry
+
     registry = builtin_registry()
     try:
         import bt_grasp.behaviours as behaviours
@@ -140,7 +142,10 @@ def run_cmd(
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object: status, ticks, blackboard."),
 ) -> None:
     """Tick a tree with a simulated clock until it finishes; exit 0 on SUCCESS, 1 otherwise."""
+    from bt_grasp.clock import ManualClock
     from bt_grasp.tree.loader import load_tree
+    from bt_grasp.tree.node import BtStatus
+    from bt_grasp.tree.values import display
 
     _quiet_library_logs()
     try:

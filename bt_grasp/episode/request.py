@@ -6,10 +6,9 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from bt_grasp.defaults import DEFAULT_MAX_TICKS as DEFAULT_MAX_TICKS
 from bt_grasp.errors import InputError
 from bt_grasp.goals import Goal
-
-DEFAULT_MAX_TICKS = 12000  # 120 s of simulated time at 100 Hz
 
 #: what a user may put on the blackboard before the first tick (``--set KEY=VALUE``)
 BlackboardValue = str | int | float | bool
