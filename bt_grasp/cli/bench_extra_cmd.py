@@ -99,3 +99,43 @@ def logging_bench(
 
 def register(app: typer.Typer) -> None:
     """The commands above attach themselves to bench_cmd's group when this module is imported."""
+
+
+@bench_app.command("budget")
+def budget(
+    tree: Path = typer.Option(Path("trees/pick.xml"), "--tree"),
+    scene: Path = typer.Option(Path("scenes/tabletop.yaml"), "--scene"),
+    seed: int = typer.Option(0, "--seed"),
+    calibration: Path | None = typer.Option(None, "--calibration", help="Default: the file the scene names."),
+    log: bool = typer.Option(True, "--log/--no-log", help="Record the measured pick to a temporary MCAP log."),
+    as_json: bool = typer.Option(False, "--json"),
+) -> None:
+    """Where one warm pick's time goes, by stage, with the floor (physics alone + one capture) beside it."""
+    from bt_grasp.episode.budget_bench import run_budget_bench
+
+    report = run_budget_bench(tree, scene, seed, calibration, log)
+    if as_json:
+        typer.echo(json.dumps(report))
+        return
+    total = report["episode_wall_s"]
+    table = Table(title=f"one warm pick: {tree} on {scene}, seed {seed}, log {'on' if log else 'off'} "
+                        f"({report['ticks']} ticks, {report['sim_time_s']} s simulated; {report['machine']})")
+    for col in ("group", "stage", "wall s", "share", "calls"):
+        table.add_column(col)
+    for row in report["stages"]:
+        table.add_row(row["group"], row["stage"], f"{row['s']:.3f}", f"{100 * row['share']:.1f}%", str(row["calls"]))
+    table.add_row("", "total (Episode.run)", f"{total:.3f}", "100%", "")
+    console = Console()
+    console.print(table)
+    floor = report["floor"]
+    overhead = report["tick_loop_overhead_us_per_tick"]
+    console.print(
+        f"floor: physics of the same {report['physics_steps']} steps alone {floor['physics_s']:.3f} s "
+        f"({floor['physics_steps_per_s']:.0f} steps/s, measured now) + one capture {floor['capture_s']:.3f} s = "
+        f"{floor['floor_s']:.3f} s; this pick {total:.3f} s = {report['wall_over_floor']:.2f}x the floor "
+        f"(tick loop alone {report['tick_loop_wall_s']:.3f} s)\n"
+        f"tick loop's own overhead per tick: py_trees {overhead['tree (py_trees)']:.0f} us, status bookkeeping "
+        f"{overhead['status bookkeeping']:.0f} us, blackboard differ {overhead['blackboard differ']:.0f} us, "
+        f"recording {overhead['recording']:.0f} us; total {overhead['total']:.0f} us",
+        highlight=False, soft_wrap=True,
+    )
