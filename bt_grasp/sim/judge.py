@@ -91,10 +91,16 @@ class Judge:
         """Once per tick (and while settling): releases and motion, for placement goals."""
         self.tracker.observe(self.now_s())
 
+    @staticmethod
+    def places(goal: Goal) -> bool:
+        """Whether ``goal`` is judged by where objects came to rest after release (what :meth:`observe` tracks);
+        a pick or a clear-the-table goal is judged by the state at the end alone."""
+        return not (isinstance(goal, PickGoal) or (isinstance(goal, ClearGoal) and goal.into is None))
+
     def settle_ticks(self, goal: Goal) -> int:
         """Ticks the world must still run after the tree ended so a placement goal's 'resting for 1 s after
         release' can be seen (0 for goals that place nothing)."""
-        if isinstance(goal, PickGoal) or (isinstance(goal, ClearGoal) and goal.into is None):
+        if not self.places(goal):
             return 0
         tick_s = self._world.steps_per_tick * self._world.dt_s
         return math.ceil(self.tracker.settle_s(self.now_s()) / tick_s) + 1
