@@ -6,12 +6,12 @@ from typing import TYPE_CHECKING
 
 from py_trees.common import Status
 
-from bt_grasp.behaviours.cell import Cell
 from bt_grasp.behaviours.reasons import FailureReason
 from bt_grasp.tree.exceptions import TreeRuntimeError
 from bt_grasp.tree.leaf import Leaf
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # the cell (numpy, the scene model) is imported when a tree is set up, not to validate it
+    from bt_grasp.behaviours.cell import Cell
     from bt_grasp.perception.results import Detection
 
 
@@ -21,6 +21,8 @@ class RobotLeaf(Leaf):
     cell: Cell
 
     def setup(self, **kwargs: object) -> None:
+        from bt_grasp.behaviours.cell import Cell
+
         cell = kwargs.get("cell")
         if not isinstance(cell, Cell):
             raise TypeError(f"{self.name}: setup() needs cell=Cell(...)")
