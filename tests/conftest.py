@@ -6,6 +6,8 @@ from pathlib import Path
 
 import pytest
 
+pytest_plugins = ["skip_guard"]
+
 REPO = Path(__file__).resolve().parents[1]
 SCENE = REPO / "scenes" / "tabletop.yaml"
 

@@ -78,6 +78,7 @@ def _chromium() -> str:
     return exe
 
 
+@pytest.mark.real_client
 def test_report_renders_in_headless_chromium(tmp_path: Path) -> None:
     a = _write(tmp_path / "before.jsonl", _rows("before", "pick_with_recovery", 3))
     b = _write(tmp_path / "after.jsonl", _rows("after", "pick_with_recovery", 6))
