@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
 
+from bt_grasp.campaign.out_lock import campaign_lock
 from bt_grasp.campaign.results import ResultsWriter, read_rows, results_path
 from bt_grasp.campaign.spec import Campaign, Episode
 from bt_grasp.errors import BtGraspError, InputError
@@ -96,6 +97,16 @@ def run_campaign(
 
     Raises :class:`CampaignIncomplete` when some episodes did not finish (after writing every row that did).
     """
+    with campaign_lock(Path(out_dir)):
+        return _run_locked(campaign, Path(out_dir), engine_factory, on_progress)
+
+
+def _run_locked(
+    campaign: Campaign,
+    out_dir: Path,
+    engine_factory: Callable[[], Engine],
+    on_progress: Callable[[Progress, dict[str, Any] | EpisodeError | None], None] | None,
+) -> Progress:
     path = results_path(out_dir, campaign.name)
     rows = read_rows(path, repair=True) if path.exists() else []
     todo = pending(campaign, rows, path)

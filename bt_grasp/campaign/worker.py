@@ -16,6 +16,7 @@ from typing import Any
 from bt_grasp.campaign.environment import environment
 from bt_grasp.campaign.episode import EpisodeBackend, EpisodeOutcome
 from bt_grasp.campaign.spec import Episode
+from bt_grasp.safe_path import file_component
 
 log = logging.getLogger(__name__)
 
@@ -39,10 +40,10 @@ class KeepLogs(enum.StrEnum):
 
 
 def log_path(log_dir: Path, episode: Episode) -> Path:
-    return (
-        log_dir
-        / f"{Path(episode.tree).stem}__{episode.scene}__{episode.fault_plan}__seed{episode.seed}__{episode.key}.mcap"
-    )
+    """Where an episode's kept log goes: one plain file name inside ``log_dir``, whatever the campaign file
+    names its tree, scene or fault plan (``../x`` becomes ``_x-<hash>``: a name never leaves the folder)."""
+    parts = (Path(episode.tree).stem, episode.scene, episode.fault_plan, f"seed{episode.seed}", episode.key)
+    return log_dir / ("__".join(file_component(str(p)) for p in parts) + ".mcap")
 
 
 def make_row(episode: Episode, outcome: EpisodeOutcome, mcap: Path | None, episode_wall_s: float) -> dict[str, Any]:
