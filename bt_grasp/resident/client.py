@@ -59,8 +59,7 @@ def _connect_or_start() -> Any:
     conn = _connect()
     if conn is not None:
         return conn
-    socket_path().unlink(missing_ok=True)
-    _start()
+    _start()  # it removes a dead resident's socket itself, under its lock; a second one started meanwhile leaves
     deadline = time.monotonic() + START_TIMEOUT_S
     while time.monotonic() < deadline:
         time.sleep(0.1)
@@ -78,9 +77,14 @@ def run_resident(request: EpisodeRequest) -> tuple[EpisodeResult, int]:
     version = code_version()
     for _attempt in range(2):
         conn = _connect_or_start()
-        with conn:
-            conn.send(("run", request, version))
-            reply = conn.recv()
+        try:
+            with conn:
+                conn.send(("run", request, version))
+                reply = conn.recv()
+        except (EOFError, OSError):
+            raise ResidentError(
+                f"the resident process ended without answering (killed, or it crashed); see {home() / 'server.log'}"
+            ) from None
         if reply[0] == "ok":
             return reply[1], reply[2]
         if reply[0] == "error":

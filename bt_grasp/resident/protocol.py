@@ -5,21 +5,50 @@ from __future__ import annotations
 import hashlib
 import os
 import secrets
+import stat
 from pathlib import Path
 
 import bt_grasp
+from bt_grasp.errors import InputError
 
 #: the resident process exits after this long without a request
 IDLE_TIMEOUT_S = 600.0
 
 
+ENV_DIR = "BT_GRASP_RESIDENT_DIR"
+
+
 def home() -> Path:
-    """A folder only this user can read: the socket, its key and the process's log live there."""
-    base = os.environ.get("BT_GRASP_RESIDENT_DIR") or str(Path.home() / ".cache" / "bt_grasp" / "resident")
+    """A folder only this user can read: the socket, its key and the process's log live there.
+
+    A folder someone else could have prepared is refused (exit 2), never repaired: one owned by another user
+    (they could have put their own key and socket there, and the client would talk to their process), one
+    that is a symbolic link, or one writable by the group or others. A folder of this user's that is merely
+    readable by others is made private (0700)."""
+    base = os.environ.get(ENV_DIR) or str(Path.home() / ".cache" / "bt_grasp" / "resident")
     path = Path(base)
-    path.mkdir(parents=True, exist_ok=True)
-    path.chmod(0o700)
+    path.mkdir(mode=0o700, parents=True, exist_ok=True)
+    _check_private(path, ENV_DIR if os.environ.get(ENV_DIR) else "the resident folder")
     return path
+
+
+def _check_private(path: Path, source: str) -> None:
+    info = os.lstat(path)
+    if stat.S_ISLNK(info.st_mode) or not stat.S_ISDIR(info.st_mode):
+        raise InputError(source, f"{path} is not a plain folder (a symbolic link or a file); the resident refuses it")
+    if info.st_uid != os.getuid():
+        raise InputError(source, f"{path} belongs to user id {info.st_uid}, not to you; the resident refuses a "
+                         "folder another user controls")
+    if info.st_mode & 0o022:
+        raise InputError(source, f"{path} is writable by others (mode {stat.S_IMODE(info.st_mode):o}); the resident "
+                         "refuses a shared folder: point it at a private one")
+    if stat.S_IMODE(info.st_mode) != 0o700:
+        path.chmod(0o700)
+
+
+def lock_path() -> Path:
+    """Held (``flock``) by the one resident process of this folder for as long as it lives."""
+    return home() / "resident.lock"
 
 
 def socket_path() -> Path:
@@ -29,11 +58,17 @@ def socket_path() -> Path:
 def authkey() -> bytes:
     """The shared secret of this user's client and resident process (created once, mode 0600)."""
     path = home() / "key"
-    if not path.exists():
+    if not os.path.lexists(path):
         fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
         with os.fdopen(fd, "wb") as f:
             f.write(secrets.token_bytes(32))
-    return path.read_bytes()
+    fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW)
+    with os.fdopen(fd, "rb") as f:
+        info = os.fstat(f.fileno())
+        if info.st_uid != os.getuid() or info.st_mode & 0o077 or not stat.S_ISREG(info.st_mode):
+            raise InputError(path, "the resident's key must be a private (0600) file of yours; remove it to make a "
+                             "new one")
+        return f.read(64)
 
 
 def code_version() -> str:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import fcntl
 import logging
 import os
 import sys
@@ -12,9 +13,12 @@ from multiprocessing.connection import Listener
 from typing import Any
 
 from bt_grasp.errors import BtGraspError
-from bt_grasp.resident.protocol import IDLE_TIMEOUT_S, authkey, code_version, socket_path
+from bt_grasp.resident.protocol import IDLE_TIMEOUT_S, authkey, code_version, lock_path, socket_path
 
 log = logging.getLogger(__name__)
+
+#: how long a starting resident waits for the folder's lock before leaving it to the process that holds it
+LOCK_WAIT_S = 3.0
 
 
 def _watchdog(state: dict[str, float], idle_s: float) -> None:
@@ -44,11 +48,33 @@ def _handle(message: Any, worlds: Any, version: str) -> tuple[Any, ...]:
         return ("crash", traceback.format_exc())
 
 
+def _hold_the_lock() -> int | None:
+    """This folder's resident lock, or None when another resident process holds it (then this one is not
+    needed: two cold clients may both start one, and the second one to get here simply leaves)."""
+    fd = os.open(lock_path(), os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o600)
+    deadline = time.monotonic() + LOCK_WAIT_S  # a resident that said "stale" is exiting: give it a moment
+    while True:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            break
+        except BlockingIOError:
+            if time.monotonic() > deadline:
+                os.close(fd)
+                return None
+            time.sleep(0.05)
+    os.ftruncate(fd, 0)
+    os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+    return fd  # kept open for the process's life; the kernel releases the lock however it ends
+
+
 def serve(idle_s: float = IDLE_TIMEOUT_S) -> None:
     from bt_grasp.episode import WarmWorlds
 
+    if _hold_the_lock() is None:
+        log.info("another resident process serves %s; leaving", socket_path())
+        return
     path = socket_path()
-    path.unlink(missing_ok=True)
+    path.unlink(missing_ok=True)  # a dead resident's socket: only the lock holder may remove it
     version = code_version()
     listener = Listener(str(path), family="AF_UNIX", authkey=authkey())
     path.chmod(0o600)

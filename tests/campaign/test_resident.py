@@ -36,12 +36,10 @@ def test_second_resident_run_is_served_warm_with_the_same_result(tmp_path: Path)
                 "scenes/tabletop.yaml",
                 "--seed",
                 "3",
-                "--max-ticks",
-                "300",
                 "--summary-json",
                 str(out),
             )
-            assert proc.returncode in (0, 1), proc.stderr
+            assert proc.returncode == 0, proc.stderr  # the pick must succeed, judged by physics
             pids.append(proc.stderr.split("(ran in the resident process ")[1].split(")")[0])
             summary = json.loads(out.read_text())
             summary.pop("wall_time_s")
