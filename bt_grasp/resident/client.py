@@ -6,15 +6,17 @@ import dataclasses
 import subprocess
 import sys
 import time
-from multiprocessing.connection import Client
+from multiprocessing.connection import Client, Connection
 from pathlib import Path
 from typing import Any
 
 from bt_grasp.episode import EpisodeRequest, EpisodeResult
 from bt_grasp.errors import BtGraspError
-from bt_grasp.resident.protocol import authkey, code_version, home, socket_path
+from bt_grasp.resident.protocol import authkey, code_version, home, request_adapter, result_adapter, socket_path
+from bt_grasp.resident.wire import WireError, client_handshake, receive, send
 
 START_TIMEOUT_S = 300.0
+HANDSHAKE_TIMEOUT_S = 30.0
 
 
 class ResidentError(BtGraspError):
@@ -35,11 +37,17 @@ def _absolute(request: EpisodeRequest) -> EpisodeRequest:
     return dataclasses.replace(request, **changes)
 
 
-def _connect() -> Any | None:
+def _connect() -> Connection | None:
     try:
-        return Client(str(socket_path()), family="AF_UNIX", authkey=authkey())
+        conn = Client(str(socket_path()), family="AF_UNIX")
     except (FileNotFoundError, ConnectionRefusedError):
         return None
+    try:
+        client_handshake(conn, authkey(), HANDSHAKE_TIMEOUT_S)
+    except (WireError, OSError) as exc:
+        conn.close()
+        raise ResidentError(f"the process on {socket_path()} failed the resident's handshake: {exc}") from None
+    return conn
 
 
 def _start() -> None:
@@ -55,7 +63,7 @@ def _start() -> None:
         )
 
 
-def _connect_or_start() -> Any:
+def _connect_or_start() -> Connection:
     conn = _connect()
     if conn is not None:
         return conn
@@ -79,20 +87,27 @@ def run_resident(request: EpisodeRequest) -> tuple[EpisodeResult, int]:
         conn = _connect_or_start()
         try:
             with conn:
-                conn.send(("run", request, version))
-                reply = conn.recv()
-        except (EOFError, OSError):
+                send(conn, "run", request=request_adapter().dump_python(request, mode="json"), code_version=version)
+                reply = receive(conn, None)
+        except (WireError, OSError) as exc:
             raise ResidentError(
-                f"the resident process ended without answering (killed, or it crashed); see {home() / 'server.log'}"
+                f"the resident process ended without answering (killed, or it crashed: {exc}); "
+                f"see {home() / 'server.log'}"
             ) from None
-        if reply[0] == "ok":
-            return reply[1], reply[2]
-        if reply[0] == "error":
-            raise ResidentError(reply[1], reply[2])
-        if reply[0] == "stale":  # it ran older code and is exiting: start a current one
+        kind = reply["kind"]
+        if kind == "ok":
+            try:
+                return result_adapter().validate_python(reply.get("result")), int(reply["pid"])
+            except (ValueError, KeyError, TypeError) as exc:
+                raise ResidentError(f"the resident process answered a malformed result: {exc}") from None
+        if kind == "error":
+            code = reply.get("exit_code")
+            raise ResidentError(str(reply.get("message"))[:2000], code if code in (1, 2) else 1)
+        if kind == "stale":  # it ran older code and is exiting: start a current one
             time.sleep(0.5)
             continue
-        raise ResidentError(f"the resident process failed: {reply[1].strip().splitlines()[-1]}")
+        lines = str(reply.get("message", "")).strip().splitlines() or ["no detail"]
+        raise ResidentError(f"the resident process failed: {lines[-1][:500]}")
     raise ResidentError("the resident process keeps running other code than this command")
 
 
@@ -102,6 +117,7 @@ def stop_resident() -> int | None:
     if conn is None:
         return None
     with conn:
-        conn.send(("stop",))
-        reply = conn.recv()
-    return int(reply[1])
+        send(conn, "stop")
+        reply = receive(conn, HANDSHAKE_TIMEOUT_S)
+    pid = reply.get("pid")
+    return pid if isinstance(pid, int) else None

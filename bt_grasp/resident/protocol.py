@@ -6,10 +6,17 @@ import hashlib
 import os
 import secrets
 import stat
+from functools import cache
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import bt_grasp
 from bt_grasp.errors import InputError
+
+if TYPE_CHECKING:
+    from pydantic import TypeAdapter
+
+    from bt_grasp.episode import EpisodeRequest, EpisodeResult
 
 #: the resident process exits after this long without a request
 IDLE_TIMEOUT_S = 600.0
@@ -79,3 +86,22 @@ def code_version() -> str:
         stat = path.stat()
         h.update(f"{path.relative_to(root)}:{stat.st_size}:{stat.st_mtime_ns}".encode())
     return h.hexdigest()[:16]
+
+
+@cache
+def request_adapter() -> TypeAdapter[EpisodeRequest]:
+    """Episode requests on the wire: typed JSON, validated field by field (no pickle)."""
+    from pydantic import TypeAdapter
+
+    from bt_grasp.episode import EpisodeRequest
+
+    return TypeAdapter(EpisodeRequest)
+
+
+@cache
+def result_adapter() -> TypeAdapter[EpisodeResult]:
+    from pydantic import TypeAdapter
+
+    from bt_grasp.episode import EpisodeResult
+
+    return TypeAdapter(EpisodeResult)

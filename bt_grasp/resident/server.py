@@ -13,10 +13,22 @@ from multiprocessing.connection import Listener
 from typing import Any
 
 from bt_grasp.errors import BtGraspError
-from bt_grasp.resident.protocol import IDLE_TIMEOUT_S, authkey, code_version, lock_path, socket_path
+from bt_grasp.resident.protocol import (
+    IDLE_TIMEOUT_S,
+    authkey,
+    code_version,
+    lock_path,
+    request_adapter,
+    result_adapter,
+    socket_path,
+)
+from bt_grasp.resident.wire import WireError, receive, send, server_handshake
 
 log = logging.getLogger(__name__)
 
+#: how long a client may take to prove it knows the key, then to send its request
+HANDSHAKE_TIMEOUT_S = 5.0
+REQUEST_TIMEOUT_S = 10.0
 #: how long a starting resident waits for the folder's lock before leaving it to the process that holds it
 LOCK_WAIT_S = 3.0
 
@@ -29,23 +41,31 @@ def _watchdog(state: dict[str, float], idle_s: float) -> None:
             os._exit(0)
 
 
-def _handle(message: Any, worlds: Any, version: str) -> tuple[Any, ...]:
-    kind = message[0]
+def _handle(message: dict[str, Any], worlds: Any, version: str) -> tuple[str, dict[str, Any]]:
+    """The reply (kind, fields) to one message; a request that does not validate is an ``error`` reply."""
+    kind = message["kind"]
     if kind in ("ping", "stop"):
-        return ("pong", os.getpid(), version)
+        return "pong", {"pid": os.getpid(), "code_version": version}
     if kind != "run":
-        return ("crash", f"unknown request {kind!r}")
-    _, request, client_version = message
-    if client_version != version:
-        return ("stale", version)
-    from bt_grasp.episode import run_episode
+        return "error", {"message": f"unknown request {kind[:40]!r}", "exit_code": 2}
+    if message.get("code_version") != version:
+        return "stale", {"code_version": version}
+    from pydantic import ValidationError
+
+    from bt_grasp.episode import EpisodeRequest, run_episode
 
     try:
-        return ("ok", run_episode(request, worlds=worlds), os.getpid())
+        request = request_adapter().validate_python(message.get("request"))
+    except ValidationError as exc:
+        return "error", {"message": f"malformed episode request ({exc.error_count()} problem(s))", "exit_code": 2}
+    try:
+        result = run_episode(request, worlds=worlds)
     except BtGraspError as exc:
-        return ("error", str(exc), exc.exit_code)
+        return "error", {"message": str(exc), "exit_code": exc.exit_code}
     except Exception:
-        return ("crash", traceback.format_exc())
+        return "crash", {"message": traceback.format_exc()}
+    assert isinstance(request, EpisodeRequest)
+    return "ok", {"result": result_adapter().dump_python(result, mode="json"), "pid": os.getpid()}
 
 
 def _hold_the_lock() -> int | None:
@@ -76,7 +96,8 @@ def serve(idle_s: float = IDLE_TIMEOUT_S) -> None:
     path = socket_path()
     path.unlink(missing_ok=True)  # a dead resident's socket: only the lock holder may remove it
     version = code_version()
-    listener = Listener(str(path), family="AF_UNIX", authkey=authkey())
+    key = authkey()
+    listener = Listener(str(path), family="AF_UNIX")
     path.chmod(0o600)
     state = {"busy": 0.0, "last": time.monotonic()}
     threading.Thread(target=_watchdog, args=(state, idle_s), daemon=True).start()
@@ -86,23 +107,25 @@ def serve(idle_s: float = IDLE_TIMEOUT_S) -> None:
     while True:
         try:
             conn = listener.accept()
-        except (OSError, EOFError):  # a client that failed the handshake
+        except OSError:
             continue
         state["busy"] = 1.0
-        try:
-            message = conn.recv()
-            reply = _handle(message, worlds, version)
-            conn.send(reply)
-            if reply[0] == "stale" or message[0] == "stop":  # the code changed under it, or asked to stop
-                path.unlink(missing_ok=True)
-                os._exit(0)
-        except (OSError, EOFError):
-            pass
+        stop = False
+        try:  # a bad client (wrong key, garbage, a huge declared length, silence) loses its connection, no more
+            server_handshake(conn, key, HANDSHAKE_TIMEOUT_S)
+            message = receive(conn, REQUEST_TIMEOUT_S)
+            kind, fields = _handle(message, worlds, version)
+            send(conn, kind, **fields)
+            stop = kind == "stale" or message["kind"] == "stop"  # the code changed under it, or asked to stop
+        except (WireError, OSError, EOFError) as exc:
+            log.warning("dropped a connection: %s", exc)
         finally:
             conn.close()
             state["busy"] = 0.0
             state["last"] = time.monotonic()
-
+        if stop:
+            path.unlink(missing_ok=True)
+            os._exit(0)
 
 if __name__ == "__main__":
     logging.basicConfig(level=logging.WARNING, stream=sys.stderr)

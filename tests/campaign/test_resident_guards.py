@@ -91,3 +91,95 @@ def test_item8_two_residents_started_at_once_leave_one_serving(tmp_path: Path) -
                 p.kill()
                 p.wait(timeout=30)
     assert not (folder / "episode.sock").exists()
+
+
+@pytest.fixture
+def resident(tmp_path: Path, monkeypatch: pytest.MonkeyPatch):  # type: ignore[no-untyped-def]
+    """A resident process serving a private folder; stopped afterwards."""
+    folder = tmp_path / "resident"
+    env = _env(folder)
+    monkeypatch.setenv("BT_GRASP_RESIDENT_DIR", str(folder))
+    proc = subprocess.Popen([sys.executable, "-m", "bt_grasp.resident.server", "120"], env=env,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    sock = folder / "episode.sock"
+    deadline = time.monotonic() + 120
+    while not sock.exists() and time.monotonic() < deadline and proc.poll() is None:
+        time.sleep(0.05)
+    assert sock.exists(), "the resident did not start"
+    yield proc, sock
+    if proc.poll() is None:
+        proc.kill()
+    proc.wait(timeout=30)
+
+
+def _ping() -> int | None:
+    from bt_grasp.resident.client import stop_resident
+
+    return stop_resident()
+
+
+def _raw(sock: Path):  # type: ignore[no-untyped-def]
+    from multiprocessing.connection import Client
+
+    return Client(str(sock), family="AF_UNIX")
+
+
+def test_item7_wrong_key_garbage_and_a_1tb_length_do_not_kill_the_resident(resident) -> None:  # type: ignore[no-untyped-def]
+    import struct
+
+    from bt_grasp.resident.protocol import authkey
+    from bt_grasp.resident.wire import WireError, client_handshake
+
+    proc, sock = resident
+    with _raw(sock) as conn, pytest.raises(WireError):
+        client_handshake(conn, b"not the key" * 3, 10)  # the server refuses, and so does the client
+    with _raw(sock) as conn:
+        client_handshake(conn, authkey(), 10)
+        conn.send_bytes(b"\x80\x04garbage that is not JSON")
+    with _raw(sock) as conn:
+        client_handshake(conn, authkey(), 10)
+        conn.send_bytes(b'{"v": 99, "kind": "run"}')
+    with _raw(sock) as conn:
+        client_handshake(conn, authkey(), 10)
+        conn._send(struct.pack("!i", -1) + struct.pack("!Q", 1 << 40))  # declares a 1 TB frame, sends nothing
+    with _raw(sock) as conn:
+        client_handshake(conn, authkey(), 10)
+        conn.send_bytes(b'{"v": 1, "kind": "run", "code_version": "x", "request": {"tree": 5}}')
+    assert proc.poll() is None, "the resident died"
+    assert _ping() == proc.pid  # and it still serves (then stops)
+
+
+def test_item7_a_silent_connection_does_not_block_other_clients(resident) -> None:  # type: ignore[no-untyped-def]
+    proc, sock = resident
+    silent = _raw(sock)  # connects, never answers the handshake
+    try:
+        t0 = time.monotonic()
+        assert _ping() == proc.pid
+        assert time.monotonic() - t0 < 60  # the server dropped the silent one after its handshake timeout
+    finally:
+        silent.close()
+
+
+def test_a_client_whose_resident_is_killed_says_so_and_does_not_exit_130(resident, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    import signal
+
+    proc, _sock = resident
+    log = tmp_path / "run.mcap"
+    client = subprocess.Popen([*BT, *RUN, "--realtime", "1", "--log", str(log)], cwd=REPO,
+                              env=_env(tmp_path / "resident"), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                              text=True)
+    try:
+        deadline = time.monotonic() + 120  # the episode is under way once the resident has written its log's head
+        while time.monotonic() < deadline and client.poll() is None:
+            if log.exists() and log.stat().st_size > 0:
+                break
+            time.sleep(0.1)
+        os.kill(proc.pid, signal.SIGKILL)
+        _out, err = client.communicate(timeout=120)
+    finally:
+        if client.poll() is None:
+            client.kill()
+            client.communicate()
+    assert client.returncode == 1, err
+    assert "the resident process ended without answering" in err
+    assert "Traceback" not in err
