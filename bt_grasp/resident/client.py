@@ -111,6 +111,18 @@ def run_resident(request: EpisodeRequest) -> tuple[EpisodeResult, int]:
     raise ResidentError("the resident process keeps running other code than this command")
 
 
+def resident_status() -> tuple[int | None, Path]:
+    """The pid of the resident process serving this user's folder (None: none runs), and the folder."""
+    conn = _connect()
+    if conn is None:
+        return None, home()
+    with conn:
+        send(conn, "ping")
+        reply = receive(conn, HANDSHAKE_TIMEOUT_S)
+    pid = reply.get("pid")
+    return (pid if isinstance(pid, int) else None), home()
+
+
 def stop_resident() -> int | None:
     """Stop this user's resident process if one runs; returns its pid."""
     conn = _connect()

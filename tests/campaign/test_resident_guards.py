@@ -183,3 +183,15 @@ def test_a_client_whose_resident_is_killed_says_so_and_does_not_exit_130(residen
     assert client.returncode == 1, err
     assert "the resident process ended without answering" in err
     assert "Traceback" not in err
+
+
+def test_resident_status_and_stop_commands(resident, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    proc, _sock = resident
+    env = _env(tmp_path / "resident")
+    status = subprocess.run([*BT, "resident", "status"], capture_output=True, text=True, timeout=60, env=env)
+    assert status.returncode == 0 and f"resident process {proc.pid} serves" in status.stdout, status.stderr
+    stop = subprocess.run([*BT, "resident", "stop"], capture_output=True, text=True, timeout=60, env=env)
+    assert stop.returncode == 0 and f"stopped resident process {proc.pid}" in stop.stdout, stop.stderr
+    proc.wait(timeout=30)
+    again = subprocess.run([*BT, "resident", "status"], capture_output=True, text=True, timeout=60, env=env)
+    assert again.returncode == 1 and "no resident process" in again.stdout
