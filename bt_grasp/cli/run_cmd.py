@@ -165,6 +165,8 @@ def run(
     if realtime is not None and realtime <= 0:
         raise InputError("--realtime", f"the factor must be positive, got {realtime}")
     console = Console(stderr=True)
+    if live is not None and not is_loopback(live_host):
+        console.print(exposure_warning(live_host), highlight=False, markup=False)
     if resident:
         from bt_grasp.resident.client import run_resident
 
@@ -184,6 +186,26 @@ def run(
         summary_json.parent.mkdir(parents=True, exist_ok=True)
         summary_json.write_text(json.dumps(summary.to_json(), indent=2) + "\n")
     raise typer.Exit(0 if summary.success else 1)
+
+
+def is_loopback(host: str) -> bool:
+    """True for an address only this machine can reach (127.0.0.0/8, ::1, localhost)."""
+    import ipaddress
+
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+def exposure_warning(host: str) -> str:
+    return (
+        f"warning: --live-host {host} serves this run to anyone who can reach the port: the Foxglove WebSocket "
+        "protocol has no authentication. To watch from another machine, keep the default 127.0.0.1 and tunnel "
+        "(ssh -L 8765:127.0.0.1:8765 this-host); see docs/security.md."
+    )
 
 
 def register(app: typer.Typer) -> None:
