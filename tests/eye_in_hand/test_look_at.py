@@ -53,9 +53,17 @@ def test_eye_in_hand_pick_xml_and_yaml_twins_succeed_and_tick_identically(tmp_pa
         paths = {uid: info.path for uid, info in run.structures[0].nodes().items()}
         streams.append([{paths[n.uid]: n.status for n in tick.nodes if n.ticked} for tick in run.ticks])
     assert streams[0] == streams[1]
-    # the survey, the close view and the refining perception all ran (coarse to fine)
-    visited = set().union(*streams[0])
-    assert {p for p in visited if "survey" in p or "close_view" in p or "refine" in p or "find" in p}, visited
+    # the survey, the first look, the close view and the refining perception each succeeded, in that order
+    # (coarse to fine)
+    first_success: dict[str, int] = {}
+    for i, tick in enumerate(streams[0]):
+        for path, status in tick.items():
+            for name in ("survey", "find", "close_view", "refine"):
+                if path.rsplit("/", 1)[-1].split("@")[0] == name and str(status).endswith("SUCCESS"):
+                    first_success.setdefault(name, i)
+    assert sorted(first_success, key=first_success.__getitem__) == ["survey", "find", "close_view", "refine"], (
+        first_success
+    )
 
 
 _VIEW_TREE = """<root BTCPP_format="4" main_tree_to_execute="T">

@@ -26,9 +26,14 @@ def test_problem_set_is_reproducible_and_large_enough(scene_config) -> None:  # 
 def test_small_bench_summary(scene_config) -> None:  # type: ignore[no-untyped-def]
     summary = run_plan_bench(scene_config, count=6, seed=1).summary()
     assert summary["problems"] == 6
-    assert 0.0 <= summary["success_rate"] <= 1.0  # type: ignore[operator]
-    for key in ("plan_ms_median", "plan_ms_p95", "ik_ms_median", "traj_ms_median"):
-        assert key in summary
+    # the seeded problem set is solvable and the planner's budget counts checks, not seconds: every problem is
+    # solved on any machine, whatever its load
+    assert summary["success_rate"] == 1.0 and summary["statuses"] == {"ok": 6}, summary
+    for key in ("plan_ms_median", "ik_ms_median", "traj_ms_median", "path_length_rad_median",
+                "traj_duration_s_median"):
+        assert 0.0 < summary[key] < 60_000, (key, summary)  # type: ignore[operator]
+    assert summary["plan_ms_p95"] >= summary["plan_ms_median"]  # type: ignore[operator]
+    assert 0.0 <= summary["direct_fraction"] <= 1.0  # type: ignore[operator]
 
 
 def test_cli_prints_exactly_one_json_object(capsys: pytest.CaptureFixture[str]) -> None:
