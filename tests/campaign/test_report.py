@@ -128,3 +128,25 @@ def test_report_renders_in_headless_chromium(tmp_path: Path) -> None:
     pixels = imread(shot)
     assert pixels.shape[:2] == (1400, 1100)
     assert pixels[..., :3].std() > 0.05, "the screenshot is blank"
+
+
+@pytest.mark.parametrize(("k", "n"), [(0, n) for n in range(1, 60)] + [(n, n) for n in range(1, 60)])
+def test_item5_the_interval_always_contains_the_rate_at_0_of_n_and_n_of_n(k: int, n: int) -> None:
+    lo, hi = wilson_interval(k, n)
+    assert 0.0 <= lo <= k / n <= hi <= 1.0
+    assert (lo == 0.0) if k == 0 else (hi == 1.0)
+
+
+def test_item5_eval_report_on_all_failed_and_all_succeeded_groups_exits_0(tmp_path: Path) -> None:
+    from bt_grasp.campaign.report import build_report
+
+    rows = []
+    for group, ok in (("tabletop", False), ("wide", True)):  # 0/n and n/n
+        for seed in range(7):
+            row = _rows("c", "pick", 2)[0]
+            row.update(scene=group, seed=seed, episode=f"{group}{seed}", success=ok,
+                       failure_reason=None if ok else "NO_DETECTION", failed_leaf=None if ok else "Perceive")
+            rows.append(row)
+    results = _write(tmp_path / "r.jsonl", rows)
+    written = build_report(results, tmp_path / "report.html", compare=results)
+    assert (tmp_path / "report.html").exists() and written
