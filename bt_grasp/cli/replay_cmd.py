@@ -35,6 +35,9 @@ def replay_command(
     resim: bool = typer.Option(
         False, "--resim", help="Re-run the recorded tree, scene, seed, calibration and faults; compare every tick."
     ),
+    resim_log: Path | None = typer.Option(
+        None, "--resim-log", help="With --resim: keep the re-simulated run's log here (else it is removed)."
+    ),
     report: Path | None = typer.Option(None, "--report", help="Write a self-contained HTML run report here."),
     report_dir: Path | None = typer.Option(None, "--report-dir", help="Also write the report's figures as PNG here."),
     foxglove: bool = typer.Option(False, "--foxglove", help="Print how to open this log in Foxglove."),
@@ -48,7 +51,7 @@ def replay_command(
     console = Console(highlight=False)
     run = open_log(log)
     if resim:
-        _resim(console, log, as_json)
+        _resim(console, log, as_json, resim_log)
         return
     if foxglove:
         _print_foxglove(console, run)
@@ -121,17 +124,17 @@ def _utc(ns: int) -> str:
     return datetime.datetime.fromtimestamp(ns / 1e9, datetime.UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
 
 
-def _resim(console: Console, log: Path, as_json: bool) -> None:
+def _resim(console: Console, log: Path, as_json: bool, keep: Path | None) -> None:
     from bt_grasp.cli.resim import resimulate
 
-    report = resimulate(log)
+    report = resimulate(log, keep)
     if as_json:
         _json(console, report.to_json())
     elif report.reproduced:
         console.print(
             f"[green]reproduced[/]: {report.ticks_new} ticks, the same fingerprint (every node's status and "
             f"reason, blackboard, joints, gripper at every tick; final object poses) {report.digest_new[:16]} "
-            f"(success {report.success_new}); new log {report.new_log}"
+            f"(success {report.success_new})" + (f"; new log {report.new_log}" if report.new_log else "")
         )
     else:
         d = report.divergence

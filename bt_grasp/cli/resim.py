@@ -11,6 +11,7 @@ that names the first differing node statuses.
 from __future__ import annotations
 
 import json
+import shutil
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -18,6 +19,7 @@ from typing import Any
 
 from bt_grasp.errors import LogFileError
 from bt_grasp.goals import Goal
+from bt_grasp.safe_path import check_relative_name, join_under
 
 
 @dataclass
@@ -56,13 +58,20 @@ class ResimReport:
         }
 
 
-def _attachment(run: Any, folder: str, workdir: Path) -> Path | None:
+def _write_attachment(log_path: Path, workdir: Path, name: str, data: bytes) -> Path:
+    """Write one attachment under ``workdir`` by its recorded name, through the one name gate: a name with
+    ``..``, an absolute name or a link out of the folder is refused (exit 2), never followed."""
+    path = join_under(workdir, name, source=log_path, what="attachment name")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("xb") as f:  # a name recorded twice must not overwrite the first
+        f.write(data)
+    return path
+
+
+def _attachment(run: Any, folder: str, workdir: Path, log_path: Path) -> Path | None:
     for name, data in run.attachments.items():
         if name.startswith(folder + "/"):
-            path = workdir / name
-            path.parent.mkdir(parents=True, exist_ok=True)
-            path.write_bytes(data)
-            return path
+            return _write_attachment(log_path, workdir, name, data)
     return None
 
 
@@ -79,7 +88,21 @@ def recorded_goal(log_path: Path, meta: dict[str, str]) -> Goal | None:
     return goal
 
 
-def resimulate(log_path: Path, workdir: Path | None = None) -> ResimReport:
+def resimulate(log_path: Path, keep_log: Path | None = None) -> ResimReport:
+    """Re-run a recorded log in a temporary folder that is removed afterwards, whatever happens; the new run's
+    log is kept only at ``keep_log`` when given."""
+    with tempfile.TemporaryDirectory(prefix="bt_grasp_resim_") as tmp:
+        report = _resimulate(log_path, Path(tmp))
+        if keep_log is not None:
+            keep_log.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(report.new_log, keep_log)
+            report.new_log = str(keep_log)
+        else:
+            report.new_log = ""
+    return report
+
+
+def _resimulate(log_path: Path, workdir: Path) -> ResimReport:
     from bt_grasp.episode import EpisodeRequest, run_episode
     from bt_grasp.recording.compare import compare_tick_streams
     from bt_grasp.recording.fingerprint import fingerprint_of_log
@@ -87,21 +110,20 @@ def resimulate(log_path: Path, workdir: Path | None = None) -> ResimReport:
 
     run = open_log(log_path)
     meta = run.metadata
-    workdir = workdir or Path(tempfile.mkdtemp(prefix="bt_grasp_resim_"))
+    for name in run.attachments:  # a log with any hostile name is refused whole, written or not
+        check_relative_name(name, source=log_path, what="attachment name")
     tree_files = [n for n in run.attachments if n.startswith("tree/")]
     if not tree_files or "seed" not in meta:
         raise LogFileError(log_path, "the log has no recorded tree or seed, so the run cannot be re-simulated")
     for name in tree_files:  # every tree file (includes too), in one folder as they were named
-        target = workdir / name
-        target.parent.mkdir(parents=True, exist_ok=True)
-        target.write_bytes(run.attachments[name])
+        _write_attachment(log_path, workdir, name, run.attachments[name])
     main_name = Path(meta.get("tree_file", tree_files[0])).name
-    tree = workdir / "tree" / main_name
-    scene = _attachment(run, "scene", workdir)
+    tree = join_under(workdir / "tree", main_name, source=log_path, what="tree file name")
+    scene = _attachment(run, "scene", workdir, log_path)
     if scene is None:
         raise LogFileError(log_path, "the log has no recorded scene file, so the run cannot be re-simulated")
-    calibration = _attachment(run, "calibration", workdir)
-    faults = _attachment(run, "faults", workdir)
+    calibration = _attachment(run, "calibration", workdir, log_path)
+    faults = _attachment(run, "faults", workdir, log_path)
     inject = tuple(i for i in meta.get("inject", "").split(";") if i)
     try:
         blackboard = json.loads(meta.get("blackboard", "{}"))
