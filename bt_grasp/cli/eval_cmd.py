@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING, Any
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 
 if TYPE_CHECKING:  # the campaign package is imported when a campaign runs, not for --help
     from bt_grasp.campaign.runner import EpisodeError, Progress
@@ -40,12 +41,14 @@ def progress_printer(console: Console) -> Any:
             console.print(f"{progress.total} episodes{resumed}", highlight=False)
             return
         if isinstance(item, EpisodeError):
-            what = f"[red]NOT FINISHED[/] {item.episode.label()}: {item.message}"
+            what = f"[red]NOT FINISHED[/] {escape(item.episode.label())}: {escape(item.message)}"
         else:
             verdict = (
-                "[green]ok[/]" if item["success"] else f"[red]FAIL[/] {item['failure_reason']} ({item['failed_leaf']})"
+                "[green]ok[/]" if item["success"]
+                else f"[red]FAIL[/] {escape(str(item['failure_reason']))} ({escape(str(item['failed_leaf']))})"
             )
-            what = f"{Path(item['tree']).stem}/{item['scene']}/seed{item['seed']}/{item['fault_plan']} {verdict}"
+            label = f"{Path(str(item['tree'])).stem}/{item['scene']}/seed{item['seed']}/{item['fault_plan']}"
+            what = f"{escape(label)} {verdict}"
         console.print(f"{head}  {what}", highlight=False, soft_wrap=True)
 
     return show

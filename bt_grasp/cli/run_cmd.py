@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 
 from bt_grasp.defaults import DEFAULT_LIFT_HEIGHT_M, DEFAULT_MAX_TICKS
 from bt_grasp.errors import InputError
@@ -60,22 +61,24 @@ def judged_phrase(summary: EpisodeResult) -> str:
 
 
 def print_summary(console: Console, summary: EpisodeResult) -> None:
+    """The run's summary; every string that comes from the user's files (leaf names, reasons, paths) is
+    escaped, so Rich markup in a node's name (``[/]``, ``[link=...]``) prints as text instead of crashing."""
     verdict = "[bold green]SUCCESS[/]" if summary.success else "[bold red]FAILURE[/]"
-    console.print(f"\n{verdict}  (tree: {summary.tree_status}, {judged_phrase(summary)})")
+    console.print(f"\n{verdict}  (tree: {escape(summary.tree_status)}, {escape(judged_phrase(summary))})")
     if not summary.success:
-        console.print(f"  reason: [red]{summary.reason}[/]  leaf: {summary.failed_leaf}")
+        console.print(f"  reason: [red]{escape(str(summary.reason))}[/]  leaf: {escape(str(summary.failed_leaf))}")
         if summary.judged.failed_condition is not None:
-            console.print(f"  goal not met: {summary.judged.failed_condition}")
+            console.print(f"  goal not met: {escape(summary.judged.failed_condition)}")
     console.print(
         f"  ticks {summary.ticks}, simulated {summary.sim_time_s:.2f} s, "
         f"wall {summary.wall_time_s:.2f} s, seed {summary.seed}"
     )
     if summary.retries:
-        console.print("  retries: " + ", ".join(f"{k} x{v}" for k, v in summary.retries.items()))
+        console.print("  retries: " + ", ".join(f"{escape(k)} x{v}" for k, v in summary.retries.items()))
     if summary.faults_fired:
         console.print(f"  faults fired: {summary.faults_fired}")
     if summary.log:
-        console.print(f"  log: {summary.log}  (bt-grasp replay {summary.log})")
+        console.print(f"  log: {escape(summary.log)}  (bt-grasp replay {escape(summary.log)})")
 
 
 def live_progress(console: Console) -> TickCallback:
@@ -91,9 +94,9 @@ def live_progress(console: Console) -> TickCallback:
             f"{leaf.name}: {leaf.feedback_message}" if leaf is not None else ""
         )
         if console.is_terminal:
-            console.print(text[: console.width - 1], end="\r", highlight=False, soft_wrap=True)
+            console.print(text[: console.width - 1], end="\r", highlight=False, soft_wrap=True, markup=False)
         elif text != state["last"]:
-            console.print(text, highlight=False)
+            console.print(text, highlight=False, markup=False)
         state["last"] = text
 
     return hook
@@ -180,11 +183,10 @@ def run(
             f"live: in Foxglove, Open connection > Foxglove WebSocket > {url} (layout: {layout_path()})",
             highlight=False))
         summary = episode.run(on_tick=() if quiet else (live_progress(console),))
-    out = Console()
-    print_summary(out, summary)
-    if summary_json is not None:
+    if summary_json is not None:  # written first: nothing printed may stand between a run and its record
         summary_json.parent.mkdir(parents=True, exist_ok=True)
         summary_json.write_text(json.dumps(summary.to_json(), indent=2) + "\n")
+    print_summary(Console(), summary)
     raise typer.Exit(0 if summary.success else 1)
 
 
