@@ -38,19 +38,69 @@ def _wanted_chunks(summary: Summary, channel_ids: Collection[int] | None) -> lis
                                                                     c.message_index_offsets)]
 
 
-def _decompress(compression: str, data: bytes, size: int, zstd: zstandard.ZstdDecompressor) -> bytes:
+#: no chunk of a log may decompress to more than this (a bt_grasp chunk holds one tick: kilobytes to a few MB)
+MAX_CHUNK_BYTES = 64 << 20
+#: and a whole file to no more than this many times its own size, plus one chunk's worth: real logs compress
+#: 2-10x; only a decompression bomb gets near it
+MAX_EXPANSION = 200
+
+
+class ChunkTooLarge(ValueError):
+    """A chunk that would decompress past the limits: a corrupt or hostile log, refused (never allocated)."""
+
+    def __init__(self, offset: int, problem: str) -> None:
+        super().__init__(f"the chunk at byte {offset} {problem}; the log is refused (corrupt or hostile)")
+        self.offset = offset
+
+
+class DecompressionBudget:
+    """Bytes a file may still decompress to, whatever its chunks declare (one per file read)."""
+
+    def __init__(self, file_size: int) -> None:
+        self.left = MAX_CHUNK_BYTES + MAX_EXPANSION * file_size
+
+    def take(self, n: int, offset: int) -> None:
+        self.left -= n
+        if self.left < 0:
+            raise ChunkTooLarge(offset, f"takes the file past {MAX_EXPANSION}x its own size once decompressed")
+
+
+def bounded_decompress(compression: str, data: bytes, declared: int, offset: int, budget: DecompressionBudget) -> bytes:
+    """A chunk's records, decompressed with a hard output limit that holds whatever the frame declares:
+    at most the chunk's declared size, :data:`MAX_CHUNK_BYTES` and what the file's budget has left."""
+    limit = min(MAX_CHUNK_BYTES, max(budget.left, 0))
+    if declared > limit:
+        raise ChunkTooLarge(offset, f"declares {declared} bytes uncompressed (limit {limit})")
     if compression == "":
-        return data
-    if compression == "zstd":
-        return zstd.decompress(data, max_output_size=size)
-    if compression == "lz4" and lz4_frame is not None:
-        return bytes(lz4_frame.decompress(data))
-    raise ValueError(f"unsupported chunk compression {compression!r}")
+        out = bytes(data)
+    elif compression == "zstd":
+        frame_size = zstandard.frame_content_size(data) if len(data) >= 18 else -1
+        if frame_size > declared:
+            raise ChunkTooLarge(offset, f"holds a zstd frame of {frame_size} bytes in a chunk of {declared}")
+        reader = zstandard.ZstdDecompressor().stream_reader(data, read_across_frames=True)
+        parts, got = [], 0
+        while got <= declared:
+            piece = reader.read(min(1 << 20, declared + 1 - got))
+            if not piece:
+                break
+            parts.append(piece)
+            got += len(piece)
+        out = b"".join(parts)
+    elif compression == "lz4" and lz4_frame is not None:
+        out = bytes(lz4_frame.LZ4FrameDecompressor().decompress(data, max_length=declared + 1))
+    else:
+        raise ValueError(f"unsupported chunk compression {compression!r}")
+    if len(out) != declared:
+        raise ChunkTooLarge(offset, f"decompresses to {'more' if len(out) > declared else len(out)} bytes, not the "
+                            f"{declared} it declares")
+    budget.take(len(out), offset)
+    return out
 
 
-def iter_indexed(f: BinaryIO, summary: Summary, channel_ids: Collection[int] | None) -> Iterator[RawTuple]:
+def iter_indexed(
+    f: BinaryIO, summary: Summary, channel_ids: Collection[int] | None, budget: DecompressionBudget
+) -> Iterator[RawTuple]:
     """Messages of the given channels (all if None), in file order, from the chunks the index lists."""
-    zstd = zstandard.ZstdDecompressor()
     wanted = None if channel_ids is None else frozenset(channel_ids)
     for index in _wanted_chunks(summary, wanted):
         f.seek(index.chunk_start_offset)
@@ -65,7 +115,7 @@ def iter_indexed(f: BinaryIO, summary: Summary, channel_ids: Collection[int] | N
         pos += name_len
         (data_len,) = struct.unpack_from("<Q", buf, pos)
         pos += 8
-        records = _decompress(compression, buf[pos: pos + data_len], size, zstd)
+        records = bounded_decompress(compression, buf[pos: pos + data_len], size, index.chunk_start_offset, budget)
         yield from _messages(records, wanted)
 
 

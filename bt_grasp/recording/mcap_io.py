@@ -7,6 +7,7 @@ by record from the start until the data ends or stops making sense; everything b
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import logging
 import os
@@ -100,7 +101,8 @@ def _schema_name(schemas: dict[int, Schema], channel: Channel) -> str:
 
 
 def _scan_indexed(
-    f: io.BufferedReader, reader: SeekingReader, summary: Summary, wanted: Collection[str] | None
+    f: io.BufferedReader, reader: SeekingReader, summary: Summary, wanted: Collection[str] | None,
+    budget: chunks.DecompressionBudget,
 ) -> Scan:
     scan = Scan(indexed=True, complete=True, header_seen=True)
     scan.library = reader.get_header().library
@@ -111,18 +113,18 @@ def _scan_indexed(
     counts = summary.statistics.channel_message_counts if summary.statistics else {}
     for channel in summary.channels.values():
         scan.topic_counts[channel.topic] = scan.topic_counts.get(channel.topic, 0) + counts.get(channel.id, 0)
-    scan.messages.extend(_indexed_messages(f, summary, wanted))
+    scan.messages.extend(_indexed_messages(f, summary, wanted, budget))
     return scan
 
 
 def _indexed_messages(
-    f: io.BufferedReader, summary: Summary, wanted: Collection[str] | None
+    f: io.BufferedReader, summary: Summary, wanted: Collection[str] | None, budget: chunks.DecompressionBudget
 ) -> Iterator[RawMessage]:
     channels = summary.channels
     ids = None if wanted is None else {c.id for c in channels.values() if c.topic in wanted}
     if ids is not None and not ids:
         return
-    for channel_id, log_time, publish_time, data in chunks.iter_indexed(f, summary, ids):
+    for channel_id, log_time, publish_time, data in chunks.iter_indexed(f, summary, ids, budget):
         channel = channels[channel_id]
         yield RawMessage(channel.topic, _schema_name(summary.schemas, channel), channel.message_encoding,
                          log_time, publish_time, data)
@@ -150,12 +152,13 @@ def _scan_linear(f: io.BufferedReader, size: int, wanted: Collection[str] | None
                     record.log_time, record.publish_time, record.data,
                 ))
 
-    _linear_records(f, size, scan, on_record)
+    _linear_records(f, size, scan, on_record, chunks.DecompressionBudget(size))
     return scan
 
 
 def _linear_records(
-    f: io.BufferedReader, size: int, scan: Scan, on_record: Callable[[object], None]
+    f: io.BufferedReader, size: int, scan: Scan, on_record: Callable[[object], None],
+    budget: chunks.DecompressionBudget,
 ) -> None:
     """Feed every readable record to ``on_record``; stop quietly where the data ends or breaks."""
     f.seek(0)
@@ -171,14 +174,20 @@ def _linear_records(
             elif isinstance(record, Attachment):
                 scan.attachments[record.name] = record.data
             elif isinstance(record, Chunk):
-                # CRCs are checked here: a cut chunk must not yield half its messages.
-                for inner in breakup_chunk(record, validate_crc=True):
+                # decompressed here, bounded whatever the chunk declares; CRCs are checked by breakup_chunk:
+                # a cut chunk must not yield half its messages
+                plain = chunks.bounded_decompress(record.compression, record.data, record.uncompressed_size,
+                                                  f.tell(), budget)
+                plain_chunk = dataclasses.replace(record, compression="", data=plain)
+                for inner in breakup_chunk(plain_chunk, validate_crc=True):
                     on_record(inner)
             elif isinstance(record, Footer):
                 footer_seen = True  # complete only once the closing magic has been read too
             else:
                 on_record(record)
         scan.complete = footer_seen
+    except chunks.ChunkTooLarge:
+        raise
     except Exception as exc:  # the end of a crashed or cut file shows up as any of many parse errors
         scan.stop_reason = f"{type(exc).__name__}: {exc}"
         log.debug("linear read stopped: %s", scan.stop_reason)
@@ -187,14 +196,19 @@ def _linear_records(
 def scan_file(path: Path, wanted: Collection[str] | None) -> Scan:
     """Metadata, attachments, per-topic counts and the messages of the ``wanted`` topics (all if None)."""
     size = check_path(path)
-    with path.open("rb") as f:
-        found = _summary(f, size)
-        if found is not None:
-            try:
-                return _scan_indexed(f, *found, wanted)
-            except Exception as exc:  # an index that lies: fall back to reading every record
-                log.warning("%s: the index could not be used (%s); reading linearly", path, exc)
-        return _scan_linear(f, size, wanted)
+    try:
+        with path.open("rb") as f:
+            found = _summary(f, size)
+            if found is not None:
+                try:
+                    return _scan_indexed(f, *found, wanted, chunks.DecompressionBudget(size))
+                except chunks.ChunkTooLarge:
+                    raise
+                except Exception as exc:  # an index that lies: fall back to reading every record
+                    log.warning("%s: the index could not be used (%s); reading linearly", path, exc)
+            return _scan_linear(f, size, wanted)
+    except chunks.ChunkTooLarge as exc:
+        raise LogFileError(path, str(exc)) from None
 
 
 def iter_topic(path: Path, topics: Collection[str], indexed: bool) -> Iterator[RawMessage]:
@@ -203,7 +217,10 @@ def iter_topic(path: Path, topics: Collection[str], indexed: bool) -> Iterator[R
     with path.open("rb") as f:
         size = path.stat().st_size
         found = _summary(f, size) if indexed else None
-        if found is not None:
-            yield from _indexed_messages(f, found[1], topics)
-        else:
-            yield from _scan_linear(f, size, topics).messages
+        try:
+            if found is not None:
+                yield from _indexed_messages(f, found[1], topics, chunks.DecompressionBudget(size))
+            else:
+                yield from _scan_linear(f, size, topics).messages
+        except chunks.ChunkTooLarge as exc:
+            raise LogFileError(path, str(exc)) from None
