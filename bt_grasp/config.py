@@ -14,6 +14,7 @@ from typing import Any, TypeVar
 import yaml
 from pydantic import BaseModel, ConfigDict, ValidationError
 
+from bt_grasp.bounded_io import read_user_file
 from bt_grasp.errors import ConfigError, did_you_mean
 
 M = TypeVar("M", bound=BaseModel)
@@ -64,12 +65,9 @@ _Yaml12Loader.add_implicit_resolver(
 def read_yaml(path: str | Path) -> tuple[Any, dict[KeyPath, int]]:
     """Parse a YAML file safely; returns the data and a map from key paths to line numbers."""
     path = Path(path)
-    if not path.exists():
-        raise ConfigError(path, "no such file")
-    if path.is_dir():
-        raise ConfigError(path, "is a folder, not a YAML file")
+    data = read_user_file(path, error=ConfigError)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise ConfigError(path, "is not UTF-8 text") from exc
     try:

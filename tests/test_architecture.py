@@ -24,7 +24,7 @@ FORBIDDEN = {
 }
 LEAF_MODULES = (
     "errors", "clock", "geometry", "interfaces", "config", "scene_config", "robot_description", "colors",
-    "scene_fixtures", "scene_goals", "scene_conveyor", "safe_path", "defaults",
+    "scene_fixtures", "scene_goals", "scene_conveyor", "safe_path", "defaults", "bounded_io",
 )
 
 

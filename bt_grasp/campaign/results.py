@@ -14,6 +14,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
+from bt_grasp.bounded_io import MAX_RESULTS_BYTES, read_user_file
 from bt_grasp.errors import InputError
 
 SUFFIX = ".jsonl"
@@ -28,7 +29,7 @@ def read_rows(path: Path, *, repair: bool = False) -> list[dict[str, Any]]:
     path = Path(path)
     if not path.exists():
         raise InputError(path, "no such results file")
-    data = path.read_bytes()
+    data = read_user_file(path, MAX_RESULTS_BYTES)
     end = data.rfind(b"\n") + 1
     if end < len(data) and repair:
         with open(path, "r+b") as f:

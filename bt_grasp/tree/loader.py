@@ -15,6 +15,7 @@ from typing import Any
 
 import py_trees
 
+from bt_grasp.bounded_io import read_user_file
 from bt_grasp.clock import Clock, ManualClock
 from bt_grasp.errors import TreeFileError
 from bt_grasp.tree.blackboard import Blackboard
@@ -47,7 +48,11 @@ def parse_bytes(data: bytes, display: str, fmt: str | None = None) -> Document:
 
 def _read_bytes(path: Path, display: str, where: tuple[str, int] | None = None) -> bytes:
     try:
-        return path.read_bytes()
+        if not path.exists():
+            raise FileNotFoundError(path)
+        if path.is_dir():
+            raise IsADirectoryError(path)
+        return read_user_file(path, error=TreeFileError)  # bounded: no device, pipe or giant file
     except FileNotFoundError:
         if where is not None:
             raise TreeFileError(where[0], f"included file '{display}' does not exist", where=where[1]) from None
