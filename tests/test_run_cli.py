@@ -46,6 +46,20 @@ def test_bad_input_exits_2_with_one_line_and_no_log(args: list[str], fragment: s
     assert not log.exists(), "a bad input must not leave a log behind"
 
 
+@pytest.mark.parametrize("kind", ["folder", "under_a_file"])
+def test_a_log_path_that_cannot_be_a_file_is_bad_input_before_the_run(kind: str, tmp_path: Path) -> None:
+    """Issue 22 (weak items): `--log DIR` was an IsADirectoryError traceback and exit 1 after the run."""
+    if kind == "folder":
+        log = tmp_path
+    else:
+        (tmp_path / "plain").write_text("x")
+        log = tmp_path / "plain" / "run.mcap"
+    proc = _bt("run", "trees/pick.xml", "--scene", str(SCENE), "--log", str(log), timeout=120)
+    assert proc.returncode == 2, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and "--log" in lines[0] and "Traceback" not in proc.stderr, proc.stderr
+
+
 def test_calibration_for_the_other_mount_is_refused(tmp_path: Path) -> None:
     text = (
         CALIB.read_text()

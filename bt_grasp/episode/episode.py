@@ -94,7 +94,22 @@ def load_inputs(request: EpisodeRequest) -> Inputs:
         check_fault_plan(fault_plan, leaves_of(list(tree.nodes())), [o.name for o in scene.objects])
     if request.max_ticks < 1:
         raise InputError("--max-ticks", f"must be at least 1, got {request.max_ticks}")
+    _check_log_path(request.log)
     return Inputs(scene, tree, calibration_path, calibration, goal, fault_plan, clock)
+
+
+def _check_log_path(log_path: Path | None) -> None:
+    """The log must be a file that can be created: a folder, or a path under something that is not a folder,
+    is bad input before anything runs (it was an IsADirectoryError traceback after the run)."""
+    if log_path is None:
+        return
+    if log_path.is_dir():
+        raise InputError("--log", f"{log_path} is a folder; give a file name such as {log_path / 'run.mcap'}")
+    parent = log_path.parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if not parent.is_dir():
+        raise InputError("--log", f"{log_path}: {parent} is not a folder")
 
 
 def _check_goal(goal: Goal, request: EpisodeRequest, scene: Scene) -> None:
