@@ -23,6 +23,10 @@ def _figure(width: float, height: float) -> Any:
 
 
 def _png(fig: Any) -> bytes:
+    from matplotlib.text import Text
+
+    for text in fig.findobj(Text):  # names from files are text: a '$' must not start mathtext (it crashed)
+        text.set_parse_math(False)
     buf = io.BytesIO()
     fig.savefig(buf, format="png", metadata={"Software": None})
     return buf.getvalue()

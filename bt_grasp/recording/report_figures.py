@@ -37,6 +37,10 @@ def _pyplot() -> Any:
 
 
 def _png(fig: Any) -> bytes:
+    from matplotlib.text import Text
+
+    for text in fig.findobj(Text):  # names from files are text: a '$' must not start mathtext (it crashed)
+        text.set_parse_math(False)
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
     _pyplot().close(fig)

@@ -150,3 +150,18 @@ def test_item5_eval_report_on_all_failed_and_all_succeeded_groups_exits_0(tmp_pa
     results = _write(tmp_path / "r.jsonl", rows)
     written = build_report(results, tmp_path / "report.html", compare=results)
     assert (tmp_path / "report.html").exists() and written
+
+
+def test_dollar_signs_in_names_do_not_start_mathtext_in_the_report(tmp_path: Path) -> None:
+    """Issue 22 (weak items): a leaf or scene named with '$...$' crashed the matplotlib figures."""
+    from bt_grasp.campaign.report import build_report
+
+    rows = _rows("c", "pick", 3)
+    for row in rows:
+        row["scene"] = "cost_$\\frac{1}{0$"
+        if not row["success"]:
+            row["failed_leaf"] = "$\\undefinedcommand{x}$"
+            row["retries"] = {"$^$": 1}
+    results = _write(tmp_path / "r.jsonl", rows)
+    build_report(results, tmp_path / "report.html")
+    assert "$\\undefinedcommand{x}$" in (tmp_path / "report.html").read_text()
