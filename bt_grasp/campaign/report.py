@@ -94,9 +94,9 @@ def _failures_table(rows: Sequence[dict[str, Any]]) -> str:
         replay = f"<code>bt-grasp replay {html.escape(r['mcap'])}</code>" if r.get("mcap") else "(log not kept)"
         out.append(
             f"<tr><td>{html.escape(tree_label(r))}</td><td>{html.escape(str(r['scene']))}</td>"
-            f"<td class=num>{r['seed']}</td><td>{html.escape(str(r['fault_plan']))}</td>"
+            f"<td class=num>{html.escape(str(r['seed']))}</td><td>{html.escape(str(r['fault_plan']))}</td>"
             f"<td>{html.escape(str(r['failure_reason']))}</td><td>{html.escape(str(r['failed_leaf']))}</td>"
-            f"<td class=num>{r['ticks']}</td><td>{replay}</td></tr>"
+            f"<td class=num>{html.escape(str(r['ticks']))}</td><td>{replay}</td></tr>"
         )
     more = len(failed) - MAX_FAILURE_ROWS
     out.append("</table>" + (f"<p class=note>... and {more} more (see the results file)</p>" if more > 0 else ""))
@@ -113,7 +113,7 @@ def _environments(rows: Sequence[dict[str, Any]]) -> str:
         libs = ", ".join(f"{k} {v}" for k, v in (env.get("libraries") or {}).items() if v)
         parts.append(
             f"<li><code>{html.escape(env_id)}</code>: {html.escape(str(env.get('cpu_model', '?')))}, "
-            f"{env.get('cpu_count', '?')} cores, Python {html.escape(str(env.get('python', '?')))}; "
+            f"{html.escape(str(env.get('cpu_count', '?')))} cores, Python {html.escape(str(env.get('python', '?')))}; "
             f"{html.escape(libs)}</li>"
         )
     warn = (
