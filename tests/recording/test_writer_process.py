@@ -7,7 +7,7 @@ import os
 import signal
 import subprocess
 import sys
-import textwrap
+import time
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +19,10 @@ from bt_grasp.recording.writer import RunRecorder
 from bt_grasp.recording.writer_process import ProcessWriter, WriterProcessError
 
 TOPICS = ("/bt/tick", "/robot/joint_state", "/tf")
+REPO = Path(__file__).resolve().parents[2]
+WRITER_PARENT = Path(__file__).with_name("record_via_writer_process.py")
+#: the kill comes once the parent has reported this many ticks flushed
+KILL_AFTER = 150
 
 
 def _record(path: Path, *, writer_process: bool) -> None:
@@ -58,34 +62,61 @@ def test_a_child_process_writes_the_same_messages(tmp_path: Path) -> None:
     assert "camera_color_optical_frame" in frames and "wrist_3_link" in frames
 
 
-def test_the_child_finishes_the_log_of_a_killed_parent(tmp_path: Path) -> None:
-    out = tmp_path / "killed.mcap"
-    script = textwrap.dedent(f"""
-        import sys, time
-        import numpy as np
-        from bt_grasp.recording.writer import RunRecorder
-        rec = RunRecorder({str(out)!r}, metadata={{"seed": "1"}}, writer_process=True, handle_signals=False)
-        for tick in range(1, 41):
-            rec.write_tick(tick, tick * 10_000_000, [], {{"tick": tick}}, {{"q_rad": [0.0] * 6}})
-            rec.flush_tick()
-        time.sleep(0.5)  # the feeder thread has written every batch to the pipe
-        print("flushed", flush=True)
-        time.sleep(60)
-    """)
-    proc = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
-    assert proc.stdout is not None and proc.stdout.readline().strip() == "flushed"
-    proc.send_signal(signal.SIGKILL)
-    proc.wait(timeout=30)
-    proc.stdout.close()
-    for _ in range(100):  # the child sees its input end and finishes the file
-        run = open_log(out)
-        if run.indexed:
-            break
-        import time
+def test_a_killed_parent_loses_no_tick_it_handed_to_the_writer_process(tmp_path: Path) -> None:
+    """SIGKILL the process that records through the writer process (the writer ``bt-grasp run --log`` uses) while
+    it is writing ticks as fast as it can, then read the log the writer process finished.
 
-        time.sleep(0.1)
-    assert run.indexed and not run.truncated  # summary and footer written
-    assert [t.tick for t in run.ticks] == list(range(1, 41))
+    "Flushed" for the writer process: ``flush()`` queues the tick's batch, and the feeder thread writes it to the
+    writer process's stdin and flushes that pipe; once that returned, the batch is in the kernel's pipe (or read
+    already), which outlives the parent, and the writer process reads its input to the end and finishes the file.
+    The parent (``record_via_writer_process.py``) prints ``flushed N`` after each such pipe flush, a count taken
+    outside the file; every tick it printed before the kill must be in the log, which must be finished (summary
+    and footer written by the writer process). The kill is made when the parent has reported KILL_AFTER ticks and
+    is still running (it records up to a million), so it always lands mid-run, whatever the machine's speed."""
+    out = tmp_path / "killed.mcap"
+    proc = subprocess.Popen([sys.executable, str(WRITER_PARENT), str(out)], stdout=subprocess.PIPE, text=True,
+                            cwd=REPO, env={**os.environ, "PYTHONPATH": str(REPO)})
+    try:
+        assert proc.stdout is not None
+        first = proc.stdout.readline().split()
+        assert first[:1] == ["writer"], first
+        writer_pid = int(first[1])
+        reported: list[int] = []
+        while not reported or reported[-1] < KILL_AFTER:
+            line = proc.stdout.readline()
+            assert line.startswith("flushed "), f"the parent stopped before tick {KILL_AFTER}: {line!r}"
+            reported.append(int(line.split()[1]))
+        assert proc.poll() is None, "the parent finished before the kill"
+        proc.send_signal(signal.SIGKILL)
+        assert proc.wait(timeout=30) == -signal.SIGKILL
+        # everything it printed, it printed before the kill: the rest of its output counts too
+        reported += [int(line.split()[1]) for line in proc.stdout.read().splitlines()]
+        proc.stdout.close()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert reported == list(range(1, len(reported) + 1)), "the parent reported ticks out of order"
+    _wait_until_gone(writer_pid, timeout_s=120)  # it read its input to the end and finished the file
+    run = open_log(out)
+    assert run.indexed and not run.truncated  # summary and footer written by the writer process
+    ticks = [t.tick for t in run.ticks]
+    assert ticks[: len(reported)] == reported, f"{len(reported)} ticks flushed before the kill, {len(ticks)} in the log"
+    assert ticks == list(range(1, len(ticks) + 1))  # and no tick later than those lost in between
+
+
+def _wait_until_gone(pid: int, *, timeout_s: float) -> None:
+    """Wait until a process that is not this one's child has exited (gone, or a zombie of its new parent)."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        try:
+            state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+        except (FileNotFoundError, ProcessLookupError):
+            return
+        if state == "Z":
+            return
+        time.sleep(0.05)
+    raise AssertionError(f"the writer process {pid} did not finish within {timeout_s:g} s")
 
 
 def test_an_unwritable_log_fails_before_the_run(tmp_path: Path) -> None:
