@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+import ctypes
 import logging
 import multiprocessing
 import os
 import signal
+import sys
+import threading
+import time
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
@@ -21,14 +25,49 @@ log = logging.getLogger(__name__)
 
 _WORKER: Worker | None = None  # this worker process's warm worker (set by the pool's initializer)
 
+#: how often a worker's watchdog checks that its coordinator is still its parent (seconds)
+PARENT_POLL_S = 1.0
+_PR_SET_PDEATHSIG = 1  # <linux/prctl.h>
 
-def _init(factory: Callable[[], EpisodeBackend], log_dir: Path, keep_logs: KeepLogs) -> None:
+
+def _init(factory: Callable[[], EpisodeBackend], log_dir: Path, keep_logs: KeepLogs, coordinator: int,
+          kernel_signal: bool, poll_s: float) -> None:
     global _WORKER
+    tie_to_coordinator(coordinator, kernel_signal, poll_s)
     # Ctrl-C is the coordinator's to handle: it stops the pool; a worker must not die half-way on its own
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     # the episodes' library logs are not the terminal's (the coordinator prints progress)
     logging.getLogger().addHandler(logging.NullHandler())
     _WORKER = Worker(factory, log_dir, keep_logs)
+
+
+def tie_to_coordinator(coordinator: int, kernel_signal: bool, poll_s: float = PARENT_POLL_S) -> None:
+    """End this worker process when its coordinator (pid ``coordinator``, its parent) ends, however it ends: a
+    coordinator killed with SIGKILL cannot stop its pool, and a worker (~700 MB with a warm simulator) would wait
+    for episodes forever (it holds both ends of the pool's pipes, so it never sees them close).
+
+    - ``kernel_signal``: Linux's ``PR_SET_PDEATHSIG`` has the kernel send SIGKILL the moment the parent goes.
+      The kernel's "parent" is the *thread* that spawned this process, so the coordinator asks for it only when
+      it spawned its workers from its main thread (which outlives every other one of its threads).
+    - then, if the parent is already not the coordinator, it died before the request: exit now.
+    - always, a watchdog thread compares ``os.getppid()`` with the coordinator every ``poll_s`` (an orphan is
+      re-parented): the fallback without the kernel's signal (another thread spawned us, not Linux)."""
+    if kernel_signal and sys.platform.startswith("linux"):
+        libc = ctypes.CDLL(None, use_errno=True)
+        if libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0) != 0:
+            log.warning("prctl(PR_SET_PDEATHSIG) failed (errno %d); the watchdog alone ties this worker to its "
+                        "coordinator", ctypes.get_errno())
+    if os.getppid() != coordinator:
+        os._exit(1)
+    threading.Thread(target=_watch_parent, args=(coordinator, poll_s), name="coordinator-watchdog",
+                     daemon=True).start()
+
+
+def _watch_parent(coordinator: int, poll_s: float) -> None:
+    while True:
+        time.sleep(poll_s)  # a lifetime check, not a decision of any run
+        if os.getppid() != coordinator:
+            os._exit(1)
 
 
 def _run(episode: Episode) -> dict[str, Any]:
@@ -41,7 +80,8 @@ def default_workers() -> int:
 
 
 class LocalEngine:
-    """``workers`` processes (spawned, so no simulator state is inherited), episodes handed out as they free up."""
+    """``workers`` processes (spawned, so no simulator state is inherited), episodes handed out as they free up.
+    The workers end with the coordinator process, even a SIGKILLed one (:func:`tie_to_coordinator`)."""
 
     def __init__(
         self, workers: int, backend_factory: Callable[[], EpisodeBackend], log_dir: Path, keep_logs: KeepLogs
@@ -54,11 +94,15 @@ class LocalEngine:
     def run(self, episodes: Sequence[Episode]) -> Iterator[dict[str, Any] | EpisodeError]:
         for key, value in WORKER_ENV.items():  # spawned workers inherit it before they import numpy
             os.environ.setdefault(key, value)
+        # every worker is spawned by the submit() calls below, in this thread (Python 3.11's pool spawns again
+        # only to replace a worker that ended by max_tasks_per_child, which is not used: a lost worker breaks it)
+        in_main_thread = threading.current_thread() is threading.main_thread()
         pool = ProcessPoolExecutor(
             max_workers=min(self.workers, len(episodes)),
             mp_context=multiprocessing.get_context("spawn"),
             initializer=_init,
-            initargs=(self.backend_factory, self.log_dir, self.keep_logs),
+            initargs=(self.backend_factory, self.log_dir, self.keep_logs, os.getpid(), in_main_thread,
+                      PARENT_POLL_S),
         )
         futures: dict[Future[dict[str, Any]], Episode] = {pool.submit(_run, e): e for e in episodes}
         open_futures = set(futures)

@@ -4,6 +4,12 @@ Ray does the scheduling, placement and fault tolerance (actors restart on a lost
 are retried); this module only hands each idle actor the next episode and yields rows as they come back.
 Every node needs bt_grasp installed at the same version and the campaign's input files at the same paths
 (a shared folder or the same checkout): see docs/campaigns.md.
+
+The actors die with the driver (the coordinator): they are created ``non_detached`` explicitly (not left to a
+job config's ``default_actor_lifetime``), so Ray's GCS kills them when the driver's job ends, however the driver
+ends (a SIGKILLed driver's job ends when its connection drops). A local cluster that ``ray.init`` starts
+(``--ray local``) fate-shares with the driver too: Ray starts its processes with ``PR_SET_PDEATHSIG`` on Linux (a
+reaper process elsewhere).
 """
 
 from __future__ import annotations
@@ -20,6 +26,10 @@ from bt_grasp.campaign.worker import WORKER_ENV, KeepLogs, Worker
 from bt_grasp.errors import InputError
 
 log = logging.getLogger(__name__)
+
+#: the options of every episode actor: one CPU each, restarted on a lost node, and never detached (an actor
+#: outliving its driver would hold ~700 MB and a CPU slot with nobody to hand it episodes)
+ACTOR_OPTIONS: dict[str, Any] = {"num_cpus": 1, "max_restarts": 2, "max_task_retries": 2, "lifetime": "non_detached"}
 
 
 class EpisodeActor:
@@ -69,8 +79,7 @@ class RayEngine:
         ray = self._connect()
         try:
             slots = self.workers or max(1, int(ray.cluster_resources().get("CPU", 1)))
-            actor_cls = ray.remote(num_cpus=1, max_restarts=2, max_task_retries=2,
-                                   runtime_env={"env_vars": dict(WORKER_ENV)})(EpisodeActor)
+            actor_cls = ray.remote(**ACTOR_OPTIONS, runtime_env={"env_vars": dict(WORKER_ENV)})(EpisodeActor)
             actors = [
                 actor_cls.remote(self.backend_factory, self.log_dir, self.keep_logs)
                 for _ in range(min(slots, len(episodes)))
