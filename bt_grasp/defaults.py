@@ -1,5 +1,5 @@
 """Default values that the command line shows in its help, kept in a leaf module so that printing help imports
-nothing else (``bt_grasp.goals`` and ``bt_grasp.episode.request`` re-export them under the same names)."""
+nothing else (``bt_grasp.episode.request`` re-exports them under the same names)."""
 
 from __future__ import annotations
 

@@ -8,7 +8,7 @@ Text form for tree-file ports (BT.CPP style, fields separated by ``;``)::
     "0.35;-0.25;0.0;90;world"    x;y;z;yaw_deg;frame   (frame: base (default) or world)
 
 Metres and degrees. The base frame is the robot's ``base_link``; the world frame has its origin on the table
-top, z up (see ``bt_grasp.scene_config``). What the numbers mean is the leaf's: ``Place`` reads the pose of
+top, z up (see ``bt_grasp.scene.format``). What the numbers mean is the leaf's: ``Place`` reads the pose of
 the held object's centre in x, y, its yaw, and z as the height of the surface it is set on; ``MoveTo`` reads
 the tool centre point's position and yaw (the tool always points down).
 """

@@ -21,11 +21,15 @@ FORBIDDEN = {
     "campaign": ("sapien", "bt_grasp.sim", "bt_grasp.cli"),  # episodes only through bt_grasp.episode
     "resident": ("sapien", "bt_grasp.sim", "bt_grasp.cli"),  # episodes only through bt_grasp.episode
     "tasks": ("sapien", "bt_grasp.cli"),
+    "scene": ("sapien", "bt_grasp.sim", "bt_grasp.perception", "bt_grasp.motion", "bt_grasp.behaviours",
+              "bt_grasp.tree", "bt_grasp.episode", "bt_grasp.cli"),
 }
 LEAF_MODULES = (
-    "errors", "clock", "geometry", "interfaces", "config", "scene_config", "robot_description", "colors",
-    "scene_fixtures", "scene_goals", "scene_conveyor", "safe_path", "defaults", "bounded_io",
+    "errors", "clock", "geometry", "interfaces", "config", "robot_description", "colors", "safe_path", "defaults",
+    "bounded_io",
 )
+#: leaf packages: every module in them imports only leaf modules and modules of the same package
+LEAF_PACKAGES = ("scene",)
 
 
 def _module_name(path: Path) -> str:
@@ -126,3 +130,53 @@ def test_leaf_modules_import_nothing_of_ours_but_leaves(module: str) -> None:
     names = _imports(PKG / f"{module}.py")
     ours = {n.removeprefix("bt_grasp.").split(".")[0] for n in names if n.startswith("bt_grasp.")}
     assert ours <= set(LEAF_MODULES), ours
+
+
+@pytest.mark.parametrize("package", LEAF_PACKAGES)
+def test_leaf_packages_import_only_leaves_and_themselves(package: str) -> None:
+    folder = PKG / package
+    assert folder.is_dir(), f"bt_grasp/{package}/ is gone: update LEAF_PACKAGES with where its code went"
+    offenders = []
+    for path in sorted(folder.rglob("*.py")):
+        ours = {n.removeprefix("bt_grasp.").split(".")[0] for n in _imports(path) if n.startswith("bt_grasp.")}
+        offenders += [f"{path.relative_to(PKG.parent)} imports bt_grasp.{o}" for o in sorted(ours)
+                      if o not in LEAF_MODULES and o != package]
+    assert offenders == []
+
+
+def _module_graph(folder: Path) -> dict[str, set[str]]:
+    """Module -> the modules of the same package it imports (``from pkg import mod`` counts as ``pkg.mod``)."""
+    modules = {_module_name(p): p for p in folder.rglob("*.py")}
+    return {name: {n for n in _imports(path) if n in modules and n != name} for name, path in modules.items()}
+
+
+def _cycle(graph: dict[str, set[str]]) -> list[str] | None:
+    """One import circle in ``graph`` (a list of modules, first == last), or None."""
+    state: dict[str, int] = {}
+    stack: list[str] = []
+
+    def visit(node: str) -> list[str] | None:
+        state[node] = 1
+        stack.append(node)
+        for nxt in sorted(graph[node]):
+            if state.get(nxt) == 1:
+                return [*stack[stack.index(nxt):], nxt]
+            if nxt not in state and (found := visit(nxt)):
+                return found
+        stack.pop()
+        state[node] = 2
+        return None
+
+    for node in sorted(graph):
+        if node not in state and (found := visit(node)):
+            return found
+    return None
+
+
+def test_cycle_finder_finds_a_circle() -> None:
+    assert _cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}}) == ["a", "b", "c", "a"]
+    assert _cycle({"a": {"b"}, "b": set(), "c": {"a", "b"}}) is None
+
+
+def test_the_scene_package_has_no_import_circle() -> None:
+    assert _cycle(_module_graph(PKG / "scene")) is None

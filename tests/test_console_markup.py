@@ -14,7 +14,7 @@ from bt_grasp.cli.run_cmd import print_summary
 from bt_grasp.episode import EpisodeResult
 from bt_grasp.episode.instruments import PlanningStats
 from bt_grasp.episode.result import Judged
-from bt_grasp.scene_goals import PickGoal
+from bt_grasp.scene.goals import PickGoal
 
 HOSTILE = ["[/]", "[link=https://example.invalid]x[/link]", "[bold]", "[/red]"]
 

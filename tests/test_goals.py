@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import pytest
 
+from bt_grasp.defaults import DEFAULT_LIFT_HEIGHT_M
 from bt_grasp.errors import InputError
-from bt_grasp.goals import DEFAULT_LIFT_HEIGHT_M, goal_for_run, goal_from_options
-from bt_grasp.scene_config import Scene
-from bt_grasp.scene_goals import ClearGoal, PickGoal
+from bt_grasp.scene.format import Scene
+from bt_grasp.scene.goals import ClearGoal, PickGoal
+from bt_grasp.scene.run_goal import goal_for_run, goal_from_options
 
 
 def test_command_line_goals() -> None:

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from bt_grasp.errors import ConfigError
-from bt_grasp.scene_config import load_scene
+from bt_grasp.scene.format import load_scene
 
 BAD = Path(__file__).parent / "data" / "bad_scenes"
 

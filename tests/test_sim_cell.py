@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bt_grasp.scene_config import load_scene
+from bt_grasp.scene.format import load_scene
 from bt_grasp.sim.noise import depth_rms_m
 from bt_grasp.sim.oracle import GroundTruthOracle
 from bt_grasp.sim.world import World

@@ -13,7 +13,7 @@ import pytest
 import sapien
 
 from bt_grasp.robot_description import ARM_JOINTS, TCP_LINK
-from bt_grasp.scene_config import Scene, load_scene
+from bt_grasp.scene.format import Scene, load_scene
 from bt_grasp.sim.oracle import GroundTruthOracle
 from bt_grasp.sim.poses import to_pose
 from bt_grasp.sim.world import World

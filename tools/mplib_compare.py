@@ -65,7 +65,7 @@ def main() -> int:
     from bt_grasp.motion.planning_scene import PlanningScene, table_box
     from bt_grasp.motion.trajectory import time_parametrize
     from bt_grasp.robot_description import ARM_JOINTS, FINGER_JOINT, MAX_OPENING_M, MIMIC_FINGER_JOINT, robot_urdf_path
-    from bt_grasp.scene_config import load_scene
+    from bt_grasp.scene.format import load_scene
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--problems", type=int, default=60)

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 from bt_grasp.behaviours.services import CameraCalibration, MediaSink, NullSink, Planner
 from bt_grasp.clock import Clock
 from bt_grasp.interfaces import Camera, Robot
-from bt_grasp.scene_config import Scene
+from bt_grasp.scene.format import Scene
 
 if TYPE_CHECKING:
     from bt_grasp.motion.executor import ExecutorOptions

@@ -10,8 +10,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from bt_grasp.scene_config import Scene
-from bt_grasp.scene_fixtures import Conveyor
+from bt_grasp.scene.fixtures import Conveyor
+from bt_grasp.scene.format import Scene
 
 if TYPE_CHECKING:
     from bt_grasp.perception.results import Detection, PerceptionResult

@@ -16,7 +16,7 @@ from bt_grasp.behaviours import (
 )
 from bt_grasp.errors import TreeFileError
 from bt_grasp.perception.results import Detection
-from bt_grasp.scene_config import Scene
+from bt_grasp.scene.format import Scene
 from bt_grasp.tree.builtins.loops import loop_spec
 from bt_grasp.tree.leaf import Leaf
 from bt_grasp.tree.node import BtNode

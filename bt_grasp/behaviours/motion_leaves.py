@@ -17,7 +17,7 @@ from bt_grasp.behaviours.base import RobotLeaf
 from bt_grasp.behaviours.gripper import EMPTY_WIDTH_M
 from bt_grasp.behaviours.motion_job import MotionJob, PathFailure, PathFn, Segment
 from bt_grasp.behaviours.reasons import FailureReason
-from bt_grasp.goals import DEFAULT_LIFT_HEIGHT_M
+from bt_grasp.defaults import DEFAULT_LIFT_HEIGHT_M
 from bt_grasp.tree.registry import PortDirection, PortSpec, leaf
 
 if TYPE_CHECKING:

@@ -23,8 +23,8 @@ from bt_grasp.tree.registry import NodeKind, PortDirection, PortSpec, leaf
 
 if TYPE_CHECKING:
     from bt_grasp.perception.results import Detection
-    from bt_grasp.scene_config import Scene
-    from bt_grasp.scene_fixtures import Fixture
+    from bt_grasp.scene.fixtures import Fixture
+    from bt_grasp.scene.format import Scene
 
 _OBJECTS_IN = PortSpec("objects", PortDirection.INPUT, object, "{objects}", "an object list (from PerceiveAll)")
 ORDERS = ("first", "nearest", "farthest", "largest", "smallest")

@@ -37,7 +37,7 @@ from bt_grasp.tree.registry import PortDirection, PortSpec, leaf
 if TYPE_CHECKING:
     from bt_grasp.behaviours.cell import Cell
     from bt_grasp.perception.results import Detection
-    from bt_grasp.scene_config import Scene
+    from bt_grasp.scene.format import Scene
 
 #: the tool points down: tcp z along base -z
 R_DOWN = np.diag([1.0, -1.0, -1.0])
@@ -252,7 +252,7 @@ class Place(_PlaceBase):
         """A literal pose off the table or out of reach is a load error (checked before the run)."""
         if self.ports.key("pose") is not None:
             return None
-        from bt_grasp.scene_config import place_xy_problem
+        from bt_grasp.scene.format import place_xy_problem
 
         pose: Pose = self.ports.get("pose")
         T = np.asarray(scene.T_world_base()) @ np.array([pose.x_m, pose.y_m, 0.0, 1.0])

@@ -30,7 +30,7 @@ from bt_grasp.tree.registry import PortDirection, PortSpec, leaf
 
 if TYPE_CHECKING:
     from bt_grasp.perception.results import Detection
-    from bt_grasp.scene_config import Scene
+    from bt_grasp.scene.format import Scene
 
 #: camera-to-point distance of the survey view and of a close view, m
 SURVEY_DISTANCE_M = 0.62

@@ -21,7 +21,7 @@ from pydantic import Field, field_validator, model_validator
 
 from bt_grasp.config import KeyPath, StrictModel, read_yaml, validate
 from bt_grasp.errors import ConfigError, InputError
-from bt_grasp.scene_goals import Goal
+from bt_grasp.scene.goals import Goal
 
 NO_FAULTS = "none"
 MAX_EPISODES = 1_000_000
@@ -322,7 +322,7 @@ def _scene_calibration(
 ) -> Path | None:
     """The scene loads, and the calibration its episodes use (the campaign's, else the scene's own) fits it."""
     from bt_grasp.perception.calibration_file import calibration_for_scene
-    from bt_grasp.scene_config import load_scene
+    from bt_grasp.scene.format import load_scene
 
     try:
         config = load_scene(scene_file)

@@ -32,7 +32,7 @@ def plan(
     from bt_grasp.errors import InputError
     from bt_grasp.motion.bench import make_problems, run_plan_bench
     from bt_grasp.motion.planner import PLANNERS, PlannerOptions
-    from bt_grasp.scene_config import load_scene
+    from bt_grasp.scene.format import load_scene
 
     if planner not in PLANNERS:
         raise InputError("--planner", f"unknown planner '{planner}'; known: {', '.join(PLANNERS)}")

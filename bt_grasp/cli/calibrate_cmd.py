@@ -34,7 +34,7 @@ def calibrate(
     from bt_grasp.episode.calibration import calibrate_in_sim
     from bt_grasp.errors import InputError
     from bt_grasp.perception.calibration_file import save_calibration
-    from bt_grasp.scene_config import load_scene
+    from bt_grasp.scene.format import load_scene
 
     if mount not in MOUNTS:
         raise InputError("--mount", f"expected eye-to-hand or eye-in-hand, got '{mount}'")
@@ -100,7 +100,7 @@ class SimBenchBackend:
     """The simulator side of ``bt_grasp.perception.bench`` (a fresh World per scene; truth from the oracle)."""
 
     def __init__(self, scene_path: Path) -> None:
-        from bt_grasp.scene_config import load_scene
+        from bt_grasp.scene.format import load_scene
 
         self._base = load_scene(scene_path)
 

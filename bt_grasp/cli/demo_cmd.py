@@ -23,7 +23,7 @@ def demo(
     from bt_grasp.episode import pick_request, run_episode
     from bt_grasp.episode.calibration import calibrate_in_sim
     from bt_grasp.perception.calibration_file import save_calibration
-    from bt_grasp.scene_config import load_scene
+    from bt_grasp.scene.format import load_scene
 
     console = Console()
     load_scene(scene)

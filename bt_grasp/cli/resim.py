@@ -18,8 +18,8 @@ from pathlib import Path
 from typing import Any
 
 from bt_grasp.errors import LogFileError
-from bt_grasp.goals import Goal
 from bt_grasp.safe_path import check_relative_name, join_under
+from bt_grasp.scene.goals import Goal
 
 
 @dataclass

@@ -143,8 +143,8 @@ def run(
     """Run a task tree on the simulated cell. Exit code 0 on task success (judged by physics), 1 on failure."""
     from bt_grasp.episode.episode import Episode
     from bt_grasp.episode.request import EpisodeRequest, parse_assignments
-    from bt_grasp.goals import goal_from_options
     from bt_grasp.recording.layout import layout_path
+    from bt_grasp.scene.run_goal import goal_from_options
 
     blackboard: dict[str, BlackboardValue] = {"color": color, "lift_height": lift_height}
     blackboard.update(parse_assignments(set_))

@@ -16,7 +16,7 @@ scene_app = typer.Typer(help="Inspect scene files.", no_args_is_help=True)
 @scene_app.command("validate")
 def validate(scene: Path = typer.Argument(..., help="Scene YAML file.")) -> None:
     """Check a scene file and print a one-line summary."""
-    from bt_grasp.scene_config import load_scene
+    from bt_grasp.scene.format import load_scene
 
     config = load_scene(scene)
     typer.echo(f"{scene}: ok ({len(config.objects)} objects, camera {config.camera.mount})")
@@ -34,7 +34,7 @@ def render(
     import numpy as np
 
     from bt_grasp.errors import InputError
-    from bt_grasp.scene_config import load_scene
+    from bt_grasp.scene.format import load_scene
 
     if mount is not None and mount not in tuple(Mount):
         raise InputError("--mount", f"expected eye-to-hand or eye-in-hand, got '{mount}'")

@@ -18,7 +18,8 @@ from bt_grasp.episode.request import (
 )
 from bt_grasp.episode.result import EpisodeResult, Judged
 from bt_grasp.episode.worlds import FreshWorlds, WarmWorlds, WorldSource
-from bt_grasp.goals import ClearGoal, Goal, PickGoal, goal_for_run, goal_from_options
+from bt_grasp.scene.goals import ClearGoal, Goal, PickGoal
+from bt_grasp.scene.run_goal import goal_for_run, goal_from_options
 
 __all__ = [
     "DEFAULT_MAX_TICKS",

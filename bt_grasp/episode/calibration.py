@@ -19,7 +19,7 @@ import numpy as np
 
 from bt_grasp.geometry import Mat4
 from bt_grasp.perception.calibration import CalibrationRun
-from bt_grasp.scene_config import Scene, load_scene
+from bt_grasp.scene.format import Scene, load_scene
 
 if TYPE_CHECKING:
     from bt_grasp.behaviours.calibration_job import CalibrationJob

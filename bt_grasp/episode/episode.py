@@ -19,7 +19,8 @@ from bt_grasp.episode.request import BlackboardValue, EpisodeRequest
 from bt_grasp.episode.result import EpisodeResult, Judged
 from bt_grasp.episode.worlds import FreshWorlds, WorldSource
 from bt_grasp.errors import InputError
-from bt_grasp.goals import Goal, PickGoal, goal_for_run
+from bt_grasp.scene.goals import Goal, PickGoal
+from bt_grasp.scene.run_goal import goal_for_run
 
 if TYPE_CHECKING:
     from bt_grasp.behaviours.cell import Cell
@@ -30,7 +31,7 @@ if TYPE_CHECKING:
     from bt_grasp.perception.calibration_file import CalibrationFile
     from bt_grasp.recording.live import LiveServer
     from bt_grasp.recording.writer import RunRecorder
-    from bt_grasp.scene_config import Scene
+    from bt_grasp.scene.format import Scene
     from bt_grasp.sim.judge import Verdict
     from bt_grasp.sim.world import World
     from bt_grasp.tree.loader import LoadedTree
@@ -72,7 +73,7 @@ def load_inputs(request: EpisodeRequest) -> Inputs:
     """Read and check every input of ``request``; raises InputError (or a ConfigError) naming the file."""
     from bt_grasp.behaviours import robot_registry
     from bt_grasp.behaviours.library import check_tree_against_scene
-    from bt_grasp.scene_config import load_scene
+    from bt_grasp.scene.format import load_scene
     from bt_grasp.tree.loader import load_tree
 
     scene = load_scene(request.scene)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from bt_grasp.defaults import DEFAULT_MAX_TICKS as DEFAULT_MAX_TICKS
 from bt_grasp.errors import InputError
-from bt_grasp.goals import Goal
+from bt_grasp.scene.goals import Goal
 
 #: what a user may put on the blackboard before the first tick (``--set KEY=VALUE``)
 BlackboardValue = str | int | float | bool
@@ -19,7 +19,7 @@ class EpisodeRequest:
     """One episode: a tree on a scene with a seed, judged against ``goal``.
 
     ``goal``: what the judge checks; None: the scene's declared goal, else a pick of the blackboard's
-    ``color`` lifted by its ``lift_height`` (:func:`bt_grasp.goals.goal_for_run`).
+    ``color`` lifted by its ``lift_height`` (:func:`bt_grasp.scene.run_goal.goal_for_run`).
     ``calibration``: a calibration file to load before the first tick (``LoadCalibration`` may load one
     too); ``log``: write the run to this MCAP file; ``faults``/``inject``: a fault plan file and/or
     one-line faults; ``blackboard``: entries set on the main tree's blackboard before the first tick;
@@ -67,7 +67,8 @@ def pick_request(tree: Path, scene: Path, seed: int, *, calibration: Path | None
                  argv: tuple[str, ...] = ()) -> EpisodeRequest:
     """The default pick (`bt-grasp demo`, `bt-grasp bench pick`): the red object lifted the default height,
     judged as a pick goal, with the tree's ``color`` and ``lift_height`` entries set to match."""
-    from bt_grasp.goals import DEFAULT_LIFT_HEIGHT_M, goal_from_options
+    from bt_grasp.defaults import DEFAULT_LIFT_HEIGHT_M
+    from bt_grasp.scene.run_goal import goal_from_options
 
     return EpisodeRequest(tree=tree, scene=scene, seed=seed, goal=goal_from_options("pick", "red"),
                           calibration=calibration, log=log, argv=argv,

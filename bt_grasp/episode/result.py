@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from bt_grasp.episode.instruments import PlanningStats
-from bt_grasp.goals import Goal
+from bt_grasp.scene.goals import Goal
 
 JsonScalar = str | int | float | bool | None
 JsonValue = JsonScalar | list["JsonValue"] | dict[str, "JsonValue"]

@@ -13,7 +13,7 @@ import logging
 from pathlib import Path
 from typing import TYPE_CHECKING, Protocol
 
-from bt_grasp.scene_config import Scene
+from bt_grasp.scene.format import Scene
 
 if TYPE_CHECKING:
     from bt_grasp.sim.world import World

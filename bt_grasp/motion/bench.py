@@ -22,7 +22,7 @@ from bt_grasp.motion.kinematics import default_kinematics
 from bt_grasp.motion.planner import PlannerOptions, PlanStatus, default_planner
 from bt_grasp.motion.planning_scene import Box, PlanningScene, table_box
 from bt_grasp.motion.trajectory import MotionLimits, time_parametrize
-from bt_grasp.scene_config import Scene
+from bt_grasp.scene.format import Scene
 
 log = logging.getLogger(__name__)
 

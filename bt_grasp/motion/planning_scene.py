@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from bt_grasp.geometry import Mat4, make_T
-from bt_grasp.scene_config import Scene
+from bt_grasp.scene.format import Scene
 
 Vec3 = tuple[float, float, float]
 Quat = tuple[float, float, float, float]

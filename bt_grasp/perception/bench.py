@@ -24,7 +24,8 @@ from bt_grasp.interfaces import Mount, RGBDFrame
 from bt_grasp.perception.config import PerceptionConfig
 from bt_grasp.perception.grasps import synthesize_grasps
 from bt_grasp.perception.pipeline import perceive
-from bt_grasp.scene_config import ObjectPose, Randomize, Scene, SceneObject
+from bt_grasp.scene.format import Scene
+from bt_grasp.scene.objects import ObjectPose, Randomize, SceneObject
 
 log = logging.getLogger(__name__)
 

@@ -27,7 +27,7 @@ from bt_grasp.interfaces import CameraIntrinsics, RGBDFrame
 from bt_grasp.perception.calibration_file import CalibrationFile, make_calibration
 from bt_grasp.perception.charuco import BoardSpec, corner_object_points, detect_board
 from bt_grasp.perception.handeye import EYE_TO_HAND, HandEyeSolution, View, solve_hand_eye
-from bt_grasp.scene_config import Scene
+from bt_grasp.scene.format import Scene
 
 log = logging.getLogger(__name__)
 

@@ -33,7 +33,7 @@ from bt_grasp.errors import ConfigError
 from bt_grasp.geometry import Mat4, T_from_pos_quat_wxyz, quat_wxyz
 from bt_grasp.interfaces import CameraIntrinsics, Mount
 from bt_grasp.perception.charuco import BoardSpec
-from bt_grasp.scene_config import Scene
+from bt_grasp.scene.format import Scene
 
 Vec3 = tuple[float, float, float]
 Row4 = tuple[float, float, float, float]

@@ -15,7 +15,7 @@ from pydantic import Field, field_validator
 from bt_grasp.config import StrictModel, load_model
 from bt_grasp.geometry import inv, transform_points
 from bt_grasp.robot_description import MAX_OPENING_M, TCP_TO_FINGERTIP_M
-from bt_grasp.scene_config import Scene
+from bt_grasp.scene.format import Scene
 
 PositiveFloat = Annotated[float, Field(gt=0)]
 NonNegFloat = Annotated[float, Field(ge=0)]

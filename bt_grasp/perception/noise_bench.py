@@ -20,7 +20,7 @@ from bt_grasp.interfaces import Mount, RGBDFrame
 from bt_grasp.perception.bench import DETECTED_WITHIN_M, random_scene, yaw_error_deg
 from bt_grasp.perception.config import PerceptionConfig
 from bt_grasp.perception.pipeline import perceive
-from bt_grasp.scene_config import DepthNoise, Scene
+from bt_grasp.scene.format import DepthNoise, Scene
 
 #: the issue's table: (subpixel, edge_dropout, color_sigma) per level; 1x is the scene default
 NOISE_LEVELS: dict[str, tuple[float, float, float]] = {

@@ -6,7 +6,7 @@ towards +x of the fixture frame); objects whose drawn position lies on the belt 
 scene's ``objects`` randomisation says where they enter). The simulator drives the belt as a chain of thin
 kinematic slats moving at the belt speed (``bt_grasp.sim.conveyor``): objects ride on them by friction only.
 
-Import :class:`Conveyor` from ``bt_grasp.scene_fixtures`` (this module is loaded by it, for the union).
+The :data:`bt_grasp.scene.fixtures.Fixture` union includes it.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import Field
 
-from bt_grasp.scene_fixtures import FixturePart, _FixtureBase
+from bt_grasp.scene.fixture_base import FixtureBase, FixturePart
 
 PositiveFloat = Annotated[float, Field(gt=0)]
 #: the fastest belt bt_grasp simulates, m/s: light industrial belts run 0.05-0.5 m/s; faster ones throw
@@ -26,7 +26,7 @@ MAX_BELT_SPEED_M_S = 0.5
 SLAT_PITCH_M = 0.05
 
 
-class Conveyor(_FixtureBase):
+class Conveyor(FixtureBase):
     """A flat belt conveyor on the table: its top at ``height_m`` above the table top."""
 
     kind: Literal["conveyor"]

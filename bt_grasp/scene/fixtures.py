@@ -8,7 +8,8 @@ Every kind is a frozen model with a ``kind`` tag and one method, :meth:`parts`, 
 fixture as boxes in the world frame. The simulator builds those boxes (solid ones collide, flat ones are
 paint), and the planning scene adds the solid ones as obstacles. **Adding a kind** (e.g. a conveyor):
 
-1. write a model here with ``kind: Literal["conveyor"]``, a ``name`` and a ``parts()`` method;
+1. write a model on :class:`~bt_grasp.scene.fixture_base.FixtureBase` (here, or in its own module as the
+   conveyor is) with ``kind: Literal["conveyor"]``, a ``name`` and a ``parts()`` method;
 2. add it to the :data:`Fixture` union below (the file format then accepts it, with strict key checks);
 3. if it is not made of static boxes (a moving belt), register a builder for its kind in
    ``bt_grasp.sim.fixtures.BUILDERS``; otherwise nothing else is needed.
@@ -16,56 +17,18 @@ paint), and the planning scene adds the solid ones as obstacles. **Adding a kind
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import Field, field_validator
+from pydantic import Field
 
-from bt_grasp.colors import RGB, check_color, rgb_of
-from bt_grasp.config import StrictModel
-from bt_grasp.geometry import Mat4, make_T, rot_z
+from bt_grasp.scene.conveyor import Conveyor
+from bt_grasp.scene.fixture_base import FixtureBase, FixturePart
 
 PositiveFloat = Annotated[float, Field(gt=0)]
-Name = Annotated[str, Field(min_length=1, pattern=r"^[A-Za-z_][A-Za-z0-9_\-]*$")]
-
-@dataclass(frozen=True)
-class FixturePart:
-    """One box of a fixture: full edge lengths along its axes, its pose in the world frame."""
-
-    name: str
-    size_m: tuple[float, float, float]
-    T_world_part: Mat4
-    solid: bool = True  # False: paint (a marker), no collision and no planning obstacle
-    rgb: RGB = (0.5, 0.5, 0.5)
 
 
-class _FixtureBase(StrictModel):
-    name: Name
-    center_xy_m: tuple[float, float]
-    yaw_deg: float = 0.0
-    color: str | RGB = "grey"
-
-    @field_validator("color")
-    @classmethod
-    def _known_color(cls, value: str | RGB) -> str | RGB:
-        return check_color(value)
-
-    @property
-    def rgb(self) -> RGB:
-        return rgb_of(self.color)
-
-    def T_world_fixture(self, z_m: float = 0.0) -> Mat4:
-        """The fixture's frame: centre of its footprint on the table top, yawed."""
-        return make_T(rot_z(np.deg2rad(self.yaw_deg)), [self.center_xy_m[0], self.center_xy_m[1], z_m])
-
-    def _box(self, name: str, size: tuple[float, float, float], xyz: tuple[float, float, float],
-             solid: bool = True) -> FixturePart:
-        T = self.T_world_fixture() @ make_T(translation=list(xyz))
-        return FixturePart(f"{self.name}/{name}", size, T, solid, self.rgb)
-
-
-class Container(_FixtureBase):
+class Container(FixtureBase):
     """A floor plate with four walls; ``inner_size_m`` is the free floor inside the walls (x, y)."""
 
     inner_size_m: tuple[PositiveFloat, PositiveFloat]
@@ -111,7 +74,7 @@ class Bin(Container):
     wall_height_m: PositiveFloat = 0.05
 
 
-class Marker(_FixtureBase):
+class Marker(FixtureBase):
     """A flat coloured patch painted on the table (1 mm thick, no collision): a visible place target."""
 
     kind: Literal["marker"]
@@ -125,7 +88,7 @@ class Marker(_FixtureBase):
         return (self._box("patch", (self.size_m[0], self.size_m[1], 0.001), (0.0, 0.0, 0.0005), solid=False),)
 
 
-class Wall(_FixtureBase):
+class Wall(FixtureBase):
     """A solid upright slab standing on the table (``size_m``: x, y, height)."""
 
     kind: Literal["wall"]
@@ -139,9 +102,6 @@ class Wall(_FixtureBase):
         x, y, z = self.size_m
         return (self._box("slab", (x, y, z), (0.0, 0.0, z / 2)),)
 
-
-# the conveyor lives in its own module, which builds on _FixtureBase above (hence the late import)
-from bt_grasp.scene_conveyor import Conveyor  # noqa: E402
 
 #: what ``fixtures:`` entries may be; the ``kind`` key selects the model
 Fixture = Annotated[Tray | Bin | Marker | Wall | Conveyor, Field(discriminator="kind")]

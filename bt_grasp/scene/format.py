@@ -12,15 +12,16 @@ from pathlib import Path
 from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import Field, field_validator, model_validator
+from pydantic import Field, model_validator
 
-from bt_grasp.colors import COLOR_NAMES, check_color, rgb_of
+from bt_grasp.colors import COLOR_NAMES
 from bt_grasp.config import KeyPath, StrictModel, read_yaml, validate
 from bt_grasp.errors import ConfigError
-from bt_grasp.scene_fixtures import CONTAINER_KINDS, Fixture
-from bt_grasp.scene_goals import Goal, PickGoal, PlaceGoal, SortGoal, StackGoal
+from bt_grasp.scene.fixtures import CONTAINER_KINDS, Fixture
+from bt_grasp.scene.goals import Goal, PickGoal, PlaceGoal, SortGoal, StackGoal
+from bt_grasp.scene.objects import SceneObject
 
-__all__ = ["COLOR_NAMES", "SCENE_VERSION", "Scene", "SceneObject", "load_scene"]
+__all__ = ["COLOR_NAMES", "SCENE_VERSION", "Scene", "load_scene"]
 
 #: the scene file format this bt_grasp writes and reads (a file without ``version`` is version 1)
 SCENE_VERSION = 2
@@ -105,55 +106,6 @@ class Light(StrictModel):
     shadow: bool = False
 
 
-class ObjectPose(StrictModel):
-    xy_m: tuple[float, float]
-    yaw_deg: float = 0.0
-
-
-class Randomize(StrictModel):
-    x_m: Range = (0.0, 0.0)
-    y_m: Range = (0.0, 0.0)
-    yaw_deg: Range = (0.0, 0.0)
-
-    @field_validator("x_m", "y_m", "yaw_deg")
-    @classmethod
-    def _ordered(cls, value: Range) -> Range:
-        if value[0] > value[1]:
-            raise ValueError("a range is [low, high] with low <= high")
-        return value
-
-
-class SceneObject(StrictModel):
-    name: Annotated[str, Field(min_length=1, pattern=r"^[A-Za-z_][A-Za-z0-9_\-]*$")]
-    shape: Literal["box", "cylinder", "sphere"]
-    size_m: tuple[PositiveFloat, ...]  # box: x y z; cylinder: radius height; sphere: radius
-    color: str | tuple[float, float, float]
-    mass_kg: PositiveFloat = 0.1
-    friction: NonNegFloat = 0.8
-    pose: ObjectPose
-    randomize: Randomize = Randomize()
-
-    @model_validator(mode="after")
-    def _size_matches_shape(self) -> SceneObject:
-        expected = {"box": 3, "cylinder": 2, "sphere": 1}[self.shape]
-        if len(self.size_m) != expected:
-            raise ValueError(f"a {self.shape} needs size_m with {expected} numbers, got {len(self.size_m)}")
-        return self
-
-    @field_validator("color")
-    @classmethod
-    def _known_color(cls, value: str | tuple[float, float, float]) -> str | tuple[float, float, float]:
-        return check_color(value)
-
-    @property
-    def height_m(self) -> float:
-        return {"box": self.size_m[-1], "cylinder": self.size_m[-1], "sphere": 2 * self.size_m[0]}[self.shape]
-
-    @property
-    def rgb(self) -> tuple[float, float, float]:
-        return rgb_of(self.color)
-
-
 class Workspace(StrictModel):
     """The region of the table where objects may be (world frame), for perception's region of interest."""
 
@@ -178,7 +130,7 @@ class Scene(StrictModel):
     #: (version 2) the smallest gap between drawn objects' footprints, m; 0 lets objects touch. Not given:
     #: the first format's rule (circumscribed circles 1 cm apart), which draws the same poses per seed
     object_gap_m: NonNegFloat | None = None
-    #: (version 2) static fixtures: trays, bins, markers, walls (see bt_grasp.scene_fixtures)
+    #: (version 2) static fixtures: trays, bins, markers, walls (see bt_grasp.scene.fixtures)
     fixtures: tuple[Fixture, ...] = ()
     #: (version 2) what a run on this scene is judged on; None: pick the object of the run's --color
     goal: Goal | None = None

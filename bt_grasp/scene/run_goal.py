@@ -1,6 +1,6 @@
 """What a run must achieve, as typed data: the judge (``bt_grasp.sim.judge``) checks it by physics.
 
-The goal types are the scene file's (``bt_grasp.scene_goals``: frozen, strictly validated, one class per
+The goal types are the scene file's (``bt_grasp.scene.goals``: frozen, strictly validated, one class per
 kind, discriminated by ``kind``); this module makes them from a command line or from a scene plus the
 run's blackboard. The tree never sees the goal, and the judge never looks at the tree.
 """
@@ -10,14 +10,13 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 
-from bt_grasp.defaults import DEFAULT_LIFT_HEIGHT_M as DEFAULT_LIFT_HEIGHT_M
+from bt_grasp.defaults import DEFAULT_LIFT_HEIGHT_M
 from bt_grasp.errors import InputError
-from bt_grasp.scene_config import Scene
-from bt_grasp.scene_goals import GOAL_KINDS, ClearGoal, Goal, PickGoal
+from bt_grasp.scene.format import Scene
+from bt_grasp.scene.goals import GOAL_KINDS, ClearGoal, Goal, PickGoal
 
-__all__ = ["DEFAULT_LIFT_HEIGHT_M", "ClearGoal", "Goal", "PickGoal", "goal_for_run", "goal_from_options"]
+__all__ = ["COMMAND_LINE_KINDS", "goal_for_run", "goal_from_options"]
 
-#: the lift a pick must reach unless told otherwise, metres (the Lift leaf's default too)
 #: the kinds a command line can ask for (the others need a scene's names: declare them in the scene)
 COMMAND_LINE_KINDS = ("pick", "clear")
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from bt_grasp.environment import machine_description
-from bt_grasp.scene_config import load_scene
+from bt_grasp.scene.format import load_scene
 from bt_grasp.sim.world import World
 
 

@@ -16,8 +16,8 @@ from numpy.typing import NDArray
 
 from bt_grasp.geometry import Mat4, T_from_xyz_rpy
 from bt_grasp.interfaces import CameraIntrinsics, Mount, RGBDFrame
-from bt_grasp.scene_config import Camera as CameraConfig
-from bt_grasp.scene_config import DepthNoise
+from bt_grasp.scene.format import Camera as CameraConfig
+from bt_grasp.scene.format import DepthNoise
 from bt_grasp.sim.noise import apply_color_noise, apply_depth_noise
 from bt_grasp.sim.poses import cv_from_sapien_cam, look_at_cv, sapien_cam_from_cv, to_pose, to_T
 from bt_grasp.sim.shader_pack import SHADER_DIR

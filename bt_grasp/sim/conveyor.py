@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 import sapien
 
-from bt_grasp.scene_conveyor import SLAT_PITCH_M, SLAT_THICKNESS_M
-from bt_grasp.scene_fixtures import Conveyor
+from bt_grasp.scene.conveyor import SLAT_PITCH_M, SLAT_THICKNESS_M
+from bt_grasp.scene.fixtures import Conveyor
 from bt_grasp.sim.fixtures import BUILDERS, FIXTURE_FRICTION
 from bt_grasp.sim.objects import PlacedObject
 from bt_grasp.sim.poses import to_pose

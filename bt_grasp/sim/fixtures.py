@@ -1,6 +1,6 @@
 """Building a scene's fixtures (trays, bins, markers, walls) as static SAPIEN actors.
 
-Each fixture kind describes itself as boxes (:meth:`parts`, in ``bt_grasp.scene_fixtures``); the default
+Each fixture kind describes itself as boxes (:meth:`parts`, in ``bt_grasp.scene.fixtures``); the default
 builder makes one static actor per fixture from them: solid parts collide, flat parts (markers) are only
 drawn. A kind that is not a set of static boxes (a conveyor) registers its own builder in :data:`BUILDERS`.
 """
@@ -11,7 +11,7 @@ from collections.abc import Callable
 
 import sapien
 
-from bt_grasp.scene_fixtures import Fixture
+from bt_grasp.scene.fixtures import Fixture
 from bt_grasp.sim.poses import to_pose
 
 #: friction of every fixture surface

@@ -1,4 +1,4 @@
-"""The judge: did the run achieve its :data:`bt_grasp.goals.Goal`, by physics? Reads the oracle (judge only).
+"""The judge: did the run achieve its :data:`bt_grasp.scene.goals.Goal`, by physics? Reads the oracle (judge only).
 
 One checker per goal kind (a table, not a chain of ifs); each returns the conditions it checked, so a
 verdict says which one failed. The pipeline never calls this: only the episode's summary, tests and
@@ -15,10 +15,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from bt_grasp.geometry import Mat4
-from bt_grasp.goals import ClearGoal, Goal, PickGoal
 from bt_grasp.interfaces import Mount
-from bt_grasp.scene_fixtures import Container
-from bt_grasp.scene_goals import PlaceGoal, SortGoal, StackGoal
+from bt_grasp.scene.fixtures import Container
+from bt_grasp.scene.goals import ClearGoal, Goal, PickGoal, PlaceGoal, SortGoal, StackGoal
 from bt_grasp.sim.oracle import GroundTruthOracle
 from bt_grasp.sim.placement import Placement, PlacementTracker
 from bt_grasp.sim.world import World

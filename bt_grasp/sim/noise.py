@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from bt_grasp.scene_config import DepthNoise
+from bt_grasp.scene.format import DepthNoise
 
 
 def depth_rms_m(z_m: NDArray[np.floating] | float, noise: DepthNoise) -> NDArray[np.float64]:

@@ -9,7 +9,7 @@ import sapien
 
 from bt_grasp.errors import ConfigError
 from bt_grasp.geometry import Mat4, make_T, rot_z
-from bt_grasp.scene_config import SceneObject
+from bt_grasp.scene.objects import SceneObject
 from bt_grasp.sim.poses import to_pose
 
 # a cylinder in PhysX lies along x; rotate it to stand along z

@@ -2,7 +2,7 @@
 
 :class:`PlacementTracker` watches every object once per tick (ground truth, judge only): while both finger
 pads touch it, it is held; the tick contact stops is its release, and its centre's height then is kept.
-At the end of a run an object counts as *placed* when it is (``bt_grasp.scene_goals`` holds the numbers):
+At the end of a run an object counts as *placed* when it is (``bt_grasp.scene.goals`` holds the numbers):
 
 - released: no finger touches it;
 - upright: its z axis within ``UPRIGHT_DEG`` of vertical;
@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bt_grasp.scene_goals import MAX_DROP_M, STILL_S, STILL_SPEED_M_S, UPRIGHT_DEG
+from bt_grasp.scene.goals import MAX_DROP_M, STILL_S, STILL_SPEED_M_S, UPRIGHT_DEG
 from bt_grasp.sim.oracle import GroundTruthOracle
 
 

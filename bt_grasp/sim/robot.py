@@ -15,7 +15,7 @@ from bt_grasp.robot_description import (
     arm_joint_limits,
     robot_urdf_path,
 )
-from bt_grasp.scene_config import RobotMount
+from bt_grasp.scene.format import RobotMount
 
 ARM_STIFFNESS = 1e4
 ARM_DAMPING = 1e3

@@ -12,7 +12,7 @@ from bt_grasp.motion.kinematics import IKResult, IKStatus
 from bt_grasp.motion.planner import PlanResult, PlanStatus
 from bt_grasp.perception.results import Detection
 from bt_grasp.robot_description import MAX_OPENING_M
-from bt_grasp.scene_config import Scene
+from bt_grasp.scene.format import Scene
 
 
 class FakeRobot:

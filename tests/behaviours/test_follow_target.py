@@ -18,7 +18,7 @@ from bt_grasp.behaviours.cell import make_cell
 from bt_grasp.clock import ManualClock
 from bt_grasp.interfaces import RGBDFrame
 from bt_grasp.motion.kinematics import ArmKinematics
-from bt_grasp.scene_config import Scene
+from bt_grasp.scene.format import Scene
 from bt_grasp.tree.loader import load_tree_from_string
 
 TREE = """

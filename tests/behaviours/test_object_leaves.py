@@ -13,7 +13,7 @@ from bt_grasp.clock import ManualClock
 from bt_grasp.errors import TreeFileError
 from bt_grasp.perception.results import Detection, PerceptionResult, PerceptionStatus
 from bt_grasp.pose import Pose
-from bt_grasp.scene_config import Scene
+from bt_grasp.scene.format import Scene
 from bt_grasp.tree.loader import load_tree_from_string
 
 

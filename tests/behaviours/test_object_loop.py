@@ -12,7 +12,7 @@ from behaviour_fakes import FakeRobot, fake_cell
 from bt_grasp.behaviours import robot_registry
 from bt_grasp.clock import ManualClock
 from bt_grasp.perception.results import Detection
-from bt_grasp.scene_config import Scene
+from bt_grasp.scene.format import Scene
 from bt_grasp.tree.loader import load_tree_from_string
 
 RED = Detection("red", (0, 0, 1, 1), (0.5, 0.1, 0.025), (0.05, 0.05, 0.05), 0.0, 100, 1.0)

@@ -13,7 +13,7 @@ import pytest
 from bt_grasp.behaviours.servo import Gains, PidLaw, TargetTrack, grasp_yaw
 from bt_grasp.errors import ConfigError
 from bt_grasp.perception.tracking import Footprint, _top_centre_from_hits
-from bt_grasp.scene_config import load_scene
+from bt_grasp.scene.format import load_scene
 
 REPO = Path(__file__).resolve().parents[2]
 SCENE = REPO / "scenes/conveyor.yaml"

@@ -17,7 +17,7 @@ def kin() -> ArmKinematics:
 
 @pytest.fixture(scope="session")
 def scene_config():  # type: ignore[no-untyped-def]
-    from bt_grasp.scene_config import load_scene
+    from bt_grasp.scene.format import load_scene
 
     return load_scene("scenes/tabletop.yaml")
 

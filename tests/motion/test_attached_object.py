@@ -8,7 +8,7 @@ from bt_grasp.geometry import make_T
 from bt_grasp.motion.collision import collision_checker
 from bt_grasp.motion.kinematics import default_kinematics
 from bt_grasp.motion.planning_scene import Box, PlanningScene
-from bt_grasp.scene_config import Scene
+from bt_grasp.scene.format import Scene
 
 
 def test_a_carried_box_collides_with_a_shape_the_bare_gripper_misses() -> None:

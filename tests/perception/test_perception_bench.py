@@ -9,7 +9,7 @@ from perception_synth import DEFAULT_T_BASE_CAMERA, Box, render
 
 from bt_grasp.geometry import make_T, rot_z
 from bt_grasp.perception.bench import random_scene, run_perception_bench, yaw_error_deg
-from bt_grasp.scene_config import Scene
+from bt_grasp.scene.format import Scene
 
 
 def test_random_scenes_are_seeded_and_valid() -> None:

@@ -12,7 +12,7 @@ from bt_grasp.behaviours.calibration_job import CalibrationJob
 from bt_grasp.behaviours.cell import make_cell
 from bt_grasp.episode.calibration import tick_calibration
 from bt_grasp.geometry import pose_error
-from bt_grasp.scene_config import load_scene
+from bt_grasp.scene.format import load_scene
 from bt_grasp.sim.charuco import mount_calibration_board
 from bt_grasp.sim.oracle import GroundTruthOracle
 from bt_grasp.sim.world import World

@@ -69,7 +69,7 @@ def test_sim_scenes_at_three_times_the_stereo_error(tabletop_scene_path: Path) -
     within 4 mm (a perfect calibration isolates perception's own error)."""
     from bt_grasp.perception.bench import random_scene
     from bt_grasp.perception.noise_bench import level_noise
-    from bt_grasp.scene_config import load_scene
+    from bt_grasp.scene.format import load_scene
     from bt_grasp.sim.oracle import GroundTruthOracle
     from bt_grasp.sim.world import World
 
@@ -94,7 +94,7 @@ class _SweepBackend:
     """Analytic frames: the target alone, noise k z^2 scaled like the levels' subpixel figures."""
 
     def base_scene(self):  # type: ignore[no-untyped-def]
-        from bt_grasp.scene_config import Scene
+        from bt_grasp.scene.format import Scene
 
         return Scene()
 

@@ -24,7 +24,7 @@ class Script:
 
     def __init__(self) -> None:
         from bt_grasp.motion.kinematics import default_kinematics
-        from bt_grasp.scene_config import load_scene
+        from bt_grasp.scene.format import load_scene
         from bt_grasp.sim.judge import Judge
         from bt_grasp.sim.oracle import GroundTruthOracle
         from bt_grasp.sim.world import World
@@ -84,7 +84,7 @@ class Script:
     def verdict(self, goal: dict[str, object]):  # type: ignore[no-untyped-def]
         from pydantic import TypeAdapter
 
-        from bt_grasp.scene_goals import Goal
+        from bt_grasp.scene.goals import Goal
 
         for _ in range(self.judge.settle_ticks(TypeAdapter(Goal).validate_python(goal))):
             self.world.step_tick()

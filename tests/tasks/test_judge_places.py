@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from bt_grasp.scene_goals import ClearGoal, PickGoal, PlaceGoal, SortGoal, SortRule, StackGoal
+from bt_grasp.scene.goals import ClearGoal, PickGoal, PlaceGoal, SortGoal, SortRule, StackGoal
 from bt_grasp.sim.judge import Judge
 
 pytestmark = pytest.mark.sim  # importing the judge imports the simulator

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from bt_grasp.errors import ConfigError
-from bt_grasp.scene_config import Scene, load_scene
-from bt_grasp.scene_fixtures import Tray
-from bt_grasp.scene_goals import PickGoal
+from bt_grasp.scene.fixtures import Tray
+from bt_grasp.scene.format import Scene, load_scene
+from bt_grasp.scene.goals import PickGoal
 
 REPO = Path(__file__).resolve().parents[2]
 BAD = REPO / "tests" / "data" / "bad_task_scenes"
