@@ -1,4 +1,4 @@
-"""The environment fingerprint of a results row: what it was computed with (libraries, CPU, Python, OS)."""
+"""The environment fingerprint of a results row: what it was computed with (code, libraries, CPU, Python, OS)."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ import platform
 from functools import lru_cache
 from typing import Any
 
+from bt_grasp.code_fingerprint import code_fingerprint
 from bt_grasp.environment import KEY_LIBRARIES, cpu_model, library_version
 
 #: the run's key libraries, plus what changes numbers or speed underneath them
@@ -18,6 +19,7 @@ LIBRARIES = (*KEY_LIBRARIES, "numpy", "ray")
 @lru_cache(maxsize=1)
 def environment() -> dict[str, Any]:
     env: dict[str, Any] = {
+        "code": code_fingerprint(),  # the package's files and the libraries that change a run (one worker's start)
         "libraries": {name: library_version(name) for name in LIBRARIES},
         "python": platform.python_version(),
         "os": f"{platform.system()} {platform.release()}",

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import hashlib
 import os
 import secrets
 import stat
@@ -10,7 +9,7 @@ from functools import cache
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-import bt_grasp
+from bt_grasp.code_fingerprint import code_fingerprint
 from bt_grasp.errors import InputError
 
 if TYPE_CHECKING:
@@ -79,13 +78,10 @@ def authkey() -> bytes:
 
 
 def code_version() -> str:
-    """Changes whenever a source file of bt_grasp changes: a resident process never runs stale code."""
-    root = Path(bt_grasp.__file__).parent
-    h = hashlib.sha256()
-    for path in sorted(root.rglob("*.py")):
-        stat = path.stat()
-        h.update(f"{path.relative_to(root)}:{stat.st_size}:{stat.st_mtime_ns}".encode())
-    return h.hexdigest()[:16]
+    """Changes whenever the content of any bt_grasp file (sources, shaders, assets) or the version of a library
+    that simulates, renders, perceives or plans changes: a resident process never runs stale code
+    (``bt_grasp.code_fingerprint``)."""
+    return code_fingerprint()
 
 
 @cache
