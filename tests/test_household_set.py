@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 import trimesh
 import yaml
+from scipy.spatial import ConvexHull
 
 from bt_grasp.colors import COLOR_NAMES
 from bt_grasp.perception.config import GraspSettings
@@ -107,6 +108,19 @@ def test_mesh_is_a_watertight_solid_resting_on_its_origin(name: str) -> None:
     assert mesh.volume == pytest.approx(CATALOGUE[name]["volume_m3"], rel=1e-3)
     # the centre of mass lies over the footprint, inside the bounds: the object can stand as shipped
     assert np.all(mesh.center_mass >= lo) and np.all(mesh.center_mass <= hi)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_it_rests_stably_as_shipped(name: str) -> None:
+    """The centre of mass lies over the support polygon (the hull of what touches z = 0), at least 3 mm inside its
+    edges: placed at height 0 the object stays as drawn instead of rolling or tipping."""
+    mesh = _mesh(name)
+    support = mesh.vertices[mesh.vertices[:, 2] <= 1e-4][:, :2]
+    assert len(support) >= 3, "the object stands on a point or a line"
+    hull = ConvexHull(support)
+    # each hull facet is n . x + d <= 0 inside; the smallest -(n . com + d) is the distance to the nearest edge
+    margin = -(hull.equations[:, :2] @ mesh.center_mass[:2] + hull.equations[:, 2]).max()
+    assert margin >= 0.003
 
 
 @pytest.mark.parametrize("name", NAMES)

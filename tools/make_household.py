@@ -166,18 +166,20 @@ def _prism(polygon_xz: list[tuple[float, float]], width_y: float) -> trimesh.Tri
     return flat
 
 
-def _swept_tube(centre: NDArray[np.float64], radius: NDArray[np.float64], sides: int = 32) -> trimesh.Trimesh:
-    """A tube of circular section along a planar (xy) polyline, capped at both ends with a centre vertex."""
+def _swept_tube(centre: NDArray[np.float64], radius: NDArray[np.float64], floor_z: float,
+                sides: int = 32) -> trimesh.Trimesh:
+    """A tube of circular section along a planar (xy) polyline, flattened below ``floor_z`` (so that it lies on a
+    flat strip, not on one point of its thickest section) and capped at both ends with a centre vertex."""
     tangent = np.gradient(centre, axis=0)
     tangent /= np.linalg.norm(tangent, axis=1, keepdims=True)
     normal = np.stack([-tangent[:, 1], tangent[:, 0], np.zeros(len(centre))], axis=1)  # in plane, left of the path
     up = np.array([0.0, 0.0, 1.0])
     ring: list[NDArray[np.float64]] = []
     for c, n, r in zip(centre, normal, radius, strict=True):
-        ring.extend(
-            c + r * (math.cos(a) * n + math.sin(a) * up)
-            for a in (2 * math.pi * k / sides for k in range(sides))
-        )
+        for a in (2 * math.pi * k / sides for k in range(sides)):
+            p = c + r * (math.cos(a) * n + math.sin(a) * up)
+            p[2] = max(p[2], floor_z)
+            ring.append(p)
     vertices = [*ring, centre[0], centre[-1]]
     m = len(centre)
     first, last = m * sides, m * sides + 1
@@ -233,7 +235,7 @@ def banana() -> trimesh.Trimesh:
     angle = -span / 2 + span * t
     centre = np.stack([bend_radius * np.sin(angle), -bend_radius * np.cos(angle), np.zeros_like(t)], axis=1)
     radius = 0.005 + 0.0125 * np.sin(np.pi * t) ** 0.6
-    return _swept_tube(centre, radius)
+    return _swept_tube(centre, radius, floor_z=-0.7 * float(radius.max()))
 
 
 def t_tool() -> trimesh.Trimesh:
@@ -294,8 +296,8 @@ OBJECTS: tuple[HouseholdObject, ...] = (
                     GraspSpec((0.0, 0.0), X, 0.03, "across the body"),
                     "A 330 ml soda can, 66 mm across, 122 mm tall, full."),
     HouseholdObject("banana", banana, BANANA, "yellow", "elongated", "lying",
-                    GraspSpec((0.0, 0.0), Y, 0.03, "across the tube at its middle"),
-                    "A banana-like curved tube, tapered at both ends, 180 mm along its arc."),
+                    GraspSpec((0.0, 0.0), Y, 0.02, "across the tube at its middle"),
+                    "A banana-like curved tube, tapered at both ends, 180 mm along its arc, on a flattened underside."),
     HouseholdObject("t_tool", t_tool, ABS, "orange", "other", "lying",
                     GraspSpec((-0.02, 0.0), Y, 0.015, "across the stem"),
                     "A T-shaped plastic tool: a 22 mm square stem with a 100 mm crossbar at one end."),
