@@ -131,7 +131,7 @@ def run_perception_bench(scenes: int, seed: int, *, backend: BenchBackend, calib
             if err < DETECTED_WITHIN_M:
                 detected += 1
                 centroid_mm.append(err * 1e3)
-                y = yaw_error_deg(det.yaw_rad, truth[target.name], target.size_m)
+                y = yaw_error_deg(det.yaw_rad, truth[target.name], target.dims_m)
                 if y is not None:
                     yaw_deg.append(y)
                 grasp_ok += int(synthesize_grasps(det, result.others).ok)

@@ -86,7 +86,7 @@ def run_noise_sweep(scenes: int, seed: int, *, backend: SweepBackend, adapt: boo
             if err < DETECTED_WITHIN_M:
                 row["detected"] += 1
                 row["centroid_mm"].append(err * 1e3)
-                yaw = yaw_error_deg(det.yaw_rad, truth[target.name], target.size_m)
+                yaw = yaw_error_deg(det.yaw_rad, truth[target.name], target.dims_m)
                 if yaw is not None:
                     row["yaw_deg"].append(yaw)
         if progress is not None:

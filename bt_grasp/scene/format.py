@@ -175,6 +175,10 @@ def load_scene(path: str | Path) -> Scene:
         _check_version(data, path, lines)
     scene = validate(Scene, data, path, lines)
     check_references(scene, path, lines)
+    if any(o.is_mesh for o in scene.objects):
+        from bt_grasp.scene.meshes import attach_geometry  # trimesh is imported only for scenes with meshes
+
+        attach_geometry(scene.objects, max(scene.table.size_m[0], scene.table.size_m[1]), path, lines)
     return scene
 
 

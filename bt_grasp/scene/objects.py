@@ -8,10 +8,12 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import Field, field_validator, model_validator
+from pydantic import Field, PrivateAttr, field_validator, model_validator
 
 from bt_grasp.colors import check_color, rgb_of
 from bt_grasp.config import StrictModel
+from bt_grasp.errors import ConfigError
+from bt_grasp.scene.mesh_geometry import MeshGeometry
 
 PositiveFloat = Annotated[float, Field(gt=0)]
 NonNegFloat = Annotated[float, Field(ge=0)]
@@ -36,32 +38,137 @@ class Randomize(StrictModel):
         return value
 
 
+#: the mesh file formats a ``shape: mesh`` object may name (trimesh reads them)
+MESH_SUFFIXES: tuple[str, ...] = (".obj", ".stl", ".ply", ".glb", ".gltf")
+PRIMITIVE_SHAPES: tuple[str, ...] = ("box", "cylinder", "sphere")
+#: a mesh object's colour when the scene gives none and its file has no material colour
+DEFAULT_MESH_RGB: tuple[float, float, float] = (0.6, 0.6, 0.6)
+
+
 class SceneObject(StrictModel):
+    """One movable object. Primitives (``box``, ``cylinder``, ``sphere``) give ``size_m`` and ``color``;
+    a ``mesh`` gives ``mesh: FILE`` (relative to the scene file) and may give ``scale``, a colour (else the
+    file's own material) and ``mass_kg`` or ``density_kg_m3``; a ``urdf`` gives ``urdf: FILE`` (one link, no
+    joints; its collision and visual meshes, and its mass unless the scene gives one). A mesh's or URDF's
+    geometry is read and checked when the scene loads (:func:`bt_grasp.scene.meshes.attach_geometry`) and
+    is then :attr:`geometry`."""
+
     name: Annotated[str, Field(min_length=1, pattern=r"^[A-Za-z_][A-Za-z0-9_\-]*$")]
-    shape: Literal["box", "cylinder", "sphere"]
-    size_m: tuple[PositiveFloat, ...]  # box: x y z; cylinder: radius height; sphere: radius
-    color: str | tuple[float, float, float]
-    mass_kg: PositiveFloat = 0.1
+    shape: Literal["box", "cylinder", "sphere", "mesh", "urdf"]
+    size_m: tuple[PositiveFloat, ...] | None = None  # box: x y z; cylinder: radius height; sphere: radius
+    mesh: Annotated[str, Field(min_length=1)] | None = None  # shape: mesh; OBJ, STL, PLY, GLB or GLTF file
+    urdf: Annotated[str, Field(min_length=1)] | None = None  # shape: urdf; a single-link URDF file
+    scale: PositiveFloat | tuple[PositiveFloat, PositiveFloat, PositiveFloat] = 1.0  # mesh units -> metres
+    color: str | tuple[float, float, float] | None = None  # primitives: required; meshes: else the file's
+    mass_kg: PositiveFloat | None = None  # default 0.1 kg (a URDF: its <inertial> mass)
+    density_kg_m3: PositiveFloat | None = None  # meshes only: mass from the collision volume
     friction: NonNegFloat = 0.8
     pose: ObjectPose
     randomize: Randomize = Randomize()
+    _geometry: MeshGeometry | None = PrivateAttr(default=None)
 
     @model_validator(mode="after")
-    def _size_matches_shape(self) -> SceneObject:
-        expected = {"box": 3, "cylinder": 2, "sphere": 1}[self.shape]
-        if len(self.size_m) != expected:
-            raise ValueError(f"a {self.shape} needs size_m with {expected} numbers, got {len(self.size_m)}")
+    def _keys_match_shape(self) -> SceneObject:
+        if self.shape in PRIMITIVE_SHAPES:
+            expected = {"box": 3, "cylinder": 2, "sphere": 1}[self.shape]
+            if self.size_m is None:
+                raise ValueError(f"a {self.shape} needs size_m with {expected} numbers")
+            if len(self.size_m) != expected:
+                raise ValueError(f"a {self.shape} needs size_m with {expected} numbers, got {len(self.size_m)}")
+            if self.color is None:
+                raise ValueError(f"a {self.shape} needs a color")
+            for key in ("mesh", "urdf", "density_kg_m3"):
+                if getattr(self, key) is not None:
+                    raise ValueError(f"'{key}' is for mesh or urdf objects, not a {self.shape}")
+            if self.scale != 1.0:
+                raise ValueError(f"'scale' is for mesh or urdf objects, not a {self.shape} (give size_m)")
+            return self
+        file_key = self.shape  # "mesh" or "urdf"
+        other = "urdf" if file_key == "mesh" else "mesh"
+        if getattr(self, file_key) is None:
+            raise ValueError(f"a {self.shape} object needs '{file_key}: FILE' (relative to the scene file)")
+        if getattr(self, other) is not None:
+            raise ValueError(f"a {self.shape} object takes '{file_key}', not '{other}'")
+        if self.size_m is not None:
+            raise ValueError(f"a {self.shape} object's size comes from its file and 'scale', not size_m")
+        if self.mass_kg is not None and self.density_kg_m3 is not None:
+            raise ValueError("give mass_kg or density_kg_m3, not both")
+        if self.mesh is not None and not self.mesh.lower().endswith(MESH_SUFFIXES):
+            raise ValueError(f"mesh file '{self.mesh}' is not one of {', '.join(MESH_SUFFIXES)}")
         return self
 
     @field_validator("color")
     @classmethod
-    def _known_color(cls, value: str | tuple[float, float, float]) -> str | tuple[float, float, float]:
-        return check_color(value)
+    def _known_color(
+        cls, value: str | tuple[float, float, float] | None
+    ) -> str | tuple[float, float, float] | None:
+        return None if value is None else check_color(value)
+
+    @property
+    def is_mesh(self) -> bool:
+        """True for ``mesh`` and ``urdf`` objects (their geometry comes from files)."""
+        return self.shape not in PRIMITIVE_SHAPES
+
+    @property
+    def scale_xyz(self) -> tuple[float, float, float]:
+        s = self.scale
+        return (float(s), float(s), float(s)) if isinstance(s, int | float) else (s[0], s[1], s[2])
+
+    @property
+    def geometry(self) -> MeshGeometry:
+        """The mesh read from this object's file (mesh and urdf objects of a loaded scene only)."""
+        if self._geometry is None:
+            raise ConfigError(self.name, "a mesh object's geometry is read by load_scene; load the scene file")
+        return self._geometry
+
+    def with_geometry(self, geometry: MeshGeometry) -> SceneObject:
+        """Attach the geometry the scene loader read (done once, at load)."""
+        self._geometry = geometry
+        return self
+
+    @property
+    def mass_or_default_kg(self) -> float | None:
+        """The mass to give the body; None: from ``density_kg_m3`` and the collision volume."""
+        if self.mass_kg is not None:
+            return self.mass_kg
+        if self.density_kg_m3 is not None:
+            return None
+        if self.shape == "urdf" and self._geometry is not None and self._geometry.mass_kg is not None:
+            return self._geometry.mass_kg
+        return 0.1
+
+    @property
+    def size_xyz_m(self) -> tuple[float, float, float]:
+        """The object's extents along its own x, y, z (a mesh: its scaled bounding box)."""
+        if self.is_mesh:
+            lo, hi = self.geometry.bounds_m
+            return (hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2])
+        assert self.size_m is not None
+        if self.shape == "box":
+            return (self.size_m[0], self.size_m[1], self.size_m[2])
+        d = 2 * self.size_m[0]
+        return (d, d, self.height_m)
+
+    @property
+    def dims_m(self) -> tuple[float, ...]:
+        """``size_m`` for a primitive; a mesh's scaled bounding-box extents (x, y, z) otherwise."""
+        if self.is_mesh:
+            return self.size_xyz_m
+        assert self.size_m is not None
+        return self.size_m
 
     @property
     def height_m(self) -> float:
+        if self.is_mesh:
+            lo, hi = self.geometry.bounds_m
+            return hi[2] - lo[2]
+        assert self.size_m is not None
         return {"box": self.size_m[-1], "cylinder": self.size_m[-1], "sphere": 2 * self.size_m[0]}[self.shape]
 
     @property
     def rgb(self) -> tuple[float, float, float]:
-        return rgb_of(self.color)
+        if self.color is not None:
+            return rgb_of(self.color)
+        if self._geometry is not None and self._geometry.rgb is not None:
+            return self._geometry.rgb
+        return DEFAULT_MESH_RGB

@@ -31,7 +31,7 @@ def true_objects(world: World) -> list[TrueObject]:
     for name in oracle.object_names():
         obj = by_name.get(name)
         if obj is not None:
-            out.append(TrueObject(name, obj.shape, tuple(float(v) for v in obj.size_m),
+            out.append(TrueObject(name, obj.shape, tuple(float(v) for v in obj.dims_m),
                                   np.asarray(oracle.T_world_object(name), dtype=np.float64),
                                   (float(obj.rgb[0]), float(obj.rgb[1]), float(obj.rgb[2]))))
     return out
