@@ -1,4 +1,9 @@
-"""Building the scene's objects and drawing their poses from a seed (non-overlapping)."""
+"""Building the scene's objects and drawing their poses from a seed (non-overlapping).
+
+Primitives are built from their sizes; mesh and URDF objects (``bt_grasp.scene.objects``) are drawn from their
+visual file and collide with the convex parts from :func:`bt_grasp.scene.mesh_cache.collision_shapes` (the hull
+of a convex mesh, else its cached CoACD decomposition). A mesh object is drawn with its lowest point
+:data:`MESH_DROP_M` above its support; the world lets it settle before the run starts (``World.settle``)."""
 
 from __future__ import annotations
 
@@ -9,9 +14,12 @@ import sapien
 
 from bt_grasp.errors import ConfigError
 from bt_grasp.geometry import Mat4, make_T, rot_z
+from bt_grasp.scene.mesh_cache import collision_shapes
 from bt_grasp.scene.objects import SceneObject
 from bt_grasp.sim.poses import to_pose
 
+#: a mesh object starts this far above its support, then settles (a mesh's bottom need not be flat)
+MESH_DROP_M = 0.002
 # a cylinder in PhysX lies along x; rotate it to stand along z
 _CYLINDER_UPRIGHT = sapien.Pose(q=[np.cos(np.pi / 4), 0.0, np.sin(np.pi / 4), 0.0])
 
@@ -23,6 +31,9 @@ class PlacedObject:
 
 
 def _circle_radius_m(obj: SceneObject) -> float:
+    if obj.is_mesh:
+        return float(np.max(np.hypot(obj.geometry.vertices_m[:, 0], obj.geometry.vertices_m[:, 1])))
+    assert obj.size_m is not None
     if obj.shape == "box":
         return float(np.hypot(obj.size_m[0], obj.size_m[1]) / 2)
     return float(obj.size_m[0])
@@ -30,11 +41,16 @@ def _circle_radius_m(obj: SceneObject) -> float:
 
 def footprint_xy(obj: SceneObject, T_world_object: Mat4) -> np.ndarray:
     """The object's footprint on the table as a convex polygon (N, 2): a box's 4 corners, a round
-    object's circle as 16 points on its circumscribed polygon."""
-    if obj.shape == "box":
+    object's circle as 16 points on its circumscribed polygon; a mesh's bounding rectangle."""
+    if obj.is_mesh:
+        (x0, y0, _), (x1, y1, _) = obj.geometry.bounds_m
+        local = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
+    elif obj.shape == "box":
+        assert obj.size_m is not None
         hx, hy = obj.size_m[0] / 2, obj.size_m[1] / 2
         local = np.array([[-hx, -hy], [hx, -hy], [hx, hy], [-hx, hy]])
     else:
+        assert obj.size_m is not None
         r = obj.size_m[0] / np.cos(np.pi / 16)
         angles = np.arange(16) * 2 * np.pi / 16
         local = np.stack([r * np.cos(angles), r * np.sin(angles)], axis=1)
@@ -84,13 +100,24 @@ def draw_poses(
                 break
         else:
             raise ConfigError(source, f"cannot place object '{obj.name}' without overlapping others", "objects")
-        z = table_top_z_m + obj.height_m / 2
+        z = resting_z_m(obj, table_top_z_m)
         placed.append(PlacedObject(obj, make_T(rot_z(yaw), [x, y, z])))
     return placed
 
 
+def resting_z_m(obj: SceneObject, support_z_m: float) -> float:
+    """The object frame's height when the object stands on a support at ``support_z_m`` (a primitive's frame is
+    its centre; a mesh's is its file's origin, dropped from :data:`MESH_DROP_M` above)."""
+    if obj.is_mesh:
+        return support_z_m - obj.geometry.bounds_m[0][2] + MESH_DROP_M
+    return support_z_m + obj.height_m / 2
+
+
 def build_object(scene: sapien.Scene, placed: PlacedObject) -> sapien.Entity:
     obj = placed.spec
+    if obj.is_mesh:
+        return _build_mesh_object(scene, placed)
+    assert obj.size_m is not None
     builder = scene.create_actor_builder()
     material = sapien.physx.PhysxMaterial(obj.friction, obj.friction, 0.0)
     render_material = sapien.render.RenderMaterial(base_color=[*obj.rgb, 1.0], roughness=0.7, metallic=0.0)
@@ -105,7 +132,9 @@ def build_object(scene: sapien.Scene, placed: PlacedObject) -> sapien.Entity:
     else:
         builder.add_sphere_collision(radius=obj.size_m[0], material=material)
         builder.add_sphere_visual(radius=obj.size_m[0], material=render_material)
-    density = obj.mass_kg / _volume_m3(obj)
+    mass = obj.mass_or_default_kg
+    assert mass is not None  # a primitive has no density_kg_m3
+    density = mass / _volume_m3(obj)
     for shape in builder.collision_records:
         shape.density = density
     builder.set_initial_pose(to_pose(placed.T_world_object))
@@ -113,7 +142,40 @@ def build_object(scene: sapien.Scene, placed: PlacedObject) -> sapien.Entity:
     return actor
 
 
+def _build_mesh_object(scene: sapien.Scene, placed: PlacedObject) -> sapien.Entity:
+    """A mesh/URDF object: its visual file drawn (the scene's colour, else the file's own material), convex
+    collision parts, a density that gives ``mass_kg`` (or the scene's ``density_kg_m3``), friction as given."""
+    obj = placed.spec
+    geometry = obj.geometry
+    shapes = collision_shapes(geometry)
+    mass = obj.mass_or_default_kg
+    density = mass / shapes.volume_m3 if mass is not None else float(obj.density_kg_m3 or 1000.0)
+    material = sapien.physx.PhysxMaterial(obj.friction, obj.friction, 0.0)
+    body = sapien.physx.PhysxRigidDynamicComponent()
+    unit = np.ones(3, dtype=np.float32)
+    for part in shapes.parts:
+        shape = sapien.physx.PhysxCollisionShapeConvexMesh(np.asarray(part, dtype=np.float32), unit, material)
+        shape.set_density(density)
+        body.attach(shape)
+    render_material = None
+    if obj.color is not None:
+        render_material = sapien.render.RenderMaterial(base_color=[*obj.rgb, 1.0], roughness=0.7, metallic=0.0)
+    visual = sapien.render.RenderShapeTriangleMesh(
+        str(geometry.visual_path), np.asarray(geometry.scale, dtype=np.float32), render_material
+    )
+    render = sapien.render.RenderBodyComponent()
+    render.attach(visual)
+    entity = sapien.Entity()
+    entity.name = obj.name
+    entity.add_component(body)
+    entity.add_component(render)
+    entity.set_pose(to_pose(placed.T_world_object))
+    scene.add_entity(entity)
+    return entity
+
+
 def _volume_m3(obj: SceneObject) -> float:
+    assert obj.size_m is not None
     if obj.shape == "box":
         return float(np.prod(obj.size_m))
     if obj.shape == "cylinder":

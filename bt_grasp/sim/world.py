@@ -21,6 +21,13 @@ from bt_grasp.sim.robot import SimRobot
 log = logging.getLogger(__name__)
 
 _STREAM_OBJECTS, _STREAM_CAMERA, _STREAM_FAULTS = 0, 1, 2
+#: settling ends when every object moves slower than this (centre speed, m/s) ...
+SETTLE_SPEED_M_S = 0.002
+#: ... and turns slower than this (rad/s) ...
+SETTLE_SPIN_RAD_S = 0.02
+#: ... for this many control periods in a row, or after SETTLE_MAX_S of simulated time
+SETTLE_STILL_TICKS = 5
+SETTLE_MAX_S = 2.0
 
 
 class World:
@@ -58,6 +65,8 @@ class World:
             parent = self.robot.links[scene_config.camera.eye_in_hand.parent_link]
         self.camera = SimCamera(self.scene, scene_config.camera, mount, self.camera_rng, self.clock.now_ns, parent)
         self._physics_steps = 0
+        #: physics steps spent letting mesh objects settle before the run's first tick (0 without mesh objects)
+        self.settle_steps = self.settle() if any(p.spec.is_mesh for p in self.placed) else 0
         log.debug("world built: seed %d, %d objects", self.seed, len(self.objects))
 
     def _seed_streams(self, seed: int) -> None:
@@ -102,6 +111,26 @@ class World:
                 self.scene.add_directional_light(list(light.direction), list(light.color), shadow=light.shadow)
             else:
                 self.scene.add_point_light(list(light.position_m), list(light.color), shadow=light.shadow)
+
+    def settle(self, max_s: float = SETTLE_MAX_S) -> int:
+        """Let the objects come to rest where they were drawn: step physics one control period at a time until
+        every object is still (:data:`SETTLE_SPEED_M_S`, :data:`SETTLE_SPIN_RAD_S`) for
+        :data:`SETTLE_STILL_TICKS` periods, or ``max_s`` of simulated time passed. Deterministic (no wall
+        clock); the simulated time it takes passes on the world's clock before the run's first tick. Returns
+        the physics steps taken. Primitives are drawn exactly resting, so scenes without meshes skip this."""
+        bodies = [e.find_component_by_type(sapien.physx.PhysxRigidDynamicComponent) for e in self.objects.values()]
+        still, start = 0, self._physics_steps
+        limit = start + round(max_s / self.dt_s)
+        while self._physics_steps < limit and still < SETTLE_STILL_TICKS:
+            self.step_tick()
+            calm = all(
+                np.linalg.norm(b.get_linear_velocity()) < SETTLE_SPEED_M_S
+                and np.linalg.norm(b.get_angular_velocity()) < SETTLE_SPIN_RAD_S
+                for b in bodies
+            )
+            still = still + 1 if calm else 0
+        log.debug("objects settled in %d physics steps", self._physics_steps - start)
+        return self._physics_steps - start
 
     # --- time ----------------------------------------------------------------------------------------
     @property
