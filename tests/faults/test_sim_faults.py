@@ -2,7 +2,9 @@
 MCAP log to see that the fault fired (/faults), which reason the leaf reported (/bt/events), which
 recovery branch ran next (/bt/tick) and whether the task still succeeded (/run/result).
 
-One run per fault kind (~10-40 s each); the calibration is made once per module with ``bt-grasp calibrate``.
+One run per fault kind (~10-40 s each, so the module is marked ``slow``); the calibration is the eye-to-hand
+one ``bt-grasp calibrate`` made for the default scene. Every check names the one leaf and the one reason the
+fault's semantics (docs/faults.md) lead to on seed 3, and the branch that answers it.
 """
 
 from __future__ import annotations
@@ -18,9 +20,10 @@ SCENE = REPO / "scenes" / "tabletop.yaml"
 PICK = REPO / "trees" / "pick.xml"
 RECOVERY = REPO / "trees" / "pick_with_recovery.xml"
 SEED = 3
-BLACKBOARD = {"color": "red", "lift_height": 0.15}
+BLACKBOARD: dict[str, str | int | float] = {"color": "red", "lift_height": 0.15}
 
-pytestmark = pytest.mark.sim
+pytestmark = [pytest.mark.sim, pytest.mark.slow]
+
 
 @pytest.fixture(scope="module")
 def calibration() -> Path:
@@ -133,14 +136,15 @@ def test_ik_failure_during_plan_grasp_tries_the_next_candidate(tmp_path: Path, c
 
 
 def test_object_nudged_after_perceive_empties_the_grasp_then_regrasps(tmp_path: Path, calibration: Path) -> None:
-    out = run(tmp_path, calibration, RECOVERY, "nudge@PlanGrasp#1:dy_m=0.07,dx_m=0.0")
+    # the 50 mm box slides 60 mm along x, the pads' width (the fingers close along y: a nudge along y puts the
+    # box under a finger instead, see the next test and docs/faults.md), so it is no longer between the pads:
+    # the descent is free and the fingers close on nothing
+    out = run(tmp_path, calibration, RECOVERY, "nudge@PlanGrasp#1:dx_m=0.06,dy_m=0.0")
     record = fault_record(out, "object_nudge")
     assert record["fault"]["details"]["object"] == "red_box"
     first = out.first_failure_after_fault()
-    # fingers that miss the pushed box close on nothing; fingers that land on it stall the descent
-    branch = {("Grasp", "GRASP_EMPTY"): "regrasp", ("Approach", "TRACKING_ERROR"): "rehome"}
-    assert (first["leaf"], first["reason"]) in branch
-    assert out.ran(branch[first["leaf"], first["reason"]], first["tick"])
+    assert (first["leaf"], first["reason"]) == ("Grasp", "GRASP_EMPTY")
+    assert out.ran("regrasp", first["tick"])
     assert out.summary.success, out.summary.to_json()
 
 
@@ -173,12 +177,15 @@ def test_depth_hole_over_the_scene_hides_the_object_once(tmp_path: Path, calibra
     assert out.summary.success, out.summary.to_json()
 
 
-def test_depth_burst_once_is_survived(tmp_path: Path, calibration: Path) -> None:
-    out = run(tmp_path, calibration, RECOVERY, "burst@Perceive#1:sigma_m=0.08")
+def test_depth_burst_fails_perception_cleanly_and_looking_again_recovers(tmp_path: Path, calibration: Path) -> None:
+    # 0.5 m of depth noise on every valid pixel of one frame: the red blob no longer stands on the table, so
+    # Perceive says NO_DETECTION (a clean failure, not a wrong pose), and the "anything else" branch looks again
+    out = run(tmp_path, calibration, RECOVERY, "burst@Perceive#1:sigma_m=0.5")
     record = fault_record(out, "depth_burst")
     assert record["fault"]["details"]["pixels_hit"] > 100_000
     perceive_failures = [f for f in out.failures() if f["leaf"] == "Perceive" and f["tick"] == record["tick"]]
-    assert all(f["reason"] == "NO_DETECTION" for f in perceive_failures)  # it fails cleanly, or copes
+    assert [f["reason"] for f in perceive_failures] == ["NO_DETECTION"]
+    assert out.ran("Sleep", record["tick"])
     assert out.summary.success, out.summary.to_json()
 
 
@@ -196,18 +203,26 @@ def test_controller_stall_trips_tracking_and_rehomes(tmp_path: Path, calibration
 
 def test_calibration_offset_makes_the_pick_miss(tmp_path: Path, calibration: Path) -> None:
     # armed on entering Perceive (a tick trigger would come too late: tick 1 already runs Perceive .. Approach)
+    # a camera 60 mm off along y puts the grasp 60 mm off along the fingers' closing axis: a finger comes down
+    # on the box (as a 60-70 mm nudge along y does) and the descent cannot settle
     out = run(tmp_path, calibration, PICK, "calib@Perceive#1:dy_mm=60")
     record = fault_record(out, "calibration_offset")
     assert record["fault"]["leaf"] == "Perceive"
+    first = out.first_failure_after_fault()
+    assert (first["leaf"], first["reason"]) == ("Approach", "TRACKING_ERROR")
+    assert first["message"].startswith("descend:"), first["message"]
     assert not out.summary.success
-    assert out.summary.reason in {"GRASP_EMPTY", "TRACKING_ERROR", "COLLISION", "PLAN_FAILED", "SLIPPED"}
-    assert out.summary.failed_leaf in {"Approach", "Grasp", "Lift"}
+    assert (out.summary.failed_leaf, out.summary.reason) == ("Approach", "TRACKING_ERROR")
 
 
 def test_leaf_timeout_hangs_approach_until_its_watchdog_fires(tmp_path: Path, calibration: Path) -> None:
+    # the cell ignores the arm's commands: Approach's watchdog is the executor's tracking check (TIMEOUT is
+    # the gripper leaves' watchdog), and it fires while the cell is still not responding
     out = run(tmp_path, calibration, PICK, "timeout@Approach#1:duration_s=3")
     record = fault_record(out, "leaf_timeout")
     assert record["fault"]["leaf"] == "Approach"
+    first = out.first_failure_after_fault()
+    assert (first["leaf"], first["reason"]) == ("Approach", "TRACKING_ERROR")
+    assert first["stamp_ns"] < record["fault"]["details"]["until_ns"]
     assert not out.summary.success
-    assert out.summary.failed_leaf == "Approach"
-    assert out.summary.reason in {"TRACKING_ERROR", "TIMEOUT"}
+    assert (out.summary.failed_leaf, out.summary.reason) == ("Approach", "TRACKING_ERROR")
