@@ -1,5 +1,6 @@
-"""Campaigns end to end on the simulator: the same per-episode results with 1 worker, 2 workers (one of
-them killed mid-campaign, then resumed) and a 2-node local Ray cluster."""
+"""Campaigns end to end on the simulator: the same per-episode results with 1 worker, with a campaign
+interrupted twice (its coordinator killed, then one of 2 workers) and resumed, and on a 2-node local Ray
+cluster."""
 
 from __future__ import annotations
 
@@ -17,6 +18,7 @@ from typing import Any
 
 import pytest
 
+from bt_grasp.campaign.results import read_rows
 from bt_grasp.campaign.worker import PLACE_COLUMNS
 
 REPO = Path(__file__).resolve().parents[2]
@@ -104,42 +106,77 @@ def _worker_pids(parent: int) -> list[int]:
     return pids
 
 
-def test_two_workers_one_killed_then_resumed_match_one_worker(
+def _wait_for_rows(proc: subprocess.Popen[str], results: Path, more_than: int, *, timeout_s: float = 600) -> int:
+    """Poll (a condition, not a guess at the speed) until the results file holds more than ``more_than`` rows
+    while the coordinator still runs; the row count seen."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        assert proc.poll() is None, f"the campaign ended (exit {proc.returncode}) before its kill"
+        seen = len(read_rows(results)) if results.exists() else 0
+        if seen > more_than:
+            return seen
+        time.sleep(0.05)
+    raise AssertionError(f"no row beyond {more_than} within {timeout_s:g} s")
+
+
+def _popen_eval(out: Path, workers: int) -> subprocess.Popen[str]:
+    """A campaign in its own process group (the coordinator, its workers and their log writers)."""
+    return subprocess.Popen(
+        [*BT, "eval", "run", str(TINY), "--out", str(out), "--workers", str(workers), "--keep-logs", "none"],
+        cwd=REPO, env=_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+    )
+
+
+def test_killed_coordinator_then_lost_worker_then_resumed_match_one_worker(
     one_worker: dict[str, dict[str, Any]], tmp_path: Path
 ) -> None:
+    """Two interruptions of one 4-episode campaign, each proven to land mid-campaign: fewer rows than episodes
+    once the interrupted run ended. 1) the coordinator and everything it started are SIGKILLed (exit by the
+    signal) once one row is on disk; 2) the resumed campaign, on 2 workers, loses a worker (SIGKILL) once a new
+    row is on disk, while an episode is still open: the pool breaks, every open episode fails and the coordinator
+    must say so with exit 3 (exit 0 would claim a finished campaign); 3) a last resume finishes it. Rows written
+    before each interruption stay as they were, every episode has exactly one row, and the rows match the
+    uninterrupted 1-worker run's."""
     results = tmp_path / "tiny.jsonl"
-    proc = subprocess.Popen(
-        [*BT, "eval", "run", str(TINY), "--out", str(tmp_path), "--workers", "2", "--keep-logs", "none"],
-        cwd=REPO,
-        env=_env(),
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
+    total = len(one_worker)
+    # 1) the coordinator killed
+    proc = _popen_eval(tmp_path, workers=1)
     try:
-        deadline = time.monotonic() + 300
-        while time.monotonic() < deadline and proc.poll() is None:
-            if results.exists() and results.read_text().count("\n") >= 1:
-                break
-            time.sleep(0.2)
+        _wait_for_rows(proc, results, 0)
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    assert proc.returncode == -signal.SIGKILL
+    first = results.read_text()
+    n_first = len(read_rows(results))
+    assert 1 <= n_first < total, f"{n_first} rows after the coordinator's kill: it did not land mid-campaign"
+    # 2) resumed, and a worker lost
+    proc = _popen_eval(tmp_path, workers=2)
+    try:
+        _wait_for_rows(proc, results, n_first)
         workers = _worker_pids(proc.pid)
         assert len(workers) == 2, workers
-        os.kill(workers[0], signal.SIGKILL)  # a worker dies mid-campaign
+        os.kill(workers[0], signal.SIGKILL)
         _out, err = proc.communicate(timeout=300)
     finally:
         if proc.poll() is None:
-            proc.kill()
-    before = results.read_text()
-    # either the campaign reported the lost worker (exit 3) or the killed worker had nothing left to do
-    assert proc.returncode in (0, 3), err
-    if proc.returncode == 3:
-        assert "run the same command again to resume" in err and "Traceback" not in err
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    second = results.read_text()
+    n_second = len(read_rows(results))
+    assert n_first < n_second < total, f"{n_second} rows after the lost worker: it did not land mid-campaign"
+    assert proc.returncode == 3, f"exit {proc.returncode} after a lost worker: {err}"
+    assert "run the same command again to resume" in err and "Traceback" not in err
+    assert second.startswith(first), "a row written before the coordinator's kill changed"
+    # 3) resumed to the end
     resumed = _eval(str(TINY), "--out", str(tmp_path), "--workers", "2", "--keep-logs", "none")
     assert resumed.returncode == 0, resumed.stderr
-    after = results.read_text()
-    assert after.startswith(before), "a row written before the kill changed"
+    assert results.read_text().startswith(second), "a row written before the lost worker changed"
     rows = _rows(results)
-    assert len(rows) == 4
+    assert sorted(r["episode"] for r in rows) == sorted(one_worker)  # every episode exactly once
     assert _differences(_identity(rows), one_worker) == []
 
 
