@@ -57,7 +57,7 @@ import ast
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pytest
@@ -108,7 +108,7 @@ class Run:
     def objects(self) -> list[str]:
         return [o.name for o in self.episode.scene.objects]
 
-    def fixture(self, name: str) -> object:
+    def fixture(self, name: str) -> Any:  # a fixture of any kind (tray, bin, marker, conveyor)
         return next(f for f in self.episode.scene.fixtures if f.name == name)
 
 
@@ -117,14 +117,14 @@ def _inside_container(run: Run, name: str, container_name: str) -> str | None:
     the container's centre, yaw and inner size (not with the judge's own geometry)."""
     box = run.fixture(container_name)
     xyz = run.end_xyz_m(name)
-    yaw = np.deg2rad(box.yaw_deg)  # type: ignore[attr-defined]
-    d = xyz[:2] - np.array(box.center_xy_m)  # type: ignore[attr-defined]
+    yaw = np.deg2rad(box.yaw_deg)
+    d = xyz[:2] - np.array(box.center_xy_m)
     local = np.array([np.cos(yaw) * d[0] + np.sin(yaw) * d[1], -np.sin(yaw) * d[0] + np.cos(yaw) * d[1]])
-    half = np.array(box.inner_size_m) / 2  # type: ignore[attr-defined]
+    half = np.array(box.inner_size_m) / 2
     if np.any(np.abs(local) > half):
         return f"{name} at {xyz[:2].round(3)} is outside {container_name}'s walls"
     bottom = xyz[2] - run.height_m(name) / 2
-    floor = box.floor_thickness_m  # type: ignore[attr-defined]
+    floor = box.floor_thickness_m
     if abs(bottom - floor) > 0.005:
         return f"{name}'s bottom is {1e3 * (bottom - floor):+.1f} mm from {container_name}'s floor"
     return None
@@ -158,7 +158,7 @@ def check_pick_and_place(run: Run) -> None:
     _assert_judged_success(run, "at_target")
     marker = run.fixture("target_marker")
     xyz = run.end_xyz_m("red_box")
-    off = float(np.hypot(*(xyz[:2] - np.array(marker.center_xy_m))))  # type: ignore[attr-defined]
+    off = float(np.hypot(*(xyz[:2] - np.array(marker.center_xy_m))))
     assert off <= 0.01, f"red_box rests {off * 100:.1f} cm from the marker's centre"
     assert abs(xyz[2] - run.height_m("red_box") / 2) <= 0.005, f"red_box's centre at z={xyz[2]:.3f} m"
 
@@ -208,7 +208,9 @@ def check_calibrate(run: Run) -> None:
     dt_m, dr_rad = pose_error(calibration.T_parent_camera, T_true)
     assert dt_m * 1e3 <= CALIBRATION_MAX_MM and np.degrees(dr_rad) <= CALIBRATION_MAX_DEG, (
         f"calibration {dt_m * 1e3:.3f} mm / {np.degrees(dr_rad):.4f} deg from the true camera pose")
-    # by physics: the board's sweep lifted nothing and tipped nothing (every object still rests on the table)
+    # by physics: the board's sweep lifted nothing and tipped nothing (every object still rests on the table).
+    # Not asserted: that nothing was pushed. The views are planned against the installation only (the objects
+    # are unknown before calibration): on this seed the sweep pushes blue_box ~10 mm sideways.
     assert result.judged.lifted_objects == (), result.judged.lifted_objects
     for name in run.objects():
         assert abs(run.moved_m(name)[2]) < STILL_M, f"{name} rose or fell by {run.moved_m(name)[2]} m"
@@ -225,8 +227,9 @@ def check_follow_conveyor(run: Run) -> None:
     assert median <= FOLLOW_MEDIAN_MAX_MM, f"median tracking error {median:.2f} mm (p95 {p95:.2f} mm)"
     # the target really travelled on the belt, at the belt's speed (a still target would track trivially)
     belt = next(f for f in run.episode.scene.fixtures if f.kind == "conveyor")
+    assert belt.speed_m_s > 0.0, belt
     moved = run.moved_m(FOLLOWED)
-    expected = belt.speed_m_s * result.sim_time_s  # type: ignore[union-attr]
+    expected = belt.speed_m_s * result.sim_time_s
     assert moved[1] >= 0.8 * expected and abs(moved[0]) < 0.005, f"{FOLLOWED} moved {moved} m, belt {expected} m"
 
 
