@@ -9,7 +9,9 @@ The actors die with the driver (the coordinator): they are created ``non_detache
 job config's ``default_actor_lifetime``), so Ray's GCS kills them when the driver's job ends, however the driver
 ends (a SIGKILLed driver's job ends when its connection drops). A local cluster that ``ray.init`` starts
 (``--ray local``) fate-shares with the driver too: Ray starts its processes with ``PR_SET_PDEATHSIG`` on Linux (a
-reaper process elsewhere).
+reaper process elsewhere). Measured (2 cores, Ray 2.60, the driver SIGKILLed mid-campaign): with ``--ray local``
+the raylet and GCS went at once, the actors within 3 s, Ray's dashboard and runtime-env agents after ~63 s; on a
+cluster the actors went and the cluster stayed (``tests/campaign/test_worker_lifetime.py``).
 """
 
 from __future__ import annotations

@@ -5,10 +5,14 @@ exits (it does not wait forever)."""
 
 from __future__ import annotations
 
+import importlib.util
 import os
+import secrets
+import shutil
 import signal
 import subprocess
 import sys
+import tempfile
 import textwrap
 import time
 from pathlib import Path
@@ -84,6 +88,28 @@ def _wait_gone(processes: dict[int, str]) -> list[int]:
             return []
         time.sleep(0.05)
     return [pid for pid, start in processes.items() if _alive(pid, start)]
+
+
+def _descendants(root: int) -> dict[int, tuple[str, str]]:
+    """Every process below ``root``: pid -> (start time, command line)."""
+    children: dict[int, list[int]] = {}
+    for entry in Path("/proc").iterdir():
+        fields = _stat(int(entry.name)) if entry.name.isdigit() else None
+        if fields is not None:
+            children.setdefault(int(fields[1]), []).append(int(entry.name))
+    found: dict[int, tuple[str, str]] = {}
+    todo = [root]
+    while todo:
+        for pid in children.get(todo.pop(), []):
+            fields = _stat(pid)
+            try:
+                cmdline = (Path("/proc") / str(pid) / "cmdline").read_bytes().replace(b"\0", b" ")
+            except OSError:
+                continue
+            if fields is not None:
+                found[pid] = (fields[19], cmdline.decode(errors="replace"))
+                todo.append(pid)
+    return found
 
 
 def _kill_coordinator_with_workers(tmp_path: Path, poll_s: float, thread: bool) -> tuple[dict[int, str], list[int]]:
@@ -200,3 +226,109 @@ def test_a_killed_processes_log_writer_finishes_the_log_and_exits(tmp_path: Path
     run = open_log(out)
     assert run.indexed and not run.truncated
     assert [t.tick for t in run.ticks] == list(range(1, 21))
+
+
+RAY_DRIVER = """
+import sys, time
+from pathlib import Path
+sys.path.insert(0, {tests!r})
+import ray
+from campaign.standin import stand_in
+from bt_grasp.campaign.ray_engine import RayEngine
+from bt_grasp.campaign.spec import load_campaign
+from bt_grasp.campaign.worker import KeepLogs
+address = {address!r}
+if address != "local":  # a cluster's head can take a while to accept connections on a busy machine
+    t = time.monotonic()
+    while True:
+        try:
+            ray.init(address=address, log_to_driver=False)
+            ray.shutdown()
+            break
+        except ConnectionError:
+            if time.monotonic() - t > 120:
+                raise
+            time.sleep(1)
+episodes = load_campaign({campaign!r}, check_inputs=False).episodes()
+for row in RayEngine(address, 2, stand_in, Path({logs!r}), KeepLogs.NONE).run(episodes):
+    print(row["worker"] if isinstance(row, dict) else row, flush=True)
+"""
+
+
+def _ray_head(temp_dir: Path, env: dict[str, str], err: Path) -> tuple[str, subprocess.Popen[bytes]]:
+    """A cluster of its own: ``ray start --head --block`` in its own process group."""
+    ray_bin = Path(sys.executable).with_name("ray")
+    if not ray_bin.exists():
+        pytest.skip(f"Ray cannot start here: no `ray` command next to {sys.executable}")
+    port = 20000 + (os.getpid() + 7919) % 20000
+    with err.open("wb") as f:
+        head = subprocess.Popen([str(ray_bin), "start", "--head", f"--port={port}", "--include-dashboard=false",
+                                 f"--temp-dir={temp_dir}", "--num-cpus=2", "--node-ip-address=127.0.0.1",
+                                 "--disable-usage-stats", "--block"],
+                                env=env, start_new_session=True, stdout=subprocess.DEVNULL, stderr=f)
+    return f"127.0.0.1:{port}", head
+
+
+@pytest.mark.slow
+@pytest.mark.real_client
+@pytest.mark.parametrize("where", ["local", "cluster"])
+def test_ray_actors_die_with_a_killed_driver(tmp_path: Path, where: str) -> None:
+    """The driver (coordinator) SIGKILLed mid-campaign. ``local`` (``--ray local``): Ray's raylet and GCS, started
+    by the driver, fate-share with it, and so do the episode actors. ``cluster``: the cluster stays, and the
+    episode actors, not detached, go with their driver's job (an actor made ``detached`` stays: this catches it).
+    (Ray's own dashboard and runtime-env agents of a local cluster took ~63 s to notice: not asserted.)"""
+    if importlib.util.find_spec("ray") is None:
+        pytest.skip("Ray is not installed (pip install -e '.[ray]')")
+    campaign = tmp_path / "c.yaml"
+    campaign.write_text(
+        f"name: c\ntrees: [{REPO / 'trees/pick.xml'}]\nscenes: [{REPO / 'scenes/tabletop.yaml'}]\n"
+        "seeds: {first: 0, count: 500}\n"
+    )
+    ray_temp = Path(tempfile.mkdtemp(prefix="ray", dir="/tmp"))  # Ray's socket paths must stay short
+    env = dict(os.environ, PYTHONPATH=str(REPO) + os.pathsep + str(REPO / "tests"), RAY_TMPDIR=str(ray_temp),
+               RAY_AUTH_MODE="token", RAY_AUTH_TOKEN=secrets.token_hex(32))  # hermetic: no ~/.ray token
+    head = None
+    address = "local"
+    if where == "cluster":
+        address, head = _ray_head(ray_temp, env, tmp_path / "head.err")
+    script = RAY_DRIVER.format(tests=str(REPO / "tests"), campaign=str(campaign), logs=str(tmp_path / "logs"),
+                               address=address)
+    proc = subprocess.Popen([sys.executable, "-c", script], env=env, stdout=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    below: dict[int, tuple[str, str]] = {}
+    try:
+        assert proc.stdout is not None
+        actors: set[int] = set()
+        while len(actors) < 2:  # both actors warm and running episodes (the rows' worker column: host:pid)
+            line = proc.stdout.readline()
+            assert line, f"the driver ended (exit {proc.wait()}) before both actors ran an episode"
+            actors.add(int(line.strip().rsplit(":", 1)[1]))
+        below = {pid: (fields[19], "actor") for pid in actors if (fields := _stat(pid)) is not None}
+        if where == "local":
+            below.update(_descendants(proc.pid))
+        ours = {pid: start for pid, (start, cmd) in below.items()
+                if pid in actors or "raylet/raylet" in cmd or "gcs/gcs_server" in cmd}
+        assert len(ours) == (2 if where == "cluster" else 4), below
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait(timeout=30)
+        alive = _wait_gone(ours)
+        assert alive == [], f"outlived their SIGKILLed driver by {BOUND_S} s: {[below[p][1][:60] for p in alive]}"
+        if head is not None:
+            assert head.poll() is None, "the cluster itself must stay"
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+        if proc.stdout is not None:
+            proc.stdout.close()
+        if head is not None:  # only the process group this test started
+            os.killpg(head.pid, signal.SIGTERM)
+            try:
+                head.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                os.killpg(head.pid, signal.SIGKILL)
+                head.wait(timeout=30)
+        for pid, (start, _) in below.items():  # Ray's agents too: nothing of the test's cluster stays
+            if _alive(pid, start):
+                os.kill(pid, signal.SIGKILL)
+        shutil.rmtree(ray_temp, ignore_errors=True)
