@@ -30,3 +30,14 @@ class MeshGeometry:
     volume_m3: float  # the mesh's volume when it is closed, else its convex hull's
     rgb: Vec3 | None = None  # the file's own material colour, when it has one
     mass_kg: float | None = None  # a URDF's <inertial><mass>, when it gives one
+
+    def _identity(self) -> tuple[object, ...]:
+        return (self.visual_path, self.collision_path, self.scale, self.sha256, self.rgb, self.mass_kg)
+
+    def __eq__(self, other: object) -> bool:
+        """Equal when read from the same files with the same content and scale (a scene loaded twice, or
+        pickled to a worker, equals itself)."""
+        return isinstance(other, MeshGeometry) and self._identity() == other._identity()
+
+    def __hash__(self) -> int:
+        return hash(self._identity())

@@ -94,3 +94,13 @@ def test_a_mesh_object_without_a_loaded_scene_says_so() -> None:
     obj = SceneObject(name="m", shape="mesh", mesh="box.obj", pose=ObjectPose(xy_m=(0.5, 0.0)))
     with pytest.raises(ConfigError, match="read by load_scene"):
         _ = obj.height_m
+
+
+def test_a_loaded_scene_pickles_to_a_worker_with_its_geometry_and_equals_itself() -> None:
+    import pickle
+
+    scene = load_scene(MESHES / "scene_cup.yaml")
+    copy = pickle.loads(pickle.dumps(scene))
+    assert copy == scene and copy == load_scene(MESHES / "scene_cup.yaml")
+    assert copy.objects[0].geometry.sha256 == scene.objects[0].geometry.sha256
+    assert copy != load_scene(MESHES / "scene_box_mesh.yaml")
