@@ -3,6 +3,7 @@ child, and the child's failures reported with a sentence."""
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import subprocess
@@ -22,7 +23,7 @@ TOPICS = ("/bt/tick", "/robot/joint_state", "/tf")
 REPO = Path(__file__).resolve().parents[2]
 WRITER_PARENT = Path(__file__).with_name("record_via_writer_process.py")
 #: the kill comes once the parent has reported this many ticks flushed
-KILL_AFTER = 150
+KILL_AFTER = 50
 
 
 def _record(path: Path, *, writer_process: bool) -> None:
@@ -71,8 +72,10 @@ def test_a_killed_parent_loses_no_tick_it_handed_to_the_writer_process(tmp_path:
     already), which outlives the parent, and the writer process reads its input to the end and finishes the file.
     The parent (``record_via_writer_process.py``) prints ``flushed N`` after each such pipe flush, a count taken
     outside the file; every tick it printed before the kill must be in the log, which must be finished (summary
-    and footer written by the writer process). The kill is made when the parent has reported KILL_AFTER ticks and
-    is still running (it records up to a million), so it always lands mid-run, whatever the machine's speed."""
+    and footer written by the writer process). The writer process is stopped (SIGSTOP) from the start until the
+    parent is dead, so every batch handed over is still in the pipe at the kill, whatever the machine's speed
+    (KILL_AFTER ticks fit in a 64 KiB pipe); the kill is made when the parent has reported KILL_AFTER ticks and is
+    still running (it records up to a million), so it always lands mid-run."""
     out = tmp_path / "killed.mcap"
     proc = subprocess.Popen([sys.executable, str(WRITER_PARENT), str(out)], stdout=subprocess.PIPE, text=True,
                             cwd=REPO, env={**os.environ, "PYTHONPATH": str(REPO)})
@@ -81,6 +84,7 @@ def test_a_killed_parent_loses_no_tick_it_handed_to_the_writer_process(tmp_path:
         first = proc.stdout.readline().split()
         assert first[:1] == ["writer"], first
         writer_pid = int(first[1])
+        os.kill(writer_pid, signal.SIGSTOP)
         reported: list[int] = []
         while not reported or reported[-1] < KILL_AFTER:
             line = proc.stdout.readline()
@@ -96,6 +100,8 @@ def test_a_killed_parent_loses_no_tick_it_handed_to_the_writer_process(tmp_path:
         if proc.poll() is None:
             proc.kill()
             proc.wait()
+        with contextlib.suppress(NameError, ProcessLookupError):
+            os.kill(writer_pid, signal.SIGCONT)  # the parent is dead: the writer reads its input to the end
     assert reported == list(range(1, len(reported) + 1)), "the parent reported ticks out of order"
     _wait_until_gone(writer_pid, timeout_s=120)  # it read its input to the end and finished the file
     run = open_log(out)
