@@ -173,3 +173,19 @@ def test_mass_friction_colour_and_class_are_plausible(name: str) -> None:
     assert entry["shape_class"] in SHAPE_CLASSES
     assert entry["rests"] in {"standing", "lying"}
     assert isinstance(entry["description"], str) and entry["description"].endswith(".")
+
+
+HOUSEHOLD_SCENES = sorted((REPO / "scenes").glob("household*.yaml"))
+
+
+@pytest.mark.parametrize("scene", HOUSEHOLD_SCENES, ids=lambda p: p.stem)
+def test_household_scenes_use_the_catalogue_mass_and_friction(scene: Path) -> None:
+    objects = yaml.safe_load(scene.read_text(encoding="utf-8"))["objects"]
+    used = [o for o in objects if o.get("shape") == "mesh" and "assets/household/" in o["mesh"]]
+    assert used, f"{scene.name} uses no object of the household set"
+    for obj in used:
+        path = (scene.parent / obj["mesh"]).resolve()
+        assert path.parent == SHIPPED.resolve() and path.is_file()
+        entry = CATALOGUE[path.stem]
+        assert obj["mass_kg"] == pytest.approx(entry["mass_kg"], rel=0.01), obj["name"]
+        assert obj["friction"] == pytest.approx(entry["friction"]), obj["name"]
