@@ -301,12 +301,13 @@ def test_run_image_hz_logs_one_extra_camera_frame_per_simulated_second(tmp_path:
 def test_bench_sim() -> None:
     r = _ok_json(_bt("bench", "sim", "--json"))
     assert r["timestep_s"] == yaml.safe_load((REPO / TABLETOP).read_text())["physics"]["timestep_s"]
-    assert 0 < r["scene_build_s_median"] <= r["scene_build_s_first"] < 120
+    assert 0 <= r["scene_build_s_median"] <= r["scene_build_s_first"] < 120 and r["scene_build_s_first"] > 0
     assert 0 < r["first_capture_s"] < 120 and 0 < r["render_ms_median"] < 10_000
     assert r["render_ms_median"] <= r["capture_ms_median"] < 10_000  # a capture renders, then reads back
     # ~14,000 steps/s idle on 2 cores: 100 would mean a broken physics loop, 10 million no physics at all
     assert 100 < r["physics_steps_per_s"] < 10_000_000
-    assert r["sim_s_per_wall_s"] == pytest.approx(r["physics_steps_per_s"] * r["timestep_s"], rel=0.02)
+    # the same measurement twice: simulated seconds per wall second (printed to 0.1) = steps per second x dt
+    assert r["sim_s_per_wall_s"] == pytest.approx(r["physics_steps_per_s"] * r["timestep_s"], abs=0.051)
 
 
 def test_bench_tree() -> None:
