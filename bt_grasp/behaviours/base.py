@@ -6,7 +6,7 @@ from typing import TYPE_CHECKING
 
 from py_trees.common import Status
 
-from bt_grasp.behaviours.reasons import FailureReason
+from bt_grasp.behaviours.reasons import ReasonLike, reason_name
 from bt_grasp.tree.exceptions import TreeRuntimeError
 from bt_grasp.tree.leaf import Leaf
 
@@ -31,9 +31,10 @@ class RobotLeaf(Leaf):
     def now_s(self) -> float:
         return self.cell.clock.now_ns() * 1e-9
 
-    def failed(self, reason: FailureReason, sentence: str) -> Status:
-        self.cell.media.log("WARN", self.name, f"{reason.value}: {sentence}")
-        return self.fail(reason.value, sentence)
+    def failed(self, reason: ReasonLike, sentence: str) -> Status:
+        """Fail with a reason (built-in or registered) and one sentence; also logged to the run's media."""
+        self.cell.media.log("WARN", self.name, f"{reason_name(reason)}: {sentence}")
+        return self.fail(reason, sentence)
 
     def input(self, port: str) -> object:
         """A port's value, or None when it is not set (an empty blackboard entry)."""

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 
 from bt_grasp.behaviours import (
     calibration_leaves,
@@ -65,9 +65,13 @@ def register_robot_leaves(registry: NodeRegistry) -> NodeRegistry:
     return registry
 
 
-def robot_registry() -> NodeRegistry:
-    """Every built-in node plus bt_grasp's robot leaves: what tree files may name."""
-    return register_robot_leaves(builtin_registry())
+def robot_registry(leaves: Sequence[str] = (), installed: bool = True) -> NodeRegistry:
+    """Every built-in node plus bt_grasp's robot leaves, the installed plugins' nodes (entry point group
+    ``bt_grasp.leaves``, when ``installed``) and those of each ``--leaves`` file or module: what tree files
+    may name. A bad plugin raises :class:`bt_grasp.tree.plugins.PluginError` (exit 2)."""
+    from bt_grasp.tree.plugins import load_plugins
+
+    return load_plugins(register_robot_leaves(builtin_registry()), leaves, installed)
 
 
 def check_tree_against_scene(nodes: Iterable[BtNode], scene: Scene) -> None:

@@ -14,6 +14,8 @@ from typing import TYPE_CHECKING, Any
 import typer
 from rich.console import Console
 
+from bt_grasp.cli.plugin_option import leaves_option
+
 if TYPE_CHECKING:  # the recording package (mcap, cv2) is imported when a log is replayed, not for --help
     from bt_grasp.recording.reader import RunLog
 
@@ -41,6 +43,7 @@ def replay_command(
     report: Path | None = typer.Option(None, "--report", help="Write a self-contained HTML run report here."),
     report_dir: Path | None = typer.Option(None, "--report-dir", help="Also write the report's figures as PNG here."),
     foxglove: bool = typer.Option(False, "--foxglove", help="Print how to open this log in Foxglove."),
+    leaves: list[str] = leaves_option(),
 ) -> None:
     """Replay a recorded run: summary and timeline by default, or the views asked for."""
     from bt_grasp.recording import render, replay
@@ -51,7 +54,7 @@ def replay_command(
     console = Console(highlight=False)
     run = open_log(log)
     if resim:
-        _resim(console, log, as_json, resim_log)
+        _resim(console, log, as_json, resim_log, tuple(leaves))
         return
     if foxglove:
         _print_foxglove(console, run)
@@ -124,10 +127,10 @@ def _utc(ns: int) -> str:
     return datetime.datetime.fromtimestamp(ns / 1e9, datetime.UTC).strftime("%Y-%m-%d %H:%M:%S UTC")
 
 
-def _resim(console: Console, log: Path, as_json: bool, keep: Path | None) -> None:
+def _resim(console: Console, log: Path, as_json: bool, keep: Path | None, leaves: tuple[str, ...] = ()) -> None:
     from bt_grasp.cli.resim import resimulate
 
-    report = resimulate(log, keep)
+    report = resimulate(log, keep, leaves)
     if as_json:
         _json(console, report.to_json())
     elif report.reproduced:

@@ -88,11 +88,12 @@ def recorded_goal(log_path: Path, meta: dict[str, str]) -> Goal | None:
     return goal
 
 
-def resimulate(log_path: Path, keep_log: Path | None = None) -> ResimReport:
+def resimulate(log_path: Path, keep_log: Path | None = None, leaves: tuple[str, ...] = ()) -> ResimReport:
     """Re-run a recorded log in a temporary folder that is removed afterwards, whatever happens; the new run's
-    log is kept only at ``keep_log`` when given."""
+    log is kept only at ``keep_log`` when given. ``leaves``: the ``--leaves`` plugins the run used (a log never
+    names code to load by itself: the user passes them again)."""
     with tempfile.TemporaryDirectory(prefix="bt_grasp_resim_") as tmp:
-        report = _resimulate(log_path, Path(tmp))
+        report = _resimulate(log_path, Path(tmp), leaves)
         if keep_log is not None:
             keep_log.parent.mkdir(parents=True, exist_ok=True)
             shutil.copyfile(report.new_log, keep_log)
@@ -102,7 +103,7 @@ def resimulate(log_path: Path, keep_log: Path | None = None) -> ResimReport:
     return report
 
 
-def _resimulate(log_path: Path, workdir: Path) -> ResimReport:
+def _resimulate(log_path: Path, workdir: Path, leaves: tuple[str, ...] = ()) -> ResimReport:
     from bt_grasp.episode import EpisodeRequest, run_episode
     from bt_grasp.recording.compare import compare_tick_streams
     from bt_grasp.recording.fingerprint import fingerprint_of_log
@@ -130,6 +131,10 @@ def _resimulate(log_path: Path, workdir: Path) -> ResimReport:
     except json.JSONDecodeError:
         blackboard = {}
     goal = recorded_goal(log_path, meta)
+    recorded_leaves = [v for v in meta.get("leaves", "").split(";") if v]
+    if recorded_leaves and not leaves:
+        raise LogFileError(log_path, f"the run used --leaves {' '.join(recorded_leaves)}; pass them again with "
+                           "--leaves (a log never loads code by itself)")
     new_log = workdir / "resim.mcap"
     request = EpisodeRequest(
         tree=tree,
@@ -143,6 +148,7 @@ def _resimulate(log_path: Path, workdir: Path) -> ResimReport:
         inject=inject,
         blackboard=blackboard,
         argv=("bt-grasp", "replay", str(log_path), "--resim"),
+        leaves=leaves,
     )
     summary = run_episode(request)
     new_run = open_log(new_log)

@@ -11,6 +11,7 @@ import typer
 from rich.console import Console
 from rich.markup import escape
 
+from bt_grasp.cli.plugin_option import leaves_option
 from bt_grasp.defaults import DEFAULT_LIFT_HEIGHT_M, DEFAULT_MAX_TICKS
 from bt_grasp.errors import InputError
 
@@ -139,6 +140,7 @@ def run(
         False, "--resident", help="Run in this user's resident warm process (started if needed; it exits after "
         "10 idle minutes): a second run skips the start-up. No live progress, no --live."
     ),
+    leaves: list[str] = leaves_option(),
 ) -> None:
     """Run a task tree on the simulated cell. Exit code 0 on task success (judged by physics), 1 on failure."""
     from bt_grasp.episode.episode import Episode
@@ -164,6 +166,7 @@ def run(
         live_port=live,
         live_host=live_host,
         realtime=realtime,
+        leaves=tuple(leaves),
     )
     if realtime is not None and realtime <= 0:
         raise InputError("--realtime", f"the factor must be positive, got {realtime}")

@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 
 import typer
 
+from bt_grasp.cli.plugin_option import leaves_option
 from bt_grasp.errors import InputError
 
 if TYPE_CHECKING:  # the tree package (py_trees) is imported when a command reads a tree, not for --help
@@ -25,8 +26,10 @@ tree_app = typer.Typer(
 )
 
 
-def tree_registry() -> NodeRegistry:
-    """The built-in nodes plus the robot leaves, when ``bt_grasp.behaviours`` provides ``register(registry)``."""
+def tree_registry(leaves: list[str] | None = None) -> NodeRegistry:
+    """The built-in nodes plus the robot leaves, when ``bt_grasp.behaviours`` provides ``register(registry)``,
+    plus the installed plugins' and ``--leaves`` nodes (a bad plugin raises PluginError, an InputError)."""
+    from bt_grasp.tree.plugins import load_plugins
     from bt_grasp.tree.registry import builtin_registry
 
     registry = builtin_registry()
@@ -37,7 +40,7 @@ def tree_registry() -> NodeRegistry:
     register = getattr(behaviours, "register", None)
     if callable(register):
         register(registry)
-    return registry
+    return load_plugins(registry, leaves or ())
 
 
 def _fail(exc: InputError) -> typer.Exit:
@@ -50,13 +53,15 @@ def _quiet_library_logs() -> None:
 
 
 @tree_app.command("validate")
-def validate_cmd(file: Path = typer.Argument(..., help="XML or YAML tree file.")) -> None:
+def validate_cmd(
+    file: Path = typer.Argument(..., help="XML or YAML tree file."), leaves: list[str] = leaves_option()
+) -> None:
     """Check a tree file completely (nodes, ports, scripts, includes, subtrees) without running it."""
     from bt_grasp.tree.loader import load_tree
 
     _quiet_library_logs()
     try:
-        tree = load_tree(file, tree_registry())
+        tree = load_tree(file, tree_registry(leaves))
     except InputError as exc:
         raise _fail(exc) from None
     count = sum(1 for _ in tree.nodes())
@@ -68,6 +73,7 @@ def show_cmd(
     file: Path = typer.Argument(..., help="XML or YAML tree file."),
     fmt: str = typer.Option("text", "--format", "-f", help="text, dot, png or svg."),
     out: Path | None = typer.Option(None, "--out", "-o", help="Write here instead of the terminal."),
+    leaves: list[str] = leaves_option(),
 ) -> None:
     """Draw the expanded tree (subtrees inlined) as text, Graphviz dot, png or svg."""
     from rich.console import Console
@@ -81,7 +87,7 @@ def show_cmd(
             raise InputError("--format", f"unknown format '{fmt}'; use text, dot, png or svg")
         if fmt in ("png", "svg") and out is None:
             raise InputError("--out", f"--format {fmt} needs --out FILE")
-        tree = load_tree(file, tree_registry())
+        tree = load_tree(file, tree_registry(leaves))
         if fmt == "text":
             if out is None:
                 Console().print(render.rich_tree(tree.root))
@@ -107,13 +113,17 @@ def show_cmd(
 def convert_cmd(
     source: Path = typer.Argument(..., help="Input tree file (.xml, .yaml, .yml)."),
     target: Path = typer.Argument(..., help="Output file; its extension chooses the format."),
+    leaves: list[str] = leaves_option(),
 ) -> None:
-    """Convert between BT.CPP v4 XML and the YAML twin format."""
+    """Convert between BT.CPP v4 XML and the YAML twin format (node types are not resolved: --leaves plugins
+    are only loaded and checked)."""
     from bt_grasp.tree.formats.convert import convert_file, format_of
 
     _quiet_library_logs()
     try:
         format_of(target)
+        if leaves:
+            tree_registry(leaves)
         convert_file(source, target)
     except InputError as exc:
         raise _fail(exc) from None
@@ -140,6 +150,7 @@ def run_cmd(
     ),
     tick_hz: float = typer.Option(100.0, "--tick-hz", help="Simulated ticks per second."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object: status, ticks, blackboard."),
+    leaves: list[str] = leaves_option(),
 ) -> None:
     """Tick a tree with a simulated clock until it finishes; exit 0 on SUCCESS, 1 otherwise."""
     from bt_grasp.clock import ManualClock
@@ -154,7 +165,7 @@ def run_cmd(
         if not tick_hz > 0:
             raise InputError("--tick-hz", f"must be positive, got {tick_hz}")
         clock = ManualClock()
-        tree = load_tree(file, tree_registry(), substitutions=_parse_substitutions(substitute), clock=clock)
+        tree = load_tree(file, tree_registry(leaves), substitutions=_parse_substitutions(substitute), clock=clock)
         robots = tree.robot_nodes()
         if robots:
             node = robots[0]
@@ -192,13 +203,18 @@ def models_cmd(
     include_builtins: bool = typer.Option(
         False, "--builtins", help="Also describe BT.CPP's built-in nodes (Groot2 knows them already)."
     ),
+    leaves: list[str] = leaves_option(),
 ) -> None:
     """Write the TreeNodesModel of bt_grasp's nodes (ports, types, defaults), for Groot2's palette."""
     from bt_grasp.tree.builtins import builtin_specs
     from bt_grasp.tree.formats.models import tree_nodes_model
 
     builtin_names = {spec.name for spec in builtin_specs()}
-    specs = [s for s in tree_registry().specs() if include_builtins or s.name not in builtin_names]
+    try:
+        registry = tree_registry(leaves)
+    except InputError as exc:
+        raise _fail(exc) from None
+    specs = [s for s in registry.specs() if include_builtins or s.name not in builtin_names]
     text = tree_nodes_model(specs)
     if out is None:
         typer.echo(text, nl=False)

@@ -84,7 +84,7 @@ def load_inputs(request: EpisodeRequest) -> Inputs:
     # --calibration, else the file the scene names beside it; another mount or camera pose is bad input
     calibration_path, calibration = calibration_for_scene(scene, request.scene, request.calibration)
     clock = _EpisodeClock()
-    tree = load_tree(request.tree, robot_registry(), clock=clock)
+    tree = load_tree(request.tree, robot_registry(request.leaves), clock=clock)
     check_tree_against_scene(tree.nodes(), scene)
     fault_plan = None
     if request.faults is not None or request.inject:

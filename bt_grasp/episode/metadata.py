@@ -43,6 +43,7 @@ def run_metadata(request: EpisodeRequest, scene: Scene, tree: LoadedTree, calibr
         "versions": versions_line(),
         "git_commit": git_commit(),
         "main_tree": tree.main_tree,
+        "leaves": ";".join(r.leaves),
     }
 
 

@@ -47,6 +47,8 @@ class EpisodeRequest:
     live_port: int | None = None
     live_host: str = "127.0.0.1"
     realtime: float | None = None
+    #: users' own nodes: ``--leaves`` plugin files or modules, loaded after the installed entry points
+    leaves: tuple[str, ...] = ()
 
 
 def parse_assignments(items: Sequence[str], source: str = "--set") -> dict[str, BlackboardValue]:

@@ -34,6 +34,8 @@ def _absolute(request: EpisodeRequest) -> EpisodeRequest:
         value = getattr(request, field)
         if value is not None:
             changes[field] = Path(value).absolute()
+    # --leaves plugin files too (a module name stays a module name)
+    changes["leaves"] = tuple(str(Path(v).absolute()) if v.endswith(".py") else v for v in request.leaves)
     return dataclasses.replace(request, **changes)
 
 

@@ -34,6 +34,7 @@ from py_trees.common import Status
 from bt_grasp.tree.context import NodeContext
 from bt_grasp.tree.exceptions import TreeRuntimeError
 from bt_grasp.tree.node import FROM_PY, BtNode, BtStatus
+from bt_grasp.tree.reasons import ReasonLike, reason_name
 
 #: root blackboard keys :meth:`Leaf.fail` writes (read by the ``FailureIs`` condition)
 FAILURE_REASON_KEY = "failure_reason"
@@ -55,9 +56,12 @@ class Leaf(BtNode):
         self._bt_once_per_period = ctx.spec.needs_robot
         self._bt_updated_in = -1
 
-    def fail(self, reason: str, sentence: str) -> Status:
-        """Report a typed failure: sets ``failure_reason`` and ``feedback_message`` and writes
-        ``failure_reason`` and ``failed_leaf`` into the root blackboard. Returns ``Status.FAILURE``."""
+    def fail(self, reason: ReasonLike, sentence: str) -> Status:
+        """Report a typed failure: sets ``failure_reason`` (the reason's name: a built-in
+        :class:`~bt_grasp.tree.reasons.FailureReason`, or a :class:`~bt_grasp.tree.reasons.Reason` a plugin
+        registered) and ``feedback_message``, and writes ``failure_reason`` and ``failed_leaf`` into the root
+        blackboard. Returns ``Status.FAILURE``."""
+        reason = reason_name(reason)
         self.failure_reason = reason
         self.feedback_message = sentence
         root = self.blackboard.root

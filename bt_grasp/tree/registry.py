@@ -20,11 +20,18 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from bt_grasp.errors import closest_names
+from bt_grasp.tree.reasons import Reason, builtin_reasons
 
 if TYPE_CHECKING:
     import py_trees
 
     from bt_grasp.tree.context import NodeContext
+
+
+class DeclarationError(ValueError):
+    """A node, port or failure reason declared wrongly, or a name registered twice (one sentence).
+
+    A ``ValueError``, so callers that caught those keep working; the plugin loader names the plugin with it."""
 
 
 class PortDirection(enum.Enum):
@@ -92,6 +99,7 @@ class PortSpec:
             A string default may be a blackboard reference such as ``"{target}"``.
         description: one sentence shown by ``bt-grasp tree show`` and written to TreeNodesModel
         choices: when not empty, the only literal values the port accepts (``else`` of Precondition)
+        reason: the port names a failure reason: a literal must be one the registry knows (``FailureIs``)
     """
 
     name: str
@@ -100,14 +108,19 @@ class PortSpec:
     default: Any = NO_DEFAULT
     description: str = ""
     choices: tuple[str, ...] = ()
+    reason: bool = False
 
     def __post_init__(self) -> None:
-        if self.type not in PORT_TYPES and not is_text_port_type(self.type):
-            raise ValueError(
+        if not isinstance(self.name, str) or not self.name or not self.name[0].isalpha():
+            raise DeclarationError(f"port name {self.name!r} is empty or does not start with a letter")
+        if self.name in RESERVED_ATTRIBUTES or not self.name.replace("_", "a").isalnum():
+            raise DeclarationError(f"port name {self.name!r} is reserved or not letters, digits and underscores")
+        if not isinstance(self.direction, PortDirection):
+            raise DeclarationError(f"port {self.name!r}: direction must be a PortDirection, got {self.direction!r}")
+        if not isinstance(self.type, type) or (self.type not in PORT_TYPES and not is_text_port_type(self.type)):
+            raise DeclarationError(
                 f"port {self.name!r}: type must be one of str, int, float, bool, object, or a class with from_port_text"
             )
-        if not self.name or not (self.name[0].isalpha()) or self.name in RESERVED_ATTRIBUTES:
-            raise ValueError(f"port name {self.name!r} is empty, reserved or does not start with a letter")
 
     @property
     def required(self) -> bool:
@@ -148,14 +161,19 @@ class NodeSpec:
     children: tuple[int, int | None] | None = None
 
     def __post_init__(self) -> None:
-        if not self.name or not self.name.replace("_", "a").isalnum():
-            raise ValueError(f"node name {self.name!r} must be letters, digits and underscores")
+        if not isinstance(self.name, str) or not self.name or not self.name.replace("_", "a").isalnum():
+            raise DeclarationError(f"node name {self.name!r} must be letters, digits and underscores")
+        if not isinstance(self.kind, NodeKind):
+            raise DeclarationError(f"node {self.name!r}: kind must be a NodeKind, got {self.kind!r}")
         if self.children is None:
             object.__setattr__(self, "children", _DEFAULT_CHILDREN[self.kind])
         object.__setattr__(self, "ports", tuple(self.ports))
+        for port in self.ports:
+            if not isinstance(port, PortSpec):
+                raise DeclarationError(f"node {self.name!r}: a port must be a PortSpec, got {port!r}")
         names = [p.name for p in self.ports]
         if len(set(names)) != len(names):
-            raise ValueError(f"node {self.name!r} declares a port twice: {names}")
+            raise DeclarationError(f"node {self.name!r} declares a port twice: {names}")
 
     def port(self, name: str) -> PortSpec | None:
         for p in self.ports:
@@ -175,22 +193,52 @@ class NodeSpec:
 
 
 class NodeRegistry:
-    """Node types by registration ID. A duplicate name raises ``ValueError``."""
+    """Node types by registration ID, and the failure reasons leaves may report. A duplicate name raises
+    :class:`DeclarationError` (a ``ValueError``)."""
 
-    def __init__(self, specs: Iterable[NodeSpec] = (), enums: Mapping[str, int] | None = None) -> None:
+    def __init__(
+        self, specs: Iterable[NodeSpec] = (), enums: Mapping[str, int] | None = None, reasons: Iterable[Reason] = ()
+    ) -> None:
         self._specs: dict[str, NodeSpec] = {}
         #: scripting enums (BT.CPP ``registerScriptingEnum``): identifiers scripts read as integers
         self.enums: dict[str, int] = dict(enums or {})
+        self._reasons: dict[str, Reason] = {}
+        #: who registered each node that did not come with bt_grasp (node name -> plugin file or distribution)
+        self.origins: dict[str, str] = {}
+        #: the same for failure reasons (reason name -> plugin)
+        self.reason_origins: dict[str, str] = {}
         for spec in specs:
             self.register(spec)
+        for reason in reasons:
+            self.register_reason(reason)
 
     def register(self, spec: NodeSpec) -> NodeSpec:
+        if not isinstance(spec, NodeSpec):
+            raise DeclarationError(f"register() takes a NodeSpec (e.g. MyLeaf.bt_spec), got {spec!r}")
         if spec.name in self._specs:
-            raise ValueError(f"a node named {spec.name!r} is already registered")
-        if spec.factory is None:
-            raise ValueError(f"node {spec.name!r} has no factory")
+            raise DeclarationError(f"a node named {spec.name!r} is already registered")
+        if spec.factory is None or not callable(spec.factory):
+            raise DeclarationError(f"node {spec.name!r} has no factory")
         self._specs[spec.name] = spec
         return spec
+
+    def register_reason(self, reason: Reason | str, description: str = "") -> Reason:
+        """Declare a failure reason leaves may report and ``FailureIs`` may test; a name registered twice
+        raises (the built-in ones included)."""
+        try:
+            value = reason if isinstance(reason, Reason) else Reason(reason, description)
+        except ValueError as exc:
+            raise DeclarationError(str(exc)) from None
+        if value.name in self._reasons:
+            raise DeclarationError(f"a failure reason named {value.name!r} is already registered")
+        self._reasons[value.name] = value
+        return value
+
+    def reason(self, name: str) -> Reason | None:
+        return self._reasons.get(name)
+
+    def reasons(self) -> tuple[Reason, ...]:
+        return tuple(self._reasons[n] for n in sorted(self._reasons))
 
     def register_enums(self, values: Mapping[str, int]) -> None:
         for key, value in values.items():
@@ -221,7 +269,10 @@ class NodeRegistry:
         return closest_names(name, list(self._specs), n)
 
     def copy(self) -> NodeRegistry:
-        return NodeRegistry(self._specs.values(), self.enums)
+        twin = NodeRegistry(self._specs.values(), self.enums, self._reasons.values())
+        twin.origins = dict(self.origins)
+        twin.reason_origins = dict(self.reason_origins)
+        return twin
 
 
 T = TypeVar("T")
@@ -264,6 +315,6 @@ def builtin_registry() -> NodeRegistry:
     """A fresh registry holding every built-in node (BT.CPP's and bt_grasp's own)."""
     from bt_grasp.tree.builtins import register_builtins
 
-    registry = NodeRegistry()
+    registry = NodeRegistry(reasons=builtin_reasons())
     register_builtins(registry)
     return registry

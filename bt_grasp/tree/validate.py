@@ -99,6 +99,9 @@ def resolve_node(decl: NodeDecl, registry: NodeRegistry, document: Document) -> 
             ports[key] = PortValue.from_text(port, value)
         except PortValueError as exc:
             raise decl.error(f"{spec.name}: {exc}") from None
+        if port.reason and ports[key].key is None and registry.reason(str(ports[key].literal)) is None:
+            hint = did_you_mean(str(ports[key].literal), [r.name for r in registry.reasons()])
+            raise decl.error(f"{spec.name}: unknown failure reason '{ports[key].literal}'{hint}")
     for port in spec.ports:
         if port.name in ports:
             continue

@@ -38,7 +38,7 @@ SPECS = (
         FailureIs,
         "SUCCESS when the last leaf failure had this reason.",
         (
-            PortSpec("reason", IN, str, description="a failure reason such as NO_DETECTION"),
+            PortSpec("reason", IN, str, description="a failure reason such as NO_DETECTION", reason=True),
             PortSpec("leaf", IN, str, "", "only when this leaf (by name) failed"),
         ),
     ),
