@@ -157,6 +157,11 @@ class PortAccessor:
     def names(self) -> tuple[str, ...]:
         return tuple(self._values)
 
+    def blackboard_ports(self) -> tuple[tuple[PortSpec, Blackboard, str], ...]:
+        """Every port bound to a blackboard key: (spec, the node's blackboard, key), for tools that check
+        a value against the ports reading an entry (``bt_grasp.control``)."""
+        return tuple((v.port, self._blackboard, v.key) for v in self._values.values() if v.key is not None)
+
 
 class EntryWatch:
     """Tells whether one blackboard entry was written since the last look (BT.CPP compares the entry's

@@ -16,7 +16,7 @@ from __future__ import annotations
 import logging
 import time
 from collections import Counter
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -44,6 +44,15 @@ class TickRecorder(Protocol):
     def flush_tick(self) -> None: ...
 
 
+class TickGate(Protocol):
+    """Consulted between ticks (``bt_grasp.control.Controller``): once before the first tick (tick 0) and after
+    every tick that did not end the run, before the physics steps; it may hold (a paused run: simulated time
+    stands still). ``failures``: (leaf path, leaf name, reason, message) of every FAILURE a leaf returned in
+    the tick. Returns True to stop the run there."""
+
+    def between_ticks(self, tick: int, failures: Sequence[tuple[str, str, str | None, str]] = ()) -> bool: ...
+
+
 @dataclass
 class FailureEvent:
     tick: int
@@ -65,6 +74,7 @@ class RunOutcome:
     failures: list[FailureEvent] = field(default_factory=list)
     retried: dict[str, int] = field(default_factory=dict)  # leaf name -> attempts started after a FAILURE
     root_runs: int = 0  # root executions, wake-up re-runs included (>= ticks)
+    stopped: bool = False  # a TickGate stopped the run (an operator's Stop)
 
     @property
     def retries(self) -> dict[str, int]:
@@ -88,6 +98,7 @@ class TreeRunner:
         recorder: TickRecorder | None = None,
         robot_state: Callable[[], Mapping[str, Any]] | None = None,
         on_tick: Callable[[int, LoadedTree], None] | None = None,
+        gate: TickGate | None = None,
     ) -> None:
         self.tree = tree
         self.stepper = stepper
@@ -95,6 +106,7 @@ class TreeRunner:
         self.recorder = recorder
         self.robot_state = robot_state
         self.on_tick = on_tick
+        self.gate = gate
         self._watch = _TickWatch()
         for node in tree.nodes():
             node.bt_listener = self._watch
@@ -109,7 +121,9 @@ class TreeRunner:
         status = BtStatus.RUNNING
         tick = 0
         root_runs = 0
-        while tick < max_ticks:
+        gate = self.gate
+        stopped = gate is not None and gate.between_ticks(0)
+        while tick < max_ticks and not stopped:
             tick += 1
             watch.new_tick()
             status = self.tree.tick()
@@ -141,6 +155,10 @@ class TreeRunner:
                 self.on_tick(tick, self.tree)
             if status.completed:
                 break
+            if gate is not None and gate.between_ticks(
+                    tick, [(n.bt_path, n.name, reason, message) for n, reason, message in watch.failed]):
+                stopped = True
+                break
             self.stepper.step(self.steps_per_tick)
         if not status.completed:
             self.tree.halt()  # cancel motion of RUNNING leaves
@@ -153,6 +171,7 @@ class TreeRunner:
             failures=failures,
             retried=dict(watch.retries),
             root_runs=root_runs,
+            stopped=stopped,
         )
 
 

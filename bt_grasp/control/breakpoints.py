@@ -1,0 +1,99 @@
+"""Breakpoints: where a running episode pauses by itself.
+
+A breakpoint is written as a spec (``--break SPEC`` on ``bt-grasp run``, repeatable, or from a front end):
+
+==================  ===========================================================================================
+``node:NAME``       before node NAME (a name, or a path such as ``pick/Perceive``) starts: the tick holds just
+                    before the node's own tick, when the node is not already RUNNING (a new attempt)
+``fail``            after a tick in which a leaf returned FAILURE
+``fail:REASON``     ... a FAILURE with this reason code (``NO_DETECTION``, ``IK_UNREACHABLE``, ...)
+``bb:KEY``          after a tick that changed blackboard entry KEY (of the main tree; its value differs)
+``tick:N``          after tick N (``tick:0``: before the first tick)
+``time:S``          at the first tick boundary at or after S simulated seconds
+==================  ===========================================================================================
+
+A bad spec is an :class:`bt_grasp.errors.InputError` naming ``--break`` and the spec.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass
+
+from bt_grasp.errors import InputError
+
+SOURCE = "--break"
+SYNTAX = "node:NAME, fail, fail:REASON, bb:KEY, tick:N or time:S"
+
+
+class BreakKind(enum.StrEnum):
+    NODE = "node"
+    FAILURE = "fail"
+    BLACKBOARD = "bb"
+    TICK = "tick"
+    TIME = "time"
+
+
+@dataclass(frozen=True)
+class Breakpoint:
+    """One breakpoint. ``target``: the node (NODE), the reason ('' for any: FAILURE), the entry (BLACKBOARD);
+    ``tick`` for TICK; ``time_s`` for TIME."""
+
+    kind: BreakKind
+    target: str = ""
+    tick: int = 0
+    time_s: float = 0.0
+
+    @property
+    def spec(self) -> str:
+        """The spec that parses back to this breakpoint."""
+        if self.kind is BreakKind.TICK:
+            return f"tick:{self.tick}"
+        if self.kind is BreakKind.TIME:
+            return f"time:{self.time_s:g}"
+        if self.kind is BreakKind.FAILURE and not self.target:
+            return "fail"
+        return f"{self.kind.value}:{self.target}"
+
+
+def parse_breakpoint(spec: str, source: str = SOURCE) -> Breakpoint:
+    """The breakpoint a spec names; InputError (one sentence) on a bad spec."""
+    text = spec.strip()
+    head, sep, tail = text.partition(":")
+    tail = tail.strip()
+
+    def bad(problem: str) -> InputError:
+        return InputError(source, f"'{spec}': {problem}; expected {SYNTAX}")
+
+    if head == "fail":
+        if sep and not tail:
+            raise bad("a reason after 'fail:' is empty")
+        return Breakpoint(BreakKind.FAILURE, tail)
+    if not sep:
+        raise bad("no kind before ':'")
+    if head in ("node", "bb"):
+        if not tail:
+            raise bad(f"'{head}:' names nothing")
+        return Breakpoint(BreakKind(head), tail)
+    if head == "tick":
+        try:
+            tick = int(tail)
+        except ValueError:
+            raise bad(f"'{tail}' is not a tick number") from None
+        if tick < 0:
+            raise bad("a tick is 0 or more")
+        return Breakpoint(BreakKind.TICK, tick=tick)
+    if head == "time":
+        try:
+            time_s = float(tail)
+        except ValueError:
+            raise bad(f"'{tail}' is not a number of seconds") from None
+        if not math.isfinite(time_s) or time_s < 0:
+            raise bad("a time is a finite number of seconds, 0 or more")
+        return Breakpoint(BreakKind.TIME, time_s=time_s)
+    raise bad(f"unknown kind '{head}'")
+
+
+def parse_breakpoints(specs: list[str] | tuple[str, ...], source: str = SOURCE) -> tuple[Breakpoint, ...]:
+    return tuple(parse_breakpoint(s, source) for s in specs)
