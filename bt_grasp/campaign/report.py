@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from bt_grasp.campaign import plots
-from bt_grasp.campaign.results import read_rows
+from bt_grasp.campaign.results import read_report_rows
 from bt_grasp.campaign.stats import Rate, success_rates, tree_label
 from bt_grasp.errors import InputError
 
@@ -50,7 +50,7 @@ class Figure:
 
 
 def _load(path: Path) -> list[dict[str, Any]]:
-    rows = read_rows(path)
+    rows = read_report_rows(path)
     if not rows:
         raise InputError(path, "holds no finished episode yet")
     return rows

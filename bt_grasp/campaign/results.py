@@ -9,6 +9,7 @@ again on resume. Parquet is an export of this file, never the record.
 from __future__ import annotations
 
 import json
+import math
 import os
 from collections.abc import Iterable
 from pathlib import Path
@@ -36,18 +37,112 @@ def read_rows(path: Path, *, repair: bool = False) -> list[dict[str, Any]]:
             f.truncate(end)
             f.flush()
             os.fsync(f.fileno())
+    return [row for _, row in _numbered_rows(path, data[:end])]
+
+
+def _numbered_rows(path: Path, data: bytes) -> list[tuple[int, dict[str, Any]]]:
     rows = []
-    for number, line in enumerate(data[:end].splitlines(), start=1):
+    for number, line in enumerate(data.splitlines(), start=1):
         if not line.strip():
             continue
         try:
-            row = json.loads(line)
+            row = json.loads(line.decode("utf-8"))
+        except UnicodeDecodeError as exc:
+            raise InputError(path, f"not UTF-8 text (byte {exc.start + 1} of the line)", number) from None
         except json.JSONDecodeError as exc:
             raise InputError(path, f"not a JSON object ({exc.msg})", number) from None
+        except RecursionError:
+            raise InputError(path, "not a campaign results row (JSON nested too deeply to read)", number) from None
+        except ValueError as exc:  # an integer of more digits than Python converts
+            raise InputError(path, f"not a JSON object ({str(exc).split(':')[0]})", number) from None
         if not isinstance(row, dict) or "episode" not in row:
             raise InputError(path, "not a campaign results row (no 'episode' column)", number)
-        rows.append(row)
+        rows.append((number, row))
     return rows
+
+
+#: more retries than any episode makes (the report draws one bar per count)
+MAX_RETRIES = 10_000
+_TEXT = (str,)
+_OPTIONAL_TEXT = (str, type(None))
+
+
+def _is_int(value: Any, low: int = -(2**63), high: int = 2**63 - 1) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool) and low <= value <= high
+
+
+def _is_finite(value: Any) -> bool:
+    return (isinstance(value, float) and math.isfinite(value)) or _is_int(value)
+
+
+def _check_text(value: Any) -> bool:
+    """A string that can be written out again (no lone surrogate from a ``\\udcff`` escape)."""
+    try:
+        value.encode("utf-8")
+    except UnicodeEncodeError:
+        return False
+    return True
+
+
+_COLUMNS: dict[str, tuple[str, Any]] = {
+    # column -> (what it must be, check)
+    "episode": ("a string", lambda v: isinstance(v, str)),
+    "tree": ("a string", lambda v: isinstance(v, str)),
+    "scene": ("a string", lambda v: isinstance(v, str)),
+    "fault_plan": ("a string", lambda v: isinstance(v, str)),
+    "seed": ("an integer", _is_int),
+    "success": ("true or false", lambda v: isinstance(v, bool)),
+    "failure_reason": ("a string or null", lambda v: isinstance(v, _OPTIONAL_TEXT)),
+    "failed_leaf": ("a string or null", lambda v: isinstance(v, _OPTIONAL_TEXT)),
+    "ticks": ("an integer or null", lambda v: v is None or _is_int(v)),
+    "sim_time_s": ("a finite number", _is_finite),
+    "episode_wall_s": ("a finite number", _is_finite),
+    "retries_total": (f"an integer from 0 to {MAX_RETRIES}", lambda v: _is_int(v, 0, MAX_RETRIES)),
+    "retries": (f"an object of leaf names to retry counts (0 to {MAX_RETRIES})",
+                lambda v: isinstance(v, dict) and all(_is_int(n, 0, MAX_RETRIES) for n in v.values())),
+}
+_OPTIONAL_COLUMNS: dict[str, tuple[str, Any]] = {
+    "campaign": ("a string", lambda v: isinstance(v, str)),
+    "mcap": ("a string or null", lambda v: isinstance(v, _OPTIONAL_TEXT)),
+    "params": ("an object", lambda v: isinstance(v, dict)),
+    "environment": ("an object or null", lambda v: v is None or (
+        isinstance(v, dict) and isinstance(v.get("libraries") or {}, dict))),
+}
+
+
+def _check_row(path: Path, number: int, row: dict[str, Any]) -> None:
+    for column, (expected, ok) in _COLUMNS.items():
+        if column not in row:
+            raise InputError(path, f"the row has no '{column}' column (a report needs it)", number)
+        if not ok(row[column]):
+            raise InputError(path, f"'{column}' is {_shown(row[column])}, not {expected}", number)
+    for column, (expected, ok) in _OPTIONAL_COLUMNS.items():
+        if column in row and not ok(row[column]):
+            raise InputError(path, f"'{column}' is {_shown(row[column])}, not {expected}", number)
+    try:
+        text = json.dumps(row, ensure_ascii=False)
+    except RecursionError:
+        raise InputError(path, "the row is nested too deeply to report on", number) from None
+    if not _check_text(text):
+        raise InputError(path, "the row holds text that is not valid Unicode (a lone surrogate)", number)
+
+
+def _shown(value: Any) -> str:
+    text = json.dumps(value, ensure_ascii=True)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def read_report_rows(path: Path) -> list[dict[str, Any]]:
+    """The complete rows of a results file, each checked for the columns a report reads, with their types;
+    a row that lacks one or holds the wrong type is an ``InputError`` naming the line and the column."""
+    path = Path(path)
+    if not path.exists():
+        raise InputError(path, "no such results file")
+    data = read_user_file(path, MAX_RESULTS_BYTES)
+    numbered = _numbered_rows(path, data[: data.rfind(b"\n") + 1])
+    for number, row in numbered:
+        _check_row(path, number, row)
+    return [row for _, row in numbered]
 
 
 class ResultsWriter:

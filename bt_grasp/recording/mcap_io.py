@@ -205,7 +205,11 @@ def scan_file(path: Path, wanted: Collection[str] | None) -> Scan:
                 except chunks.ChunkTooLarge:
                     raise
                 except Exception as exc:  # an index that lies: fall back to reading every record
-                    log.warning("%s: the index could not be used (%s); reading linearly", path, exc)
+                    # not a warning on stderr: a refusal later must stay one sentence; the summary says it
+                    log.info("%s: the index could not be used (%s); reading linearly", path, exc)
+                    scan = _scan_linear(f, size, wanted)
+                    scan.stop_reason = scan.stop_reason or f"the index could not be used ({type(exc).__name__})"
+                    return scan
             return _scan_linear(f, size, wanted)
     except chunks.ChunkTooLarge as exc:
         raise LogFileError(path, str(exc)) from None
@@ -224,3 +228,9 @@ def iter_topic(path: Path, topics: Collection[str], indexed: bool) -> Iterator[R
                 yield from _scan_linear(f, size, topics).messages
         except chunks.ChunkTooLarge as exc:
             raise LogFileError(path, str(exc)) from None
+        except LogFileError:
+            raise
+        except Exception as exc:  # a chunk the index points at is damaged (the file was opened without it)
+            what = ", ".join(sorted(topics))
+            raise LogFileError(path, f"has damaged data where its index points for {what} "
+                               f"({type(exc).__name__})") from None

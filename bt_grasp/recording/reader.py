@@ -8,7 +8,6 @@ Anything that is not a readable bt_grasp log raises ``LogFileError`` (exit code 
 
 from __future__ import annotations
 
-import json
 import logging
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -23,6 +22,7 @@ from numpy.typing import NDArray
 from bt_grasp.errors import LogFileError
 from bt_grasp.recording import mcap_io, topics
 from bt_grasp.recording.schemas import PROTOBUF_CLASSES
+from bt_grasp.recording.validate import BadMessage, is_int, parse_json
 from bt_grasp.tree.registry import NodeKind
 
 log = logging.getLogger(__name__)
@@ -131,7 +131,8 @@ class RunLog:
     library: str = ""
     stop_reason: str = ""
     _learned: dict[int, NodeInfo] = field(default_factory=dict, repr=False)
-    _robot_raw: dict[int, bytes] = field(default_factory=dict, repr=False)  # stamp_ns -> JSON, decoded lazily
+    #: stamp_ns -> the /robot/joint_state message, decoded (and checked) when asked for
+    _robot_raw: dict[int, mcap_io.RawMessage] = field(default_factory=dict, repr=False)
     #: the file's time of simulated time 0 (format 2; 0 for format 1, whose times are simulated time)
     time_origin_ns: int = 0
 
@@ -184,43 +185,77 @@ class RunLog:
         """The last arm state (/robot/joint_state) written at or before ``tick``."""
         for record in reversed(self.ticks):
             if record.tick <= tick and record.stamp_ns in self._robot_raw:
-                state: dict[str, Any] = json.loads(self._robot_raw[record.stamp_ns])
+                state: dict[str, Any] = decode_at(self.path, self._robot_raw[record.stamp_ns], self.time_origin_ns)
                 return state
         return None
 
     def iter_messages(self, topic: str) -> Iterator[TopicMessage]:
-        """Every message on ``topic``, decoded (JSON -> dict, Foxglove -> protobuf message)."""
+        """Every message on ``topic``, decoded (JSON -> dict, Foxglove -> protobuf message) and checked."""
         for raw in mcap_io.iter_topic(self.path, [topic], self.indexed):
             yield TopicMessage(raw.topic, raw.log_time_ns - self.time_origin_ns, raw.publish_time_ns,
-                               raw.schema_name, decode(raw))
+                               raw.schema_name, decode_at(self.path, raw, self.time_origin_ns))
 
     def images(self) -> Iterator[Image]:
-        """The recorded colour and depth images, decoded to numpy arrays, in file order."""
+        """The recorded colour and depth images, decoded to numpy arrays, in file order; an image that does
+        not decode is a ``LogFileError`` naming its topic and time (it is bad input, found when shown)."""
         for raw in mcap_io.iter_topic(self.path, [topics.COLOR, topics.DEPTH], self.indexed):
-            msg = decode(raw)
-            stamp = msg.timestamp.seconds * 1_000_000_000 + msg.timestamp.nanos - self.time_origin_ns
-            if raw.topic == topics.COLOR:
-                bgr = cv2.imdecode(np.frombuffer(msg.data, np.uint8), cv2.IMREAD_COLOR)
-                if bgr is None:
-                    log.warning("%s: an undecodable %s image at %d ns", self.path, msg.format, stamp)
-                    continue
-                yield Image(raw.topic, stamp, msg.frame_id, "color", msg.format, bgr[:, :, ::-1].copy())
-            else:
-                dtype = "<u2" if msg.encoding == "16UC1" else "<f4"
-                pixels = np.frombuffer(msg.data, dtype=dtype).reshape(msg.height, -1)[:, : msg.width]
-                yield Image(raw.topic, stamp, msg.frame_id, "depth", msg.encoding, pixels.copy())
+            msg = decode_at(self.path, raw, self.time_origin_ns)
+            stamp = raw.log_time_ns - self.time_origin_ns
+            try:
+                yield _image(raw.topic, msg, msg.timestamp.seconds * 1_000_000_000 + msg.timestamp.nanos
+                             - self.time_origin_ns)
+            except BadMessage as exc:
+                raise LogFileError(self.path, f"has a bad image on {raw.topic} at {stamp} ns: {exc}") from None
+
+
+_DEPTH_TYPES: dict[str, np.dtype[Any]] = {"16UC1": np.dtype("<u2"), "32FC1": np.dtype("<f4")}
+
+
+def _image(topic: str, msg: Any, stamp: int) -> Image:
+    if topic == topics.COLOR:
+        bgr = cv2.imdecode(np.frombuffer(msg.data, np.uint8), cv2.IMREAD_COLOR) if msg.data else None
+        if bgr is None:
+            raise BadMessage(f"its {msg.format or 'unnamed'} data ({len(msg.data)} bytes) does not decode")
+        return Image(topic, stamp, msg.frame_id, "color", msg.format, bgr[:, :, ::-1].copy())
+    dtype = _DEPTH_TYPES.get(msg.encoding)
+    if dtype is None:
+        raise BadMessage(f"its encoding {msg.encoding!r} is not one of {', '.join(_DEPTH_TYPES)}")
+    row_items = len(msg.data) // dtype.itemsize // msg.height if msg.height else 0
+    if not msg.width or row_items < msg.width or len(msg.data) != row_items * msg.height * dtype.itemsize:
+        raise BadMessage(f"its {len(msg.data)} bytes are not {msg.height} rows of {msg.width} {msg.encoding} pixels")
+    pixels = np.frombuffer(msg.data, dtype=dtype).reshape(msg.height, row_items)[:, : msg.width]
+    return Image(topic, stamp, msg.frame_id, "depth", msg.encoding, pixels.copy())
 
 
 def decode(raw: mcap_io.RawMessage) -> Any:
+    """One message: JSON (checked: :mod:`bt_grasp.recording.validate`) or a Foxglove protobuf message; a topic
+    bt_grasp writes must come in the encoding and schema it writes; raises ``BadMessage``."""
+    if raw.topic in topics.JSON_TOPICS and raw.message_encoding != "json":
+        raise BadMessage(f"its encoding is {raw.message_encoding!r}, not 'json'")
+    expected = topics.PROTOBUF_TOPICS.get(raw.topic)
+    if expected is not None and (raw.message_encoding, raw.schema_name) != ("protobuf", expected):
+        raise BadMessage(f"it is {raw.message_encoding!r} of schema {raw.schema_name!r}, not 'protobuf' of "
+                         f"{expected!r}")
     if raw.message_encoding == "json":
-        return json.loads(raw.data)
+        return parse_json(raw.topic, raw.data)
     cls = PROTOBUF_CLASSES.get(raw.schema_name)
     if raw.message_encoding == "protobuf" and cls is not None:
         msg = cls()
-        msg.ParseFromString(raw.data)
+        try:
+            msg.ParseFromString(raw.data)
+        except Exception as exc:  # protobuf's DecodeError, or a RecursionError on hostile nesting
+            raise BadMessage(f"it is not a {raw.schema_name} message ({type(exc).__name__})") from None
         return msg
     return {"__undecoded__": {"encoding": raw.message_encoding, "schema": raw.schema_name,
                               "bytes": len(raw.data)}}
+
+
+def decode_at(path: Path, raw: mcap_io.RawMessage, origin: int) -> Any:
+    """``decode``, with a message that does not decode as one sentence naming the file, topic and time."""
+    try:
+        return decode(raw)
+    except BadMessage as exc:
+        raise LogFileError(path, f"has a bad message on {raw.topic} at {raw.log_time_ns - origin} ns: {exc}") from None
 
 
 def message_to_jsonable(message: Any) -> Any:
@@ -266,19 +301,16 @@ def open_log(path: str | Path) -> RunLog:
     fmt = metadata.get("log_format", "1")
     if fmt not in topics.READABLE_LOG_FORMATS:
         readable = " and ".join(topics.READABLE_LOG_FORMATS)
-        raise LogFileError(p, f"was written in bt_grasp log format {fmt}; this bt_grasp reads formats {readable}")
-    origin = int(metadata.get(topics.TIME_ORIGIN_KEY, "0") or 0)  # format 1: simulated time from 0
+        shown = fmt if fmt.isascii() and fmt.isprintable() and len(fmt) <= 20 else repr(fmt[:20])
+        raise LogFileError(p, f"was written in bt_grasp log format {shown}; this bt_grasp reads formats {readable}")
+    origin = _time_origin(p, metadata)  # format 1: simulated time from 0
     by_topic: dict[str, list[tuple[mcap_io.RawMessage, Any]]] = {}
-    robot_raw: dict[int, bytes] = {}
+    robot_raw: dict[int, mcap_io.RawMessage] = {}
     for raw in scan.messages:
-        if raw.topic == topics.JOINT_STATE:
-            robot_raw[raw.log_time_ns - origin] = raw.data
-            continue
-        try:
-            by_topic.setdefault(raw.topic, []).append((raw, decode(raw)))
-        except Exception as exc:
-            where = f"on {raw.topic} at {raw.log_time_ns - origin} ns"
-            raise LogFileError(p, f"has an undecodable message {where}") from exc
+        if raw.topic == topics.JOINT_STATE:  # one per tick: decoded and checked only when one is shown
+            robot_raw[raw.log_time_ns - origin] = raw
+        else:  # every other message is decoded and checked once, here
+            by_topic.setdefault(raw.topic, []).append((raw, decode_at(p, raw, origin)))
     learned: dict[int, NodeInfo] = {}
     ticks = []
     for _, msg in by_topic.get(topics.TICK, []):
@@ -292,8 +324,8 @@ def open_log(path: str | Path) -> RunLog:
     def stamped(topic: str) -> list[dict[str, Any]]:
         return [{"stamp_ns": raw.log_time_ns - origin, **msg} for raw, msg in by_topic.get(topic, [])]
 
-    logs = [{"stamp_ns": raw.log_time_ns - origin, "level": msg.Level.Name(msg.level), "name": msg.name,
-             "message": msg.message} for raw, msg in by_topic.get(topics.LOG, [])]
+    logs = [{"stamp_ns": raw.log_time_ns - origin, "level": _level_name(msg), "name": msg.name,
+             "message": msg.message} for raw, msg in by_topic.get(topics.LOG, []) if not isinstance(msg, dict)]
     results = by_topic.get(topics.RESULT, [])
     structures = [TreeSnapshot(raw.log_time_ns - origin, msg.get("tick"), msg["structure"])
                   for raw, msg in by_topic.get(topics.TREE, [])]
@@ -317,6 +349,22 @@ def open_log(path: str | Path) -> RunLog:
         _robot_raw=robot_raw,
         time_origin_ns=origin,
     )
+
+
+def _time_origin(path: Path, metadata: dict[str, str]) -> int:
+    text = metadata.get(topics.TIME_ORIGIN_KEY, "0") or "0"
+    value = int(text) if text.isascii() and text.isdigit() and len(text) < 20 else None
+    if value is None or not is_int(value):
+        raise LogFileError(path, f"its run metadata '{topics.TIME_ORIGIN_KEY}' is {text[:40]!r}, not a time in "
+                                 "nanoseconds")
+    return value
+
+
+def _level_name(msg: Any) -> str:
+    try:
+        return str(msg.Level.Name(msg.level))
+    except ValueError:  # a level number the schema does not name
+        return str(msg.level)
 
 
 def _trajectory(msg: dict[str, Any]) -> dict[str, Any]:

@@ -170,14 +170,18 @@ def test_dollar_signs_in_names_do_not_start_mathtext_in_the_report(tmp_path: Pat
 def test_crafted_numbers_in_a_compared_results_file_are_escaped_in_the_report(tmp_path: Path) -> None:
     """Issue 22 (weak items): seed, ticks and cpu_count went into the HTML unescaped (`--compare` a crafted file)."""
     from bt_grasp.campaign.report import build_report
+    from bt_grasp.errors import InputError
 
     payload = "<script>alert(1)</script>"
     rows = _rows("evil", "pick", 2)
     for row in rows:
-        row["ticks"] = payload
-        row["environment"]["cpu_count"] = payload
+        row["environment"]["cpu_count"] = payload  # free-form: shown, escaped
     ok = _write(tmp_path / "ok.jsonl", _rows("ok", "pick", 3))
     evil = _write(tmp_path / "evil.jsonl", rows)
     build_report(evil, tmp_path / "report.html", compare=ok)
     page = (tmp_path / "report.html").read_text()
     assert payload not in page and "&lt;script&gt;" in page
+    rows[0]["ticks"] = payload  # a column a report counts with is checked: refused, naming file, line, column
+    evil = _write(tmp_path / "evil.jsonl", rows)
+    with pytest.raises(InputError, match=r"evil.jsonl:1: 'ticks' is .*, not an integer or null"):
+        build_report(evil, tmp_path / "report2.html", compare=ok)

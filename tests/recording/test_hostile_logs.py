@@ -1,12 +1,15 @@
 """Issue 22, item 1: a log's attachment names never choose where `replay --resim` writes, and its work
-folder never outlives it."""
+folder never outlives it; item 3: decompression bombs; weak item: bad log contents (a tick of the wrong type,
+a tree without structure, an image that fails to decode only when shown) are one sentence, not a traceback."""
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -88,3 +91,177 @@ def test_item3_a_decompression_bomb_is_refused_in_one_sentence(
     assert proc.returncode == 2, proc.stderr[-2000:]
     lines = [line for line in proc.stderr.splitlines() if line.strip()]
     assert len(lines) == 1 and "bomb.mcap" in lines[0] and "refused" in lines[0], proc.stderr[-2000:]
+
+
+# -- issue 22, weak item: bad log *contents* (well-formed MCAP, wrong messages) are one sentence, not a traceback
+
+SEED_LOG = REPO / "tests" / "data" / "old_logs" / "format1.mcap"
+
+
+def _rewrite(path: Path, change: Any = None, metadata: dict[str, str] | None = None,
+             encoding: dict[str, str] | None = None, chunk_size: int = 1 << 20) -> Path:
+    """The seed log written again with the mcap library (well-formed MCAP), ``change(topic, index, data)``
+    replacing message bytes, ``metadata`` overriding run metadata, ``encoding`` a topic's message encoding."""
+    import io
+
+    from mcap.reader import make_reader
+    from mcap.writer import Writer
+
+    reader = make_reader(io.BytesIO(SEED_LOG.read_bytes()))
+    out = path.open("wb")
+    writer = Writer(out, chunk_size=chunk_size)
+    writer.start(profile="", library="test")
+    schema_ids: dict[int, int] = {}
+    channel_ids: dict[int, int] = {}
+    seen: dict[str, int] = {}
+    for schema, channel, message in reader.iter_messages():
+        if schema is not None and schema.id not in schema_ids:
+            schema_ids[schema.id] = writer.register_schema(schema.name, schema.encoding, schema.data)
+        if channel.id not in channel_ids:
+            enc = (encoding or {}).get(channel.topic, channel.message_encoding)
+            channel_ids[channel.id] = writer.register_channel(channel.topic, enc, schema_ids.get(channel.schema_id, 0))
+        index = seen[channel.topic] = seen.get(channel.topic, -1) + 1
+        data = change(channel.topic, index, message.data) if change is not None else message.data
+        writer.add_message(channel_ids[channel.id], message.log_time, data, message.publish_time)
+    for record in reader.iter_metadata():
+        writer.add_metadata(record.name, {**record.metadata, **(metadata or {})})
+    writer.finish()
+    out.close()
+    return path
+
+
+def _json_change(topic: str, index: int, edit: Any) -> Any:
+    def change(t: str, i: int, data: bytes) -> bytes:
+        if (t, i) != (topic, index):
+            return data
+        result = edit(json.loads(data))
+        return result if isinstance(result, bytes) else json.dumps(result).encode()
+
+    return change
+
+
+def _replay(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, list[str]]:
+    from bt_grasp.cli.main import main
+
+    code = main(["replay", *args])
+    err = capsys.readouterr().err
+    assert "Traceback" not in err, err
+    return code, [line for line in err.splitlines() if line.strip()]
+
+
+BAD_CONTENTS = {
+    "tick_is_a_string": (topics_tick := "/bt/tick", 2, lambda m: {**m, "tick": "5"}, "'tick' is a string"),
+    "nodes_not_a_list": (topics_tick, 0, lambda m: {**m, "nodes": {"uid": 1}}, "'nodes' is an object"),
+    "node_without_uid": (topics_tick, 1, lambda m: {**m, "nodes": [{"status": "OK"}]}, "'nodes[0].uid' is missing"),
+    "tick_not_an_object": (topics_tick, 3, lambda m: [m], "is a list, not a JSON object"),
+    "tree_without_structure": ("/bt/tree", 0, lambda m: {"tick": None}, "'structure' is missing"),
+    "tree_structure_null": ("/bt/tree", 0, lambda m: {**m, "structure": None}, "structure is null"),
+    "tree_too_deep": ("/bt/tree", 0, lambda m: {**m, "structure": _deep(150)}, "nested deeper than 100"),
+    "joint_positions_text": ("/robot/joint_state", 4, lambda m: {**m, "position": "x"}, "'position' is a string"),
+    "result_success_text": ("/run/result", 0, lambda m: {**m, "success": "yes"}, "'success' is a string"),
+    "fault_stamp_text": ("/faults", 0, lambda m: {**m, "stamp_ns": "late"}, "'stamp_ns' is a string"),
+    "not_utf8": (topics_tick, 2, lambda m: json.dumps(m).replace('"', '"\xe9', 1).encode("latin-1"), "not UTF-8"),
+    "lone_surrogate": (topics_tick, 2, lambda m: json.dumps({**m, "bb": {"k": "\udcff"}}).encode(), "not valid"),
+    "deep_json": (topics_tick, 2, lambda m: b"[" * 50_000 + b"]" * 50_000, "nested too deeply"),
+}
+
+
+def _deep(n: int) -> dict[str, Any]:
+    node: dict[str, Any] = {"uid": 1000}
+    for i in range(n):
+        node = {"uid": i, "name": "d", "children": [node]}
+    return node
+
+
+@pytest.mark.parametrize("view", [[], ["--tick", "5"], ["--json"]])
+@pytest.mark.parametrize("name", sorted(BAD_CONTENTS))
+def test_weak_item_bad_message_contents_are_one_sentence_naming_file_topic_and_time(
+    name: str, view: list[str], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    topic, index, edit, problem = BAD_CONTENTS[name]
+    log = _rewrite(tmp_path / "bad.mcap", _json_change(topic, index, edit))
+    code, lines = _replay(capsys, str(log), *view)
+    if topic == "/robot/joint_state" and view != ["--tick", "5"]:  # one per tick: checked when one is shown
+        assert code == 0, lines
+        return
+    assert code == 2 and len(lines) == 1, lines
+    assert "bad.mcap" in lines[0] and f"on {topic} at " in lines[0] and problem in lines[0], lines
+
+
+def test_weak_item_a_bt_grasp_topic_in_another_encoding_is_refused(tmp_path: Path,
+                                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    log = _rewrite(tmp_path / "cbor.mcap", encoding={"/bt/tick": "cbor"})
+    code, lines = _replay(capsys, str(log))
+    assert code == 2 and len(lines) == 1 and "on /bt/tick" in lines[0] and "'cbor', not 'json'" in lines[0], lines
+    log = _rewrite(tmp_path / "tfjson.mcap", encoding={"/tf": "json"})
+    code, lines = _replay(capsys, str(log), "--report", str(tmp_path / "r.html"))
+    assert code == 2 and len(lines) == 1 and "on /tf" in lines[0] and "not 'protobuf'" in lines[0], lines
+
+
+@pytest.mark.parametrize("value", ["x", "1e400", "9" * 400, "-5"])
+def test_weak_item_a_bad_time_origin_is_refused(value: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    log = _rewrite(tmp_path / "origin.mcap", metadata={"time_origin_ns": value})
+    code, lines = _replay(capsys, str(log), "--json")
+    assert code == 2 and len(lines) == 1 and "'time_origin_ns'" in lines[0] and "origin.mcap" in lines[0], lines
+
+
+def _image_change(topic: str, edit: Any) -> Any:
+    from bt_grasp.recording.schemas import PROTOBUF_CLASSES
+
+    def change(t: str, i: int, data: bytes) -> bytes:
+        if (t, i) != (topic, 1):
+            return data
+        msg = PROTOBUF_CLASSES["foxglove.CompressedImage" if t == "/camera/color" else "foxglove.RawImage"]()
+        msg.ParseFromString(data)
+        edit(msg)
+        return bytes(msg.SerializeToString())
+
+    return change
+
+
+IMAGES = {
+    "colour_not_an_image": ("/camera/color", lambda m: setattr(m, "data", b"\x89PNG not really"), "does not decode"),
+    "depth_short": ("/camera/depth", lambda m: setattr(m, "data", m.data[:-7]), "are not"),
+    "depth_encoding": ("/camera/depth", lambda m: setattr(m, "encoding", "rgb8"), "'rgb8' is not one of"),
+    "depth_no_rows": ("/camera/depth", lambda m: setattr(m, "height", 0), "are not 0 rows"),
+}
+
+
+@pytest.mark.parametrize("view", ["--export-frames", "--report"])
+@pytest.mark.parametrize("name", sorted(IMAGES))
+def test_weak_item_an_image_that_fails_to_decode_only_when_shown_is_one_sentence(
+    name: str, view: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    topic, edit, problem = IMAGES[name]
+    log = _rewrite(tmp_path / "img.mcap", _image_change(topic, edit))
+    code, lines = _replay(capsys, str(log), view, str(tmp_path / ("frames" if view == "--export-frames" else "r.html")))
+    assert code == 2 and len(lines) == 1, lines
+    assert "img.mcap" in lines[0] and f"bad image on {topic} at " in lines[0] and problem in lines[0], lines
+    code, lines = _replay(capsys, str(log), "--json")  # the summary does not read images: the log opens
+    assert code == 0, lines
+
+
+def test_weak_item_damage_only_where_the_index_points_for_images_is_one_sentence(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The eager read skips image chunks; the chunk of the second colour image is damaged, so the file opens
+    through its index and the damage is found only when the frames are exported."""
+    import io
+
+    from mcap.reader import make_reader
+
+    log = _rewrite(tmp_path / "idx.mcap", chunk_size=64)  # about one message per chunk
+    data = bytearray(log.read_bytes())
+    summary = make_reader(io.BytesIO(bytes(data))).get_summary()
+    assert summary is not None
+    color = next(c.id for c in summary.channels.values() if c.topic == "/camera/color")
+    image_chunks = [c for c in summary.chunk_indexes if set(c.message_index_offsets) == {color}]
+    chunk = image_chunks[1]
+    name_at = chunk.chunk_start_offset + 1 + 8 + 8 + 8 + 8 + 4 + 4  # opcode, length, start, end, size, crc, name length
+    assert data[name_at: name_at + 4] == b"zstd"
+    data[name_at: name_at + 4] = b"zstx"  # a compression nobody knows: the chunk cannot be read
+    log.write_bytes(bytes(data))
+    code, lines = _replay(capsys, str(log), "--json")
+    assert code == 0, lines
+    code, lines = _replay(capsys, str(log), "--export-frames", str(tmp_path / "frames"))
+    assert code == 2 and len(lines) == 1 and "idx.mcap" in lines[0] and "/camera/color" in lines[0], lines

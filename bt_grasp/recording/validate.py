@@ -1,0 +1,207 @@
+"""The shapes of bt_grasp's own JSON messages, checked once where a log is read.
+
+A log is a file a user gives: a message of the wrong shape (a tick number that is a string, a tree without
+its structure, a joint state whose positions are not numbers) must be one sentence naming the file, the topic
+and the time, not a traceback somewhere in a view that uses it later. ``parse_json`` decodes and checks one
+message and raises ``BadMessage`` with what is wrong; the reader adds the file, topic and time.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from collections.abc import Callable
+from typing import Any
+
+from bt_grasp.recording import topics
+
+#: deeper than any real tree (the views walk trees recursively in places: a hostile depth would crash them)
+MAX_TREE_DEPTH = 100
+#: integers (ticks, times, uids) a log may hold: what MCAP's own times hold
+INT_LIMIT = 2**63
+_LONE_SURROGATE_ESCAPE = re.compile(r"\\u[dD][89a-fA-F]")
+
+
+class BadMessage(ValueError):
+    """A message that is not what its topic holds; the text says what is wrong in it."""
+
+
+def _kind(value: Any) -> str:
+    return {bool: "a boolean", int: "an integer", float: "a number", str: "a string", list: "a list",
+            dict: "an object", type(None): "null"}.get(type(value), type(value).__name__)
+
+
+def is_int(value: Any) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool) and -INT_LIMIT <= value < INT_LIMIT
+
+
+def is_number(value: Any) -> bool:
+    return (isinstance(value, float) or is_int(value)) and not isinstance(value, bool)
+
+
+def _need(ok: bool, what: str, value: Any, expected: str) -> None:
+    if not ok:
+        raise BadMessage(f"'{what}' is {_kind(value)}, not {expected}")
+
+
+def _int(msg: dict[str, Any], key: str, where: str = "", optional: bool = False, null: bool = False) -> None:
+    if key not in msg:
+        if optional:
+            return
+        raise BadMessage(f"'{where}{key}' is missing")
+    value = msg[key]
+    if null and value is None:
+        return
+    _need(is_int(value), where + key, value, "an integer below 2^63")
+
+
+def _str(msg: dict[str, Any], key: str, where: str = "", optional: bool = True, null: bool = False) -> None:
+    if key not in msg:
+        if optional:
+            return
+        raise BadMessage(f"'{where}{key}' is missing")
+    value = msg[key]
+    if null and value is None:
+        return
+    _need(isinstance(value, str), where + key, value, "a string" + (" or null" if null else ""))
+
+
+def _numbers(value: Any, what: str, null_ok: bool = False) -> None:
+    _need(isinstance(value, list), what, value, "a list of numbers")
+    if all(type(item) is float for item in value):  # the usual case, fast: a log holds one list per tick
+        return
+    for i, item in enumerate(value):
+        _need(is_number(item) or (null_ok and item is None), f"{what}[{i}]", item, "a number")
+
+
+def _object(msg: Any, what: str = "the message") -> dict[str, Any]:
+    if not isinstance(msg, dict):
+        raise BadMessage(f"{what} is {_kind(msg)}, not a JSON object")
+    return msg
+
+
+def _tick(msg: dict[str, Any]) -> None:
+    _int(msg, "tick")
+    _int(msg, "stamp_ns")
+    nodes = msg.get("nodes", [])
+    _need(isinstance(nodes, list), "nodes", nodes, "a list")
+    for i, node in enumerate(nodes):
+        where = f"nodes[{i}]."
+        _object(node, f"nodes[{i}]")
+        _int(node, "uid", where)
+        _str(node, "status", where, optional=False)
+        for key in ("feedback", "failure_reason"):
+            _str(node, key, where, null=True)
+        for key in ("path", "type", "name", "kind"):
+            _str(node, key, where)
+        if "ticked" in node:
+            _need(isinstance(node["ticked"], bool), where + "ticked", node["ticked"], "a boolean")
+    if "bb" in msg:
+        _need(isinstance(msg["bb"], dict), "bb", msg["bb"], "an object")
+    removed = msg.get("bb_removed", [])
+    _need(isinstance(removed, list) and all(isinstance(k, str) for k in removed), "bb_removed", removed,
+          "a list of strings")
+
+
+def _tree(msg: dict[str, Any]) -> None:
+    _int(msg, "tick", optional=True, null=True)
+    if "structure" not in msg:
+        raise BadMessage("'structure' is missing")
+    stack: list[tuple[Any, str, int]] = [(msg["structure"], "structure", 1)]
+    while stack:
+        node, where, depth = stack.pop()
+        _object(node, where)
+        if depth > MAX_TREE_DEPTH:
+            raise BadMessage(f"the tree is nested deeper than {MAX_TREE_DEPTH} levels")
+        _int(node, "uid", where + ".")
+        for key in ("path", "type", "name", "kind"):
+            _str(node, key, where + ".")
+        children = node.get("children", [])
+        _need(isinstance(children, list), where + ".children", children, "a list")
+        stack.extend((child, f"{where}.children[{i}]", depth + 1) for i, child in enumerate(children))
+
+
+def _result(msg: dict[str, Any]) -> None:
+    if "success" in msg:
+        _need(msg["success"] is None or isinstance(msg["success"], bool), "success", msg["success"], "a boolean")
+    for key in ("reason", "failed_leaf"):
+        _str(msg, key, null=True)
+    for key in ("sim_time_s", "wall_time_s"):
+        if msg.get(key) is not None:
+            _need(is_number(msg[key]), key, msg[key], "a number")
+    if "ticks" in msg:
+        _int(msg, "ticks", null=True)
+
+
+def _joint_state(msg: dict[str, Any]) -> None:
+    _int(msg, "tick", optional=True, null=True)
+    for key in ("position", "velocity", "tcp_xyz_m", "tcp_quat_xyzw"):
+        if key in msg:
+            _numbers(msg[key], key)
+    if "name" in msg:
+        _need(isinstance(msg["name"], list) and all(isinstance(n, str) for n in msg["name"]), "name", msg["name"],
+              "a list of strings")
+    if msg.get("gripper_width_m") is not None:
+        _need(is_number(msg["gripper_width_m"]), "gripper_width_m", msg["gripper_width_m"], "a number")
+
+
+def _trajectory(msg: dict[str, Any]) -> None:
+    if "q_rad" in msg:
+        _need(isinstance(msg["q_rad"], list), "q_rad", msg["q_rad"], "a list of joint vectors")
+        for i, row in enumerate(msg["q_rad"]):
+            _numbers(row, f"q_rad[{i}]", null_ok=True)
+    if "points" in msg:
+        _need(isinstance(msg["points"], list), "points", msg["points"], "a list")
+        for i, point in enumerate(msg["points"]):
+            _numbers(_object(point, f"points[{i}]").get("q_rad"), f"points[{i}].q_rad", null_ok=True)
+    if "times_s" in msg:
+        _numbers(msg["times_s"], "times_s", null_ok=True)
+
+
+def _stamped(msg: dict[str, Any]) -> None:
+    """Events and faults: free-form, but the reader adds ``stamp_ns`` and the views print ``tick``."""
+    _int(msg, "tick", optional=True, null=True)
+    _int(msg, "stamp_ns", optional=True)
+
+
+_CHECKS: dict[str, Callable[[dict[str, Any]], None]] = {
+    topics.TICK: _tick, topics.TREE: _tree, topics.RESULT: _result, topics.JOINT_STATE: _joint_state,
+    topics.TRAJECTORY: _trajectory, topics.EVENTS: _stamped, topics.FAULTS: _stamped,
+}
+
+
+def _check_text(value: Any) -> None:
+    """Every string in ``value`` encodes as UTF-8 (a lone surrogate escape, ``"\\udcff"``, does not)."""
+    stack = [value]
+    while stack:
+        item = stack.pop()
+        if isinstance(item, str):
+            try:
+                item.encode("utf-8")
+            except UnicodeEncodeError:
+                raise BadMessage("it holds text that is not valid Unicode (a lone surrogate)") from None
+        elif isinstance(item, dict):
+            stack.extend(item.keys())
+            stack.extend(item.values())
+        elif isinstance(item, list):
+            stack.extend(item)
+
+
+def parse_json(topic: str, data: bytes) -> Any:
+    """One JSON message, decoded and, for bt_grasp's own topics, checked; raises ``BadMessage``."""
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise BadMessage(f"it is not UTF-8 text (byte {exc.start})") from None
+    try:
+        msg = json.loads(text)
+    except RecursionError:
+        raise BadMessage("it is nested too deeply to read") from None
+    except ValueError as exc:  # JSONDecodeError, and integers of more digits than Python converts
+        raise BadMessage(f"it is not JSON ({getattr(exc, 'msg', exc)})") from None
+    if _LONE_SURROGATE_ESCAPE.search(text):
+        _check_text(msg)
+    check = _CHECKS.get(topic)
+    if check is not None:
+        check(_object(msg))
+    return msg

@@ -1,0 +1,70 @@
+"""Issue 22: a results file is user input. `eval report` on a damaged or hostile one (binary, cut, deep, huge,
+wrong types, missing columns, NaN, lone surrogates) exits 2 with one sentence naming the file and the line,
+never a traceback, a MemoryError or a hang."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from bt_grasp.cli.main import main
+
+GOOD: dict[str, Any] = {
+    "campaign": "c", "episode": "e0", "tree": "trees/pick.xml", "scene": "tabletop", "seed": 0,
+    "fault_plan": "none", "params": {"color": "red"}, "success": False, "failure_reason": "NO_DETECTION",
+    "failed_leaf": "Perceive", "ticks": 700, "sim_time_s": 7.0, "episode_wall_s": 1.2,
+    "retries": {"Perceive": 1}, "retries_total": 1, "mcap": None,
+    "environment": {"id": "abc", "cpu_model": "x", "cpu_count": 2, "python": "3.11", "libraries": {}},
+}
+
+
+def _line(**changes: Any) -> bytes:
+    row = {**GOOD, **changes}
+    return json.dumps({k: v for k, v in row.items() if v is not _DROP}, allow_nan=True).encode()
+
+
+_DROP = object()
+
+BAD: dict[str, tuple[bytes, str]] = {
+    "binary": (b"\x84\xa0\xff\x00", "not UTF-8 text"),
+    "latin1": (_line(campaign="fX").replace(b"fX", b"f\xe9"), "not UTF-8 text"),
+    "deep": (b"[" * 100_000 + b"]" * 100_000, "nested too deeply"),
+    "digits": (b'{"episode": "h", "seed": ' + b"9" * 5000 + b"}", "not a JSON object"),
+    "missing_scene": (_line(scene=_DROP), "no 'scene' column"),
+    "missing_wall_time": (_line(episode_wall_s=_DROP), "no 'episode_wall_s' column"),
+    "environment_text": (_line(environment="$\\frac{1}{0$"), "'environment' is"),
+    "retries_total_text": (_line(retries_total="[/]"), "'retries_total' is"),
+    "retries_total_huge": (_line(retries_total=10**12), "'retries_total' is"),
+    "retries_not_counts": (_line(retries={"Perceive": "x"}), "'retries' is"),
+    "nan_time": (_line(sim_time_s=float("nan")), "'sim_time_s' is NaN, not a finite number"),
+    "nan_seed": (_line(seed=float("nan")), "'seed' is NaN, not an integer"),
+    "success_text": (_line(success="yes"), "'success' is"),
+    "lone_surrogate": (_line(failed_leaf="\udcff"), "not valid Unicode"),
+}
+
+
+@pytest.mark.parametrize("name", sorted(BAD))
+def test_a_hostile_results_row_is_one_sentence_naming_file_and_line(
+    name: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    line, problem = BAD[name]
+    results = tmp_path / "hostile.jsonl"
+    results.write_bytes(_line() + b"\n" + line + b"\n")
+    code = main(["eval", "report", str(results), "--out", str(tmp_path / "r.html")])
+    err = capsys.readouterr().err
+    lines = [x for x in err.splitlines() if x.strip()]
+    assert code == 2 and len(lines) == 1 and "Traceback" not in err, err
+    assert "hostile.jsonl:2:" in lines[0] and problem in lines[0], lines[0]
+    assert not (tmp_path / "r.html").exists()
+
+
+def test_the_checked_rows_still_make_a_report(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    results = tmp_path / "ok.jsonl"
+    results.write_bytes(_line() + b"\n" + _line(episode="e1", seed=1, success=True, failure_reason=None,
+                                                 failed_leaf=None, retries={}, retries_total=0) + b"\n")
+    code = main(["eval", "report", str(results), "--out", str(tmp_path / "r.html")])
+    assert code == 0, capsys.readouterr().err
+    assert "2 episodes, 1 succeeded" in (tmp_path / "r.html").read_text()

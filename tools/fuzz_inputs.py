@@ -1,0 +1,521 @@
+"""Seeded fuzzing of what users open: damaged MCAP logs (`bt-grasp replay`) and results files (`eval report`).
+
+Every case must be answered by exit 0 (the damage was harmless) or exit 2 with one sentence on stderr that
+names the file: never a traceback, never another exit code, never a hang (a per-case alarm), never an exhausted
+machine (an address-space limit on the worker), never a file written outside the case's own folder. Cases run
+in a worker process that is restarted when it dies.
+
+    python tools/fuzz_inputs.py --cases 2000 --seed 0          # prints the counts; exit 1 if any case failed
+
+Log mutations: bytes (truncated, bit-flipped, zeroed, inserted, spliced), records (a top-level record
+duplicated, chunks re-ordered, a length field set huge) and contents (the seed log re-written with the mcap
+library, so well-formed MCAP, with one bt_grasp message of the wrong shape, the wrong encoding, or messages
+duplicated and re-ordered). `tests/test_fuzz_inputs.py` runs a bounded number of these cases in the suite.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import io
+import json
+import os
+import random
+import re
+import resource
+import shutil
+import signal
+import struct
+import subprocess
+import sys
+import tempfile
+import time
+from collections import Counter
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+REPO = Path(__file__).resolve().parents[1]
+SEED_LOG = REPO / "tests" / "data" / "old_logs" / "format1.mcap"
+MEMORY_LIMIT = 3 << 30
+CASE_TIMEOUT_S = 30
+MAGIC = b"\x89MCAP0\r\n"
+
+LOG_KINDS = ("truncate", "flip", "ff_window", "zero", "insert", "splice", "duplicate_record", "reorder_chunks",
+             "huge_length", "wrong_schema", "wrong_encoding", "rechunk")
+RESULTS_KINDS = ("type", "drop", "cut", "binary", "huge", "deep", "markup", "not_object", "nan", "encoding")
+LOG_VIEWS = ("summary", "json", "failures", "tick", "export_frames", "report", "topic")
+
+GOOD_ROW: dict[str, Any] = {
+    "campaign": "fuzz", "episode": "e0", "tree": "trees/pick.xml", "scene": "tabletop", "seed": 0,
+    "fault_plan": "none", "params": {"color": "red"}, "success": False, "failure_reason": "NO_DETECTION",
+    "failed_leaf": "Perceive", "ticks": 700, "sim_time_s": 7.0, "episode_wall_s": 1.2,
+    "retries": {"Perceive": 1}, "retries_total": 1, "mcap": None,
+    "environment": {"id": "abc", "cpu_model": "x", "cpu_count": 2, "python": "3.11", "libraries": {}},
+}
+#: values a hostile writer puts where bt_grasp expects something else
+HOSTILE_VALUES: tuple[Any, ...] = ("x", "5", "", [], [1, "a"], {}, {"uid": "a"}, None, 1.5, -1, True, 10**30, -(10**30),
+                                   1e308, float("nan"), "\udcff", "<b>[/]$x$</b>")
+
+
+# ---------------------------------------------------------------- MCAP structure (byte level)
+def top_records(data: bytes) -> list[tuple[int, int, int]]:
+    """(offset, opcode, total length) of each top-level record after the magic, as far as they parse."""
+    out, pos = [], len(MAGIC)
+    while pos + 9 <= len(data):
+        opcode, length = struct.unpack_from("<BQ", data, pos)
+        end = pos + 9 + length
+        if end > len(data):
+            break
+        out.append((pos, opcode, end - pos))
+        pos = end
+    return out
+
+
+def _records_mutation(data: bytes, kind: str, rng: random.Random) -> bytes:
+    records = top_records(data)
+    if kind == "duplicate_record":
+        off, _, length = rng.choice(records)
+        return data[: off + length] + data[off: off + length] + data[off + length:]
+    if kind == "reorder_chunks":  # two chunks swap places: the index's offsets now point at the wrong ones
+        chunks = [r for r in records if r[1] == 0x06]
+        a, b = sorted(rng.sample(chunks, 2), key=lambda r: r[0])
+        return (data[: a[0]] + data[b[0]: b[0] + b[2]] + data[a[0] + a[2]: b[0]] + data[a[0]: a[0] + a[2]]
+                + data[b[0] + b[2]:])
+    # huge_length: a record's length field, or a chunk's declared sizes, set huge
+    buf = bytearray(data)
+    off, opcode, _ = rng.choice(records)
+    huge = rng.choice([2**63 - 1, 2**64 - 1, 2**40, 2**32, len(data) * 1000])
+    field_at = off + 1
+    if opcode == 0x06 and rng.random() < 0.5:  # a chunk: start, end, uncompressed size, crc, ... records length
+        field_at = off + 9 + rng.choice([16, 28 + 4 + 4])  # uncompressed size, or the records' byte length
+    struct.pack_into("<Q", buf, field_at, huge)
+    return bytes(buf)
+
+
+def _bytes_mutation(data: bytes, kind: str, rng: random.Random) -> bytes:
+    buf = bytearray(data)
+    if kind == "truncate":
+        return bytes(buf[: rng.randrange(len(buf))])
+    if kind == "flip":
+        for _ in range(rng.randint(1, 20)):
+            i = rng.randrange(len(buf))
+            buf[i] ^= 1 << rng.randrange(8)
+    elif kind == "ff_window":  # eight bytes of 0xff somewhere: any length field there becomes huge
+        i = rng.randrange(len(buf) - 8)
+        buf[i: i + 8] = b"\xff" * 8
+    elif kind == "zero":
+        i = rng.randrange(len(buf))
+        n = min(rng.randint(1, 512), len(buf) - i)
+        buf[i: i + n] = bytes(n)
+    elif kind == "insert":
+        i = rng.randrange(len(buf))
+        buf[i:i] = rng.randbytes(rng.randint(1, 256))
+    else:  # splice: the head of the file joined to a later tail
+        i = rng.randrange(len(buf))
+        buf = buf[:i] + buf[rng.randrange(len(buf)):]
+    return bytes(buf)
+
+
+# ---------------------------------------------------------------- MCAP contents (re-written with the mcap library)
+@dataclass
+class Corpus:
+    """The seed log, raw and as records the mcap writer can write again."""
+
+    raw: bytes
+    metadata: list[tuple[str, dict[str, str]]] = field(default_factory=list)
+    attachments: list[tuple[str, bytes]] = field(default_factory=list)
+    schemas: dict[int, tuple[str, str, bytes]] = field(default_factory=dict)  # id -> name, encoding, data
+    channels: dict[int, tuple[str, str, int]] = field(default_factory=dict)  # id -> topic, encoding, schema id
+    messages: list[tuple[int, int, int, bytes]] = field(default_factory=list)  # channel, log, publish, data
+
+
+def load_corpus(path: Path = SEED_LOG) -> Corpus:
+    from mcap.reader import make_reader
+
+    corpus = Corpus(path.read_bytes())
+    reader = make_reader(io.BytesIO(corpus.raw))
+    corpus.metadata = [(m.name, dict(m.metadata)) for m in reader.iter_metadata()]
+    corpus.attachments = [(a.name, a.data) for a in reader.iter_attachments()]
+    for schema, channel, message in reader.iter_messages():
+        if schema is not None:
+            corpus.schemas[schema.id] = (schema.name, schema.encoding, schema.data)
+        corpus.channels[channel.id] = (channel.topic, channel.message_encoding, channel.schema_id)
+        corpus.messages.append((channel.id, message.log_time, message.publish_time, message.data))
+    return corpus
+
+
+def _hostile_value(rng: random.Random) -> Any:
+    if rng.random() < 0.1:  # deep nesting (recursion in whoever walks it): a placeholder `dumps` expands
+        return f"__DEEP_{rng.choice([150, 900, 3000, 20000])}__"
+    return rng.choice(HOSTILE_VALUES)
+
+
+def dumps(value: Any) -> bytes:
+    """JSON as a hostile writer would write it: NaN allowed, lone surrogates kept as bytes, and each deep
+    placeholder replaced by tree nodes nested that deep."""
+    text = json.dumps(value, allow_nan=True)  # ensure_ascii: a lone surrogate stays an escape, "\\udcff"
+
+    def deep(match: re.Match[str]) -> str:
+        n = int(match.group(1))
+        return '{"uid": 99, "name": "d", "children": [' * n + '{"uid": 98}' + "]}" * n
+
+    return re.sub(r'"__DEEP_(\d+)__"', deep, text).encode("utf-8", "surrogateescape")
+
+
+def _poke(value: Any, rng: random.Random) -> Any:
+    """``value`` with one place in it (a key, an item, the whole) replaced by something hostile or removed."""
+    if isinstance(value, dict) and value and rng.random() < 0.85:
+        key = rng.choice(sorted(value))
+        out = dict(value)
+        roll = rng.random()
+        if roll < 0.25:
+            out.pop(key)
+        elif roll < 0.6:
+            out[key] = _hostile_value(rng)
+        else:
+            out[key] = _poke(value[key], rng)
+        return out
+    if isinstance(value, list) and value and rng.random() < 0.85:
+        out_list = list(value)
+        i = rng.randrange(len(out_list))
+        out_list[i] = _poke(out_list[i], rng) if rng.random() < 0.6 else _hostile_value(rng)
+        return out_list
+    return _hostile_value(rng)
+
+
+#: the shapes named in issue 22: a tick number that is a string, a tree without structure, ...
+TARGETED: tuple[tuple[str, str, Any], ...] = (
+    ("/bt/tick", "tick", "5"), ("/bt/tick", "stamp_ns", "late"), ("/bt/tick", "nodes", {"uid": 1}),
+    ("/bt/tick", "nodes", [{"status": "SUCCESS"}]), ("/bt/tick", "bb", [1, 2]), ("/bt/tick", "bb_removed", 7),
+    ("/bt/tree", "structure", None), ("/bt/tree", "structure", []), ("/bt/tree", "tick", "x"),
+    ("/bt/tree", "structure", {"uid": "root", "children": 3}), ("/run/result", "success", "yes"),
+    ("/run/result", "wall_time_s", "fast"), ("/robot/joint_state", "position", "x"),
+    ("/robot/joint_state", "position", [[1.0]]), ("/motion/trajectory", "q_rad", 5),
+    ("/faults", "tick", [1]), ("/bt/events", "tick", {}),
+)
+
+
+def _mutate_contents(corpus: Corpus, kind: str, rng: random.Random) -> bytes:
+    from mcap.writer import CompressionType, Writer
+
+    channels = dict(corpus.channels)
+    messages = list(corpus.messages)
+    metadata = [(name, dict(values)) for name, values in corpus.metadata]
+    json_at = [i for i, m in enumerate(messages) if channels[m[0]][1] == "json"]
+    if kind == "wrong_schema":
+        if rng.random() < 0.35:
+            topic, key, value = rng.choice(TARGETED)
+            chosen = [i for i in json_at if channels[messages[i][0]][0] == topic]
+            i = rng.choice(chosen)
+            msg = json.loads(messages[i][3])
+            if value is None and rng.random() < 0.5:
+                msg.pop(key, None)
+            else:
+                msg[key] = value
+        else:
+            i = rng.choice(json_at)
+            msg = _poke(json.loads(messages[i][3]), rng)
+        messages[i] = (*messages[i][:3], dumps(msg))
+    elif kind == "wrong_encoding":
+        roll = rng.random()
+        if roll < 0.4:  # a channel says it is not json (or json where protobuf was)
+            cid = rng.choice(sorted(channels))
+            topic, _, schema_id = channels[cid]
+            channels[cid] = (topic, rng.choice(["cbor", "ros1", "protobuf", "json", ""]), schema_id)
+        elif roll < 0.8:  # a message that is not UTF-8 (latin-1 text, or raw bytes)
+            i = rng.choice(json_at)
+            data = messages[i][3]
+            bad = (data.decode().replace('"', '"\xe9', 1).encode("latin-1") if rng.random() < 0.5
+                   else rng.randbytes(rng.randint(0, 64)))
+            messages[i] = (*messages[i][:3], bad)
+        else:  # metadata that says something else than a bt_grasp reader expects
+            name, values = metadata[0]
+            values[rng.choice(["log_format", "time_origin_ns", "seed", "tree_file"])] = rng.choice(
+                ["", "x", "3", "-1", "1e400", "\u202e", "9" * 400])
+            metadata[0] = (name, values)
+    else:  # rechunk: messages duplicated, re-ordered, written in chunks of another size
+        for _ in range(rng.randint(1, 6)):
+            i = rng.randrange(len(messages))
+            messages.insert(rng.randrange(len(messages) + 1), messages[i])
+        if rng.random() < 0.5:
+            rng.shuffle(messages)
+    out = io.BytesIO()
+    compression = rng.choice([CompressionType.ZSTD, CompressionType.NONE, CompressionType.LZ4])
+    writer = Writer(out, chunk_size=rng.choice([64, 1024, 1 << 20]), compression=compression)
+    writer.start(profile="", library="bt_grasp fuzz")
+    sids = {sid: writer.register_schema(name, encoding, data)
+            for sid, (name, encoding, data) in sorted(corpus.schemas.items())}
+    ids = {cid: writer.register_channel(topic, encoding, sids.get(schema_id, 0))
+           for cid, (topic, encoding, schema_id) in sorted(channels.items())}
+    for cid, log_time, publish_time, data in messages:
+        writer.add_message(ids[cid], log_time, data, publish_time)
+    for name, values in metadata:
+        writer.add_metadata(name, values)
+    for name, data in corpus.attachments:
+        writer.add_attachment(0, 0, name, "application/octet-stream", data)
+    writer.finish()
+    return out.getvalue()
+
+
+def mutate_log(corpus: Corpus, rng: random.Random, kind: str | None = None) -> tuple[str, bytes]:
+    kind = kind or rng.choice(LOG_KINDS)
+    if kind in ("duplicate_record", "reorder_chunks", "huge_length"):
+        return kind, _records_mutation(corpus.raw, kind, rng)
+    if kind in ("wrong_schema", "wrong_encoding", "rechunk"):
+        return kind, _mutate_contents(corpus, kind, rng)
+    return kind, _bytes_mutation(corpus.raw, kind, rng)
+
+
+def mutate_results(rng: random.Random, kind: str | None = None) -> tuple[str, bytes]:
+    rows = []
+    for n in range(rng.randint(1, 6)):
+        row = json.loads(json.dumps(GOOD_ROW))
+        row["episode"], row["seed"] = f"e{n}", n
+        rows.append(row)
+    victim = rng.choice(rows)
+    kind = kind or rng.choice(RESULTS_KINDS)
+    key = rng.choice(sorted(GOOD_ROW))
+    if kind == "type":
+        victim[key] = _hostile_value(rng)
+    elif kind == "drop":
+        victim.pop(key)
+    elif kind == "markup":
+        victim[key] = rng.choice(["[/]", "$\\frac{1}{0$", "<script>x</script>", "[link=x]y", "\x00", "\u202e"])
+    lines = [dumps(r) for r in rows]
+    if kind == "cut":
+        i = rng.randrange(len(lines))
+        lines[i] = lines[i][: rng.randrange(len(lines[i]))]
+    elif kind == "binary":
+        lines.insert(rng.randrange(len(lines) + 1), rng.randbytes(rng.randint(1, 64)))
+    elif kind == "huge":
+        lines.append(rng.choice([b'{"episode": "h", "seed": 1e400, "ticks": ' + b"9" * 5000 + b"}",
+                                 json.dumps({**GOOD_ROW, "seed": 10**30, "ticks": -(10**30)}).encode(),
+                                 json.dumps({**GOOD_ROW, "sim_time_s": 1e308, "retries_total": 10**12}).encode()]))
+    elif kind == "deep":
+        lines.append(b"[" * 100_000 + b"]" * 100_000)
+    elif kind == "not_object":
+        lines.append(rng.choice([b"[]", b"1", b'"s"', b"null"]))
+    elif kind == "nan":
+        lines.append(json.dumps({**GOOD_ROW, "episode": "n", rng.choice(["sim_time_s", "episode_wall_s", "seed",
+                                                                          "retries_total"]): float("nan")}).encode())
+    elif kind == "encoding":
+        i = rng.randrange(len(lines))
+        lines[i] = lines[i].replace(b'"fuzz"', b'"f\xe9\xff"') if rng.random() < 0.5 else lines[i].decode().encode(
+            "utf-16")
+    return kind, b"\n".join(lines) + rng.choice([b"\n", b""])
+
+
+# ---------------------------------------------------------------- running one case (in the worker)
+def _run_case(args: list[str]) -> tuple[int, str]:
+    from bt_grasp.cli.main import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code = main(args)
+        except SystemExit as exc:
+            code = exc.code if isinstance(exc.code, int) else 1
+        except BaseException as exc:  # what the case is for: a crash must be seen, not hidden
+            import traceback
+
+            return -1, "Traceback: " + "".join(traceback.format_exception_only(type(exc), exc)).strip()
+    return code, err.getvalue()
+
+
+def _worker() -> None:
+    resource.setrlimit(resource.RLIMIT_AS, (MEMORY_LIMIT, MEMORY_LIMIT))
+    # no logging set-up: Python's last-resort handler writes warnings to the (redirected) stderr, as in a real run
+    def on_alarm(_signum: int, _frame: object) -> None:
+        raise TimeoutError("case took too long")
+
+    signal.signal(signal.SIGALRM, on_alarm)
+    for line in sys.stdin:
+        args = json.loads(line)
+        signal.alarm(CASE_TIMEOUT_S)
+        try:
+            code, err = _run_case(args)
+        finally:
+            signal.alarm(0)
+        print(json.dumps({"code": code, "stderr": err[-2000:]}), flush=True)
+
+
+@dataclass
+class Verdict:
+    ok: bool
+    detail: str
+
+
+def judge(code: int, stderr: str, file_name: str) -> Verdict:
+    """Exit 0, or exit 2 with one line of stderr naming the file; anything else is a failure."""
+    lines = [line for line in stderr.splitlines() if line.strip()]
+    if "Traceback" in stderr or code == -1:
+        return Verdict(False, f"crash: {stderr.strip()[-300:]}")
+    if code == 0:
+        return Verdict(True, "read")
+    if code == 2 and len(lines) == 1 and file_name in lines[0]:
+        return Verdict(True, "refused")
+    return Verdict(False, f"exit {code} with {len(lines)} lines: {stderr.strip()[-300:]}")
+
+
+class Runner:
+    def __init__(self, cwd: Path, tmp: Path) -> None:
+        self.proc: subprocess.Popen[str] | None = None
+        self.cwd, self.tmp = cwd, tmp
+
+    def _start(self) -> subprocess.Popen[str]:
+        env = dict(os.environ, PYTHONPATH=str(REPO) + os.pathsep + os.environ.get("PYTHONPATH", ""),
+                   TMPDIR=str(self.tmp), MPLBACKEND="Agg")
+        return subprocess.Popen([sys.executable, str(Path(__file__).resolve()), "--worker"], stdin=subprocess.PIPE,
+                                stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, env=env, cwd=self.cwd)
+
+    def run(self, args: list[str], file_name: str) -> Verdict:
+        if self.proc is None or self.proc.poll() is not None:
+            self.proc = self._start()
+        assert self.proc.stdin is not None and self.proc.stdout is not None
+        self.proc.stdin.write(json.dumps(args) + "\n")
+        self.proc.stdin.flush()
+        line = self.proc.stdout.readline()
+        if not line:
+            code = self._end()
+            return Verdict(False, f"the worker died (signal or memory): {code}")
+        answer = json.loads(line)
+        return judge(int(answer["code"]), str(answer["stderr"]), file_name)
+
+    def _end(self) -> int:
+        """Close the worker's pipes (it leaves when its input ends) and wait for it; its exit code."""
+        assert self.proc is not None
+        for pipe in (self.proc.stdin, self.proc.stdout):
+            if pipe is not None:
+                with contextlib.suppress(OSError):  # a dead worker's pipe may refuse the flush
+                    pipe.close()
+        code = self.proc.wait(timeout=60)
+        self.proc = None
+        return code
+
+    def close(self) -> None:
+        if self.proc is not None:
+            self._end()
+
+
+@dataclass(frozen=True)
+class Case:
+    name: str
+    kind: str  # "log:<mutation>" or "results:<mutation>"
+    view: str
+    file: Path
+    args: list[str]
+
+
+#: case i is of kind KINDS[i % len(KINDS)]: any run of len(KINDS) cases exercises every kind once
+KINDS = tuple(f"log:{k}" for k in LOG_KINDS) + tuple(f"results:{k}" for k in RESULTS_KINDS)
+
+
+def make_case(i: int, seed: int, folder: Path, corpus: Corpus) -> Case:
+    """Case ``i`` of ``seed``: its input file written into ``folder`` (its own, empty), and its command line.
+    The kind and the view go round (every kind and view in few cases); the damage itself is drawn."""
+    rng = random.Random(seed * 1_000_003 + i)
+    family, kind = KINDS[i % len(KINDS)].split(":")
+    if family == "log":
+        kind, data = mutate_log(corpus, rng, kind)
+        path = folder / f"case{i}.mcap"
+        path.write_bytes(data)
+        view = LOG_VIEWS[i % len(LOG_VIEWS)]  # len(KINDS) and len(LOG_VIEWS) share no factor: every pair occurs
+        extra = {"summary": [], "json": ["--json"], "failures": ["--failures"],
+                 "tick": ["--tick", str(rng.randint(0, 8))],
+                 "export_frames": ["--export-frames", str(folder / "frames")],
+                 "report": ["--report", str(folder / "report.html")],
+                 "topic": ["--topic", rng.choice(["/bt/tick", "/camera/depth", "/tf", "/robot/joint_state"])]}[view]
+        return Case(f"log {i}", f"log:{kind}", view, path, ["replay", str(path), *extra])
+    kind, data = mutate_results(rng, kind)
+    path = folder / f"case{i}.jsonl"
+    path.write_bytes(data)
+    return Case(f"results {i}", f"results:{kind}", "eval report", path,
+                ["eval", "report", str(path), "--out", str(folder / "report.html")])
+
+
+def _listing(root: Path, skip: Path) -> set[tuple[str, int]]:
+    """Every file and folder under ``root`` except ``skip`` (the running case's own folder), with sizes."""
+    out = set()
+    for dirpath, dirnames, filenames in os.walk(root):
+        here = Path(dirpath)
+        if here == skip:
+            dirnames[:] = []
+            continue
+        for name in filenames + dirnames:
+            p = here / name
+            out.add((str(p), p.stat().st_size if p.is_file() else -1))
+    return out
+
+
+@dataclass
+class Outcome:
+    counts: Counter[str] = field(default_factory=Counter)
+    kinds: Counter[str] = field(default_factory=Counter)
+    views: Counter[str] = field(default_factory=Counter)
+    failures: list[str] = field(default_factory=list)
+    seconds: float = 0.0
+
+
+def fuzz(n: int, seed: int) -> Outcome:
+    """Run cases 0..n-1 of ``seed``. Each runs in its own folder; the worker's working folder and TMPDIR are
+    watched folders that must stay as they were, and so must the rest of the fuzz root."""
+    outcome = Outcome()
+    start = time.monotonic()
+    corpus = load_corpus()
+    with tempfile.TemporaryDirectory(prefix="bt_grasp_fuzz_") as tmp:
+        root = Path(tmp)
+        cwd, worker_tmp, cases_dir = root / "cwd", root / "tmp", root / "cases"
+        for folder in (cwd, worker_tmp, cases_dir):
+            folder.mkdir()
+        (cwd / "sentinel.txt").write_text("must not change\n")
+        runner = Runner(cwd, worker_tmp)
+        try:
+            for i in range(n):
+                folder = cases_dir / f"case{i}"
+                folder.mkdir()
+                case = make_case(i, seed, folder, corpus)
+                before = _listing(root, folder)
+                verdict = runner.run(case.args, case.file.name)
+                after = _listing(root, folder)
+                if verdict.ok and after != before:
+                    changed = sorted(p for p, _ in after ^ before)
+                    verdict = Verdict(False, f"wrote outside its folder: {changed[:3]}")
+                outcome.kinds[case.kind] += 1
+                outcome.views[case.view] += 1
+                if verdict.ok:
+                    outcome.counts[verdict.detail] += 1
+                else:
+                    outcome.counts["failed"] += 1
+                    outcome.failures.append(f"{case.name} [{case.kind}, {case.view}] {' '.join(case.args[:2])}: "
+                                            f"{verdict.detail}")
+                    for leftover in worker_tmp.iterdir():  # so one leak is reported once, not by every later case
+                        shutil.rmtree(leftover) if leftover.is_dir() else leftover.unlink()
+                shutil.rmtree(folder)
+        finally:
+            runner.close()
+    outcome.seconds = time.monotonic() - start
+    return outcome
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
+    parser.add_argument("--cases", type=int, default=2000)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.worker:
+        _worker()
+        return 0
+    outcome = fuzz(args.cases, args.seed)
+    for line in outcome.failures[:50]:
+        print("FAIL", line)
+    print(f"{args.cases} cases, seed {args.seed}: {outcome.counts['read']} read, {outcome.counts['refused']} refused "
+          f"in one sentence, {outcome.counts['failed']} failed, in {outcome.seconds:.0f} s")
+    print("mutations:", ", ".join(f"{k} {v}" for k, v in sorted(outcome.kinds.items())))
+    print("views:", ", ".join(f"{k} {v}" for k, v in sorted(outcome.views.items())))
+    return 1 if outcome.failures else 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
