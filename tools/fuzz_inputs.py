@@ -457,43 +457,59 @@ class Outcome:
     seconds: float = 0.0
 
 
-def fuzz(n: int, seed: int) -> Outcome:
-    """Run cases 0..n-1 of ``seed``. Each runs in its own folder; the worker's working folder and TMPDIR are
-    watched folders that must stay as they were, and so must the rest of the fuzz root."""
+def _fuzz_part(indices: range, seed: int, corpus: Corpus, root: Path) -> Outcome:
+    """Run the cases ``indices`` of ``seed`` in one worker. Each runs in its own folder; the worker's working
+    folder and TMPDIR are watched folders that must stay as they were, and so must the rest of ``root``."""
     outcome = Outcome()
+    cwd, worker_tmp, cases_dir = root / "cwd", root / "tmp", root / "cases"
+    for folder in (cwd, worker_tmp, cases_dir):
+        folder.mkdir(parents=True)
+    (cwd / "sentinel.txt").write_text("must not change\n")
+    runner = Runner(cwd, worker_tmp)
+    try:
+        for i in indices:
+            folder = cases_dir / f"case{i}"
+            folder.mkdir()
+            case = make_case(i, seed, folder, corpus)
+            before = _listing(root, folder)
+            verdict = runner.run(case.args, case.file.name)
+            after = _listing(root, folder)
+            if verdict.ok and after != before:
+                changed = sorted(p for p, _ in after ^ before)
+                verdict = Verdict(False, f"wrote outside its folder: {changed[:3]}")
+            outcome.kinds[case.kind] += 1
+            outcome.views[case.view] += 1
+            if verdict.ok:
+                outcome.counts[verdict.detail] += 1
+            else:
+                outcome.counts["failed"] += 1
+                outcome.failures.append(f"{case.name} [{case.kind}, {case.view}] {' '.join(case.args[:2])}: "
+                                        f"{verdict.detail}")
+                for leftover in worker_tmp.iterdir():  # so one leak is reported once, not by every later case
+                    shutil.rmtree(leftover) if leftover.is_dir() else leftover.unlink()
+            shutil.rmtree(folder)
+    finally:
+        runner.close()
+    return outcome
+
+
+def fuzz(n: int, seed: int, jobs: int = 1) -> Outcome:
+    """Run cases 0..n-1 of ``seed`` in ``jobs`` workers (each with its own watched folders); the cases and
+    their verdicts do not depend on ``jobs``."""
+    from concurrent.futures import ThreadPoolExecutor
+
     start = time.monotonic()
     corpus = load_corpus()
-    with tempfile.TemporaryDirectory(prefix="bt_grasp_fuzz_") as tmp:
-        root = Path(tmp)
-        cwd, worker_tmp, cases_dir = root / "cwd", root / "tmp", root / "cases"
-        for folder in (cwd, worker_tmp, cases_dir):
-            folder.mkdir()
-        (cwd / "sentinel.txt").write_text("must not change\n")
-        runner = Runner(cwd, worker_tmp)
-        try:
-            for i in range(n):
-                folder = cases_dir / f"case{i}"
-                folder.mkdir()
-                case = make_case(i, seed, folder, corpus)
-                before = _listing(root, folder)
-                verdict = runner.run(case.args, case.file.name)
-                after = _listing(root, folder)
-                if verdict.ok and after != before:
-                    changed = sorted(p for p, _ in after ^ before)
-                    verdict = Verdict(False, f"wrote outside its folder: {changed[:3]}")
-                outcome.kinds[case.kind] += 1
-                outcome.views[case.view] += 1
-                if verdict.ok:
-                    outcome.counts[verdict.detail] += 1
-                else:
-                    outcome.counts["failed"] += 1
-                    outcome.failures.append(f"{case.name} [{case.kind}, {case.view}] {' '.join(case.args[:2])}: "
-                                            f"{verdict.detail}")
-                    for leftover in worker_tmp.iterdir():  # so one leak is reported once, not by every later case
-                        shutil.rmtree(leftover) if leftover.is_dir() else leftover.unlink()
-                shutil.rmtree(folder)
-        finally:
-            runner.close()
+    with tempfile.TemporaryDirectory(prefix="bt_grasp_fuzz_") as tmp, ThreadPoolExecutor(max_workers=jobs) as pool:
+        parts = list(pool.map(lambda j: _fuzz_part(range(j, n, jobs), seed, corpus, Path(tmp) / f"job{j}"),
+                              range(jobs)))
+    outcome = Outcome()
+    for part in parts:
+        outcome.counts.update(part.counts)
+        outcome.kinds.update(part.kinds)
+        outcome.views.update(part.views)
+        outcome.failures.extend(part.failures)
+    outcome.failures.sort(key=lambda line: int(line.split()[1]))
     outcome.seconds = time.monotonic() - start
     return outcome
 
@@ -502,16 +518,17 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
     parser.add_argument("--cases", type=int, default=2000)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--jobs", type=int, default=1, help="workers run at once (the cases are the same)")
     parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.worker:
         _worker()
         return 0
-    outcome = fuzz(args.cases, args.seed)
+    outcome = fuzz(args.cases, args.seed, args.jobs)
     for line in outcome.failures[:50]:
         print("FAIL", line)
     print(f"{args.cases} cases, seed {args.seed}: {outcome.counts['read']} read, {outcome.counts['refused']} refused "
-          f"in one sentence, {outcome.counts['failed']} failed, in {outcome.seconds:.0f} s")
+          f"in one sentence, {outcome.counts['failed']} failed, in {outcome.seconds:.0f} s ({args.jobs} workers)")
     print("mutations:", ", ".join(f"{k} {v}" for k, v in sorted(outcome.kinds.items())))
     print("views:", ", ".join(f"{k} {v}" for k, v in sorted(outcome.views.items())))
     return 1 if outcome.failures else 0
