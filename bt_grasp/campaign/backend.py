@@ -45,6 +45,7 @@ class WarmEpisodeBackend:
             blackboard=episode.blackboard,
             argv=("bt-grasp", "eval", "run", episode.campaign, episode.key),
             fingerprint=True,
+            leaves=episode.leaves,
         )
         t0 = time.perf_counter()
         prepared = EpisodeRun(request, self.worlds)

@@ -115,6 +115,7 @@ class Episode:
     max_ticks: int
     inputs_digest: str  # content hash of every input file of this episode
     goal: Goal | None = None  # the campaign's goal for this scene (None: the scene's declared goal, else a pick)
+    leaves: tuple[str, ...] = ()  # users' own nodes: ``eval run --leaves`` plugin files or modules
 
     @property
     def blackboard(self) -> dict[str, Any]:
@@ -155,6 +156,7 @@ class Campaign:
     max_ticks: int
     base: Path
     digests: dict[Path, str] = field(default_factory=dict, compare=False)
+    leaves: tuple[str, ...] = ()  # users' own nodes (``eval run --leaves``), loaded by every episode
 
     def episodes(self) -> list[Episode]:
         return list(self._iter())
@@ -183,6 +185,7 @@ class Campaign:
                 max_ticks=self.max_ticks,
                 inputs_digest=digest,
                 goal=scene.goal,
+                leaves=self.leaves,
             )
 
 
@@ -190,9 +193,10 @@ def _digest(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
-def load_campaign(path: str | Path, *, check_inputs: bool = True) -> Campaign:
+def load_campaign(path: str | Path, *, check_inputs: bool = True, leaves: tuple[str, ...] = ()) -> Campaign:
     """Read, validate and resolve a campaign file; with ``check_inputs`` every tree, scene, calibration and
-    fault plan it names is loaded too, so a bad input stops the campaign before its first episode."""
+    fault plan it names is loaded too, so a bad input stops the campaign before its first episode. ``leaves``:
+    plugin files or modules with users' own nodes (docs/own-leaves.md), for the checks and every episode."""
     path = Path(path)
     data, lines = read_yaml(path)
     parsed = validate(CampaignFile, data, path, lines)
@@ -254,6 +258,7 @@ def load_campaign(path: str | Path, *, check_inputs: bool = True) -> Campaign:
         max_ticks=parsed.max_ticks,
         base=base,
         digests=digests,
+        leaves=tuple(leaves),
     )
     total = len(parsed.trees) * len(scenes) * len(plans) * len(parsed.blackboard) * len(seeds)
     if total > MAX_EPISODES:
@@ -278,7 +283,7 @@ def _check_inputs(campaign: Campaign, lines: dict[KeyPath, int]) -> None:
             raise ConfigError(src, f"{_where(key)} ({what}) does not load: {exc.message}", _line(lines, key)) from None
 
     for i, tree in enumerate(campaign.trees):
-        checked(("trees", i), "tree", lambda t=tree: load_tree(campaign.base / t, robot_registry()))
+        checked(("trees", i), "tree", lambda t=tree: load_tree(campaign.base / t, robot_registry(campaign.leaves)))
     for i, plan in enumerate(campaign.fault_plans):
         if not plan.is_none:
             checked(("fault_plans", i), "fault plan", lambda p=plan: load_fault_plan(p.file, p.inject))
@@ -307,6 +312,7 @@ def _check_combinations(campaign: Campaign, lines: dict[KeyPath, int]) -> None:
             inject=plan.inject,
             blackboard=params,
             max_ticks=campaign.max_ticks,
+            leaves=campaign.leaves,
         )
         try:
             load_inputs(request)

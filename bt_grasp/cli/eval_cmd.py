@@ -9,6 +9,8 @@ import typer
 from rich.console import Console
 from rich.markup import escape
 
+from bt_grasp.cli.plugin_option import leaves_option
+
 if TYPE_CHECKING:  # the campaign package is imported when a campaign runs, not for --help
     from bt_grasp.campaign.runner import EpisodeError, Progress
 
@@ -68,6 +70,7 @@ def run(
         "failures", "--keep-logs", help="Which episodes keep their MCAP log: failures|all|none."
     ),
     parquet: bool = typer.Option(True, "--parquet/--no-parquet", help="Also export the results as NAME.parquet."),
+    leaves: list[str] = leaves_option(),
 ) -> None:
     """Run every episode of a campaign that has no result yet (so running it again resumes it)."""
     from bt_grasp.campaign.backend import warm_backend
@@ -81,7 +84,9 @@ def run(
         keep = KeepLogs(keep_logs)
     except ValueError:
         raise InputError("--keep-logs", f"expected failures, all or none, got '{keep_logs}'") from None
-    campaign = load_campaign(campaign_file)
+    # plugin files as absolute paths: every worker loads them (on a Ray cluster, the same path on each node)
+    plugins = tuple(str(Path(v).absolute()) if v.endswith(".py") else v for v in leaves)
+    campaign = load_campaign(campaign_file, leaves=plugins)
     log_dir = out / "logs"
     if ray is not None:
         from bt_grasp.campaign.ray_engine import RayEngine
