@@ -6,6 +6,7 @@ The group lives here; each benchmark's logic lives in its own package.
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import typer
@@ -95,12 +96,24 @@ def perception(
     else:
         summary = run_perception_bench(scenes, seed, backend=SimBenchBackend(scene), calibrate=calibration)
     summary["machine"] = machine_description()
+    text = json.dumps(_nan_to_null(summary), allow_nan=False)  # an empty statistic (NaN) prints as null
     if as_json:
-        typer.echo(json.dumps(summary))
+        typer.echo(text)
         return
     from rich.console import Console
 
-    Console().print_json(json.dumps(summary))
+    Console().print_json(text)
+
+
+def _nan_to_null(value: object) -> object:
+    """``value`` with every NaN float as None: JSON has no NaN (JavaScript's JSON.parse refuses the token)."""
+    if isinstance(value, float) and math.isnan(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _nan_to_null(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_nan_to_null(v) for v in value]
+    return value
 
 
 @bench_app.command("tasks")
