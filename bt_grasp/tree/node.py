@@ -90,7 +90,8 @@ class Conditions:
 
 NO_CONDITIONS = Conditions()
 
-#: a control period may execute the root at most this many times (wake-up re-runs included)
+#: a control period executes the root at most this many times (wake-up re-runs included); further wake-ups
+#: wait for the next period
 WAKE_UP_LIMIT = 10_000
 
 
@@ -98,12 +99,15 @@ class WakeUp:
     """BT.CPP's ``WakeUpSignal`` shared by the nodes of one tree, plus the control-period counter.
 
     ``emit`` is BT.CPP's ``emitWakeUpSignal``; ``take`` reads and clears the flag (``waitFor(0)``).
-    ``period`` counts control periods (CLI ticks); ``runs`` the root executions in the current one.
+    ``period`` counts control periods (CLI ticks); ``runs`` the root executions in the current one;
+    ``capped`` says the current one stopped at :data:`WAKE_UP_LIMIT` with a wake-up still requested (by
+    ``requester``).
     """
 
-    __slots__ = ("pending", "period", "requester", "runs")
+    __slots__ = ("capped", "pending", "period", "requester", "runs")
 
     def __init__(self) -> None:
+        self.capped = False
         self.pending = False
         self.requester = ""
         self.period = 0
@@ -268,22 +272,20 @@ class BtNode(py_trees.behaviour.Behaviour):
 
     def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
         """Tick this node as the root of a tree for one control period (BT.CPP ``tickOnce``), then yield every
-        node (for py_trees visitors). Raises TreeRuntimeError when the wake-up re-runs exceed
-        :data:`WAKE_UP_LIMIT`, naming the node that kept requesting them."""
+        node (for py_trees visitors). At most :data:`WAKE_UP_LIMIT` root executions happen in one period: a
+        wake-up requested after that is left to the next period (the root stays RUNNING), so an endless
+        synchronous loop (``Repeat num_cycles="-1"`` over a child that never runs) advances period by period
+        and a ``Timeout`` around it ends it in simulated time, where BT.CPP's wall-clock timer would."""
         wake_up = self._bt_wake_up
         wake_up.period += 1
         if self.bt_state.completed:
             self.reset_status()
         status = self.execute_tick()
         runs = 1
-        while status is BtStatus.RUNNING and wake_up.take():
-            if runs >= WAKE_UP_LIMIT:
-                raise TreeRuntimeError(
-                    f"{wake_up.requester} requested a wake-up {WAKE_UP_LIMIT} times within one control period "
-                    "(an endless synchronous loop, e.g. Repeat num_cycles=-1 over a child that never runs)"
-                )
+        while status is BtStatus.RUNNING and runs < WAKE_UP_LIMIT and wake_up.take():
             status = self.execute_tick()
             runs += 1
+        wake_up.capped = status is BtStatus.RUNNING and wake_up.take()
         wake_up.runs = runs
         self.bt_last_root_status = status
         yield from self.iterate()

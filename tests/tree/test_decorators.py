@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from bt_grasp.tree.exceptions import TreeRuntimeError
+from bt_grasp.tree.node import WAKE_UP_LIMIT
 
 from .harness import F, Harness, R, S
 
@@ -44,11 +44,16 @@ def test_retry_gives_up_after_num_attempts_and_resumes_running_child() -> None:
     assert h.tick() == R and h.tick() == S
 
 
-def test_retry_forever_over_a_synchronous_failure_is_an_error_not_a_hang() -> None:
-    h = Harness('<RetryUntilSuccessful num_attempts="-1"><AlwaysFailure/></RetryUntilSuccessful>')
-    # BT.CPP's tickOnce() would re-run the root forever; bt_grasp stops and names the node
-    with pytest.raises(TreeRuntimeError, match=r"RetryUntilSuccessful 'RetryUntilSuccessful::1' requested a wake-up"):
-        h.tick()
+def test_retry_forever_over_a_synchronous_failure_yields_each_period_not_a_hang() -> None:
+    h = Harness('<RetryUntilSuccessful num_attempts="-1"><Stub name="A"/></RetryUntilSuccessful>')
+    h["A"].returns(F)
+    # BT.CPP's tickOnce() would re-run the root until something outside ends it; bt_grasp caps the re-runs
+    # of one period at WAKE_UP_LIMIT and goes on in the next (RUNNING, no error)
+    assert h.tick() == R and h["A"].ticks == WAKE_UP_LIMIT
+    assert h.tree.root.bt_wake_up.requester == "RetryUntilSuccessful 'RetryUntilSuccessful::1'"
+    h["A"].returns(S)
+    # tick 2: the next attempt succeeds -> SUCCESS
+    assert h.tick() == S and h["A"].ticks == WAKE_UP_LIMIT + 1
 
 
 def test_repeat_loops_within_one_tick_and_fails_on_child_failure() -> None:

@@ -4,7 +4,8 @@ same node for any application type (:func:`loop_spec`).
 Each tick, when the child is not RUNNING, the node pops the front of ``queue`` into the output ``value`` and
 ticks the child; it returns RUNNING after a child SUCCESS (the next item comes next tick), FAILURE when the
 child fails, and ``if_empty`` (SUCCESS by default) once the queue is empty. ``queue`` is either a literal
-(``"1;2;3"``, converted at load time, so a wrong item is a load error) or a blackboard entry holding
+(``"1;2;3"``, converted at load time, so a wrong item is a load error; split as BT.CPP does, so ``""`` is an
+empty queue and ``"1;2;"`` two items) or a blackboard entry holding
 
 * a :class:`collections.deque`: shared, popped in place (BT.CPP's ``SharedQueue<T>``);
 * a ``list`` or ``tuple``: copied once when the loop starts (BT.CPP accepts a ``std::vector<T>``);
@@ -36,6 +37,16 @@ from bt_grasp.tree.values import convert_text
 Parser = Callable[[str], Any]
 
 
+def split_items(text: str) -> list[str]:
+    """The items of a text queue, split as BT.CPP's ``splitString(text, ';')``: an empty text is an empty
+    queue and a trailing ``;`` ends the last item (``"1;2;"`` is two items), but ``"1;;2"`` holds an empty
+    item."""
+    parts = text.split(";")
+    if parts[-1] == "":
+        parts.pop()
+    return parts
+
+
 class Loop(Decorator):
     """The loop node; subclasses made by :func:`loop_spec` set ``item_type`` and ``parse_item``."""
 
@@ -56,7 +67,7 @@ class Loop(Decorator):
         if cls.parse_item is None:
             raise PortValueError(f"port 'queue': a {cls.item_type.__name__} queue cannot be written as text")
         items = []
-        for part in text.split(";"):
+        for part in split_items(text):
             try:
                 items.append(cls.parse_item(part))
             except (TreeRuntimeError, ValueError) as exc:
