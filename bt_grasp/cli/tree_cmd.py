@@ -143,18 +143,31 @@ def _parse_substitutions(values: list[str]) -> dict[str, str]:
 @tree_app.command("run")
 def run_cmd(
     file: Path = typer.Argument(..., help="XML or YAML tree file."),
-    dry: bool = typer.Option(False, "--dry", help="Run without robot or simulator (required for now)."),
+    dry: bool = typer.Option(
+        False, "--dry", help="Run without robot or simulator, robot leaves replaced by stand-ins (required for now)."
+    ),
     max_ticks: int = typer.Option(1000, "--max-ticks", min=1, help="Stop after this many ticks."),
     substitute: list[str] = typer.Option(
         [], "--substitute", "-s", help="NODE=REPLACEMENT, e.g. Perceive=AlwaysSuccess or Approach=Running:3."
     ),
+    outcome: list[str] = typer.Option(
+        [], "--outcome", help="NAME=success, NAME=failure[:REASON] or NAME=running:N (leaf type, node name or path)."
+    ),
+    random_seed: int | None = typer.Option(
+        None, "--random", help="Draw each robot leaf's outcome per attempt from this seed (success or a reason)."
+    ),
     tick_hz: float = typer.Option(100.0, "--tick-hz", help="Simulated ticks per second."),
-    as_json: bool = typer.Option(False, "--json", help="Print one JSON object: status, ticks, blackboard."),
+    as_json: bool = typer.Option(
+        False, "--json", help="Print one JSON object: status, ticks, blackboard, walk (per tick, the statuses)."
+    ),
     leaves: list[str] = leaves_option(),
 ) -> None:
-    """Tick a tree with a simulated clock until it finishes; exit 0 on SUCCESS, 1 otherwise."""
+    """Tick a tree with a simulated clock until it finishes, every robot leaf replaced by a stand-in (SUCCESS
+    unless --outcome or --random say otherwise); print the statuses of the nodes each tick walked; exit 0 on
+    SUCCESS, 1 otherwise."""
+    from bt_grasp.behaviours.stand_ins import RobotStandIns
     from bt_grasp.clock import ManualClock
-    from bt_grasp.tree.loader import load_tree
+    from bt_grasp.tree.dry_run import DryRunPlan, format_walk, known_reason_names, load_dry, parse_outcome, run_dry
     from bt_grasp.tree.node import BtStatus
     from bt_grasp.tree.values import display
 
@@ -165,35 +178,28 @@ def run_cmd(
         if not tick_hz > 0:
             raise InputError("--tick-hz", f"must be positive, got {tick_hz}")
         clock = ManualClock()
-        tree = load_tree(file, tree_registry(leaves), substitutions=_parse_substitutions(substitute), clock=clock)
-        robots = tree.robot_nodes()
-        if robots:
-            node = robots[0]
-            raise InputError(
-                file,
-                f"{node.bt_type} '{node.bt_path}' needs the robot; run it with "
-                f"--substitute {node.bt_type}=AlwaysSuccess (or Running:N, Failure:REASON)",
-            )
-        status = BtStatus.IDLE
-        dt_s = 1.0 / tick_hz
-        for _ in range(max_ticks):
-            status = tree.tick()
-            if status in (BtStatus.SUCCESS, BtStatus.FAILURE, BtStatus.SKIPPED):
-                break
-            clock.advance_s(dt_s)
+        registry, catalog = tree_registry(leaves), RobotStandIns()
+        rules = tuple(parse_outcome(text) for text in outcome)
+        plan = DryRunPlan(rules, random_seed, catalog, known_reason_names(registry, catalog))
+        tree = load_dry(file, registry, plan, substitutions=_parse_substitutions(substitute), clock=clock)
+        result = run_dry(tree, clock, max_ticks, 1.0 / tick_hz)
     except InputError as exc:
         raise _fail(exc) from None
-    values = tree.blackboard_values()
+    status = result.status
     if as_json:  # typed: integers and reals stay numbers
         from bt_grasp.recording.jsonable import to_jsonable
 
-        blackboard = {k: to_jsonable(v) for k, v in values.items()}
-        typer.echo(json.dumps({"status": status.value, "ticks": tree.ticks, "blackboard": blackboard}))
+        blackboard = {k: to_jsonable(v) for k, v in result.blackboard.items()}
+        walk = [tick.as_json() for tick in result.walk]
+        typer.echo(json.dumps({"status": status.value, "ticks": result.ticks, "blackboard": blackboard, "walk": walk}))
     else:  # as BT.CPP prints values: a real with six decimals
-        finished = "" if status.completed else f" (not finished after {tree.ticks} ticks)"
-        typer.echo(f"{status.value} after {tree.ticks} ticks{finished}")
-        for key, value in values.items():
-            typer.echo(f"  {key} = {display(value)}")
+        finished = "" if status.completed else f" (not finished after {result.ticks} ticks)"
+        typer.echo(f"{status.value} after {result.ticks} ticks{finished}")
+        for key, value in result.blackboard.items():
+            text = display(value)
+            typer.echo(f"  {key} = {text if len(text) <= 100 else text[:97] + '...'}")
+        for line in format_walk(result.walk):
+            typer.echo(line)
     raise typer.Exit(0 if status is BtStatus.SUCCESS else 1)
 
 

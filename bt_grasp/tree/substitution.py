@@ -6,7 +6,10 @@ A rule maps a glob, matched against a leaf's registration ID, instance name or f
 * a test behaviour: ``Success``, ``Failure``, ``Failure:NO_DETECTION`` (fails with that reason, which
   ``FailureIs`` sees), ``Running:3`` (RUNNING 3 ticks, then SUCCESS), ``Running:3:Failure[:REASON]``.
 
-Rules apply to actions and conditions only; the first matching rule wins.
+Rules apply to actions and conditions only; the first matching rule wins. A pattern with a wildcard
+(``*``, ``?``, ``[``) replaces robot leaves only (``*=AlwaysSuccess`` leaves ``Script``, ``SetBlackboard`` and
+the other built-in leaves alone); to replace any other leaf, name its type, name or path exactly
+(``Script=AlwaysSuccess``).
 """
 
 from __future__ import annotations
@@ -66,6 +69,10 @@ class SubstitutionRule:
     replacement: str
     spec: NodeSpec | None = None  # a registered replacement
     behaviour: TestBehaviour | None = None  # a test behaviour
+
+    @property
+    def wildcard(self) -> bool:
+        return any(c in self.pattern for c in "*?[")
 
     def matches(self, type_id: str, name: str, path: str) -> bool:
         return any(fnmatch.fnmatchcase(text, self.pattern) for text in (type_id, name, path))
@@ -130,10 +137,13 @@ def parse_rules(rules: Mapping[str, str] | None, registry: NodeRegistry) -> tupl
 def substitute(
     rules: tuple[SubstitutionRule, ...], spec: NodeSpec, type_id: str, name: str, path: str
 ) -> NodeSpec | None:
-    """The replacement spec for a leaf, or None when no rule matches (or the node is not a leaf)."""
+    """The replacement spec for a leaf, or None when no rule matches (or the node is not a leaf, or only a
+    wildcard rule matches a leaf that is not a robot leaf)."""
     if spec.kind not in _LEAF_KINDS:
         return None
     for rule in rules:
+        if rule.wildcard and not spec.needs_robot:
+            continue
         if rule.matches(type_id, name, path):
             return rule.spec_for(spec)
     return None

@@ -54,7 +54,7 @@ def test_run_dry_json(tree_file: Path, capsys: pytest.CaptureFixture[str]) -> No
     code, out, _ = run_cli(capsys, "tree", "run", str(tree_file), "--dry", "--json")
     result = json.loads(out)
     # tick 1: retry loops 3 times in one tick, Sleep starts (RUNNING); ticks at 10 ms: Sleep ends at tick 4
-    assert code == 0
+    assert code == 0 and [tick["status"] for tick in result.pop("walk")] == ["RUNNING"] * 3 + ["SUCCESS"]
     assert result == {"status": "SUCCESS", "ticks": 4, "blackboard": {"attempts": 3, "message": "done"}}
 
 

@@ -99,7 +99,7 @@ def test_substitution_rules() -> None:
       <Stub name="Approach"/>
       <Fallback><Stub name="Grasp"/><FailureIs reason="SLIPPED"/></Fallback>
     </Sequence>"""
-    h = Harness(xml, substitutions={"Perceive": "AlwaysSuccess", "Appr*": "Running:2", "Grasp": "Failure:SLIPPED"})
+    h = Harness(xml, substitutions={"Perceive": "AlwaysSuccess", "Approach": "Running:2", "Grasp": "Failure:SLIPPED"})
     # Approach (stand-in) runs 2 ticks then succeeds; Grasp fails with SLIPPED, FailureIs recovers
     assert [h.tick(), h.tick(), h.tick()] == [R, R, S]
     assert h.stubs == {}  # no Stub was built
