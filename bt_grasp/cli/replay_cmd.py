@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 
 from bt_grasp.cli.plugin_option import leaves_option
 
@@ -99,6 +100,11 @@ def replay_command(
         console.print(render.summary_table(replay.summary(run)))
         console.print()
         console.print(render.timeline_table(replay.timeline(run), max_rows))
+        if run.interventions:
+            from bt_grasp.recording.interventions import interventions_table
+
+            console.print()
+            console.print(interventions_table(run.interventions))
     _print_views(console, run.path.name, views, leaf, max_rows, run)
     if "frames" in exports:
         console.print(f"wrote {len(exports['frames'])} frames to {frames_dir}")
@@ -138,6 +144,8 @@ def _resim(console: Console, log: Path, as_json: bool, keep: Path | None, leaves
             f"[green]reproduced[/]: {report.ticks_new} ticks, the same fingerprint (every node's status and "
             f"reason, blackboard, joints, gripper at every tick; final object poses) {report.digest_new[:16]} "
             f"(success {report.success_new})" + (f"; new log {report.new_log}" if report.new_log else "")
+            + (f"; {report.interventions} interventions applied again at their ticks" if report.interventions
+               else "")
         )
     else:
         d = report.divergence
@@ -148,6 +156,8 @@ def _resim(console: Console, log: Path, as_json: bool, keep: Path | None, leaves
                 console.print(f"  {diff}")
         if report.fingerprint_difference is not None:
             console.print(f"[red]fingerprints differ[/]: {report.fingerprint_difference.describe()}")
+        if report.intervention_difference is not None:
+            console.print(f"[red]interventions differ[/]: {escape(report.intervention_difference)}")
     if not report.reproduced:
         raise typer.Exit(1)
 

@@ -33,10 +33,14 @@ class ResimReport:
     fingerprint_difference: Any = None  # bt_grasp.recording.fingerprint.FingerprintDifference | None
     digest_recorded: str = ""
     digest_new: str = ""
+    #: an interactive run's interventions applied again at their ticks, and the first that was not (a sentence)
+    interventions: int = 0
+    intervention_difference: str | None = None
 
     @property
     def reproduced(self) -> bool:
-        return self.divergence is None and self.fingerprint_difference is None
+        return (self.divergence is None and self.fingerprint_difference is None
+                and self.intervention_difference is None)
 
     def to_json(self) -> dict[str, Any]:
         from dataclasses import asdict
@@ -55,6 +59,7 @@ class ResimReport:
                 else asdict(self.fingerprint_difference),
             },
             "new_log": self.new_log,
+            "interventions": {"reapplied": self.interventions, "first_difference": self.intervention_difference},
         }
 
 
@@ -135,6 +140,7 @@ def _resimulate(log_path: Path, workdir: Path, leaves: tuple[str, ...] = ()) -> 
     if recorded_leaves and not leaves:
         raise LogFileError(log_path, f"the run used --leaves {' '.join(recorded_leaves)}; pass them again with "
                            "--leaves (a log never loads code by itself)")
+    recorded_interventions = _interventions(log_path, run.interventions)
     new_log = workdir / "resim.mcap"
     request = EpisodeRequest(
         tree=tree,
@@ -150,7 +156,12 @@ def _resimulate(log_path: Path, workdir: Path, leaves: tuple[str, ...] = ()) -> 
         argv=("bt-grasp", "replay", str(log_path), "--resim"),
         leaves=leaves,
     )
-    summary = run_episode(request)
+    controller = None
+    if recorded_interventions:
+        from bt_grasp.control import Controller
+
+        controller = Controller(replay=recorded_interventions)
+    summary = run_episode(request, controller=controller)
     new_run = open_log(new_log)
     divergence = compare_tick_streams(run.ticks, new_run.ticks, stop_at_shorter=run.truncated)
     recorded_print, new_print = fingerprint_of_log(run), fingerprint_of_log(new_run)
@@ -161,5 +172,34 @@ def _resimulate(log_path: Path, workdir: Path, leaves: tuple[str, ...] = ()) -> 
     if difference is not None and difference.tick is None and not final_known:
         difference = None
     recorded_success = run.result.get("success") if isinstance(run.result, dict) else None
+    applied = controller.interventions if controller is not None else ()
     return ResimReport(len(run.ticks), len(new_run.ticks), divergence, recorded_success, summary.success,
-                       str(new_log), difference, recorded_print.digest, new_print.digest)
+                       str(new_log), difference, recorded_print.digest, new_print.digest,
+                       len(recorded_interventions), _first_intervention_difference(recorded_interventions, applied))
+
+
+def _interventions(log_path: Path, recorded: list[dict[str, Any]]) -> list[Any]:
+    """The log's interventions as records, each command checked; a malformed one is one sentence (exit 2)."""
+    from bt_grasp.control import CommandError, InterventionRecord, command_from_json
+
+    records = []
+    for index, data in enumerate(recorded):
+        try:
+            record = InterventionRecord.from_json(data)
+            command_from_json(record.command)
+        except (KeyError, TypeError, ValueError, CommandError) as exc:
+            raise LogFileError(log_path, f"intervention {index} on /control/interventions cannot be applied "
+                                         f"again: {exc}") from None
+        records.append(record)
+    return records
+
+
+def _first_intervention_difference(recorded: list[Any], applied: tuple[Any, ...]) -> str | None:
+    """Where the re-simulation's interventions differ from the recorded ones (tick, command, effect)."""
+    for was, now in zip(recorded, applied, strict=False):
+        if (was.tick, was.command, was.effect) != (now.tick, now.command, now.effect):
+            return (f"tick {was.tick}: recorded {was.command} ({was.effect}), applied at tick {now.tick}: "
+                    f"{now.command} ({now.effect})")
+    if len(recorded) != len(applied):
+        return f"{len(recorded)} interventions recorded, {len(applied)} applied again"
+    return None

@@ -36,13 +36,13 @@ from bt_grasp.control.commands import (
     command_to_json,
     is_intervention,
 )
-from bt_grasp.control.controller import Controller, FaultFirer, InterventionSink
+from bt_grasp.control.controller import Controller, FaultFirer, InterventionSink, check_breakpoints
 from bt_grasp.control.state import DetectionView, FailureView, InterventionRecord, NodeView, RunState
 
 __all__ = [
     "BreakKind", "Breakpoint", "ChooseObject", "ClearBreakpoint", "Command", "CommandError", "Controller",
     "DetectionView", "FailureView", "FaultFirer", "FireFault", "Intervention", "InterventionRecord",
     "InterventionSink", "NodeView", "Pause", "Restart", "Resume", "RunState", "SeedPolicy", "SetBlackboard",
-    "SetBreakpoint", "Source", "Step", "Stop", "command_from_json", "command_to_json", "is_intervention",
-    "parse_breakpoint", "parse_breakpoints",
+    "SetBreakpoint", "Source", "Step", "Stop", "check_breakpoints", "command_from_json", "command_to_json",
+    "is_intervention", "parse_breakpoint", "parse_breakpoints",
 ]

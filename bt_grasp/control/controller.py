@@ -174,9 +174,7 @@ class Controller:
         """Wire the controller to a built tree before its first tick: node breakpoints hook every node's
         pre-tick (chained with a hook already there); ``--break node:X`` naming no node is an InputError."""
         self._tree, self._now_ns, self._sink, self._fire_fault = tree, now_ns, sink, fire_fault
-        for bp in self._breakpoints:
-            if bp.kind is BreakKind.NODE:
-                self._check_node(bp.target, InputError)
+        check_breakpoints(tree, self._breakpoints)
         for node in tree.nodes():
             self._hook(node)
         keys = list(tree.root_blackboard.keys())  # a Blackboard is not iterable
@@ -306,10 +304,8 @@ class Controller:
         return self._tree
 
     def _check_node(self, target: str, error: type[Exception]) -> None:
-        tree = self._attached()
-        if not any(n.name == target or n.bt_path == target for n in tree.nodes()):
-            names = sorted({n.name for n in tree.nodes()})
-            problem = f"'node:{target}' names no node of the tree; nodes: {', '.join(names)}"
+        problem = _no_node(self._attached(), target)
+        if problem:
             raise InputError(SOURCE, problem) if error is InputError else CommandError(problem)
 
     def _hook(self, node: BtNode) -> None:
@@ -404,6 +400,21 @@ class Controller:
             self._cond.notify_all()
         for listener in self._listeners:
             listener(state)
+
+
+def _no_node(tree: LoadedTree, target: str) -> str:
+    if any(n.name == target or n.bt_path == target for n in tree.nodes()):
+        return ""
+    names = sorted({n.name for n in tree.nodes()})
+    return f"'node:{target}' names no node of the tree; nodes: {', '.join(names)}"
+
+
+def check_breakpoints(tree: LoadedTree, breakpoints: Sequence[Breakpoint]) -> None:
+    """InputError (``--break``, one sentence) when a ``node:`` breakpoint names no node of ``tree``."""
+    for bp in breakpoints:
+        problem = _no_node(tree, bp.target) if bp.kind is BreakKind.NODE else ""
+        if problem:
+            raise InputError(SOURCE, problem)
 
 
 def _views(node: Any, depth: int, out: list[NodeView]) -> None:

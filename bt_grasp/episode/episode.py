@@ -24,6 +24,7 @@ from bt_grasp.scene.run_goal import goal_for_run
 
 if TYPE_CHECKING:
     from bt_grasp.behaviours.cell import Cell
+    from bt_grasp.control.controller import Controller, FaultFirer
     from bt_grasp.episode.instruments import TimedPlanner
     from bt_grasp.faults.injector import Injector
     from bt_grasp.faults.physics import PhysicsHook
@@ -168,8 +169,12 @@ class Episode:
         cell.planner = self.planning
         return cell
 
-    def run(self, on_tick: Sequence[TickCallback] = ()) -> EpisodeResult:
-        """Tick the tree to the end (or ``max_ticks``), judge the goal, write the result; returns it."""
+    def run(self, on_tick: Sequence[TickCallback] = (), controller: Controller | None = None) -> EpisodeResult:
+        """Tick the tree to the end (or ``max_ticks``), judge the goal, write the result; returns it.
+
+        ``controller``: an interactive run (``bt_grasp.control``): consulted between ticks, it may pause, stop
+        and intervene; a fault injector is installed (with no fault planned: nothing changes until one is fired
+        by hand) and interventions are recorded. Without one the run is exactly the plain run."""
         from bt_grasp.sim.judge import Judge
         from bt_grasp.tree.runner import TreeRunner
 
@@ -193,10 +198,11 @@ class Episode:
                 from bt_grasp.episode.observers import RealtimePacer
 
                 observers.append(RealtimePacer(world, request.realtime))
-            if self.inputs.fault_plan is not None:
+            if self.inputs.fault_plan is not None or controller is not None:
                 from bt_grasp.faults.injector import install_faults
+                from bt_grasp.faults.plan import FaultPlan
 
-                injector = install_faults(self.inputs.fault_plan, self, recorder)
+                injector = install_faults(self.inputs.fault_plan or FaultPlan(()), self, recorder)
             for node in self.tree.nodes():
                 node.setup(cell=cell)
 
@@ -223,8 +229,11 @@ class Episode:
                 printer = FingerprintRecorder()
                 tick_recorder = printer if recorder is None else _Both(recorder, printer)
                 read_robot = robot_state_reader(cell)  # every tick, watched or not
+            if controller is not None:
+                controller.attach(self.tree, world.now_ns, sink=recorder,
+                                  fire_fault=None if injector is None else _fault_firer(injector))
             runner = TreeRunner(self.tree, world, steps_per_tick=world.steps_per_tick, recorder=tick_recorder,
-                                robot_state=read_robot, on_tick=tick_hook)
+                                robot_state=read_robot, on_tick=tick_hook, gate=controller)
             outcome = runner.run(request.max_ticks)
             # a placement goal's "resting for 1 s after release" needs the world to run on a little
             for _ in range(judge.settle_ticks(self.inputs.goal)):
@@ -236,6 +245,8 @@ class Episode:
             reason = None
             if not success:
                 reason = last.reason if last else ("MAX_TICKS" if outcome.status == "RUNNING" else None)
+                if outcome.stopped:
+                    reason = "STOPPED"  # an operator ended the run (bt_grasp.control)
             result = EpisodeResult(
                 success=success,
                 tree_status=outcome.status,
@@ -259,6 +270,8 @@ class Episode:
                     extras.finish()
                 recorder.write_result(world.now_ns(), result.to_json())
         finally:
+            if controller is not None:
+                controller.finish()
             if injector is not None:
                 injector.close()  # a reused world starts the next episode as built
             if recorder is not None:
@@ -387,7 +400,24 @@ def _when_watched(recorder: RunRecorder | None, read: Callable[[], RobotState]) 
     return lambda: read() if recorder.active else {}
 
 
+def _fault_firer(injector: Injector) -> FaultFirer:
+    """An operator's FireFault, checked as a fault plan's fault and armed now."""
+    from bt_grasp.control.commands import CommandError
+    from bt_grasp.faults.plan import fault_now
+
+    def fire(kind: str, params: Mapping[str, Any], tick: int) -> str:
+        try:
+            fault = fault_now(kind, params, tick, "fault")
+            injector.fire_now(fault, tick)
+        except InputError as exc:
+            raise CommandError(exc.message) from None
+        return f"{fault.label} armed"
+
+    return fire
+
+
 def run_episode(request: EpisodeRequest, *, worlds: WorldSource | None = None,
-                on_tick: Sequence[TickCallback] = ()) -> EpisodeResult:
-    """Prepare and run one episode (``worlds``: where the world comes from; default a fresh one)."""
-    return Episode(request, worlds).run(on_tick)
+                on_tick: Sequence[TickCallback] = (), controller: Controller | None = None) -> EpisodeResult:
+    """Prepare and run one episode (``worlds``: where the world comes from; default a fresh one;
+    ``controller``: an interactive run, see :meth:`Episode.run`)."""
+    return Episode(request, worlds).run(on_tick, controller)

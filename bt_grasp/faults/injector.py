@@ -72,6 +72,8 @@ class Injector:
         self._tick = 0  # the last tick finished
         self._in_after_tick = False
         self._faults = [_Armed(f, i) for i, f in enumerate(plan.faults)]
+        #: the run's fault stream (``install_faults`` sets it): faults fired by hand draw from it too
+        self.seed_sequence: np.random.SeedSequence | None = None
         check_fault_plan(plan, leaves, None)
         for node in leaves:
             self._hook(node)
@@ -118,6 +120,24 @@ class Injector:
         self._in_after_tick = True
         try:
             self._after_tick(tick)
+        finally:
+            self._in_after_tick = False
+
+    def fire_now(self, fault: Fault, tick: int) -> None:
+        """Arm ``fault`` at the boundary after ``tick`` as a ``tick:`` trigger would (an operator's FireFault;
+        ``bt_grasp.control``); its random draws come from its own stream, numbered after the plan's."""
+        check_fault_plan(FaultPlan((fault,)), self.leaves, list(self.wrapped.physics.object_names()))
+        index = len(self._faults)
+        if self.seed_sequence is not None:
+            seq = self.seed_sequence
+            self.wrapped.rngs[index] = np.random.default_rng(
+                np.random.SeedSequence(seq.entropy, spawn_key=(*seq.spawn_key, index)))
+        armed = _Armed(fault, index)
+        self._faults.append(armed)
+        self._tick = tick
+        self._in_after_tick = True
+        try:
+            self._arm(armed, None)
         finally:
             self._in_after_tick = False
 
@@ -232,5 +252,6 @@ def install_faults(plan: FaultPlan, site: FaultSite, recorder: FaultRecorder | N
     leaves = leaves_of(list(site.tree.nodes()))
     check_fault_plan(plan, leaves, list(site.physics.object_names()))
     injector = Injector(plan, wrapped, leaves, recorder)
+    injector.seed_sequence = site.fault_seed_sequence
     log.info("installed %d fault(s) on %d leaves", len(plan.faults), len(leaves))
     return injector

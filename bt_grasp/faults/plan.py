@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import logging
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -115,6 +115,18 @@ def _from_inject(text: str) -> Fault:
     except ConfigError as exc:
         problem = _tidy(exc.problem.removeprefix("faults[0]."))
         raise InputError(INJECT_SOURCE, f"'{text}': {problem}") from None
+
+
+def fault_now(kind: str, params: Mapping[str, Any], tick: int, source: str) -> Fault:
+    """A fault an operator fires by hand after ``tick`` (``bt_grasp.control.FireFault``), checked as a plan's
+    fault is; InputError naming ``source`` and the problem in one sentence."""
+    where = f"{kind} now"
+    try:
+        entry = validate(FaultEntry, {"kind": kind, "at_tick": max(int(tick), 1), "params": dict(params)}, source)
+        return _build(entry, 0, source, {}, where)
+    except ConfigError as exc:
+        problem = _tidy(exc.problem.removeprefix("top level: ").removeprefix("faults[0]."))
+        raise InputError(source, f"fault '{kind}': {problem}") from None
 
 
 def load_fault_plan(path: Path | None, inject: Sequence[str] = ()) -> FaultPlan:

@@ -135,6 +135,8 @@ class RunLog:
     _robot_raw: dict[int, mcap_io.RawMessage] = field(default_factory=dict, repr=False)
     #: the file's time of simulated time 0 (format 2; 0 for format 1, whose times are simulated time)
     time_origin_ns: int = 0
+    #: an interactive run's interventions (/control/interventions), each with its ``stamp_ns``
+    interventions: list[dict[str, Any]] = field(default_factory=list)
 
     @property
     def ticks_recovered(self) -> int:
@@ -348,6 +350,7 @@ def open_log(path: str | Path) -> RunLog:
         _learned=learned,
         _robot_raw=robot_raw,
         time_origin_ns=origin,
+        interventions=stamped(topics.INTERVENTIONS),
     )
 
 

@@ -66,6 +66,8 @@ def summary_table(s: dict[str, Any]) -> Table:
         rows.append(("  failures of", f"{name}: {count}"))
     if s["faults"]:
         rows.append(("faults fired", str(len(s["faults"]))))
+    if s.get("interventions"):
+        rows.append(("interventions", f"{len(s['interventions'])} (listed below)"))
     truncated = Text(f"yes: file not finished, {s['ticks_recovered']} ticks recovered", style="yellow") \
         if s["truncated"] else Text("no")
     rows.append(("truncated", truncated))

@@ -160,6 +160,7 @@ def summary(run: RunLog) -> dict[str, Any]:
         "result": run.result,
         "topics": run.topics,
         "faults": [{k: v for k, v in f.items()} for f in run.faults],
+        "interventions": list(run.interventions),
         "events": len(run.events),
         "metadata": meta,
         "attachments": sorted(run.attachments),

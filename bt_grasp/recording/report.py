@@ -252,6 +252,10 @@ def build_report(run: RunLog, html_path: Path, png_dir: Path | None = None) -> R
         parts.append("<h3>Injected faults</h3><table>" + "".join(
             f"<tr><td>{f['stamp_ns'] * 1e-9:.2f} s</td><td>tick {_esc(f.get('tick'))}</td>"
             f"<td>{_esc(f.get('fault'))}</td></tr>" for f in run.faults) + "</table>")
+    if run.interventions:
+        from bt_grasp.recording.interventions import interventions_html
+
+        parts.append(interventions_html(run.interventions))
     last_tick = run.ticks[-1].tick if run.ticks else None
     if last_tick is not None:
         tree = replay.tree_at(run, last_tick)

@@ -46,6 +46,9 @@ LOG = "/log"
 #: the simulator's true object poses, written by the judge's side for offline debugging; nothing in the
 #: pipeline reads a log, and nothing reads this topic back into a run
 JUDGE_OBJECTS = "/judge/true_objects"
+#: an operator's interventions in an interactive run (bt_grasp.control): registered at the first one, so a run
+#: without interventions has no such channel
+INTERVENTIONS = "/control/interventions"
 
 #: Topics whose messages are JSON objects.
 JSON_TOPICS: tuple[str, ...] = (TREE, TICK, EVENTS, FAULTS, RESULT, JOINT_STATE, TRAJECTORY)
@@ -65,7 +68,9 @@ PROTOBUF_TOPICS: dict[str, str] = {
     JUDGE_OBJECTS: "foxglove.SceneUpdate",
 }
 #: Topics the reader loads eagerly (everything except bulky sensor data).
-EAGER_TOPICS: tuple[str, ...] = (*JSON_TOPICS, LOG)
+EAGER_TOPICS: tuple[str, ...] = (*JSON_TOPICS, LOG, INTERVENTIONS)
+#: JSON topics whose channel is registered when the first message is written (not at the start of a log)
+LATE_JSON_TOPICS: tuple[str, ...] = (INTERVENTIONS,)
 
 # Foxglove Studio's JSON-schema support (1.48) accepts a subset of JSON Schema: one "type" per property (no
 # type lists: a value that may be absent is left out of the message instead of written as null), "enum" only
@@ -146,6 +151,18 @@ JSON_SCHEMAS: dict[str, dict[str, Any]] = {
             "tcp_quat_xyzw": _FLOATS,
         },
         ["name", "position"],
+    ),
+    INTERVENTIONS: _object(
+        "bt_grasp.Intervention",
+        {
+            "tick": _INT,  # applied at the boundary after this tick (0: before the first tick)
+            "stamp_ns": _INT,
+            "source": {"type": "string", "enum": ["terminal", "foxglove", "api", "resim"]},
+            "kind": {"type": "string", "enum": ["set_blackboard", "choose_object", "fire_fault", "stop", "restart"]},
+            "command": _FREE,  # the command's JSON form (bt_grasp.control.command_to_json)
+            "effect": _STR,
+        },
+        ["tick", "source", "kind", "command"],
     ),
     TRAJECTORY: _object(
         "bt_grasp.JointTrajectory",

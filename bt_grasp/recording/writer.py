@@ -191,6 +191,8 @@ class RunRecorder:
         self._when_watched: dict[str, Callable[[], None]] = {}
         #: called with (kind, payload) after every event written (a failure, a retry, an abort)
         self.event_listeners: list[Callable[[str, Mapping[str, Any]], None]] = []
+        #: called with the spec of a channel registered mid-run (``late_channel_spec``): a live server advertises it
+        self.channel_listeners: list[Callable[[ChannelSpec], None]] = []
         self._robot_model = robot_model
         self._leaf_names = tuple(leaf_names)
         self._leaf_keys: tuple[tuple[str, ...], list[str]] = ((), [])
@@ -515,6 +517,25 @@ class RunRecorder:
     def write_fault(self, stamp_ns: int, tick: int, fault: Mapping[str, Any]) -> None:
         """One firing of an injected fault on /faults."""
         self._write_json(topics.FAULTS, stamp_ns, {"tick": int(tick), "fault": to_jsonable(fault)})
+
+    def write_intervention(self, stamp_ns: int, record: Mapping[str, Any]) -> None:
+        """An operator's intervention on /control/interventions (``bt_grasp.control.InterventionRecord``); the
+        channel is registered with the first one, so a run with none records nothing extra."""
+        topic = topics.INTERVENTIONS
+        if topic not in self._channels:
+            with self._guard.busy():
+                schema_id = self._writer.register_schema(
+                    name=str(topics.JSON_SCHEMAS[topic]["title"]), encoding=SchemaEncoding.JSONSchema,
+                    data=topics.json_schema_bytes(topic))
+                self._channels[topic] = self._writer.register_channel(topic, MessageEncoding.JSON, schema_id)
+            for listener in self.channel_listeners:
+                listener(self.late_channel_spec(topic))
+        self._write_json(topic, stamp_ns, to_jsonable(record))
+
+    def late_channel_spec(self, topic: str) -> ChannelSpec:
+        """A channel registered only when first written (``topics.LATE_JSON_TOPICS``)."""
+        return ChannelSpec(topic, MessageEncoding.JSON, str(topics.JSON_SCHEMAS[topic]["title"]),
+                           SchemaEncoding.JSONSchema, topics.json_schema_bytes(topic))
 
     def write_result(self, stamp_ns: int, result: Mapping[str, Any]) -> None:
         """The run's outcome on /run/result: success, reason, failed_leaf, ticks, sim_time_s, wall_time_s,
