@@ -71,3 +71,19 @@ def classify(hsv_values: NDArray[np.uint8], settings: ColorSettings) -> tuple[st
         if fraction > best_fraction:
             best, best_fraction = name, fraction
     return (best, best_fraction) if best_fraction >= 0.5 else (None, best_fraction)
+
+
+def dominant_color(
+    rgb_values: NDArray[np.uint8], hsv_values: NDArray[np.uint8], settings: ColorSettings
+) -> tuple[str, tuple[int, int, int]]:
+    """The name matched by the most of these pixels ("" when none matches any) and their median RGB: an
+    attribute of an object already found by geometry, whatever share of it the colour covers."""
+    if len(rgb_values) == 0:
+        return "", (0, 0, 0)
+    rgb = tuple(int(c) for c in np.median(rgb_values.reshape(-1, 3), axis=0))
+    best, best_fraction = "", 0.0
+    for name, ranges in settings.ranges.items():
+        fraction = float(pixel_matches(hsv_values, ranges).mean())
+        if fraction > best_fraction:
+            best, best_fraction = name, fraction
+    return best, (rgb[0], rgb[1], rgb[2])

@@ -22,15 +22,19 @@ from bt_grasp.geometry import Mat4
 from bt_grasp.interfaces import RGBDFrame
 from bt_grasp.perception import cloud as pc
 from bt_grasp.perception import noise_adapt
-from bt_grasp.perception.color import blobs, classify, color_mask, to_hsv
+from bt_grasp.perception.color import blobs, classify, color_mask, dominant_color, to_hsv
 from bt_grasp.perception.config import PerceptionConfig, SegmentationSettings
-from bt_grasp.perception.results import Detection, PerceptionResult, PerceptionStatus
+from bt_grasp.perception.results import Detection, OrientedBox, PerceptionResult, PerceptionStatus, ShapeClass
 from bt_grasp.perception.segment import (
     Plane,
     assign_full_resolution,
     cluster,
     fit_table_plane,
+    footprint_fill,
+    gravity_axes,
     object_geometry,
+    pca_box,
+    shape_class_of,
 )
 
 log = logging.getLogger(__name__)
@@ -159,13 +163,14 @@ def perceive(
                        table_plane_base=plane.as_tuple(), noise=noise, height_sigma_m=height_sigma)
     hsv = None
     with timer.stage("color"):
+        rgb = np.asarray(frame.color, dtype=np.uint8)
         hsv = to_hsv(frame.color)
         mask = None
         if color is not None:
             mask = color_mask(hsv, config.color.ranges[color], config.color)
     with timer.stage("geometry"):
         detections = [
-            d for d in (_describe(c, plane, hsv, mask, config, seg) for c in full_clusters) if d is not None
+            d for d in (_describe(c, plane, rgb, hsv, mask, config, seg) for c in full_clusters) if d is not None
         ]
     if not detections:
         return _status(PerceptionStatus.NO_OBJECTS, timer, "no cluster large enough to be an object",
@@ -194,8 +199,9 @@ def perceive(
 
 
 def _describe(
-    obj: pc.PixelCloud, plane: Plane, hsv: NDArray[np.uint8], mask: NDArray[np.uint8] | None,
-    config: PerceptionConfig, seg: SegmentationSettings,
+    obj: pc.PixelCloud, plane: Plane, rgb: NDArray[np.uint8], hsv: NDArray[np.uint8],
+    mask: NDArray[np.uint8] | None, config: PerceptionConfig, seg: SegmentationSettings,
+    *, cluster_note: str = "", split_from: int = 0,
 ) -> Detection | None:
     if len(obj) < seg.min_cluster_points:
         return None
@@ -204,6 +210,13 @@ def _describe(
     label, label_fraction = classify(hsv[v, u], config.color)
     match = float((mask[v, u] > 0).mean()) if mask is not None else label_fraction
     support = min(1.0, len(obj) / _FULL_CONFIDENCE_POINTS)
+    color_name, color_rgb = dominant_color(rgb[v, u], hsv[v, u], config.color)
+    centre = tuple(float(x) for x in geo.centre_base_m)
+    g_axes = gravity_axes(plane, geo.yaw_rad)
+    pca_centre, pca_axes, pca_extents = pca_box(obj.points)
+    fill_all, fill_top = footprint_fill(obj.points, plane, geo)
+    points = np.array(obj.points, dtype=np.float64)
+    points.setflags(write=False)
     return Detection(
         label=label or "object",
         pixel_box=(int(u.min()), int(v.min()), int(u.max()), int(v.max())),
@@ -216,7 +229,26 @@ def _describe(
         principal_axes_base=tuple(tuple(float(x) for x in row) for row in geo.principal_axes),  # type: ignore[misc]
         footprint_base_m=tuple((float(x), float(y)) for x, y in geo.footprint_base_m),
         shape="round" if geo.round else "box",
+        obb=OrientedBox(centre, _rows(g_axes), (geo.length_m, geo.width_m, geo.height_m)),  # type: ignore[arg-type]
+        obb_pca=OrientedBox(_vec(pca_centre), _rows(pca_axes), _vec(pca_extents)),
+        principal_axis_base=_vec(pca_axes[0]),
+        extents_m=_vec(pca_extents),
+        points_base_m=points,
+        color_name=color_name,
+        color_rgb=color_rgb,
+        shape_class=ShapeClass(shape_class_of(geo, fill_all, fill_top)),
+        cluster_note=cluster_note,
+        split_from=split_from,
     )
+
+
+def _vec(v: NDArray[np.float64]) -> tuple[float, float, float]:
+    return (float(v[0]), float(v[1]), float(v[2]))
+
+
+def _rows(m: NDArray[np.float64]) -> tuple[tuple[float, float, float], tuple[float, float, float],
+                                           tuple[float, float, float]]:
+    return (_vec(m[0]), _vec(m[1]), _vec(m[2]))
 
 
 def _rank(

@@ -11,6 +11,46 @@ from numpy.typing import NDArray
 from bt_grasp.geometry import Mat4
 
 
+class ShapeClass(enum.Enum):
+    """What an object's visible geometry looks like (from its boxes and top view; never from its colour)."""
+
+    BOX_LIKE = "box-like"  # a flat top filling a rectangular footprint
+    CYLINDER_LIKE = "cylinder-like"  # a round footprint (standing can, bottle, bowl), or a lying curved-top one
+    ELONGATED = "elongated"  # one side at least 2.5 times the next (a rod, a pen, a banana, a tall narrow object)
+    FLAT = "flat"  # much lower than wide (a plate, a thin part)
+    OTHER = "other"  # none of these (a mug with its handle, an L bracket, a T tool, a ring)
+
+
+Vec3 = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class OrientedBox:
+    """A box in the robot BASE frame: ``axes`` are its unit x, y, z axes (the rotation's columns, a
+    right-handed frame), ``extents_m`` its full side lengths along them, ``center_m`` its centre."""
+
+    center_m: Vec3
+    axes: tuple[Vec3, Vec3, Vec3]
+    extents_m: Vec3
+
+    @property
+    def rotation(self) -> NDArray[np.float64]:
+        """3x3 rotation base <- box (columns are the axes)."""
+        return np.array(self.axes, dtype=float).T
+
+    @property
+    def T_base_box(self) -> Mat4:
+        T = np.eye(4)
+        T[:3, :3] = self.rotation
+        T[:3, 3] = self.center_m
+        return T
+
+    def corners(self) -> NDArray[np.float64]:
+        """The 8 corners (8, 3), base frame."""
+        signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=float)
+        return np.asarray(self.center_m) + (signs * np.asarray(self.extents_m) / 2) @ self.rotation.T
+
+
 class PerceptionStatus(enum.Enum):
     OK = "ok"
     NO_DEPTH = "no_depth"  # no frame, or a depth image with no valid reading at all
@@ -27,6 +67,15 @@ class Detection:
     the table plane is ``yaw_rad`` (about base +z, in (-pi/2, pi/2]); height above the table plane.
     ``centroid_base_m`` is the centre of the object's bounding box (half the height above the table).
     ``pixel_box`` is (u_min, v_min, u_max, v_max) in the colour image.
+
+    Objects are found by geometry alone (the table plane and clusters above it); colour is an attribute:
+    ``label`` is the colour name when most of the object's pixels match one (else "object", as before),
+    ``color_name``/``color_rgb`` are always the dominant colour (nearest named colour, median RGB).
+    ``obb`` is the gravity-aligned box (z = the table normal, x = the footprint's long side, extents =
+    ``size_m``, centre = ``centroid_base_m``); ``obb_pca`` is the box in the full PCA frame of the visible
+    points (x = ``principal_axis_base``, extents between robust quantiles). ``points_base_m`` are the
+    visible points (N, 3), base frame, read-only; ``cluster_note`` says why a cluster may hold more than one
+    object (empty when nothing suggests it) and ``split_from`` how many clusters it was cut from (0: not cut).
     """
 
     label: str  # a colour name when the colour matched, else "object"
@@ -40,6 +89,17 @@ class Detection:
     principal_axes_base: tuple[tuple[float, float, float], ...] = ()  # PCA axes (unit vectors), largest first
     footprint_base_m: tuple[tuple[float, float], ...] = ()  # the footprint rectangle's 4 corners (x, y)
     shape: str = "box"  # "box" (a footprint with corners) or "round" (no preferred yaw: cylinder, sphere)
+    # added with issue 28 (geometry first, colour as an attribute); defaults keep hand-made detections valid
+    obb: OrientedBox | None = None  # gravity-aligned oriented box
+    obb_pca: OrientedBox | None = None  # oriented box in the PCA frame of the visible points
+    principal_axis_base: Vec3 = (0.0, 0.0, 0.0)  # unit vector of largest spread (sign: +x, else +y, else +z)
+    extents_m: Vec3 = (0.0, 0.0, 0.0)  # obb_pca's extents: along the principal axis, the second, the third
+    points_base_m: NDArray[np.float64] | None = field(default=None, compare=False, repr=False)
+    color_name: str = ""  # the dominant colour's name (nearest named colour; "" when unknown)
+    color_rgb: tuple[int, int, int] = (0, 0, 0)  # the median colour of the object's pixels
+    shape_class: ShapeClass = ShapeClass.OTHER
+    cluster_note: str = ""  # e.g. why this cluster may be several touching objects
+    split_from: int = 0  # >0: this detection was cut out of one cluster holding that many objects
 
     @property
     def centroid(self) -> NDArray[np.float64]:

@@ -224,3 +224,82 @@ def object_geometry(points: NDArray[np.float64], plane: Plane, settings: Segment
         principal_axes=vt,
         top_point_count=int(top.sum()),
     )
+
+
+#: robust extent quantiles of the PCA box (a few stray points do not grow it)
+_PCA_QUANTILES = (0.005, 0.995)
+#: cell side of the top-view occupancy grid used for the shape class, m
+_FILL_CELL_M = 0.005
+#: one side at least this many times the next makes an object elongated
+_ELONGATED_RATIO = 2.5
+#: an object at most this fraction of its footprint's narrow side high (and under _FLAT_MAX_M) is flat
+_FLAT_RATIO = 0.35
+_FLAT_MAX_M = 0.03
+#: top-view fill of the footprint rectangle above which a footprint is a full rectangle
+_FULL_FILL = 0.75
+
+
+def _unit_sign(v: Vec) -> Vec:
+    """``v`` with a deterministic sign: its first component of magnitude > 1e-6 (x, then y, then z) positive."""
+    for c in v:
+        if abs(c) > 1e-6:
+            return v if c > 0 else -v
+    return v
+
+
+def pca_box(points: NDArray[np.float64]) -> tuple[Vec, NDArray[np.float64], Vec]:
+    """Centre, axes (3, 3) as rows (a right-handed frame, largest spread first) and extents of the points'
+    box in their PCA frame, extents between the 0.5 % and 99.5 % quantiles along each axis."""
+    mean = points.mean(axis=0)
+    centred = points - mean
+    _, _, vt = np.linalg.svd(centred, full_matrices=False)
+    x, y = _unit_sign(vt[0]), _unit_sign(vt[1])
+    axes = np.stack([x, y, np.cross(x, y)])
+    proj = centred @ axes.T
+    lo, hi = np.quantile(proj, _PCA_QUANTILES, axis=0)
+    centre = mean + ((lo + hi) / 2) @ axes
+    return centre, axes, hi - lo
+
+
+def gravity_axes(plane: Plane, yaw_rad: float) -> NDArray[np.float64]:
+    """Rows x, y, z of the gravity-aligned box: z = the table normal, x = the yaw direction in the plane."""
+    z = plane.normal
+    x = np.array([np.cos(yaw_rad), np.sin(yaw_rad), 0.0])
+    x = x - (x @ z) * z
+    x /= np.linalg.norm(x)
+    return np.stack([x, np.cross(z, x), z])
+
+
+def footprint_fill(points: NDArray[np.float64], plane: Plane, geo: ObjectGeometry) -> tuple[float, float]:
+    """How much of the object's top-view rectangle (all its points projected on the table, in the footprint's
+    axes, between the 1 % and 99 % quantiles) it covers seen from above: (all points, points within 1 cm of
+    its top), each the share of the rectangle's 5 mm cells holding at least one point."""
+    axes = gravity_axes(plane, geo.yaw_rad)
+    rel = points - geo.centre_base_m
+    a, b = rel @ axes[0], rel @ axes[1]
+    (a0, b0), (a1, b1) = np.quantile(np.stack([a, b], axis=1), _QUANTILES, axis=0)
+    na = max(1, round(float(a1 - a0) / _FILL_CELL_M))
+    nb = max(1, round(float(b1 - b0) / _FILL_CELL_M))
+    ia = np.floor((a - a0) / max(a1 - a0, 1e-6) * na).astype(np.int64)
+    ib = np.floor((b - b0) / max(b1 - b0, 1e-6) * nb).astype(np.int64)
+    inside = (ia >= 0) & (ia < na) & (ib >= 0) & (ib < nb)
+    top = inside & (plane.height(points) > geo.height_m - 0.01)
+
+    def share(mask: NDArray[np.bool_]) -> float:
+        return float(len(np.unique(ia[mask] * nb + ib[mask]))) / float(na * nb)
+
+    return share(inside), share(top)
+
+
+def shape_class_of(geo: ObjectGeometry, fill_all: float, fill_top: float) -> str:
+    """The shape class's value (see ``results.ShapeClass``) from the gravity box and the top-view fill."""
+    sides = sorted((geo.length_m, geo.width_m, geo.height_m), reverse=True)
+    if geo.height_m <= min(_FLAT_RATIO * geo.width_m, _FLAT_MAX_M):
+        return "flat"
+    if geo.round:
+        return "cylinder-like"
+    if sides[0] >= _ELONGATED_RATIO * sides[1]:
+        return "elongated"
+    if fill_all >= _FULL_FILL:
+        return "box-like" if fill_top >= _FULL_FILL else "cylinder-like"
+    return "other"
