@@ -35,7 +35,9 @@ def test_the_judge_fails_what_the_suite_is_for() -> None:
 def test_bounded_fuzz_run_has_no_failure_and_exercises_every_kind_and_view() -> None:
     fz = _tool()
     n = len(fz.KINDS)  # every mutation kind once, every log view at least once: about 45 s on a loaded 2-core machine
-    outcome = fz.fuzz(n, seed=22)
+    # seed 6: with the message-shape checks of bt_grasp/recording/validate.py turned off, its wrong-schema log
+    # case crashes (1 failure); with the results-row checks turned off, 2 results cases crash (both tried)
+    outcome = fz.fuzz(n, seed=6)
     assert outcome.failures == [], "\n".join(outcome.failures)
     assert outcome.counts["read"] > 0 and outcome.counts["refused"] > 0, outcome.counts
     assert sum(outcome.counts.values()) == n
