@@ -89,7 +89,7 @@ def test_the_readme_table_is_parsed_into_every_command() -> None:
         "bench perception --noise-sweep", "bench follow", "bench tasks", "bench budget", "resident status",
         "resident stop", "--version",
     }
-    assert names == expected
+    assert expected <= names, expected - names  # a new row is for the next test to demand a test of
 
 
 def test_an_invocation_counts_but_a_mention_does_not() -> None:
