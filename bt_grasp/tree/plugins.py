@@ -22,6 +22,7 @@ import importlib
 import importlib.util
 import sys
 import traceback
+import zlib
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from importlib.metadata import entry_points
@@ -95,7 +96,7 @@ def load_file(path: str | Path) -> Plugin:
     if file.suffix != ".py":
         raise PluginError(source, "a plugin file must be Python source ending in .py")
     resolved = str(file.resolve())
-    module_name = f"bt_grasp_user_leaves.{file.stem}_{abs(hash(resolved)) & 0xFFFFFFFF:08x}"
+    module_name = f"bt_grasp_user_leaves.{file.stem}_{zlib.crc32(resolved.encode()):08x}"
     spec = importlib.util.spec_from_file_location(module_name, resolved)
     if spec is None or spec.loader is None:  # pragma: no cover - a .py file always has a loader
         raise PluginError(source, "cannot be imported")
@@ -144,10 +145,11 @@ def entry_point_plugins() -> tuple[Plugin, ...]:
             target = ep.load()
         except Exception as exc:
             raise PluginError(source, _import_problem(exc)) from None
+        # no line numbers for these: the source named in errors is the entry point, not a file
         if isinstance(target, ModuleType):
-            plugins.append(_hook_of(target, source, str(getattr(target, "__file__", "") or "")))
+            plugins.append(_hook_of(target, source, ""))
         elif callable(target):
-            plugins.append(Plugin(source, target, str(getattr(getattr(target, "__code__", None), "co_filename", ""))))
+            plugins.append(Plugin(source, target))
         else:
             raise PluginError(source, f"names {target!r}, neither a register(registry) function nor a module")
     return tuple(plugins)
