@@ -52,18 +52,18 @@ def installed(monkeypatch: pytest.MonkeyPatch) -> Iterator[list[FakeEntryPoint]]
 
 
 def test_installed_plugins_register_in_a_fixed_order_before_leaves_files(installed: list[FakeEntryPoint]) -> None:
-    calls: list[str] = []
+    calls: list[tuple[str, bool]] = []
 
-    def hook(name: str) -> Any:
-        return lambda registry: calls.append(name)
+    def hook(name: str) -> Any:  # records whether the --leaves file's node was registered before it
+        return lambda registry: calls.append((name, "CheckWeight" in registry))
 
     installed += [FakeEntryPoint("b", "pkg_b:register", hook("z-dist/b"), "z-dist"),
                   FakeEntryPoint("a", "pkg_a:register", hook("a-dist/a"), "a-dist")]
     registry = plugins.load_plugins(builtin_registry(), [str(PLUGIN)])
-    assert calls == ["a-dist/a", "z-dist/b"]
+    assert calls == [("a-dist/a", False), ("z-dist/b", False)]
     assert "CheckWeight" in registry
     plugins.load_plugins(builtin_registry())  # a second registry reuses the discovered hooks
-    assert calls == ["a-dist/a", "z-dist/b", "a-dist/a", "z-dist/b"]
+    assert [name for name, _ in calls] == ["a-dist/a", "z-dist/b", "a-dist/a", "z-dist/b"]
 
 
 def test_an_entry_point_naming_a_module_uses_its_register(installed: list[FakeEntryPoint]) -> None:
