@@ -8,6 +8,10 @@ Never stalls the run: ``Channel.log`` only queues; the SDK keeps at most ``backl
 client and drops the oldest data message when a slow viewer's queue is full (frames are dropped, ticks are
 not). A topic written once (the robot model, the fixtures, the tree, the camera calibration) is sent again to
 a viewer that subscribes later, so joining mid-run still shows the arm.
+
+Control (``serve_control``): the server always offers the protocol's parameters and client publishing; a run
+started with ``--control`` hands them to a :class:`bt_grasp.control.foxglove.FoxgloveControl` (Studio's
+Parameters and Publish panels drive the run), any other run answers a client that tries with one sentence.
 """
 
 from __future__ import annotations
@@ -15,11 +19,15 @@ from __future__ import annotations
 import contextlib
 import logging
 import threading
-from typing import Any
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
 
 from bt_grasp.errors import BtGraspError, InputError
 from bt_grasp.recording import topics
 from bt_grasp.recording.writer import RunRecorder
+
+if TYPE_CHECKING:
+    from bt_grasp.control.foxglove import Answer, FoxgloveControl
 
 log = logging.getLogger(__name__)
 
@@ -33,11 +41,18 @@ class LiveServerError(BtGraspError):
     exit_code = 2
 
 
-class _Listener:  # implements foxglove.ServerListener (a Protocol with defaults for the other callbacks)
-    """Re-sends the latched topics' last message when a viewer subscribes."""
+#: the status id of control answers (a new answer replaces the last one in a viewer)
+CONTROL_STATUS = "bt_grasp.control"
+NO_CONTROL = "this run takes no commands: start it with --live --control to drive it from Foxglove"
+
+
+class _Listener:  # implements foxglove.ServerListener (every callback: the SDK calls them by name)
+    """Re-sends the latched topics' last message when a viewer subscribes; parameters and client messages go to
+    the run's control (when it has one)."""
 
     def __init__(self, server: LiveServer) -> None:
         self._server = server
+        self._command_channels: set[tuple[int, int]] = set()  # (client, client channel) on the command topic
 
     def on_subscribe(self, client: Any, channel: Any) -> None:
         self._server.subscribed(+1)
@@ -45,6 +60,52 @@ class _Listener:  # implements foxglove.ServerListener (a Protocol with defaults
 
     def on_unsubscribe(self, client: Any, channel: Any) -> None:
         self._server.subscribed(-1)
+
+    def on_client_advertise(self, client: Any, channel: Any) -> None:
+        from bt_grasp.control.foxglove import COMMAND_TOPIC
+
+        if str(channel.topic) == COMMAND_TOPIC:
+            self._command_channels.add((int(client.id), int(channel.id)))
+
+    def on_client_unadvertise(self, client: Any, client_channel_id: int) -> None:
+        self._command_channels.discard((int(client.id), int(client_channel_id)))
+
+    def on_message_data(self, client: Any, client_channel_id: int, data: bytes) -> None:
+        if (int(client.id), int(client_channel_id)) not in self._command_channels:
+            return
+        control = self._server.control
+        if control is None:
+            self._server.status(NO_CONTROL)
+            return
+        self._server.answer(control.command_message(bytes(data)))
+
+    def on_get_parameters(self, client: Any, param_names: list[str], request_id: str | None = None) -> list[Any]:
+        control = self._server.control
+        return [] if control is None else self._server.parameters(control.parameters(param_names))
+
+    def on_set_parameters(self, client: Any, parameters: list[Any], request_id: str | None = None) -> list[Any]:
+        control = self._server.control
+        if control is None:
+            self._server.status(NO_CONTROL)
+            return []
+        self._server.answer(control.set_parameters({p.name: p.get_value() for p in parameters}))
+        # the values as the run stands (a paused run applies a command at once; the rest follow as updates)
+        return self._server.parameters(control.parameters())
+
+    def on_parameters_subscribe(self, param_names: list[str]) -> None:
+        return None
+
+    def on_parameters_unsubscribe(self, param_names: list[str]) -> None:
+        return None
+
+    def on_connection_graph_subscribe(self) -> None:
+        return None
+
+    def on_connection_graph_unsubscribe(self) -> None:
+        return None
+
+    def on_playback_control_request(self, playback_control_request: Any) -> None:
+        return None
 
 
 class LiveServer:
@@ -55,6 +116,7 @@ class LiveServer:
         if not 0 <= port <= 65535:
             raise InputError("--live", f"a port is a number from 0 to 65535, got {port}")
         import foxglove
+        from foxglove.websocket import Capability
 
         self._foxglove = foxglove
         self._context = foxglove.Context()
@@ -63,9 +125,11 @@ class LiveServer:
         self._lock = threading.Lock()
         self.dropped_errors = 0
         self._subscriptions = 0
+        self.control: FoxgloveControl | None = None
+        capabilities = [Capability.Parameters, Capability.ClientPublish]
         try:
             self._server = foxglove.start_server(
-                name=name, host=host, port=port, context=self._context,
+                name=name, host=host, port=port, context=self._context, capabilities=capabilities,
                 server_listener=_Listener(self),  # type: ignore[arg-type]
                 supported_encodings=["json", "protobuf"], message_backlog_size=backlog,
             )
@@ -86,6 +150,42 @@ class LiveServer:
             self._channels[spec.topic] = fg.Channel(spec.topic, schema=schema,
                                                     message_encoding=spec.message_encoding, context=self._context)
         recorder.add_tap(self._tap, wanted=lambda: self._subscriptions > 0)
+
+    def serve_control(self, control: FoxgloveControl) -> None:
+        """Let viewers drive the run: parameters and ``/control/command`` messages go to ``control``, and the
+        run's view goes back as parameter updates."""
+        self.control = control
+        control.watch(lambda changed: self._publish_parameters(changed), self.status)
+        if control.refusal:
+            log.warning("%s", control.refusal)
+
+    def parameters(self, values: Mapping[str, Any]) -> list[Any]:
+        """Parameter values as the SDK's ``Parameter`` objects (a float stays a float on the wire)."""
+        from foxglove.websocket import Parameter, ParameterType
+
+        return [Parameter(name, value=value, type=ParameterType.Float64 if isinstance(value, float) else None)
+                for name, value in values.items()]
+
+    def _publish_parameters(self, changed: Mapping[str, Any]) -> None:
+        try:
+            self._server.publish_parameter_values(self.parameters(changed))
+        except Exception:  # a viewer's updates must never stop the run
+            self.dropped_errors += 1
+            log.debug("live: could not publish parameter values", exc_info=True)
+
+    def status(self, sentence: str) -> None:
+        """Tell every viewer one sentence (Studio lists it under Problems)."""
+        from foxglove.websocket import StatusLevel
+
+        try:
+            self._server.publish_status(sentence, StatusLevel.Warning, CONTROL_STATUS)
+        except Exception:
+            self.dropped_errors += 1
+            log.debug("live: could not send a status", exc_info=True)
+
+    def answer(self, answer: Answer) -> None:
+        for problem in answer.problems:
+            self.status(problem)
 
     def subscribed(self, change: int) -> None:
         with self._lock:

@@ -1,0 +1,346 @@
+"""The Foxglove front end of an interactive run: parameters and a published command topic mapped to the control API.
+
+A live run started with ``bt-grasp run ... --live --control`` serves, besides its topics, the Foxglove WebSocket
+protocol's *parameters* (Studio's stock **Parameters** panel lists and edits them) and takes client-published
+JSON messages on :data:`COMMAND_TOPIC` (Studio's stock **Publish** panel sends them). Both become the typed
+commands of :mod:`bt_grasp.control` and go through the same :class:`~bt_grasp.control.Controller` as the
+terminal UI's keys, so an intervention from Foxglove is recorded and re-simulated like any other (source
+``foxglove``).
+
+========================  ==========================================================================================
+parameter                 meaning (writable unless marked *read*)
+========================  ==========================================================================================
+``run.paused``            ``true`` pauses at the next tick boundary, ``false`` resumes
+``run.step``              ``N`` (>= 1) runs N ticks, then pauses; reads 0
+``run.stop``              ``true`` ends the run (the log is finished, the run judged as it stands); reads false
+``run.tick``              *read*: the last tick finished (0: before the first)
+``run.sim_time_s``        *read*: simulated time
+``run.status``            *read*: ``running``, ``paused: <why>`` or ``finished``
+``run.message``           *read*: the answer to the last command (a refusal's sentence)
+``run.last_failure``      *read*: the last leaf FAILURE (tick, leaf path, reason)
+``breakpoints``           the breakpoints as a list of specs (``["fail", "tick:40", "node:Lift"]``); the list
+                          written replaces the set (``[]`` clears every one)
+``bb.<key>``              a blackboard entry a port reads as text, a number or a bool (``lift_height``, ``color``)
+``detections``            *read*: the current detections, ``"<index>: <label> at (x, y, z) m"``
+``choose.object``         an index or a label of the detections: written to entry ``target`` (configurable)
+``fault.fire``            a fault kind of the catalogue (``"frame_drop"``), or ``{"fault": KIND, "params": {...}}``
+``fault.kinds``           *read*: the catalogue's kinds
+========================  ==========================================================================================
+
+A message on :data:`COMMAND_TOPIC` is a command's JSON form (:func:`bt_grasp.control.command_from_json`:
+``{"kind": "pause"}``, ``{"kind": "step", "n": 5}``, ``{"kind": "set_blackboard", "key": ..., "value": ...}``).
+
+Every value is checked before anything is sent: a bad one gets one sentence back (the live server sends it as a
+status message: Studio lists it under Problems) and the run goes on untouched. A refusal only the tick loop can
+find (a value no port reading the entry accepts, an object index past the detections) comes back the same way
+once the controller has answered.
+
+Security: the Foxglove WebSocket protocol has no authentication, and the SDK's server does not say where a
+client connects from. Control is therefore accepted only when the live server listens on a loopback address
+(only this machine's viewers can reach it); on any other host it is refused unless ``allow_remote`` (the run
+command's ``--allow-remote-control``, which prints a warning). Nothing here imports the simulator or the
+WebSocket server: :class:`bt_grasp.recording.live.LiveServer` carries the values to and from the protocol.
+"""
+
+from __future__ import annotations
+
+import ipaddress
+import json
+import logging
+import math
+import threading
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from bt_grasp.control.breakpoints import Breakpoint, parse_breakpoint
+from bt_grasp.control.commands import (
+    ChooseObject,
+    ClearBreakpoint,
+    Command,
+    CommandError,
+    FireFault,
+    Pause,
+    Resume,
+    SetBlackboard,
+    SetBreakpoint,
+    Source,
+    Step,
+    Stop,
+    command_from_json,
+)
+from bt_grasp.control.controller import Controller
+from bt_grasp.control.state import RunState
+from bt_grasp.errors import InputError
+
+log = logging.getLogger(__name__)
+
+#: the topic a Foxglove client publishes JSON commands on (the Publish panel's topic)
+COMMAND_TOPIC = "/control/command"
+#: the schema name a client advertises it with (the Publish panel's datatype; the server does not require it)
+COMMAND_SCHEMA = "bt_grasp.Command"
+#: the prefix of the parameters that are blackboard entries
+BB_PREFIX = "bb."
+
+#: a parameter value as the protocol carries it
+ParamValue = bool | int | float | str | list[Any] | dict[str, Any]
+
+READ_ONLY = ("run.tick", "run.sim_time_s", "run.status", "run.message", "run.last_failure", "detections",
+             "fault.kinds")
+
+#: the sentences of a controller that are no refusal (an intervention applied, a breakpoint set or cleared)
+_APPLIED_PREFIXES = ("tick ", "breakpoint ")
+
+
+def is_loopback(host: str) -> bool:
+    """True for an address only this machine can reach (127.0.0.0/8, ::1, localhost)."""
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+def fault_kinds() -> tuple[str, ...]:
+    from bt_grasp.faults.model import FaultKind
+
+    return tuple(k.value for k in FaultKind)
+
+
+@dataclass(frozen=True)
+class Answer:
+    """What one request from a client did: the commands sent and, when refused, one sentence per problem."""
+
+    sent: tuple[Command, ...] = ()
+    problems: tuple[str, ...] = ()
+
+
+class FoxgloveControl:
+    """Foxglove parameters and command messages in, the control API's commands out; the run's state as
+    parameters back. Thread-safe: the live server calls it from its own threads, the controller's listener
+    from the tick loop's.
+
+    Args:
+        controller: the run's controller (commands are sent to it with source ``foxglove``).
+        host: the address the live server listens on (control only on a loopback one...).
+        allow_remote: ...unless this is set.
+        choose_entry: the blackboard entry ``choose.object`` writes (the one the tree acts on).
+        detections_entry: the entry holding the detections it chooses from.
+    """
+
+    def __init__(self, controller: Controller, *, host: str = "127.0.0.1", allow_remote: bool = False,
+                 choose_entry: str = "target", detections_entry: str = "objects") -> None:
+        self._controller = controller
+        self.host = host
+        self.enabled = allow_remote or is_loopback(host)
+        self._choose_entry = choose_entry
+        self._detections_entry = detections_entry
+        self._kinds = fault_kinds()
+        self._lock = threading.Lock()
+        self._published: dict[str, ParamValue] = {}
+        self._last_message = ""
+        self._on_change: Callable[[dict[str, ParamValue]], None] | None = None
+        self._on_refusal: Callable[[str], None] | None = None
+
+    @property
+    def refusal(self) -> str:
+        """Why control is off ('' when on)."""
+        if self.enabled:
+            return ""
+        return (f"this run takes no control from Foxglove: its live server listens on {self.host}, which other "
+                "machines can reach, and the protocol has no authentication (start it with a loopback "
+                "--live-host, or --allow-remote-control)")
+
+    # ---- run state -> parameters ------------------------------------------------------------------------------
+    def parameters(self, names: Sequence[str] = ()) -> dict[str, ParamValue]:
+        """The parameters as the run stands (``names``: only those; empty: all)."""
+        values = state_parameters(self._controller.state(), self._kinds)
+        return values if not names else {n: values[n] for n in names if n in values}
+
+    def watch(self, on_change: Callable[[dict[str, ParamValue]], None], on_refusal: Callable[[str], None]) -> None:
+        """Call ``on_change(changed parameters)`` and ``on_refusal(sentence)`` as the run's view changes
+        (from the tick loop's thread: both must only queue)."""
+        self._on_change, self._on_refusal = on_change, on_refusal
+        self._controller.subscribe(self._state_changed)
+
+    def _state_changed(self, state: RunState) -> None:
+        values = state_parameters(state, self._kinds)
+        with self._lock:
+            changed = {k: v for k, v in values.items() if self._published.get(k) != v}
+            self._published = values
+            message, fresh = state.message, state.message != self._last_message
+            self._last_message = message
+        if changed and self._on_change is not None:
+            self._on_change(changed)
+        if fresh and message and not message.startswith(_APPLIED_PREFIXES) and self._on_refusal is not None:
+            self._on_refusal(message)
+
+    # ---- parameters -> commands -------------------------------------------------------------------------------
+    def set_parameters(self, values: Mapping[str, Any]) -> Answer:
+        """Map the values a client set to commands and send them; a refused value sends nothing."""
+        if not self.enabled:
+            return Answer(problems=(self.refusal,))
+        state = self._controller.state()
+        sent: list[Command] = []
+        problems: list[str] = []
+        for name, value in values.items():
+            try:
+                commands = parameter_commands(name, value, state, self._kinds, self._choose_entry,
+                                              self._detections_entry)
+            except CommandError as exc:
+                problems.append(f"parameter '{name}': {exc}")
+                continue
+            for command in commands:
+                self._controller.send(command, Source.FOXGLOVE)
+            sent.extend(commands)
+        for problem in problems:
+            log.info("foxglove control refused: %s", problem)
+        return Answer(tuple(sent), tuple(problems))
+
+    def command_message(self, data: bytes) -> Answer:
+        """One JSON message a client published on :data:`COMMAND_TOPIC`."""
+        if not self.enabled:
+            return Answer(problems=(self.refusal,))
+        try:
+            command = command_from_json(json.loads(data.decode("utf-8")))
+        except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+            return Answer(problems=(f"a message on {COMMAND_TOPIC} is a JSON command, and this one is not JSON "
+                                    f"({exc})",))
+        except CommandError as exc:
+            return Answer(problems=(f"a message on {COMMAND_TOPIC}: {exc}",))
+        self._controller.send(command, Source.FOXGLOVE)
+        return Answer((command,))
+
+
+def state_parameters(state: RunState, kinds: Sequence[str]) -> dict[str, ParamValue]:
+    """The run's view as parameter values (see the module's table)."""
+    if state.finished:
+        status = "finished"
+    elif state.paused:
+        status = f"paused: {state.pause_reason}" if state.pause_reason else "paused"
+    else:
+        status = "running"
+    failure = state.last_failure
+    values: dict[str, ParamValue] = {
+        "run.paused": state.paused,
+        "run.step": 0,
+        "run.stop": False,
+        "run.tick": state.tick,
+        "run.sim_time_s": round(state.sim_time_s, 6),
+        "run.status": status,
+        "run.message": state.message,
+        "run.last_failure": "" if failure is None else
+        f"tick {failure.tick}: {failure.path} {failure.reason or 'FAILURE'}: {failure.message}",
+        "breakpoints": list(state.breakpoints),
+        "detections": [f"{d.index}: {d.label} at ({', '.join(f'{x:.3f}' for x in d.centroid_base_m)}) m"
+                       for d in state.detections],
+        "choose.object": "",
+        "fault.fire": "",
+        "fault.kinds": list(kinds),
+    }
+    shown = dict(state.blackboard)
+    for key in state.settings:
+        values[BB_PREFIX + key] = _shown_value(shown.get(key, ""))
+    return values
+
+
+def _shown_value(text: str) -> ParamValue:
+    """A blackboard entry's text as the value an editor shows: a number or bool as such, else the text."""
+    if text in ("True", "False"):
+        return text == "True"
+    try:
+        number = float(text)
+    except ValueError:
+        return text
+    if not math.isfinite(number):
+        return text
+    return int(number) if text.lstrip("-").isdigit() else number
+
+
+def parameter_commands(name: str, value: Any, state: RunState, kinds: Sequence[str],
+                       choose_entry: str = "target", detections_entry: str = "objects") -> list[Command]:
+    """The commands one parameter's new value means; CommandError (one sentence) when it means none."""
+    if name == "run.paused":
+        return [Pause() if _bool(value) else Resume()]
+    if name == "run.step":
+        if value in (0, None, ""):
+            return []  # the read-back value, set again by an editor
+        n = _int(value)
+        if n < 1:
+            raise CommandError(f"a step is at least 1 tick, got {n}")
+        return [Step(n)]
+    if name == "run.stop":
+        return [Stop()] if _bool(value) else []
+    if name == "breakpoints":
+        return _breakpoint_commands(value, state)
+    if name.startswith(BB_PREFIX):
+        key = name[len(BB_PREFIX):]
+        if key not in state.settings:
+            known = ", ".join(state.settings) or "none"
+            raise CommandError(f"blackboard entry '{key}' is no setting of this tree (settings: {known})")
+        if not isinstance(value, str | int | float | bool):
+            raise CommandError(f"a blackboard entry takes text, a number or true/false, got {_shown(value)}")
+        if isinstance(value, float) and not math.isfinite(value):
+            raise CommandError(f"a blackboard entry takes a finite number, got {value}")
+        return [SetBlackboard(key, value)]
+    if name == "choose.object":
+        if value in ("", None):
+            return []
+        if isinstance(value, bool) or not isinstance(value, int | str):
+            raise CommandError(f"an object is chosen by its index or its label, got {_shown(value)}")
+        return [ChooseObject(value, choose_entry, detections_entry)]
+    if name == "fault.fire":
+        return _fault_commands(value, kinds)
+    if name in READ_ONLY:
+        raise CommandError("it shows the run and cannot be set")
+    raise CommandError("this run has no such parameter")
+
+
+def _bool(value: Any) -> bool:
+    if not isinstance(value, bool):
+        raise CommandError(f"it takes true or false, got {_shown(value)}")
+    return value
+
+
+def _int(value: Any) -> int:
+    if isinstance(value, bool) or not isinstance(value, int | float) or value != int(value):
+        raise CommandError(f"it takes a whole number of ticks, got {_shown(value)}")
+    return int(value)
+
+
+def _shown(value: Any) -> str:
+    return json.dumps(value) if isinstance(value, list | dict | str) or value is None else str(value)
+
+
+def _breakpoint_commands(value: Any, state: RunState) -> list[Command]:
+    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+        raise CommandError(f"breakpoints are a list of specs such as [\"fail\", \"tick:40\"], got {_shown(value)}")
+    wanted: list[Breakpoint] = []
+    for spec in value:
+        try:
+            wanted.append(parse_breakpoint(spec, "breakpoints"))
+        except InputError as exc:
+            raise CommandError(exc.problem) from None
+    current = [parse_breakpoint(spec) for spec in state.breakpoints]
+    commands: list[Command] = [ClearBreakpoint(bp) for bp in current if bp not in wanted]
+    commands += [SetBreakpoint(bp) for bp in dict.fromkeys(wanted) if bp not in current]
+    return commands
+
+
+def _fault_commands(value: Any, kinds: Sequence[str]) -> list[Command]:
+    if value in ("", None):
+        return []
+    params: Any = {}
+    if isinstance(value, dict):
+        kind, params = value.get("fault"), value.get("params", {})
+        extra = sorted(set(value) - {"fault", "params"})
+        if extra:
+            raise CommandError(f"a fault is {{\"fault\": KIND, \"params\": {{...}}}}; unknown field '{extra[0]}'")
+        if not isinstance(params, dict):
+            raise CommandError(f"a fault's params are an object, got {_shown(params)}")
+    else:
+        kind = value
+    if not isinstance(kind, str) or kind not in kinds:
+        raise CommandError(f"{_shown(kind)} is no fault of the catalogue; kinds: {', '.join(kinds)}")
+    return [FireFault(kind, dict(params))]
