@@ -19,14 +19,14 @@ from bt_grasp.config import KeyPath, StrictModel, read_yaml, validate
 from bt_grasp.errors import ConfigError
 from bt_grasp.scene.fixtures import CONTAINER_KINDS, Fixture
 from bt_grasp.scene.goals import Goal, PickGoal, PlaceGoal, SortGoal, StackGoal
-from bt_grasp.scene.objects import SceneObject
+from bt_grasp.scene.objects import Choose, SceneObject
 
 __all__ = ["COLOR_NAMES", "SCENE_VERSION", "Scene", "load_scene"]
 
 #: the scene file format this bt_grasp writes and reads (a file without ``version`` is version 1)
 SCENE_VERSION = 2
 #: keys that need ``version: 2``
-_V2_KEYS = ("goal", "fixtures", "calibration", "object_gap_m")
+_V2_KEYS = ("goal", "fixtures", "calibration", "object_gap_m", "choose")
 #: a top-down place is planned only this far (horizontally) from the robot base, m
 TOP_DOWN_REACH_M = 0.80
 
@@ -130,6 +130,8 @@ class Scene(StrictModel):
     #: (version 2) the smallest gap between drawn objects' footprints, m; 0 lets objects touch. Not given:
     #: the first format's rule (circumscribed circles 1 cm apart), which draws the same poses per seed
     object_gap_m: NonNegFloat | None = None
+    #: (version 2) a seeded subset of the objects (see bt_grasp.scene.layout); None: every object, every run
+    choose: Choose | None = None
     #: (version 2) static fixtures: trays, bins, markers, walls (see bt_grasp.scene.fixtures)
     fixtures: tuple[Fixture, ...] = ()
     #: (version 2) what a run on this scene is judged on; None: pick the object of the run's --color
@@ -175,6 +177,7 @@ def load_scene(path: str | Path) -> Scene:
         _check_version(data, path, lines)
     scene = validate(Scene, data, path, lines)
     check_references(scene, path, lines)
+    check_choose(scene, path, lines)
     if any(o.is_mesh for o in scene.objects):
         from bt_grasp.scene.meshes import attach_geometry  # trimesh is imported only for scenes with meshes
 
@@ -195,6 +198,35 @@ def _check_version(data: dict[str, object], path: str | Path, lines: dict[KeyPat
             if key in data:
                 raise ConfigError(path, f"'{key}' needs scene format version {SCENE_VERSION}: add "
                                   f"'version: {SCENE_VERSION}' at the top of the file", where=lines.get((key,)))
+
+
+def check_choose(scene: Scene, path: str | Path, lines: dict[KeyPath, int] | None = None) -> None:
+    """``choose`` names objects of the scene, once each, and no more of them than there are; a goal names no
+    object that a run may leave out."""
+    choose = scene.choose
+    if choose is None:
+        return
+    lines = lines or {}
+    names = [o.name for o in scene.objects]
+    among = list(choose.among) if choose.among is not None else names
+    where = lines.get(("choose", "among"), lines.get(("choose",)))
+    for i, name in enumerate(among):
+        line = lines.get(("choose", "among", i), where)
+        if name not in names:
+            raise ConfigError(path, f"choose names object '{name}', which is not in the scene (objects: "
+                              f"{', '.join(names) or 'none'})", where=line)
+        if among.count(name) > 1:
+            raise ConfigError(path, f"choose names object '{name}' twice", where=line)
+    low, high = choose.count_range
+    if high > len(among):
+        raise ConfigError(path, f"choose draws up to {high} objects among {len(among)}",
+                          where=lines.get(("choose", "count"), where))
+    goal = scene.goal
+    named = {getattr(goal, key, None) for key in ("object", "on")} if goal is not None else set()
+    left_out = sorted(n for n in named if isinstance(n, str) and n in among and low < len(among))
+    if left_out:
+        raise ConfigError(path, f"the goal names object '{left_out[0]}', which choose may leave out of a run",
+                          where=lines.get(("goal",)))
 
 
 def check_references(scene: Scene, path: str | Path, lines: dict[KeyPath, int] | None = None) -> None:

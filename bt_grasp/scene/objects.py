@@ -38,11 +38,34 @@ class Randomize(StrictModel):
         return value
 
 
+class Choose(StrictModel):
+    """(scene key ``choose``) A seeded subset of the objects: ``count`` of the objects named in ``among`` (all
+    objects when not given), drawn from the run's seed; objects not in ``among`` are always there."""
+
+    among: tuple[str, ...] | None = None
+    count: Annotated[int, Field(ge=0)] | tuple[Annotated[int, Field(ge=0)], Annotated[int, Field(ge=0)]]
+
+    @field_validator("count")
+    @classmethod
+    def _ordered(cls, value: int | tuple[int, int]) -> int | tuple[int, int]:
+        if isinstance(value, tuple) and value[0] > value[1]:
+            raise ValueError("count is a number or [low, high] with low <= high")
+        return value
+
+    @property
+    def count_range(self) -> tuple[int, int]:
+        return (self.count, self.count) if isinstance(self.count, int) else self.count
+
+
 #: the mesh file formats a ``shape: mesh`` object may name (trimesh reads them)
 MESH_SUFFIXES: tuple[str, ...] = (".obj", ".stl", ".ply", ".glb", ".gltf")
 PRIMITIVE_SHAPES: tuple[str, ...] = ("box", "cylinder", "sphere")
 #: a mesh object's colour when the scene gives none and its file has no material colour
 DEFAULT_MESH_RGB: tuple[float, float, float] = (0.6, 0.6, 0.6)
+#: how a mesh or URDF object is set down (``rest_pose``): as its file is oriented, or one of its stable rest
+#: poses drawn from the seed (``stable``: with the chance it lands so when dropped; ``any_stable``: every distinct
+#: rest pose equally likely). See :mod:`bt_grasp.scene.layout`.
+RestPoseRule = Literal["modelled", "stable", "any_stable"]
 
 
 class SceneObject(StrictModel):
@@ -65,6 +88,7 @@ class SceneObject(StrictModel):
     friction: NonNegFloat = 0.8
     pose: ObjectPose
     randomize: Randomize = Randomize()
+    rest_pose: RestPoseRule = "modelled"  # mesh and urdf objects: how the object is set down (drawn per seed)
     _geometry: MeshGeometry | None = PrivateAttr(default=None)
 
     @model_validator(mode="after")
@@ -82,6 +106,8 @@ class SceneObject(StrictModel):
                     raise ValueError(f"'{key}' is for mesh or urdf objects, not a {self.shape}")
             if self.scale != 1.0:
                 raise ValueError(f"'scale' is for mesh or urdf objects, not a {self.shape} (give size_m)")
+            if self.rest_pose != "modelled":
+                raise ValueError(f"'rest_pose' is for mesh or urdf objects, not a {self.shape}")
             return self
         file_key = self.shape  # "mesh" or "urdf"
         other = "urdf" if file_key == "mesh" else "mesh"

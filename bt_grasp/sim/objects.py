@@ -7,6 +7,7 @@ of a convex mesh, else its cached CoACD decomposition). A mesh object is drawn w
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,9 +31,11 @@ class PlacedObject:
     T_world_object: Mat4
 
 
-def _circle_radius_m(obj: SceneObject) -> float:
+def _circle_radius_m(obj: SceneObject, R: np.ndarray | None = None) -> float:
+    """The radius about the object's origin of its footprint (a mesh turned by ``R``, its rest rotation)."""
     if obj.is_mesh:
-        return float(np.max(np.hypot(obj.geometry.vertices_m[:, 0], obj.geometry.vertices_m[:, 1])))
+        v = obj.geometry.vertices_m if R is None else obj.geometry.vertices_m @ np.asarray(R).T
+        return float(np.max(np.hypot(v[:, 0], v[:, 1])))
     assert obj.size_m is not None
     if obj.shape == "box":
         return float(np.hypot(obj.size_m[0], obj.size_m[1]) / 2)
@@ -41,7 +44,10 @@ def _circle_radius_m(obj: SceneObject) -> float:
 
 def footprint_xy(obj: SceneObject, T_world_object: Mat4) -> np.ndarray:
     """The object's footprint on the table as a convex polygon (N, 2): a box's 4 corners, a round
-    object's circle as 16 points on its circumscribed polygon; a mesh's bounding rectangle."""
+    object's circle as 16 points on its circumscribed polygon; a mesh's bounding rectangle (a mesh set down on
+    a side, ``T_world_object`` not upright: the convex hull of its vertices seen from above)."""
+    if obj.is_mesh and abs(T_world_object[2, 2] - 1.0) > 1e-9:
+        return _hull_xy(obj.geometry.vertices_m @ T_world_object[:3, :3].T[:, :2] + T_world_object[:2, 3])
     if obj.is_mesh:
         (x0, y0, _), (x1, y1, _) = obj.geometry.bounds_m
         local = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
@@ -58,6 +64,23 @@ def footprint_xy(obj: SceneObject, T_world_object: Mat4) -> np.ndarray:
     return np.asarray(local @ R.T + t)
 
 
+def _hull_xy(points: np.ndarray) -> np.ndarray:
+    """The 2-D convex hull of points (N, 2), counter-clockwise (Andrew's monotone chain)."""
+    pts = sorted({(round(float(x), 9), round(float(y), 9)) for x, y in points})
+
+    def half(seq: list[tuple[float, float]]) -> list[tuple[float, float]]:
+        out: list[tuple[float, float]] = []
+        for p in seq:
+            while len(out) >= 2 and ((out[-1][0] - out[-2][0]) * (p[1] - out[-2][1])
+                                     - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0])) <= 0:
+                out.pop()
+            out.append(p)
+        return out
+
+    lower, upper = half(pts), half(pts[::-1])
+    return np.array(lower[:-1] + upper[:-1])
+
+
 def footprint_gap_m(a: np.ndarray, b: np.ndarray) -> float:
     """A lower bound of the distance between two convex polygons (separating axes); negative: overlap."""
     best = -np.inf
@@ -72,27 +95,29 @@ def footprint_gap_m(a: np.ndarray, b: np.ndarray) -> float:
 
 def draw_poses(
     objects: tuple[SceneObject, ...], rng: np.random.Generator, table_top_z_m: float, source: str = "scene",
-    gap_m: float | None = None,
+    gap_m: float | None = None, rest: Mapping[str, np.ndarray] | None = None,
 ) -> list[PlacedObject]:
     """Draw each object's pose within its randomisation ranges (up to 200 tries per object), rejecting
     overlaps: with ``gap_m`` None (a scene that does not say) the circumscribed circles stay 1 cm apart, as
     in the first scene format (so old scenes draw the same poses for a seed); with a number, the exact
-    footprints stay at least ``gap_m`` apart (0: objects may touch)."""
+    footprints stay at least ``gap_m`` apart (0: objects may touch). ``rest`` gives a mesh object's rest
+    rotation (:func:`bt_grasp.scene.layout.draw_layout`), applied before the drawn yaw."""
     placed: list[PlacedObject] = []
     for obj in objects:
+        R_rest = None if rest is None or obj.name not in rest else np.asarray(rest[obj.name], dtype=np.float64)
         for _attempt in range(200):
             x = obj.pose.xy_m[0] + rng.uniform(*obj.randomize.x_m)
             y = obj.pose.xy_m[1] + rng.uniform(*obj.randomize.y_m)
             yaw = np.deg2rad(obj.pose.yaw_deg + rng.uniform(*obj.randomize.yaw_deg))
             if gap_m is None:
-                r = _circle_radius_m(obj)
+                r = _circle_radius_m(obj, R_rest)
                 clear = all(
                     np.hypot(x - p.T_world_object[0, 3], y - p.T_world_object[1, 3])
-                    > r + _circle_radius_m(p.spec) + 0.01
+                    > r + _circle_radius_m(p.spec, p.T_world_object[:3, :3] if p.spec.is_mesh else None) + 0.01
                     for p in placed
                 )
             else:
-                mine = footprint_xy(obj, make_T(rot_z(yaw), [x, y, 0.0]))
+                mine = footprint_xy(obj, _turned(make_T(rot_z(yaw), [x, y, 0.0]), R_rest))
                 clear = all(
                     footprint_gap_m(mine, footprint_xy(p.spec, p.T_world_object)) >= gap_m - 1e-9 for p in placed
                 )
@@ -100,14 +125,25 @@ def draw_poses(
                 break
         else:
             raise ConfigError(source, f"cannot place object '{obj.name}' without overlapping others", "objects")
-        z = resting_z_m(obj, table_top_z_m)
-        placed.append(PlacedObject(obj, make_T(rot_z(yaw), [x, y, z])))
+        z = resting_z_m(obj, table_top_z_m, R_rest)
+        placed.append(PlacedObject(obj, _turned(make_T(rot_z(yaw), [x, y, z]), R_rest)))
     return placed
 
 
-def resting_z_m(obj: SceneObject, support_z_m: float) -> float:
+def _turned(T: Mat4, R_rest: np.ndarray | None) -> Mat4:
+    """``T`` (yaw and position) with the object first turned by its rest rotation."""
+    if R_rest is None:
+        return T
+    out = np.array(T, dtype=np.float64)
+    out[:3, :3] = out[:3, :3] @ R_rest
+    return out
+
+
+def resting_z_m(obj: SceneObject, support_z_m: float, R_rest: np.ndarray | None = None) -> float:
     """The object frame's height when the object stands on a support at ``support_z_m`` (a primitive's frame is
-    its centre; a mesh's is its file's origin, dropped from :data:`MESH_DROP_M` above)."""
+    its centre; a mesh's is its file's origin, dropped from :data:`MESH_DROP_M` above; ``R_rest``: turned so)."""
+    if obj.is_mesh and R_rest is not None:
+        return support_z_m - float(np.min(obj.geometry.vertices_m @ R_rest[2])) + MESH_DROP_M
     if obj.is_mesh:
         return support_z_m - obj.geometry.bounds_m[0][2] + MESH_DROP_M
     return support_z_m + obj.height_m / 2

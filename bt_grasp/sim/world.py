@@ -11,6 +11,7 @@ import sapien
 from bt_grasp.clock import ManualClock
 from bt_grasp.interfaces import Mount
 from bt_grasp.scene.format import Scene, load_scene
+from bt_grasp.scene.layout import draw_layout
 from bt_grasp.sim.camera import SimCamera
 from bt_grasp.sim.conveyor import belts_for, on_supports
 from bt_grasp.sim.device import create_scene
@@ -54,8 +55,11 @@ class World:
         self.robot = SimRobot(self.scene, scene_config.robot, scene_config.T_world_base())
         self.fixtures = {f.name: build_fixture(self.scene, f) for f in scene_config.fixtures}
         self.belts = belts_for(self.scene, scene_config.fixtures)
+        layout = draw_layout(scene_config, self._object_rng)  # the seeded subset and rest poses (none: no draw)
+        if layout.objects != scene_config.objects:  # the run's scene holds the objects drawn for it
+            self.config = scene_config = scene_config.model_copy(update={"objects": layout.objects})
         self.placed: list[PlacedObject] = on_supports(draw_poses(
-            scene_config.objects, self._object_rng, 0.0, str(source), scene_config.object_gap_m
+            layout.objects, self._object_rng, 0.0, str(source), scene_config.object_gap_m, layout.rest
         ), scene_config.fixtures)
         self.objects = {p.spec.name: build_object(self.scene, p) for p in self.placed}
         self._build_lights()
