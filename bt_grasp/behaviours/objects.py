@@ -1,8 +1,10 @@
 """Object queries: PerceiveAll, SelectObject, ObjectPose, ObjectCount, and FixturePose.
 
 A perceived object is a :class:`bt_grasp.perception.results.Detection` (base frame; ``label`` is its colour
-name, ``shape`` "box" or "round", ``size_m`` length/width/height). A list of them (an *object list*) is a
-tuple of detections; the object loop (``ForEachObject``) walks one. Poses are :class:`bt_grasp.pose.Pose`.
+name, ``color_name`` its dominant colour, ``shape`` "box" or "round", ``shape_class`` box-like,
+cylinder-like, elongated, flat or other, ``size_m`` length/width/height). Objects are found by geometry;
+colour, shape class and size are attributes to choose by. A list of them (an *object list*) is a tuple of
+detections; the object loop (``ForEachObject``) walks one. Poses are :class:`bt_grasp.pose.Pose`.
 """
 
 from __future__ import annotations
@@ -28,7 +30,9 @@ if TYPE_CHECKING:
 
 _OBJECTS_IN = PortSpec("objects", PortDirection.INPUT, object, "{objects}", "an object list (from PerceiveAll)")
 ORDERS = ("first", "nearest", "farthest", "largest", "smallest")
-SHAPES = ("", "box", "round")
+ANY = "any"  # an explicit "no filter" for colour, shape and shape class (the same as leaving it empty)
+SHAPES = ("", ANY, "box", "round")
+SHAPE_CLASSES = ("", ANY, "box-like", "cylinder-like", "elongated", "flat", "other")
 
 
 def is_detection(value: object) -> TypeGuard[Detection]:
@@ -49,11 +53,26 @@ def footprint_m2(det: Detection) -> float:
     return float(det.size_m[0] * det.size_m[1])
 
 
-def matches(det: Detection, color: str, shape: str, min_size_m: float, max_size_m: float) -> bool:
-    """Colour (its label), shape, and the footprint's long side within [min_size_m, max_size_m]."""
-    if color and det.label != color:
+def _wanted(value: str) -> str:
+    return "" if value == ANY else value
+
+
+def shape_class_of(det: Detection) -> str:
+    """The detection's shape class value ("other" for a hand-made detection without one)."""
+    value = getattr(det, "shape_class", None)
+    return str(getattr(value, "value", value or "other"))
+
+
+def matches(det: Detection, color: str, shape: str, min_size_m: float, max_size_m: float,
+            shape_class: str = "") -> bool:
+    """Colour (its label or its dominant colour), shape, shape class, and the footprint's long side within
+    [min_size_m, max_size_m]; an empty or "any" colour, shape or class matches every object."""
+    color, shape, shape_class = _wanted(color), _wanted(shape), _wanted(shape_class)
+    if color and color not in (det.label, getattr(det, "color_name", "")):
         return False
     if shape and det.shape != shape:
+        return False
+    if shape_class and shape_class_of(det) != shape_class:
         return False
     length = float(max(det.size_m[0], det.size_m[1]))
     return min_size_m <= length <= max_size_m
@@ -87,29 +106,36 @@ class PerceiveAll(RobotLeaf):
     name="SelectObject",
     ports=[
         _OBJECTS_IN,
-        PortSpec("color", PortDirection.INPUT, str, "", "only objects of this colour name (empty: any)"),
-        PortSpec("shape", PortDirection.INPUT, str, "", "only this shape: box or round (empty: any)", SHAPES),
+        PortSpec("color", PortDirection.INPUT, str, "", "only objects of this colour name (empty or any: any)"),
+        PortSpec("shape", PortDirection.INPUT, str, "", "only this footprint: box or round (empty or any: any)",
+                 SHAPES),
+        PortSpec("shape_class", PortDirection.INPUT, str, "",
+                 "only this shape class: box-like, cylinder-like, elongated, flat, other (empty or any: any)",
+                 SHAPE_CLASSES),
         PortSpec("min_size", PortDirection.INPUT, float, 0.0, "only footprints whose long side is at least this, m"),
         PortSpec("max_size", PortDirection.INPUT, float, 1.0, "only footprints whose long side is at most this, m"),
         PortSpec("order", PortDirection.INPUT, str, "first", "which match: " + ", ".join(ORDERS), ORDERS),
-        PortSpec("point", PortDirection.INPUT, Pose, "0;0", "the point nearest/farthest measure from"),
+        PortSpec("point", PortDirection.INPUT, Pose, "0;0",
+                 "the point nearest/farthest measure from (a fixture: {pose} from FixturePose)"),
         PortSpec("object", PortDirection.OUTPUT, object, "{object}", "the chosen object"),
     ],
 )
 class SelectObject(Leaf):
-    """Choose one object from a list by colour, shape and size, then by order (first in the list, nearest
-    to or farthest from ``point``, largest or smallest footprint). FAILURE: NO_DETECTION (nothing matches),
+    """Choose one object from a list by colour, footprint shape, shape class and size (each empty or "any":
+    every object), then by order (first in the list, nearest to or farthest from ``point`` -- a fixture's
+    pose from FixturePose --, largest or smallest footprint). FAILURE: NO_DETECTION (nothing matches),
     BAD_INPUT (``objects`` is not an object list)."""
 
     def update(self) -> Status:
         objects = object_list(self.ports.get("objects") if self.ports.has("objects") else None)
         if objects is None:
             return self.fail(FailureReason.BAD_INPUT.value, "'objects' is not an object list: run PerceiveAll first")
-        color, shape = str(self.ports.get("color")), str(self.ports.get("shape"))
+        color, shape = _wanted(str(self.ports.get("color"))), _wanted(str(self.ports.get("shape")))
+        shape_class = _wanted(str(self.ports.get("shape_class")))
         lo, hi = float(self.ports.get("min_size")), float(self.ports.get("max_size"))
-        found = [d for d in objects if matches(d, color, shape, lo, hi)]
+        found = [d for d in objects if matches(d, color, shape, lo, hi, shape_class)]
         if not found:
-            wanted = " ".join(w for w in (color, shape or "object") if w)
+            wanted = " ".join(w for w in (color, shape_class, shape or "object") if w)
             return self.fail(FailureReason.NO_DETECTION.value, f"no {wanted} among {len(objects)} object(s)")
         order = str(self.ports.get("order"))
         point: Pose = self.ports.get("point")
@@ -122,7 +148,8 @@ class SelectObject(Leaf):
             chosen = found[int(np.argmax(area) if order == "largest" else np.argmin(area))]
         self.ports.set("object", chosen)
         c = chosen.centroid_base_m
-        self.feedback_message = f"{chosen.label} {chosen.shape} at ({c[0]:.3f}, {c[1]:.3f}) of {len(found)} match(es)"
+        self.feedback_message = (f"{chosen.label} {shape_class_of(chosen)} {chosen.shape} at ({c[0]:.3f}, {c[1]:.3f}) "
+                                 f"of {len(found)} match(es)")
         return Status.SUCCESS
 
 
@@ -162,12 +189,14 @@ class ObjectPose(Leaf):
         PortSpec("object", PortDirection.INPUT, object, "{object}", "a perceived object"),
         PortSpec("color", PortDirection.OUTPUT, object, "{object_color}", "its colour name ('object' if none)"),
         PortSpec("shape", PortDirection.OUTPUT, object, "{object_shape}", "box or round"),
+        PortSpec("shape_class", PortDirection.OUTPUT, object, "{object_shape_class}",
+                 "box-like, cylinder-like, elongated, flat or other"),
         PortSpec("size", PortDirection.OUTPUT, object, "{object_size}", "its footprint's long side, m"),
         PortSpec("height", PortDirection.OUTPUT, object, "{object_height}", "its height, m"),
     ],
 )
 class ObjectInfo(Leaf):
-    """A perceived object's colour, shape and size as plain values (for Switch, scripts, other ports).
+    """A perceived object's colour, shape, shape class and size as plain values (for Switch, scripts, ports).
     FAILURE: BAD_INPUT (``object`` is not a perceived object)."""
 
     def update(self) -> Status:
@@ -176,9 +205,10 @@ class ObjectInfo(Leaf):
             return self.fail(FailureReason.BAD_INPUT.value, "'object' is not a perceived object: run SelectObject")
         self.ports.set("color", str(det.label))
         self.ports.set("shape", str(det.shape))
+        self.ports.set("shape_class", shape_class_of(det))
         self.ports.set("size", float(max(det.size_m[0], det.size_m[1])))
         self.ports.set("height", float(det.size_m[2]))
-        self.feedback_message = f"{det.label} {det.shape}"
+        self.feedback_message = f"{det.label} {shape_class_of(det)} {det.shape}"
         return Status.SUCCESS
 
 

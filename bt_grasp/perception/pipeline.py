@@ -2,7 +2,8 @@
 
 Stages (each timed into ``PerceptionResult.timings_ms``): back-projection, transform to the base frame and
 region-of-interest crop, voxel downsampling, statistical outlier removal, RANSAC table plane, DBSCAN
-clustering of what stands on the plane, per-object geometry from the full-resolution points, and colour
+clustering of what stands on the plane, touching objects cut apart at height steps (``split.py``),
+per-object geometry from the full-resolution points, and colour
 evidence (HSV mask + morphology + minimum-area rectangles) matched to the clusters through the pixels their
 points came from. Nothing here reads simulator ground truth: the only pose used is ``T_base_camera``, from
 the hand-eye calibration (for an eye-in-hand camera, the caller composes it with the tool pose at capture).
@@ -36,6 +37,7 @@ from bt_grasp.perception.segment import (
     pca_box,
     shape_class_of,
 )
+from bt_grasp.perception.split import split_touching
 
 log = logging.getLogger(__name__)
 
@@ -158,6 +160,11 @@ def perceive(
             roi, plane.height(roi.points), off_plane_pts[keep], labels[keep], 1.5 * config.cloud.voxel_m,
             seg.min_height_m,
         )
+    with timer.stage("split"):
+        pieces: list[tuple[pc.PixelCloud, str, int]] = []
+        for whole in full_clusters:
+            cut = split_touching(whole, plane, seg.min_cluster_points)
+            pieces.extend((part, cut.note, len(cut.parts) if len(cut.parts) > 1 else 0) for part in cut.parts)
     if not full_clusters:
         return _status(PerceptionStatus.NO_OBJECTS, timer, "the table is empty (no cluster above the plane)",
                        table_plane_base=plane.as_tuple(), noise=noise, height_sigma_m=height_sigma)
@@ -170,7 +177,8 @@ def perceive(
             mask = color_mask(hsv, config.color.ranges[color], config.color)
     with timer.stage("geometry"):
         detections = [
-            d for d in (_describe(c, plane, rgb, hsv, mask, config, seg) for c in full_clusters) if d is not None
+            d for d in (_describe(c, plane, rgb, hsv, mask, config, seg, cluster_note=note, split_from=n)
+                      for c, note, n in pieces) if d is not None
         ]
     if not detections:
         return _status(PerceptionStatus.NO_OBJECTS, timer, "no cluster large enough to be an object",
