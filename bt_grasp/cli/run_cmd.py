@@ -16,8 +16,9 @@ from bt_grasp.defaults import DEFAULT_LIFT_HEIGHT_M, DEFAULT_MAX_TICKS
 from bt_grasp.errors import InputError
 
 if TYPE_CHECKING:  # the episode package (numpy, pydantic, the simulator) is imported when a run starts
+    from bt_grasp.control.breakpoints import Breakpoint
     from bt_grasp.episode import TickCallback
-    from bt_grasp.episode.request import BlackboardValue
+    from bt_grasp.episode.request import BlackboardValue, EpisodeRequest
     from bt_grasp.episode.result import EpisodeResult
     from bt_grasp.tree.loader import LoadedTree
 
@@ -141,8 +142,18 @@ def run(
         "10 idle minutes): a second run skips the start-up. No live progress, no --live."
     ),
     leaves: list[str] = leaves_option(),
+    interactive: bool = typer.Option(
+        False, "--interactive", help="Run in a terminal UI: the tree's live statuses, the blackboard, the last "
+        "failure; keys pause, step, break on failure, set an entry, choose the object, fire a fault, restart, quit "
+        "(docs/interactive.md). Starts paused."
+    ),
+    break_: list[str] = typer.Option(
+        [], "--break", metavar="SPEC", help="With --interactive, pause at: node:NAME (before it starts), fail, "
+        "fail:REASON, bb:KEY (it changed), tick:N, time:S (repeatable)."
+    ),
 ) -> None:
     """Run a task tree on the simulated cell. Exit code 0 on task success (judged by physics), 1 on failure."""
+    from bt_grasp.control.breakpoints import parse_breakpoints
     from bt_grasp.episode.episode import Episode
     from bt_grasp.episode.request import EpisodeRequest, parse_assignments
     from bt_grasp.recording.layout import layout_path
@@ -170,6 +181,11 @@ def run(
     )
     if realtime is not None and realtime <= 0:
         raise InputError("--realtime", f"the factor must be positive, got {realtime}")
+    breakpoints = parse_breakpoints(break_)
+    if breakpoints and not interactive:
+        raise InputError("--break", "breakpoints need --interactive (a front end to continue from them)")
+    if interactive and resident:
+        raise InputError("--interactive", "an interactive run cannot be --resident; drop one of the two")
     console = Console(stderr=True)
     if live is not None and not is_loopback(live_host):
         console.print(exposure_warning(live_host), highlight=False, markup=False)
@@ -180,6 +196,8 @@ def run(
             raise InputError("--resident", "a resident run cannot serve --live; drop one of the two")
         summary, pid = run_resident(request)
         console.print(f"(ran in the resident process {pid})", highlight=False)
+    elif interactive:
+        summary = _run_interactive(request, breakpoints)
     else:
         episode = Episode(request)
         episode.on_live.append(lambda url: console.print(
@@ -191,6 +209,44 @@ def run(
         summary_json.write_text(json.dumps(summary.to_json(), indent=2) + "\n")
     print_summary(Console(), summary)
     raise typer.Exit(0 if summary.success else 1)
+
+
+def _run_interactive(request: EpisodeRequest, breakpoints: tuple[Breakpoint, ...]) -> EpisodeResult:
+    """The terminal UI over one episode (and those its restarts start: logs run-2.mcap, run-3.mcap, ...)."""
+    from dataclasses import replace
+
+    from bt_grasp.control import check_breakpoints
+    from bt_grasp.episode.episode import Episode
+
+    if not (sys.stdin.isatty() and sys.stdout.isatty()):
+        raise InputError("--interactive", "needs a terminal, and standard input or output is not one")
+    first = Episode(request)  # bad input stops here, before the UI takes the terminal
+    check_breakpoints(first.tree, breakpoints)
+    from bt_grasp.cli.interactive_ui import InteractiveApp, Session
+    from bt_grasp.control import Controller
+
+    results: list[EpisodeResult] = []
+
+    def run_one(controller: Controller, seed: int, number: int) -> str:
+        log = request.log
+        if number and log is not None:
+            log = log.with_name(f"{log.stem}-{number + 1}{log.suffix}")
+        episode = first if number == 0 else Episode(replace(request, seed=seed, log=log))
+        result = episode.run(controller=controller)
+        results.append(result)
+        return (f"{'SUCCESS' if result.success else 'FAILURE'} after {result.ticks} ticks, seed {seed}"
+                + (f", reason {result.reason}" if result.reason else "") + (f", log {log}" if log else ""))
+
+    app = InteractiveApp(Session(run_one, request.seed, breakpoints))
+    try:
+        app.run()
+    finally:
+        app.stop_and_wait()
+    if app.error is not None:
+        raise app.error
+    if not results:
+        raise InputError("--interactive", "the run did not start")
+    return results[-1]
 
 
 def is_loopback(host: str) -> bool:

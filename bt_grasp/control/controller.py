@@ -327,6 +327,8 @@ class Controller:
             for command, source in self._take():
                 if is_intervention(command):
                     self._deferred.append((command, source))
+                    self._message = (f"{command_to_json(command)['kind']} waits for the end of tick {self._tick + 1} "
+                                     "(interventions apply between ticks)")
                     if isinstance(command, Stop | Restart):
                         self._paused = False  # finish this tick; the boundary stops the run
                 else:

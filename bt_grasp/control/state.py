@@ -88,5 +88,5 @@ class RunState:
 
 
 def value_text(value: Any) -> str:
-    text = repr(value) if not isinstance(value, str) else value
+    text = " ".join((repr(value) if not isinstance(value, str) else value).split())  # one line
     return text if len(text) <= VALUE_CHARS else text[: VALUE_CHARS - 3] + "..."
