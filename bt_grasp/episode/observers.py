@@ -22,7 +22,7 @@ import numpy as np
 
 from bt_grasp.interfaces import Mount
 from bt_grasp.recording import topics
-from bt_grasp.recording.scene_entities import Solid, judge_update
+from bt_grasp.recording.scene_entities import Solid, judge_update, object_model
 from bt_grasp.recording.writer import BASE_FRAME, CAMERA_FRAME
 
 if TYPE_CHECKING:
@@ -143,6 +143,8 @@ class LogExtras:
 
         stamp = self.world.now_ns()
         solids = [Solid(f"true {o.name}", o.shape, o.size_m, o.T_world_object, (*o.rgb, 0.35))
+                  if o.geometry is None else
+                  Solid(f"true {o.name}", "model", o.size_m, o.T_world_object, (*o.rgb, 0.35), object_model(o.geometry))
                   for o in true_objects(self.world)]
         self.recorder.write_scene(topics.JUDGE_OBJECTS, stamp, judge_update(self.recorder.t(stamp), solids))
 

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from bt_grasp.scene.mesh_geometry import MeshGeometry
 from bt_grasp.sim.oracle import GroundTruthOracle
 from bt_grasp.sim.world import World
 
@@ -18,10 +19,11 @@ from bt_grasp.sim.world import World
 @dataclass(frozen=True)
 class TrueObject:
     name: str
-    shape: str  # "box" (size x y z), "cylinder" (radius, height) or "sphere" (radius)
+    shape: str  # "box" (size x y z), "cylinder" (radius, height), "sphere" (radius), "mesh" or "urdf" (extents)
     size_m: tuple[float, ...]
     T_world_object: NDArray[np.float64]
     rgb: tuple[float, float, float]
+    geometry: MeshGeometry | None = None  # a mesh or urdf object's geometry (its frame is its file's)
 
 
 def true_objects(world: World) -> list[TrueObject]:
@@ -33,5 +35,6 @@ def true_objects(world: World) -> list[TrueObject]:
         if obj is not None:
             out.append(TrueObject(name, obj.shape, tuple(float(v) for v in obj.dims_m),
                                   np.asarray(oracle.T_world_object(name), dtype=np.float64),
-                                  (float(obj.rgb[0]), float(obj.rgb[1]), float(obj.rgb[2]))))
+                                  (float(obj.rgb[0]), float(obj.rgb[1]), float(obj.rgb[2])),
+                                  obj.geometry if obj.is_mesh else None))
     return out
