@@ -70,3 +70,16 @@ def test_run_with_a_bad_plugin_is_exit_2_before_the_simulator(tmp_path: Path,
     assert len(err.splitlines()) == 1 and "Traceback" not in err
     assert err.endswith(f"{bad}:2: bad declaration: port 'x': type must be one of str, int, float, bool, object, "
                         "or a class with from_port_text")
+
+
+def test_the_resident_process_gets_the_leaves_as_absolute_paths(tmp_path: Path,
+                                                                  monkeypatch: pytest.MonkeyPatch) -> None:
+    from bt_grasp.episode import EpisodeRequest
+    from bt_grasp.resident.client import _absolute
+    from bt_grasp.resident.protocol import request_adapter
+
+    monkeypatch.chdir(tmp_path)
+    request = _absolute(EpisodeRequest(tree=Path("t.xml"), scene=SCENE, leaves=("my_leaves.py", "my_pkg.nodes")))
+    assert request.leaves == (str(tmp_path / "my_leaves.py"), "my_pkg.nodes")
+    adapter = request_adapter()
+    assert adapter.validate_python(adapter.dump_python(request, mode="json")).leaves == request.leaves
