@@ -151,6 +151,15 @@ def run(
         [], "--break", metavar="SPEC", help="With --interactive, pause at: node:NAME (before it starts), fail, "
         "fail:REASON, bb:KEY (it changed), tick:N, time:S (repeatable)."
     ),
+    control: bool = typer.Option(
+        False, "--control", help="With --live: take commands from Foxglove (the Parameters and Publish panels of "
+        "the control layout: pause, step, breakpoints, blackboard, object, faults, stop; docs/interactive.md). "
+        "Starts paused; only on a loopback --live-host."
+    ),
+    allow_remote_control: bool = typer.Option(
+        False, "--allow-remote-control", help="Accept --control on a --live-host other machines reach (no "
+        "authentication: a warning is printed)."
+    ),
 ) -> None:
     """Run a task tree on the simulated cell. Exit code 0 on task success (judged by physics), 1 on failure."""
     from bt_grasp.control.breakpoints import parse_breakpoints
@@ -182,8 +191,13 @@ def run(
     if realtime is not None and realtime <= 0:
         raise InputError("--realtime", f"the factor must be positive, got {realtime}")
     breakpoints = parse_breakpoints(break_)
-    if breakpoints and not interactive:
-        raise InputError("--break", "breakpoints need --interactive (a front end to continue from them)")
+    if breakpoints and not (interactive or control):
+        raise InputError("--break", "breakpoints need --interactive or --control (a front end to continue from them)")
+    if interactive and control:
+        raise InputError("--control", "a run takes commands from the terminal (--interactive) or from Foxglove "
+                         "(--control), not both; drop one of the two")
+    if control and live is None:
+        raise InputError("--control", "takes commands from a live viewer, so it needs --live")
     if interactive and resident:
         raise InputError("--interactive", "an interactive run cannot be --resident; drop one of the two")
     console = Console(stderr=True)
@@ -198,6 +212,11 @@ def run(
         console.print(f"(ran in the resident process {pid})", highlight=False)
     elif interactive:
         summary = _run_interactive(request, breakpoints)
+    elif control:
+        from bt_grasp.cli.foxglove_control import run_foxglove_control
+
+        summary = run_foxglove_control(request, breakpoints, allow_remote=allow_remote_control, console=console,
+                                       on_tick=() if quiet else (live_progress(console),))
     else:
         episode = Episode(request)
         episode.on_live.append(lambda url: console.print(

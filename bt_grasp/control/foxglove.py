@@ -24,7 +24,7 @@ parameter                 meaning (writable unless marked *read*)
 ``detections``            *read*: the current detections, ``"<index>: <label> at (x, y, z) m"``
 ``choose.object``         an index or a label of the detections: written to entry ``target`` (configurable)
 ``fault.fire``            a fault kind of the catalogue (``"frame_drop"``), or ``{"fault": KIND, "params": {...}}``
-``fault.kinds``           *read*: the catalogue's kinds
+``fault.kinds``           *read*: the catalogue's kinds, comma-separated
 ========================  ==========================================================================================
 
 A message on :data:`COMMAND_TOPIC` is a command's JSON form (:func:`bt_grasp.control.command_from_json`:
@@ -237,7 +237,7 @@ def state_parameters(state: RunState, kinds: Sequence[str]) -> dict[str, ParamVa
                        for d in state.detections],
         "choose.object": "",
         "fault.fire": "",
-        "fault.kinds": list(kinds),
+        "fault.kinds": ", ".join(kinds),
     }
     shown = dict(state.blackboard)
     for key in state.settings:

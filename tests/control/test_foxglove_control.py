@@ -5,6 +5,8 @@ layout and the run command's guards. The stand-in run is tests/control/stand_ins
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 import threading
 from pathlib import Path
 from typing import Any
@@ -119,7 +121,7 @@ def test_the_state_as_parameters() -> None:
     assert values["breakpoints"] == ["fail", "tick:2"]
     assert values["bb.height"] == 0.05 and values["bb.mode"] == "fast" and "bb.objects" not in values
     assert values["detections"] == ["0: red at (0.100, 0.000, 0.000) m", "1: blue at (0.200, 0.000, 0.000) m"]
-    assert values["fault.kinds"] == list(KINDS) and "frame_drop" in KINDS
+    assert values["fault.kinds"] == ", ".join(KINDS) and "frame_drop" in KINDS
     assert state_parameters(RunState(finished=True), KINDS)["run.status"] == "finished"
     assert state_parameters(RunState(), KINDS)["run.status"] == "running"
 
@@ -227,3 +229,17 @@ def test_the_shipped_control_layout() -> None:
         assert command_from_json(json.loads(config["value"])) == command_from_json(command)
     for panel_id in base["configById"]:
         assert f'"{panel_id}"' in panels
+
+
+@pytest.mark.parametrize(("extra", "words"), [
+    (["--control"], "--control: takes commands from a live viewer, so it needs --live"),
+    (["--control", "--live", "0", "--live-host", "0.0.0.0"], "--live-host 0.0.0.0 can be reached from other machines"),
+    (["--control", "--interactive", "--live", "0"], "not both"),
+    (["--break", "fail"], "--break: breakpoints need --interactive or --control"),
+])
+def test_the_run_commands_guards(tmp_path: Path, extra: list[str], words: str) -> None:
+    proc = subprocess.run(
+        [sys.executable, "-m", "bt_grasp.cli.main", "run", str(ROOT / "trees/pick.xml"), "--scene",
+         str(ROOT / "scenes/tabletop.yaml"), *extra], capture_output=True, text=True, cwd=tmp_path, timeout=120)
+    assert proc.returncode == 2, proc.stderr
+    assert words in proc.stderr and "Traceback" not in proc.stderr, proc.stderr
