@@ -6,6 +6,7 @@ re-implements them):
 - :mod:`bt_grasp.scene.format`: the file itself (version, physics, table, robot mount, camera, lights,
   workspace) and :func:`~bt_grasp.scene.format.load_scene`, with the cross-reference checks;
 - :mod:`bt_grasp.scene.objects`: the movable objects (primitive shapes, meshes, URDFs) and their drawn poses;
+- :mod:`bt_grasp.scene.layout`: what a seed draws before the poses (the subset, the rest poses);
 - :mod:`bt_grasp.scene.fixture_base`, :mod:`bt_grasp.scene.fixtures`, :mod:`bt_grasp.scene.conveyor`: static
   fixtures (trays, bins, markers, walls, the conveyor);
 - :mod:`bt_grasp.scene.goals`: the goal a scene declares; :mod:`bt_grasp.scene.run_goal`: the goal of one run
@@ -14,6 +15,6 @@ re-implements them):
   collision shapes (convex hull or convex decomposition) cached on disk.
 
 Imports inside the package point one way: ``format -> (objects, fixtures, goals)``,
-``fixtures -> (conveyor -> fixture_base)``, ``run_goal -> (format, goals)``. This file imports nothing, so
-importing one module does not load the others.
+``fixtures -> (conveyor -> fixture_base)``, ``run_goal -> (format, goals)``, ``layout -> (format, objects)``.
+This file imports nothing, so importing one module does not load the others.
 """
