@@ -192,7 +192,9 @@ _GRASP = PortSpec("grasp", PortDirection.INPUT, object, "{grasp}", "the grasp to
     needs_robot=True,
 )
 class PlanGrasp(RobotLeaf):
-    """Rank top-down grasps of the target and keep the first whose whole approach is collision-free.
+    """Rank grasps of the target (:func:`bt_grasp.perception.antipodal.rank_grasps`: the footprint's top-down
+    ones, or for a tall object side grasps sampled from its cloud first) and keep the first whose whole
+    approach is collision-free.
 
     One candidate per tick (IK of the pre-grasp and grasp poses, the approach plan to the pre-grasp pose, then
     the straight descent from where that plan ends to the grasp pose with the fingers open, checked against
@@ -230,24 +232,30 @@ class PlanGrasp(RobotLeaf):
 
     def _rank(self) -> Status | None:
         """Synthesise and rank the candidates (first tick); a FAILURE status when there is nothing to try."""
-        from bt_grasp.perception.grasps import synthesize_grasps
+        from bt_grasp.perception.antipodal import rank_grasps
 
         target = self.input_detection("target")
         if target is None:
             return self.failed(FailureReason.NO_DETECTION, "no target on the blackboard: run Perceive first")
         self._target: Detection = target
         self._objects: tuple[Detection, ...] = self.input_detections("objects")
-        result = synthesize_grasps(target, self._objects, self.cell.grasp_settings)
+        self._q = self.cell.robot.joint_positions()
+        result = rank_grasps(target, self._objects, self.cell.grasp_settings, reachable=self._reachable)
         if not result.ok:
             return self.failed(FailureReason.NOTHING_TO_GRASP, f"{result.status.value}: {result.message}")
         self.cell.media.grasps(result.candidates)
         self._total = len(result.candidates)
         skip = self.input_int("skip") if self.input("skip") is not None else 0
         self._candidates = list(result.candidates[skip:])
-        self._q = self.cell.robot.joint_positions()
         self._scene = planning_scene(self, target, self._objects)
         self._descent_scene = planning_scene(self, target, self._objects, allow_target=True)
         return None
+
+    def _reachable(self, T_grasp: NDArray[np.float64], T_pregrasp: NDArray[np.float64]) -> bool:
+        """Both poses have an IK solution from the arm's configuration (how sampled candidates are kept)."""
+        kin = self.cell.kinematics
+        pre = kin.ik(T_pregrasp, self._q)
+        return bool(pre.ok and kin.ik(T_grasp, pre.q).ok)
 
     def _try(self, rank: int, candidate: GraspCandidate) -> GraspPlan | None:
         from bt_grasp.behaviours.grasp_plan import GraspPlan
@@ -289,7 +297,8 @@ class PlanGrasp(RobotLeaf):
 )
 class Approach(_MovingLeaf):
     """Move to the pre-grasp pose along the path PlanGrasp planned (planned anew if the arm moved or the scene
-    changed since), then descend in a straight line to the grasp pose."""
+    changed since), then move in a straight line along the grasp's approach axis to the grasp pose (down for
+    a top-down grasp, sideways for a side grasp; the pre-grasp lies back along -approach)."""
 
     def segments(self) -> list[Segment] | Status:
         from bt_grasp.behaviours.grasp_plan import GraspPlan
@@ -306,9 +315,11 @@ class Approach(_MovingLeaf):
         descend = cartesian_fn(self, lambda _T: T_grasp, touching)
         if isinstance(grasp, GraspPlan) and grasp.planned_in(target, objects):
             to_pregrasp = planned_path_fn(grasp, to_pregrasp)
+        # the straight line runs along the grasp's approach axis (tcp z): down for a top-down grasp
+        down = float(-np.asarray(T_grasp, dtype=float)[2, 2]) > 0.866
         return [
             Segment("to pre-grasp", to_pregrasp),
-            Segment("descend", descend),
+            Segment("descend" if down else "approach", descend),
         ]
 
 

@@ -1,0 +1,514 @@
+"""6-DoF antipodal grasp candidates from an observed object cloud (issue 28): top-down, side and across the long axis.
+
+Input: the object's points in the robot BASE frame with outward unit normals (:class:`ObjectCloud`), the
+points of everything else seen (neighbours, for clearance), and the table height. Never the simulator's mesh
+or pose: the cloud is what perception saw (:func:`detection_cloud` turns a detection into one).
+
+Sampling (seeded, GPD-style): draw contact points; the closing line of each runs along its inward normal; the
+partner contact is the farthest point of the cloud on that line (within ``line_tolerance_m``) whose normal
+opposes the first one's within the friction cone. Each pair is a grasp axis (the tool's closing direction y);
+around it the tool may approach from any direction perpendicular to y: the directions tried are the most
+vertical one (top-down when y is horizontal) and the two horizontal ones (side grasps). Seen along the approach,
+an elongated cloud (``elongation_ratio``) has the closing direction turned to lie exactly across its long axis
+(noisy normals tilt it otherwise; a pair whose turn would leave the friction cone is dropped). The tcp starts on the
+pair's midpoint, moved along the approach towards the centre-of-mass estimate as far as the pads still hold the
+contacts, then is pulled back along -approach while the finger tips would meet the table or the open gripper
+(pads and palm, swept along the approach from the pre-grasp) would come within ``min_clearance_m`` of a point
+it does not grasp.
+
+Frames: ``T_base_tcp`` as everywhere, tcp z = the approach direction, tcp y = the closing direction,
+tcp x = y cross z. The gripper model is bt_grasp/assets/gripper.urdf: pads 20 mm (tcp x) by 12 mm (tcp y)
+by 55 mm (tcp z, from 35 mm behind the tcp to the finger tips 20 mm ahead of it), the palm 50 x 130 mm,
+from 40 to 80 mm behind the tcp; opening 85 mm.
+
+Score (higher is better), the weighted sum of the terms kept in :class:`ScoreTerms`, each in [0, 1]:
+  antipodal  = how well both normals line up with the closing line (cosine of the worse one);
+  clearance  = min(1, d / 30 mm), d = distance from the open pads and the palm (swept along the approach) to
+               the nearest point not grasped (the object's own and the neighbours') or the table;
+  reach      = 1 when the grasp and pre-grasp poses have an IK solution (a candidate without one is dropped),
+               when the caller gives a reachability test; else 1;
+  approach   = how short the arm's way in is: 1 top-down, else ``side_approach_factor`` (0.5) x (1 + cos of the
+               angle between the horizontal approach and the direction from the robot base to the object) / 2
+               (reaching out, not back; a side approach runs low along the table with the wrist turned);
+  stability  = 1 - min(1, distance from the tcp to the centre-of-mass estimate / ``stability_scale_m``):
+               a grasp near the centroid of the cloud's volume estimate holds without tipping;
+  width      = (max opening - width) / max opening: play between the open pads and the object.
+A tall standing object is grasped from the side because a top-down grasp can reach only its top (the palm
+stops 40 mm under the tcp): far from its centre of mass; a long thin one across its long axis because the
+other way does not fit between the pads.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from bt_grasp.geometry import Mat4, make_T
+from bt_grasp.perception import results
+from bt_grasp.perception.config import GraspSettings
+from bt_grasp.robot_description import MAX_OPENING_M, TCP_TO_FINGERTIP_M
+
+_DOWN = np.array([0.0, 0.0, -1.0])
+
+
+class ApproachKind(enum.Enum):
+    TOP_DOWN = "top_down"  # approach within 30 degrees of straight down
+    SIDE = "side"  # approach within 30 degrees of horizontal
+    OBLIQUE = "oblique"  # anything between
+
+
+@dataclass(frozen=True)
+class AntipodalSettings:
+    """Sampling and scoring. Lengths in metres, angles in degrees."""
+
+    max_opening_m: float = MAX_OPENING_M
+    width_margin_m: float = 0.010  # play required between the object and the open pads (both sides)
+    pad_half_x_m: float = 0.010  # half the pad's size along tcp x
+    pad_thickness_m: float = 0.012  # pad size along the closing direction
+    pad_behind_tcp_m: float = 0.035  # the pad reaches this far behind the tcp (along -approach)
+    tcp_to_fingertip_m: float = TCP_TO_FINGERTIP_M  # ... and this far ahead of it
+    palm_half_x_m: float = 0.025
+    palm_half_y_m: float = 0.065
+    palm_behind_tcp_m: float = 0.040  # the palm's face
+    palm_depth_m: float = 0.040
+    table_clearance_m: float = 0.005  # pads and palm stay this far above the table
+    min_clearance_m: float = 0.003  # ... and this far from every point they do not grasp
+    pregrasp_offset_m: float = 0.10  # the pre-grasp pose lies this far back along -approach
+    samples: int = 64  # contact points drawn
+    line_tolerance_m: float = 0.004  # a partner contact lies this close to the closing line
+    friction_cone_deg: float = 25.0  # normals within this angle of the closing line count as antipodal
+    min_contact_points: int = 3  # points between the pads needed to call it a grasp
+    max_backoff_m: float = 0.06  # how far the tcp may be pulled back along -approach to clear the palm
+    backoff_step_m: float = 0.005
+    stability_scale_m: float = 0.08
+    elongation_ratio: float = 2.5  # an object this many times longer than wide is grasped across its axis
+    side_approach_factor: float = 0.5  # a side approach's approach term is at most this (top-down: 1)
+    clearance_full_m: float = 0.03
+    weight_antipodal: float = 0.3
+    weight_clearance: float = 0.2
+    weight_approach: float = 0.1
+    weight_stability: float = 0.3
+    weight_width: float = 0.1
+    keep: int = 12  # the best distinct candidates returned
+
+
+@dataclass(frozen=True)
+class ObjectCloud:
+    """An object's observed surface in the BASE frame: points (N, 3) and outward unit normals (N, 3)."""
+
+    points_base_m: NDArray[np.float64]
+    normals_base: NDArray[np.float64]
+
+    @property
+    def centre_of_mass_estimate(self) -> NDArray[np.float64]:
+        """The centre of the cloud's axis-aligned extent: a solid object's centre, seen from any side."""
+        lo, hi = self.points_base_m.min(axis=0), self.points_base_m.max(axis=0)
+        return np.asarray((lo + hi) / 2, dtype=float)
+
+
+@dataclass(frozen=True)
+class ScoreTerms:
+    antipodal: float
+    clearance: float
+    reach: float
+    approach: float
+    stability: float
+    width: float
+
+
+@dataclass(frozen=True)
+class GraspCandidate(results.GraspCandidate):
+    """A parallel-jaw grasp in full 6-DoF (top-down is one case): the tool pose, its approach direction (tcp z,
+    base frame), its closing direction (tcp y), the width between the contacts and the score's terms. A
+    :class:`bt_grasp.perception.results.GraspCandidate` too, so planning, media and Place take it unchanged."""
+
+    approach_base: tuple[float, float, float] = (0.0, 0.0, -1.0)
+    closing_base: tuple[float, float, float] = (0.0, 1.0, 0.0)
+    kind: ApproachKind = ApproachKind.TOP_DOWN
+    terms: ScoreTerms | None = None
+
+
+def approach_kind(approach: NDArray[np.float64]) -> ApproachKind:
+    """Top-down within 30 degrees of straight down, side within 30 degrees of horizontal."""
+    down = float(-approach[2])
+    if down >= math.cos(math.radians(30)):
+        return ApproachKind.TOP_DOWN
+    if abs(down) <= math.sin(math.radians(30)):
+        return ApproachKind.SIDE
+    return ApproachKind.OBLIQUE
+
+
+def tool_pose(centre: NDArray[np.float64], approach: NDArray[np.float64], closing: NDArray[np.float64]) -> Mat4:
+    """``T_base_tcp`` with tcp z along ``approach`` and tcp y along ``closing`` (both unit, perpendicular)."""
+    x = np.cross(closing, approach)
+    return make_T(np.stack([x, closing, approach], axis=1), centre)
+
+
+def from_top_down(candidate: results.GraspCandidate) -> GraspCandidate:
+    """A top-down candidate of :mod:`bt_grasp.perception.grasps` as a 6-DoF one (same poses, score and reason)."""
+    T = np.asarray(candidate.T_base_tcp_grasp, dtype=float)
+    return GraspCandidate(
+        candidate.T_base_tcp_grasp, candidate.T_base_tcp_pregrasp, candidate.width_m, candidate.score,
+        candidate.reason, approach_base=_tuple(T[:3, 2]), closing_base=_tuple(T[:3, 1]),
+        kind=approach_kind(T[:3, 2]),
+    )
+
+
+def _tuple(v: NDArray[np.float64]) -> tuple[float, float, float]:
+    return (float(v[0]), float(v[1]), float(v[2]))
+
+
+def _unit(v: NDArray[np.float64]) -> NDArray[np.float64] | None:
+    n = float(np.linalg.norm(v))
+    return None if n < 1e-9 else v / n
+
+
+def _approaches(closing: NDArray[np.float64]) -> list[NDArray[np.float64]]:
+    """Approach directions perpendicular to the closing direction: the most downward one, two horizontal."""
+    out: list[NDArray[np.float64]] = []
+    down = _unit(_DOWN - float(_DOWN @ closing) * closing)
+    if down is not None:
+        out.append(down)
+    side = _unit(np.cross(closing, np.array([0.0, 0.0, 1.0])))
+    if side is not None:
+        out.extend([side, -side])
+    return out
+
+
+def _box_distance(p: NDArray[np.float64], lo: NDArray[np.float64], hi: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Distance of each point (N, 3) to an axis-aligned box (0 inside)."""
+    d = np.maximum(np.maximum(lo - p, p - hi), 0.0)
+    return np.asarray(np.linalg.norm(d, axis=1), dtype=float)
+
+
+class _Gripper:
+    """The open gripper's boxes in the tcp frame: the two pads swept back along the approach, and the palm."""
+
+    def __init__(self, s: AntipodalSettings) -> None:
+        half_open = s.max_opening_m / 2
+        back = s.pad_behind_tcp_m + s.pregrasp_offset_m
+        self.pads = [
+            (np.array([-s.pad_half_x_m, half_open, -back]),
+             np.array([s.pad_half_x_m, half_open + s.pad_thickness_m, s.tcp_to_fingertip_m])),
+            (np.array([-s.pad_half_x_m, -half_open - s.pad_thickness_m, -back]),
+             np.array([s.pad_half_x_m, -half_open, s.tcp_to_fingertip_m])),
+        ]
+        palm_back = s.palm_behind_tcp_m + s.palm_depth_m + s.pregrasp_offset_m
+        self.palm = (np.array([-s.palm_half_x_m, -s.palm_half_y_m, -palm_back]),
+                     np.array([s.palm_half_x_m, s.palm_half_y_m, -s.palm_behind_tcp_m]))
+        # the region between the pads at the grasp (what the fingers close on)
+        self.between = (np.array([-s.pad_half_x_m, -half_open, -s.pad_behind_tcp_m]),
+                        np.array([s.pad_half_x_m, half_open, s.tcp_to_fingertip_m]))
+        # the gripper's lowest-reaching corners at the grasp (tcp frame), for the table check
+        self.corners = np.array([[x, y, z] for x in (-s.palm_half_x_m, s.palm_half_x_m)
+                                 for y in (-half_open - s.pad_thickness_m, half_open + s.pad_thickness_m)
+                                 for z in (s.tcp_to_fingertip_m, -s.palm_behind_tcp_m - s.palm_depth_m)])
+
+    def distance(self, p_tcp: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Distance of points (tcp frame) to the nearest gripper box (swept along the approach)."""
+        boxes = [*self.pads, self.palm]
+        return np.asarray(np.min([_box_distance(p_tcp, lo, hi) for lo, hi in boxes], axis=0), dtype=float)
+
+
+def sample_grasps(
+    cloud: ObjectCloud,
+    table_z_m: float,
+    others_base_m: NDArray[np.float64] | None = None,
+    settings: AntipodalSettings | None = None,
+    rng: np.random.Generator | None = None,
+    reachable: Callable[[Mat4, Mat4], bool] | None = None,
+) -> tuple[GraspCandidate, ...]:
+    """Ranked antipodal grasps of the object in ``cloud`` (best first, at most ``settings.keep``, distinct).
+
+    ``others_base_m`` (M, 3): points of everything else seen, kept clear of the open gripper; ``rng`` seeds the
+    contact sampling (default: seed 0); ``reachable(T_grasp, T_pregrasp)`` drops candidates the arm cannot
+    reach (IK) when given.
+    """
+    s = settings or AntipodalSettings()
+    rng = rng if rng is not None else np.random.default_rng(0)
+    pts = np.asarray(cloud.points_base_m, dtype=float)
+    nrm = np.asarray(cloud.normals_base, dtype=float)
+    if len(pts) < s.min_contact_points:
+        return ()
+    others = np.zeros((0, 3)) if others_base_m is None else np.asarray(others_base_m, dtype=float).reshape(-1, 3)
+    com = cloud.centre_of_mass_estimate
+    radial = _unit(np.array([com[0], com[1], 0.0]))
+    gripper = _Gripper(s)
+    cos_cone = math.cos(math.radians(s.friction_cone_deg))
+    cov = np.cov((pts - pts.mean(axis=0)).T)
+    found: list[GraspCandidate] = []
+    picks = rng.choice(len(pts), size=min(s.samples, len(pts)), replace=False)
+    for i in np.sort(picks):
+        closing = -nrm[i]  # from the first contact into the object
+        rel = pts - pts[i]
+        along = rel @ closing
+        off_line = np.linalg.norm(rel - np.outer(along, closing), axis=1)
+        partner = (off_line < s.line_tolerance_m) & (along > 0.0) & (nrm @ closing > cos_cone)
+        if not partner.any():
+            continue
+        j = int(np.flatnonzero(partner)[np.argmax(along[partner])])
+        width = float(along[j])
+        if width > s.max_opening_m - s.width_margin_m:
+            continue
+        line = _unit(pts[j] - pts[i])
+        if line is None:
+            continue
+        antipodal = min(float(-nrm[i] @ line), float(nrm[j] @ line))
+        if antipodal < cos_cone:
+            continue
+        centre = (pts[i] + pts[j]) / 2
+        for approach in _approaches(line):
+            closing = _across_long_axis(line, approach, cov, cos_cone, s.elongation_ratio)
+            if closing is None:
+                continue
+            cand = _place_tool(centre, approach, closing, width, antipodal, pts, others, table_z_m, com, radial,
+                               gripper, s)
+            if cand is not None:
+                found.append(cand)
+    return _distinct(sorted(found, key=lambda c: -c.score), s.keep, reachable)
+
+
+def _across_long_axis(
+    line: NDArray[np.float64], approach: NDArray[np.float64], cov: NDArray[np.float64], cos_cone: float,
+    ratio: float,
+) -> NDArray[np.float64] | None:
+    """The closing direction: the contacts' line, turned about the approach to lie exactly across the object's
+    long axis as seen along the approach when the object is elongated that way (spread ``ratio`` times the
+    next); None when that turn leaves the friction cone (a slanted squeeze of a rod); the line itself when the
+    object is not elongated seen this way."""
+    P = np.eye(3) - np.outer(approach, approach)
+    values, vectors = np.linalg.eigh(P @ cov @ P)
+    if values[2] < ratio**2 * max(values[1], 1e-12):
+        return line
+    long = vectors[:, 2]
+    across = _unit(line - float(line @ long) * long)
+    if across is None or float(across @ line) < cos_cone:
+        return None
+    return across
+
+
+def _place_tool(
+    centre: NDArray[np.float64], approach: NDArray[np.float64], closing: NDArray[np.float64], width: float,
+    antipodal: float, pts: NDArray[np.float64], others: NDArray[np.float64], table_z: float,
+    com: NDArray[np.float64], radial: NDArray[np.float64] | None, gripper: _Gripper, s: AntipodalSettings,
+) -> GraspCandidate | None:
+    """The tcp on the contacts' midpoint, pulled back along -approach until the gripper clears the table and
+    every point it does not grasp; None when it cannot while the pads still hold the contacts."""
+    # the contacts may lie anywhere along the pads: start with the tcp as near the centre of mass as that allows
+    shift = float(np.clip((com - centre) @ approach, -s.tcp_to_fingertip_m, s.pad_behind_tcp_m))
+    start = centre + shift * approach
+    steps = round(s.max_backoff_m / s.backoff_step_m)
+    for k in range(steps + 1):
+        tcp = start - k * s.backoff_step_m * approach
+        T = tool_pose(tcp, approach, closing)
+        R, t = T[:3, :3], T[:3, 3]
+        lowest = float(np.min((gripper.corners @ R.T + t)[:, 2]))
+        if lowest < table_z + s.table_clearance_m:
+            if approach[2] < -0.5:  # top-down: backing off raises the gripper
+                continue
+            return None
+        local = (pts - t) @ R
+        lo, hi = gripper.between
+        inside = np.all((local >= lo) & (local <= hi), axis=1)
+        if int(inside.sum()) < s.min_contact_points:
+            return None  # backed off past the contacts
+        held = local[inside]
+        width_held = float(held[:, 1].max() - held[:, 1].min())
+        if width_held > s.max_opening_m - s.width_margin_m:
+            return None
+        free = local[~inside]
+        if len(others):
+            free = np.vstack([free, (others - t) @ R])
+        dist = gripper.distance(free) if len(free) else np.array([np.inf])
+        if float(dist.min()) < s.min_clearance_m:
+            continue  # the palm or a pad (on its way in) meets a point, or nearly: back off
+        table_gap = lowest - table_z
+        clearance = min(float(dist.min()), table_gap)
+        return _scored(T, approach, closing, max(width, width_held), antipodal, clearance, com, radial, s)
+    return None
+
+
+def _scored(
+    T: Mat4, approach: NDArray[np.float64], closing: NDArray[np.float64], width: float, antipodal: float,
+    clearance: float, com: NDArray[np.float64], radial: NDArray[np.float64] | None, s: AntipodalSettings,
+) -> GraspCandidate:
+    kind = approach_kind(approach)
+    horizontal = _unit(np.array([approach[0], approach[1], 0.0]))
+    if kind is ApproachKind.TOP_DOWN or horizontal is None or radial is None:
+        approach_term = 1.0
+    else:  # the arm's way in is longer from the side: low along the table, the wrist turned
+        approach_term = s.side_approach_factor * (1.0 + float(horizontal @ radial)) / 2
+    terms = ScoreTerms(
+        antipodal=float(np.clip(antipodal, 0.0, 1.0)),
+        clearance=min(1.0, clearance / s.clearance_full_m),
+        reach=1.0,
+        approach=approach_term,
+        stability=1.0 - min(1.0, float(np.linalg.norm(T[:3, 3] - com)) / s.stability_scale_m),
+        width=max(0.0, (s.max_opening_m - width) / s.max_opening_m),
+    )
+    score = (s.weight_antipodal * terms.antipodal + s.weight_clearance * terms.clearance
+             + s.weight_approach * terms.approach + s.weight_stability * terms.stability
+             + s.weight_width * terms.width)
+    pre = T.copy()
+    pre[:3, 3] -= s.pregrasp_offset_m * approach
+    a = approach
+    reason = (f"{kind.value} antipodal grasp, approach ({a[0]:+.2f}, {a[1]:+.2f}, {a[2]:+.2f}), width "
+              f"{width * 1e3:.1f} mm, antipodal {terms.antipodal:.2f}, stability {terms.stability:.2f}, "
+              f"clearance {clearance * 1e3:.0f} mm, tcp z {T[2, 3] * 1e3:.1f} mm (base)")
+    return GraspCandidate(T, pre, float(width), float(score), reason, approach_base=_tuple(approach),
+                          closing_base=_tuple(closing), kind=kind, terms=terms)
+
+
+def _distinct(
+    ranked: Sequence[GraspCandidate], keep: int, reachable: Callable[[Mat4, Mat4], bool] | None
+) -> tuple[GraspCandidate, ...]:
+    """The best reachable one of each group of near-identical grasps (tcp within 15 mm, approach and closing
+    within 20 deg; a closing direction and its opposite are the same grasp), best first."""
+    out: list[GraspCandidate] = []
+    cos20 = math.cos(math.radians(20))
+    for c in ranked:
+        t, a, y = c.T_base_tcp_grasp[:3, 3], np.asarray(c.approach_base), np.asarray(c.closing_base)
+        if any(np.linalg.norm(t - o.T_base_tcp_grasp[:3, 3]) < 0.015 and a @ np.asarray(o.approach_base) > cos20
+               and abs(y @ np.asarray(o.closing_base)) > cos20 for o in out):
+            continue
+        if reachable is not None and not reachable(c.T_base_tcp_grasp, c.T_base_tcp_pregrasp):
+            continue
+        out.append(c)
+        if len(out) >= keep:
+            break
+    return tuple(out)
+
+
+# ------------------------------------------------------------------------------------------------------------
+# clouds from what perception reported
+
+
+def estimate_normals(points: NDArray[np.float64], k: int = 12) -> NDArray[np.float64]:
+    """Unit normals by PCA of each point's k nearest neighbours, turned away from the cloud's vertical axis
+    (outward for a convex object; a normal facing straight up or down keeps pointing up)."""
+    from scipy.spatial import cKDTree
+
+    pts = np.asarray(points, dtype=float)
+    k = max(3, min(k, len(pts)))
+    _, idx = cKDTree(pts).query(pts, k=k)
+    nb = pts[idx] - pts[idx].mean(axis=1, keepdims=True)
+    _, _, vt = np.linalg.svd(nb, full_matrices=False)
+    normals = vt[:, -1, :]
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    centre = (lo + hi) / 2
+    outward = pts - centre
+    outward[:, 2] = np.where(np.abs(normals[:, 2]) > 0.9, 1.0, outward[:, 2])
+    flip = np.sum(normals * outward, axis=1) < 0
+    normals[flip] *= -1
+    return np.asarray(normals / np.linalg.norm(normals, axis=1, keepdims=True), dtype=float)
+
+
+def detection_cloud(det: results.Detection, spacing_m: float = 0.005) -> ObjectCloud:
+    """The object's surface as perception reported it, in the BASE frame: the surface of the fitted shape (the
+    gravity-aligned box, or the upright cylinder of a round footprint; sides and top, never the bottom, which
+    the table hides), which stands in for the sides the camera cannot see, together with the visible points
+    when the detection carries them (``points_base_m``, normals estimated by :func:`estimate_normals`)."""
+    fitted = fitted_surface(det, spacing_m)
+    points = det.points_base_m
+    if points is None or len(points) < 10:
+        return fitted
+    pts = np.asarray(points, dtype=float).reshape(-1, 3)
+    return ObjectCloud(np.vstack([fitted.points_base_m, pts]),
+                       np.vstack([fitted.normals_base, estimate_normals(pts)]))
+
+
+def fitted_surface(det: results.Detection, spacing_m: float = 0.005) -> ObjectCloud:
+    """Points and outward normals on the detection's fitted shape (sides and top), ``spacing_m`` apart."""
+    length, width, height = (float(v) for v in det.size_m)
+    cx, cy, _ = (float(v) for v in det.centroid_base_m)
+    z0 = det.table_z_m
+    zs = z0 + np.arange(spacing_m / 2, height, spacing_m)
+    if det.shape == "round":
+        r = max(length, width) / 2
+        n_around = max(12, math.ceil(2 * math.pi * r / spacing_m))
+        ang = np.arange(n_around) * 2 * math.pi / n_around
+        ring = np.stack([np.cos(ang), np.sin(ang), np.zeros_like(ang)], axis=1)
+        side = np.concatenate([np.column_stack([cx + r * ring[:, 0], cy + r * ring[:, 1], np.full(n_around, z)])
+                               for z in zs])
+        side_n = np.tile(ring, (len(zs), 1))
+        g = np.arange(-r, r + 1e-9, spacing_m)
+        gx, gy = np.meshgrid(g, g)
+        keep = gx**2 + gy**2 <= r**2
+        top = np.column_stack([cx + gx[keep], cy + gy[keep], np.full(int(keep.sum()), z0 + height)])
+    else:
+        c, s_ = math.cos(det.yaw_rad), math.sin(det.yaw_rad)
+        R = np.array([[c, -s_, 0.0], [s_, c, 0.0], [0.0, 0.0, 1.0]])
+        side_list, n_list = [], []
+        for axis, half, other_half in ((0, length / 2, width / 2), (1, width / 2, length / 2)):
+            u = np.arange(-other_half, other_half + 1e-9, spacing_m)
+            uu, zz = np.meshgrid(u, zs)
+            for sign in (1.0, -1.0):
+                local = np.zeros((uu.size, 3))
+                local[:, axis], local[:, 1 - axis], local[:, 2] = sign * half, uu.ravel(), zz.ravel()
+                normal = np.zeros(3)
+                normal[axis] = sign
+                side_list.append(local)
+                n_list.append(np.tile(normal, (uu.size, 1)))
+        local_side = np.vstack(side_list)
+        side = local_side @ R.T + [cx, cy, 0.0]
+        side_n = np.vstack(n_list) @ R.T
+        gx, gy = np.meshgrid(np.arange(-length / 2, length / 2 + 1e-9, spacing_m),
+                             np.arange(-width / 2, width / 2 + 1e-9, spacing_m))
+        local_top = np.column_stack([gx.ravel(), gy.ravel(), np.zeros(gx.size)])
+        top = local_top @ R.T + [cx, cy, z0 + height]
+    top_n = np.tile([0.0, 0.0, 1.0], (len(top), 1))
+    return ObjectCloud(np.vstack([side, top]), np.vstack([side_n, top_n]))
+
+
+# ------------------------------------------------------------------------------------------------------------
+# what PlanGrasp asks for
+
+
+def is_tall(det: results.Detection, s: GraspSettings) -> bool:
+    """Taller than twice what the fingers span from above (palm face to finger tips): a top-down grasp would
+    hold it by its top third, far above its centre of mass (a standing bottle or can, not a block)."""
+    return det.size_m[2] > 2 * (s.palm_above_tcp_m + s.tcp_to_fingertip_m)
+
+
+def rank_grasps(
+    target: results.Detection,
+    neighbours: Sequence[results.Detection] = (),
+    grasp_settings: GraspSettings | None = None,
+    settings: AntipodalSettings | None = None,
+    reachable: Callable[[Mat4, Mat4], bool] | None = None,
+    seed: int = 0,
+) -> results.GraspResult:
+    """The grasps PlanGrasp tries, in order, as 6-DoF candidates.
+
+    An object a top-down grasp holds near its middle keeps the footprint's top-down ranking of
+    :func:`bt_grasp.perception.grasps.synthesize_grasps` unchanged (the colour-block scenes' runs stay as
+    they were). A tall object (:func:`is_tall`), or one with no top-down grasp, gets the antipodal candidates
+    sampled from its cloud first (seeded by ``seed``; only reachable ones when ``reachable`` is given), the
+    footprint's top-down ones after them.
+    """
+    from bt_grasp.perception.grasps import synthesize_grasps
+
+    gs = grasp_settings or GraspSettings()
+    top = synthesize_grasps(target, neighbours, gs)
+    top_list = tuple(from_top_down(c) for c in top.candidates)
+    if top.ok and not is_tall(target, gs):
+        return results.GraspResult(top.status, top_list, top.message)
+    s = settings or AntipodalSettings(pregrasp_offset_m=gs.pregrasp_offset_m)
+    seen = [d for d in neighbours if d is not target and d.centroid_base_m != target.centroid_base_m]
+    others = [fitted_surface(d).points_base_m for d in seen]
+    others += [np.asarray(d.points_base_m, dtype=float).reshape(-1, 3) for d in seen if d.points_base_m is not None]
+    other_points = np.vstack(others) if others else None
+    sampled = sample_grasps(detection_cloud(target), target.table_z_m, other_points, s,
+                            np.random.default_rng(seed), reachable)
+    candidates = sampled + top_list
+    if not candidates:
+        return top
+    why = "tall for a top-down grasp" if top.ok else f"no top-down grasp ({top.message})"
+    message = (f"{len(candidates)} candidate(s) ({len(sampled)} sampled from the cloud: {why}); "
+               f"best: {candidates[0].reason}")
+    return results.GraspResult(results.GraspStatus.OK, candidates, message)
