@@ -10,7 +10,8 @@ from pathlib import Path
 
 import pytest
 
-HEAVY = ("open3d", "matplotlib", "pyarrow", "ray", "foxglove", "sapien", "cv2", "pinocchio", "ompl", "scipy", "mcap")
+HEAVY = ("open3d", "matplotlib", "pyarrow", "ray", "foxglove", "sapien", "cv2", "pinocchio", "ompl", "scipy", "mcap",
+         "textual")  # textual: only `run --interactive` draws a terminal UI
 
 _PROBE = """
 import json, sys
@@ -20,7 +21,8 @@ print(json.dumps({"code": code, "modules": sorted(m for m in sys.modules if "." 
 """
 
 
-@pytest.mark.parametrize("argv", [["--help"], ["tree", "validate", "trees/pick.xml"]], ids=["help", "validate"])
+@pytest.mark.parametrize("argv", [["--help"], ["tree", "validate", "trees/pick.xml"], ["run", "--help"]],
+                         ids=["help", "validate", "run-help"])
 def test_the_command_imports_no_heavy_library(repo_root: Path, argv: list[str]) -> None:
     done = subprocess.run(
         [sys.executable, "-c", _PROBE, *argv], cwd=repo_root, capture_output=True, text=True, timeout=120

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Installs the system pieces bt_grasp needs, idempotently:
-#   - libusb-1.0 (open3d's import needs it),
+#   - libusb-1.0 (open3d's import needs it), graphviz, chromium and tmux (tests with real clients),
 #   - a Vulkan loader and, where no GPU Vulkan driver exists, Mesa's software driver lavapipe >= 24.3
 #     (SAPIEN needs VK_KHR_external_semaphore_fd, which lavapipe gained in Mesa 24.3; on Debian 12 that
 #     means the bookworm-backports suite).
@@ -23,7 +23,8 @@ apt_install() { DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no
 
 need=()
 # chromium: the campaign report and browser tests are checked in a real headless browser
-for p in libusb-1.0-0 libvulkan1 libgomp1 graphviz chromium; do have_pkg "$p" || need+=("$p"); done
+# tmux: `bt-grasp run --interactive` is tested in a real terminal (tests/control/test_terminal_tmux.py)
+for p in libusb-1.0-0 libvulkan1 libgomp1 graphviz chromium tmux; do have_pkg "$p" || need+=("$p"); done
 if [ "${#need[@]}" -gt 0 ]; then
     echo "setup: installing ${need[*]}"
     apt_update

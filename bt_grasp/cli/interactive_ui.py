@@ -209,7 +209,7 @@ class InteractiveApp(App[None]):
                 yield Static("", id="detections")
                 yield Static("", id="failure")
         yield Static("", id="message")
-        yield Input(id="prompt")
+        yield Input(id="prompt", disabled=True)  # enabled (and focusable) only while it asks
         yield Static(KEYS_HELP, id="keys")
 
     def on_mount(self) -> None:
@@ -231,7 +231,8 @@ class InteractiveApp(App[None]):
         self.query_one("#tree", Static).update(tree_text(state))
         settable = set(state.settings)
         self.query_one("#blackboard", Static).update(Text("\n".join(
-            f"{'*' if key in settable else ' '} {key} = {value}" for key, value in state.blackboard)))
+            f"{'*' if key in settable else ' '} {key} = {value}" for key, value in state.blackboard),
+            no_wrap=True, overflow="ellipsis"))  # one line an entry
         self.query_one("#detections", Static).update(Text("\n".join(
             f"{d.index}: {d.label} at ({', '.join(f'{x:.3f}' for x in d.centroid_base_m)}) m"
             for d in state.detections) or "none yet"))
@@ -267,6 +268,7 @@ class InteractiveApp(App[None]):
         self._asking = key
         prompt.placeholder = PROMPTS[key].question
         prompt.value = ""
+        prompt.disabled = False
         prompt.add_class("asking")
         prompt.focus()
 
@@ -276,6 +278,7 @@ class InteractiveApp(App[None]):
     def _close_prompt(self) -> None:
         prompt = self.query_one("#prompt", Input)
         prompt.remove_class("asking")
+        prompt.disabled = True  # keys go to the app again, never into a hidden prompt
         self._asking = None
         self.set_focus(None)
 
