@@ -192,3 +192,13 @@ def test_every_tree_command_takes_leaves(command: list[str], tree_file: Path, tm
         args.append(str(tmp_path / "out.yaml"))
     assert main(args) == 2
     assert _one_line_error(capsys).startswith(f"{bad}:1: import error: ModuleNotFoundError")
+
+
+def test_show_and_convert_with_the_plugin(tree_file: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["tree", "show", "--format", "dot", "--leaves", str(PLUGIN), str(tree_file)]) == 0
+    dot = capsys.readouterr().out
+    assert "RoundRobinFallback" in dot and "RateLimit" in dot and "CheckWeight" in dot
+    yaml_file = tmp_path / "weigh.yaml"
+    assert main(["tree", "convert", "--leaves", str(PLUGIN), str(tree_file), str(yaml_file)]) == 0
+    capsys.readouterr()
+    assert main(["tree", "validate", "--leaves", str(PLUGIN), str(yaml_file)]) == 0  # the YAML twin loads too
