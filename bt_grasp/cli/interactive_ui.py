@@ -163,7 +163,7 @@ class InteractiveApp(App[None]):
     #panes { height: 1fr; }
     #tree { width: 1fr; border: round $primary; }
     #side { width: 1fr; }
-    #blackboard { height: 1fr; border: round $primary; }
+    #blackboard { height: 1fr; border: round $primary; text-wrap: nowrap; text-overflow: ellipsis; }
     #detections { height: auto; max-height: 8; border: round $primary; }
     #failure { height: auto; border: round $primary; }
     #prompt { display: none; }
