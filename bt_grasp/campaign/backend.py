@@ -58,6 +58,7 @@ class WarmEpisodeBackend:
             tree_status=result.tree_status,
             failure_reason=result.reason,
             failed_leaf=result.failed_leaf,
+            failed_path=result.failed_path,
             ticks=result.ticks,
             sim_time_s=result.sim_time_s,
             wall_time_s=result.wall_time_s,

@@ -30,6 +30,7 @@ class EpisodeOutcome:
     faults_fired: int
     judge: dict[str, Any]
     fingerprint: str  # the run fingerprint's digest (bt_grasp.recording.fingerprint)
+    failed_path: str | None = None  # the failed leaf's path (its name in every output)
 
 
 class EpisodeBackend(Protocol):

@@ -95,7 +95,8 @@ def _failures_table(rows: Sequence[dict[str, Any]]) -> str:
         out.append(
             f"<tr><td>{html.escape(tree_label(r))}</td><td>{html.escape(str(r['scene']))}</td>"
             f"<td class=num>{html.escape(str(r['seed']))}</td><td>{html.escape(str(r['fault_plan']))}</td>"
-            f"<td>{html.escape(str(r['failure_reason']))}</td><td>{html.escape(str(r['failed_leaf']))}</td>"
+            f"<td>{html.escape(str(r['failure_reason']))}</td>"
+            f"<td>{html.escape(str(r.get('failed_path') or r['failed_leaf']))}</td>"
             f"<td class=num>{html.escape(str(r['ticks']))}</td><td>{replay}</td></tr>"
         )
     more = len(failed) - MAX_FAILURE_ROWS

@@ -104,6 +104,8 @@ _COLUMNS: dict[str, tuple[str, Any]] = {
 _OPTIONAL_COLUMNS: dict[str, tuple[str, Any]] = {
     "campaign": ("a string", lambda v: isinstance(v, str)),
     "mcap": ("a string or null", lambda v: isinstance(v, _OPTIONAL_TEXT)),
+    # the failed leaf's path, its name in every output (rows written before it have only failed_leaf)
+    "failed_path": ("a string or null", lambda v: isinstance(v, _OPTIONAL_TEXT)),
     "params": ("an object", lambda v: isinstance(v, dict)),
     "environment": ("an object or null", lambda v: v is None or (
         isinstance(v, dict) and isinstance(v.get("libraries") or {}, dict))),

@@ -64,6 +64,7 @@ def make_row(episode: Episode, outcome: EpisodeOutcome, mcap: Path | None, episo
         "tree_status": outcome.tree_status,
         "failure_reason": outcome.failure_reason,
         "failed_leaf": outcome.failed_leaf,
+        "failed_path": outcome.failed_path,
         "retries": outcome.retries,
         "retries_total": sum(outcome.retries.values()),
         "faults_fired": outcome.faults_fired,

@@ -43,7 +43,13 @@ def replay_command(
     ),
     report: Path | None = typer.Option(None, "--report", help="Write a self-contained HTML run report here."),
     report_dir: Path | None = typer.Option(None, "--report-dir", help="Also write the report's figures as PNG here."),
-    foxglove: bool = typer.Option(False, "--foxglove", help="Print how to open this log in Foxglove."),
+    foxglove: bool = typer.Option(
+        False, "--foxglove",
+        help="Write the Foxglove layout of this log's tree (LOG.layout.json) and say how to open both."
+    ),
+    layout_out: Path | None = typer.Option(
+        None, "--layout-out", help="With --foxglove: write the layout here instead of beside the log."
+    ),
     leaves: list[str] = leaves_option(),
 ) -> None:
     """Replay a recorded run: summary and timeline by default, or the views asked for."""
@@ -58,7 +64,7 @@ def replay_command(
         _resim(console, log, as_json, resim_log, tuple(leaves))
         return
     if foxglove:
-        _print_foxglove(console, run)
+        _print_foxglove(console, run, layout_out)
     if report is not None or report_dir is not None:
         from bt_grasp.recording.report import build_report
 
@@ -112,15 +118,17 @@ def replay_command(
         console.print(f"wrote {exports['btlog']['transitions']} transitions to {btlog}")
 
 
-def _print_foxglove(console: Console, run: RunLog) -> None:
-    from bt_grasp.recording.layout import layout_path
+def _print_foxglove(console: Console, run: RunLog, target: Path | None) -> None:
+    from bt_grasp.recording.tree_layout import write_layout
 
     origin = run.time_origin_ns
+    layout = write_layout(run, target)  # the layout of this log's tree (attached to the log since format 3)
     console.print(
         f"Open {run.path} in Foxglove (desktop or app.foxglove.dev: Open local file, or drag the file in).\n"
-        f"Then load the layout: Layouts > Import from file > {layout_path()}\n"
+        f"Then load the layout made for this run's tree: Layouts > Import from file > {layout}\n"
         "It shows the arm, point cloud, detections and grasps in 3D, the camera with detections drawn, each "
-        "leaf's status over time (State Transitions on /bt/tick.leaves.*), joint and gripper plots and the log.\n"
+        "leaf's status over time (State Transitions: one row per leaf of this tree, named by its path), joint "
+        "and gripper plots and the log.\n"
         + (f"The timeline starts at the run's real start ({_utc(origin)}); simulated time runs on from there."
            if origin else "This log is format 1: its timeline starts at 1970-01-01 (simulated time from 0)."),
         soft_wrap=True,  # paths stay whole, to be copied

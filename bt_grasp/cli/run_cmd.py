@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -21,11 +22,14 @@ if TYPE_CHECKING:  # the episode package (numpy, pydantic, the simulator) is imp
     from bt_grasp.episode.request import BlackboardValue, EpisodeRequest
     from bt_grasp.episode.result import EpisodeResult
     from bt_grasp.tree.loader import LoadedTree
+    from bt_grasp.tree.runner import FailureEvent
 
 
 #: the live view's port when ``--live`` has no value (bt_grasp.recording.live.DEFAULT_PORT, not imported here
 #: so that a run without --live does not load the WebSocket server)
 LIVE_DEFAULT_PORT = 8765
+#: the run summary's causal chain shows at most this many failures (the last ones)
+CHAIN_SHOWN = 8
 
 #: options whose value may be left out (``--live`` alone means ``--live 8765``); click/typer have no such
 #: option type, so :func:`fill_optional_values` writes the default in before parsing
@@ -68,7 +72,8 @@ def print_summary(console: Console, summary: EpisodeResult) -> None:
     verdict = "[bold green]SUCCESS[/]" if summary.success else "[bold red]FAILURE[/]"
     console.print(f"\n{verdict}  (tree: {escape(summary.tree_status)}, {escape(judged_phrase(summary))})")
     if not summary.success:
-        console.print(f"  reason: [red]{escape(str(summary.reason))}[/]  leaf: {escape(str(summary.failed_leaf))}")
+        leaf = summary.failed_path or summary.failed_leaf  # the path: the leaf's name in every output
+        console.print(f"  reason: [red]{escape(str(summary.reason))}[/]  leaf: {escape(str(leaf))}")
         if summary.judged.failed_condition is not None:
             console.print(f"  goal not met: {escape(summary.judged.failed_condition)}")
     console.print(
@@ -81,6 +86,28 @@ def print_summary(console: Console, summary: EpisodeResult) -> None:
         console.print(f"  faults fired: {summary.faults_fired}")
     if summary.log:
         console.print(f"  log: {escape(summary.log)}  (bt-grasp replay {escape(summary.log)})")
+    chain = summary.failure_chain
+    if chain:  # last: the causal chain of the failures (conditions false by design left out)
+        console.print("  what failed, and what followed (oldest first):")
+        if len(chain) > CHAIN_SHOWN:
+            console.print(f"    ... {len(chain) - CHAIN_SHOWN} earlier failures (bt-grasp replay LOG --failures)")
+        for step in chain[-CHAIN_SHOWN:]:
+            console.print(f"    tick {step.tick} ({step.sim_time_s:.2f} s) {escape(step.leaf_path)} "
+                          f"[red]{escape(str(step.reason or '-'))}[/] -> {escape(step.followed)}")
+
+
+def failure_line(console: Console) -> Callable[[FailureEvent], None]:
+    """Prints one line per leaf FAILURE as it happens (not the conditions false by design): leaf path,
+    reason, tick, simulated time."""
+
+    def show(event: FailureEvent) -> None:
+        text = (f"FAILED {event.path}: {event.reason or '-'} at tick {event.tick}, t={event.stamp_ns * 1e-9:.2f} s"
+                + (f" ({event.message})" if event.message else ""))
+        # on a terminal, over the progress line (which ends with a carriage return)
+        console.print(text.ljust(console.width - 1) if console.is_terminal else text, style="red", highlight=False,
+                      markup=False, soft_wrap=True)
+
+    return show
 
 
 def live_progress(console: Console) -> TickCallback:
@@ -219,6 +246,8 @@ def run(
                                        on_tick=() if quiet else (live_progress(console),))
     else:
         episode = Episode(request)
+        if not quiet:
+            episode.on_failure.append(failure_line(console))
         episode.on_live.append(lambda url: console.print(
             f"live: in Foxglove, Open connection > Foxglove WebSocket > {url} (layout: {layout_path()})",
             highlight=False))

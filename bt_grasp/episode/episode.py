@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from bt_grasp.episode.request import BlackboardValue, EpisodeRequest
-from bt_grasp.episode.result import EpisodeResult, Judged
+from bt_grasp.episode.result import ChainStep, EpisodeResult, Judged
 from bt_grasp.episode.worlds import FreshWorlds, WorldSource
 from bt_grasp.errors import InputError
 from bt_grasp.scene.goals import Goal, PickGoal
@@ -36,7 +36,7 @@ if TYPE_CHECKING:
     from bt_grasp.sim.judge import Verdict
     from bt_grasp.sim.world import World
     from bt_grasp.tree.loader import LoadedTree
-    from bt_grasp.tree.runner import TickRecorder
+    from bt_grasp.tree.runner import FailureEvent, TickRecorder
 
 log = logging.getLogger(__name__)
 
@@ -151,6 +151,12 @@ class Episode:
         self.live: LiveServer | None = None
         #: called with the live view's URL once its server listens (the CLI prints how to connect)
         self.on_live: list[Callable[[str], None]] = []
+        #: called as it happens with every leaf FAILURE that is not by design (the CLI's live failure line)
+        self.on_failure: list[Callable[[FailureEvent], None]] = []
+
+    def _failure_seen(self, event: FailureEvent) -> None:
+        for callback in self.on_failure:
+            callback(event)
 
     def _build_cell(self) -> Cell:
         from bt_grasp.behaviours.calibration_leaves import needs_calibration_board
@@ -233,7 +239,8 @@ class Episode:
                 controller.attach(self.tree, world.now_ns, sink=recorder,
                                   fire_fault=None if injector is None else _fault_firer(injector))
             runner = TreeRunner(self.tree, world, steps_per_tick=world.steps_per_tick, recorder=tick_recorder,
-                                robot_state=read_robot, on_tick=tick_hook, gate=controller)
+                                robot_state=read_robot, on_tick=tick_hook, gate=controller,
+                                on_failure=self._failure_seen if self.on_failure else None)
             outcome = runner.run(request.max_ticks)
             # a placement goal's "resting for 1 s after release" needs the world to run on a little
             for _ in range(judge.settle_ticks(self.inputs.goal)):
@@ -252,6 +259,9 @@ class Episode:
                 tree_status=outcome.status,
                 reason=reason,
                 failed_leaf=None if success else (last.leaf if last else None),
+                failed_path=None if success else (last.path if last else None),
+                failure_chain=tuple(ChainStep(e.tick, e.stamp_ns * 1e-9, e.path, e.reason, e.followed)
+                                    for e in outcome.chain),
                 ticks=outcome.ticks,
                 sim_time_s=outcome.sim_time_s,
                 wall_time_s=outcome.wall_time_s,
@@ -300,6 +310,7 @@ class Episode:
         from bt_grasp.recording import topics
         from bt_grasp.recording.robot_model import default_robot_model
         from bt_grasp.recording.scene_entities import fixture_update
+        from bt_grasp.recording.tree_layout import LAYOUT_ATTACHMENT, layout_bytes
         from bt_grasp.recording.writer import BASE_FRAME, WORLD_FRAME, RunRecorder
         from bt_grasp.tree.introspect import node_records, tree_structure
 
@@ -314,10 +325,12 @@ class Episode:
             metadata=run_metadata(
                 request, self.scene, self.tree, self.inputs.calibration_path, self.inputs.goal
             ),
-            attachments=run_attachments(request, self.tree, self.inputs.calibration_path),
+            attachments={**run_attachments(request, self.tree, self.inputs.calibration_path),
+                         # the Foxglove layout of this tree (its leaves' rows, by path)
+                         LAYOUT_ATTACHMENT: layout_bytes(tree_structure(self.tree.root), request.tree.name)},
             flush_interval_s=LOG_FLUSH_INTERVAL_S,
             robot_model=default_robot_model(),
-            leaf_names=[n["name"] for n in node_records(self.tree.root) if n["kind"] in ("Action", "Condition")],
+            leaf_names=[n["path"] for n in node_records(self.tree.root) if n["kind"] in ("Action", "Condition")],
             writer_process=True,  # a file log is written by a child process; the tick loop only hands over
         )
         # the frame tree's root: where the robot is bolted (installation data), repeated with every /tf

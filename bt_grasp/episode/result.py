@@ -50,11 +50,28 @@ class Judged:
 
 
 @dataclass(frozen=True)
+class ChainStep:
+    """One link of the causal chain of a run's failures: a leaf FAILURE that was not by design (a condition
+    asked by a Fallback is not one), its reason, and what followed it (a retry, the end of the run)."""
+
+    tick: int
+    sim_time_s: float
+    leaf_path: str
+    reason: str | None
+    followed: str
+
+    def to_json(self) -> dict[str, JsonValue]:
+        return {"tick": self.tick, "sim_time_s": round(self.sim_time_s, 3), "leaf_path": self.leaf_path,
+                "reason": self.reason, "followed": self.followed}
+
+
+@dataclass(frozen=True)
 class EpisodeResult:
     """``success``: the goal judged met by physics AND the tree returned SUCCESS.
 
     ``reason``/``failed_leaf``: the last leaf FAILURE (or ``MAX_TICKS`` when the tick limit ran out, or
     ``GOAL_NOT_MET`` with the judge's failed condition when the tree succeeded but the goal was not met).
+    ``failed_path``: that leaf's path, its one name in every output (``tree show``, logs, replay, reports).
     """
 
     success: bool
@@ -74,6 +91,9 @@ class EpisodeResult:
     #: the run fingerprint's digest (``bt_grasp.recording.fingerprint``) when the request asked for it: the
     #: same digest ``fingerprint_of_log`` gives for this run's log
     fingerprint: str | None = None
+    failed_path: str | None = None
+    #: every leaf FAILURE that was not by design, in order, with what followed it (the run summary's last lines)
+    failure_chain: tuple[ChainStep, ...] = ()
 
     @property
     def object_lift_m(self) -> float:
@@ -86,6 +106,8 @@ class EpisodeResult:
             "tree_status": self.tree_status,
             "reason": self.reason,
             "failed_leaf": self.failed_leaf,
+            "failed_path": self.failed_path,
+            "failure_chain": [step.to_json() for step in self.failure_chain],
             "ticks": self.ticks,
             "sim_time_s": round(self.sim_time_s, 3),
             "wall_time_s": round(self.wall_time_s, 3),

@@ -15,7 +15,7 @@ from rich.table import Table
 from rich.text import Text
 from rich.tree import Tree
 
-from bt_grasp.recording.replay import FailureReport, StatusChange
+from bt_grasp.recording.replay import FailureKind, FailureReport, StatusChange
 from bt_grasp.tree.values import display
 
 STATUS_STYLES = {"SUCCESS": "green", "FAILURE": "bold red", "RUNNING": "yellow", "IDLE": "dim",
@@ -55,7 +55,7 @@ def summary_table(s: dict[str, Any]) -> Table:
         ("fault plan", s["fault_plan"] or "-"),
         ("result", outcome),
         ("reason", str(s["reason"]) if s["reason"] else "-"),
-        ("failed leaf", str(s["failed_leaf"]) if s["failed_leaf"] else "-"),
+        ("failed leaf", str(s.get("failed_path") or s["failed_leaf"]) if s["failed_leaf"] else "-"),
         ("ticks", f"{s['ticks']} (ticks {s['first_tick']}..{s['last_tick']})" if s["ticks"] else "0"),
         ("sim duration", f"{s['sim_duration_s']:.3f} s"),
         ("retries", str(s["retries"])),
@@ -86,7 +86,7 @@ def timeline_table(rows: Sequence[tuple[int, int, list[StatusChange]]], max_rows
         for i, ch in enumerate(changes):
             if i:
                 line.append("  ")
-            line.append(ch.name)
+            line.append(ch.path or ch.name)  # the node's one name (tree show, the report, Foxglove)
             line.append(" ")
             line.append_text(status_text(ch.new, short=True))
         table.add_row(str(tick), _seconds(stamp), line)
@@ -153,22 +153,45 @@ def robot_table(robot: dict[str, Any] | None) -> Table:
 
 
 def failures_table(reports: Sequence[FailureReport]) -> RenderableType:
+    """The failures that mattered, each with where it propagated and what ran next (the one that decided the
+    outcome marked), then, apart and dimmed, the conditions that were false by design (a ``FailureIs`` asked
+    by a Fallback, ``ForceFailure``)."""
     if not reports:
         return Text("no failures recorded", style="green")
-    table = Table(title="failures", title_justify="left", box=None, pad_edge=False)
-    for column in ("tick", "sim time", "leaf", "reason", "propagated to", "what ran next"):
-        table.add_column(column)
-    for f in reports:
-        nxt = Text()
+    real = [f for f in reports if f.kind != FailureKind.BY_DESIGN]
+    by_design = [f for f in reports if f.kind == FailureKind.BY_DESIGN]
+    parts: list[RenderableType] = [Text("failures", style="italic")]
+    if not real:
+        parts.append(Text("no leaf failed (apart from conditions false by design)", style="green"))
+    for f in real:
+        head = Text("  ")
+        head.append("decided the outcome" if f.decided else "recovered", style="bold red" if f.decided else "yellow")
+        head.append(f"  tick {f.tick}  {_seconds(f.stamp_ns)}  ")
+        head.append(f.path or f.name, style="bold")
+        head.append("  ")
+        head.append(f.reason or "-", style="red")
+        parts.append(head)
+        parts.append(Text(f"      propagated to: {' > '.join(f.propagated_to) or '-'}"))
+        nxt = Text("      then: ")
         for i, ch in enumerate(f.recovery):
             if i:
                 nxt.append(", ")
-            nxt.append(f"{ch.name}@{ch.tick} ")
+            nxt.append(f"{ch.path or ch.name} (tick {ch.tick}) ")
             nxt.append_text(status_text(ch.new, short=True))
-        table.add_row(Text(str(f.tick), style="cyan"), Text(_seconds(f.stamp_ns)), Text(f.name, style="bold"),
-                      Text(f.reason or "-", style="red"), Text(" > ".join(f.propagated_to) or "-"),
-                      nxt if f.recovery else Text("nothing (the run ended)", style="dim"))
-    return table
+        if not f.recovery:
+            nxt.append("nothing (the run ended)", style="dim")
+        parts.append(nxt)
+    if by_design:
+        table = Table(title=f"false by design: {len(by_design)} (control flow, not faults)", title_justify="left",
+                      box=None, pad_edge=False, style="dim")
+        for column in ("tick", "sim time"):
+            table.add_column(column, no_wrap=True, style="dim")
+        table.add_column("leaf", overflow="fold", style="dim")  # a path is never cut short
+        table.add_column("reason", style="dim")
+        for f in by_design:
+            table.add_row(str(f.tick), _seconds(f.stamp_ns), Text(f.path or f.name), Text(f.reason or "-"))
+        parts += [Text(""), table]
+    return Group(*parts)
 
 
 def leaf_table(name: str, history: Sequence[dict[str, Any]], max_rows: int) -> RenderableType:

@@ -33,6 +33,18 @@ class StatusChange:
     failure_reason: str | None
 
 
+class FailureKind:
+    """How a failure bears on the run (``FailureReport.kind``)."""
+
+    #: the failure the run ended on: it reached the root, or it is the result's failed leaf at the end
+    OUTCOME = "outcome"
+    #: a leaf failed (with a reason, or an action with none) and the tree went on: a retry or a recovery
+    RECOVERED = "recovered"
+    #: false by design: a condition that answered "no" without a reason (``FailureIs`` in a Fallback) or a
+    #: decorator that fails by itself (``ForceFailure``, ``Inverter``): control flow, not a fault
+    BY_DESIGN = "by_design"
+
+
 @dataclass(frozen=True)
 class FailureReport:
     tick: int
@@ -43,6 +55,11 @@ class FailureReport:
     reason: str | None
     propagated_to: tuple[str, ...]
     recovery: tuple[StatusChange, ...]
+    kind: str = FailureKind.RECOVERED  # a FailureKind value
+
+    @property
+    def decided(self) -> bool:
+        return self.kind == FailureKind.OUTCOME
 
 
 def _info(run: RunLog, uid: int) -> NodeInfo:
@@ -113,15 +130,60 @@ def failures(run: RunLog) -> list[FailureReport]:
         if info is not None and not info.is_leaf and children_failed:
             continue  # a parent that failed because its child did: reported with the child
         ancestors = _ancestors(nodes, ch.uid)
-        propagated = tuple(_info(run, u).name for u in ancestors if u in same_tick)
+        propagated = tuple(_info(run, u).path or _info(run, u).name for u in ancestors if u in same_tick)
         excluded = set(ancestors)  # parents going RUNNING again are not news; the failed leaf re-running is
         recovery = tuple(
             later for later in changes[index + 1:]
             if later.new in ("RUNNING", "SUCCESS") and later.uid not in excluded
         )[:_RECOVERY_LIMIT]
+        reached = 0  # how far up the FAILURE went this tick, parent by parent
+        while reached < len(ancestors) and ancestors[reached] in same_tick:
+            reached += 1
+        root_failed = bool(ancestors) and reached == len(ancestors)
+        if root_failed or (info is not None and not ancestors and not info.is_leaf):
+            kind = FailureKind.OUTCOME
+        elif _by_design(nodes, info, ch.failure_reason):
+            kind = FailureKind.BY_DESIGN
+        else:
+            kind = FailureKind.RECOVERED
         reports.append(FailureReport(ch.tick, ch.stamp_ns, ch.uid, ch.name, ch.path, ch.failure_reason,
-                                     propagated, recovery))
+                                     propagated, recovery, kind))
+    _mark_result_leaf(run, reports)
     return reports
+
+
+def _by_design(nodes: dict[int, NodeInfo], info: NodeInfo | None, reason: str | None) -> bool:
+    """A condition asked by a Fallback (the next child is the other answer), a condition answering "no"
+    with no reason, or a control/decorator failing by itself (``ForceFailure``)."""
+    if info is None:
+        return reason is None
+    if not info.is_leaf:
+        return reason is None
+    if info.kind != "Condition":
+        return False
+    parent = nodes.get(info.parent) if info.parent is not None else None
+    return reason is None or (parent is not None and "Fallback" in parent.type)
+
+
+def _mark_result_leaf(run: RunLog, reports: list[FailureReport]) -> None:
+    """A run that failed without its root failing (the tick limit, an unmet goal): the result's failed leaf,
+    at its last failure, is what decided the outcome."""
+    import dataclasses
+
+    result = run.result or {}
+    if result.get("success") is not False or any(r.decided for r in reports):
+        return
+    wanted = result.get("failed_path") or result.get("failed_leaf")
+    for index in range(len(reports) - 1, -1, -1):
+        report = reports[index]
+        if wanted and wanted in (report.path, report.name) and report.kind != FailureKind.BY_DESIGN:
+            reports[index] = dataclasses.replace(report, kind=FailureKind.OUTCOME)
+            return
+
+
+def failure_chain(run: RunLog) -> list[FailureReport]:
+    """The causal chain of the run's failures, oldest first: every failure that was not false by design."""
+    return [f for f in failures(run) if f.kind != FailureKind.BY_DESIGN]
 
 
 def _result_field(run: RunLog, key: str) -> Any:
@@ -133,9 +195,9 @@ def summary(run: RunLog) -> dict[str, Any]:
     meta = run.metadata
     counts = attempts(run)
     nodes = run.nodes
-    per_leaf = {_info(run, uid).name: c[2] for uid, c in counts.items()
+    per_leaf = {_info(run, uid).path or _info(run, uid).name: c[2] for uid, c in counts.items()
                 if c[2] and (uid not in nodes or nodes[uid].is_leaf or not nodes[uid].kind)}
-    failures_per_leaf = Counter(f.name for f in failures(run))
+    failures_per_leaf = Counter(f.path or f.name for f in failures(run))
     first, last = (run.ticks[0], run.ticks[-1]) if run.ticks else (None, None)
     sim_s = (last.stamp_ns - first.stamp_ns) * 1e-9 if first and last else 0.0
     retries = _result_field(run, "retries")
@@ -148,6 +210,7 @@ def summary(run: RunLog) -> dict[str, Any]:
         "success": _result_field(run, "success"),
         "reason": _result_field(run, "reason"),
         "failed_leaf": _result_field(run, "failed_leaf"),
+        "failed_path": _result_field(run, "failed_path"),
         "ticks": len(run.ticks),
         "first_tick": first.tick if first else None,
         "last_tick": last.tick if last else None,
@@ -251,9 +314,11 @@ def topic_messages(run: RunLog, topic: str) -> Iterator[dict[str, Any]]:
 
 
 __all__ = [
+    "FailureKind",
     "FailureReport",
     "StatusChange",
     "attempts",
+    "failure_chain",
     "failures",
     "find_nodes",
     "leaf_history",

@@ -49,15 +49,54 @@ def _badge(status: str) -> str:
 
 
 def _leaf_rows(run: RunLog) -> tuple[list[str], dict[int, str]]:
+    """The Gantt's rows: every leaf by its path (its one name: ``tree show``, replay and Foxglove show it too)."""
     leaves = [info for _, info in sorted(run.nodes.items()) if info.is_leaf]
-    names = [info.name for info in leaves]
-    labels = {info.uid: (info.name if names.count(info.name) == 1 else f"{info.name} ({info.path})")
-              for info in leaves}
+    paths = [info.path or info.name for info in leaves]
+    labels = {info.uid: (path if paths.count(path) == 1 else f"{path} #{info.uid}")
+              for info, path in zip(leaves, paths, strict=True)}
     return list(labels.values()), labels
 
 
 def _bars(run: RunLog, labels: dict[int, str]) -> list[report_figures.Bar]:
-    end_s = run.ticks[-1].stamp_ns * 1e-9 if run.ticks else 0.0
+    """A bar per stretch of consecutive ticks in which a leaf was ticked and returned one status: it ends when
+    the status changes or the leaf is no longer ticked (a leaf that returned SUCCESS and then waits, not ticked,
+    for its parent to reset it is not painted on until the reset)."""
+    ticks = run.ticks
+    if not ticks:
+        return []
+    if not any(node.ticked for record in ticks for node in record.nodes):
+        return _bars_by_changes(run, labels)  # a log that does not say which nodes were ticked
+    period_ns = (ticks[-1].stamp_ns - ticks[0].stamp_ns) // max(len(ticks) - 1, 1) if len(ticks) > 1 else 10**7
+    open_bar: dict[int, tuple[int, str, int]] = {}  # uid -> (start_ns, status, index of the last tick)
+    bars: list[report_figures.Bar] = []
+
+    def close(uid: int, end_ns: int) -> None:
+        start, status, _ = open_bar.pop(uid)
+        bars.append(report_figures.Bar(labels[uid], start * 1e-9, (end_ns - start) * 1e-9, status))
+
+    for index, record in enumerate(ticks):
+        end_ns = ticks[index + 1].stamp_ns if index + 1 < len(ticks) else record.stamp_ns + period_ns
+        for node in record.nodes:
+            if node.uid not in labels or not node.ticked:
+                continue
+            current = open_bar.get(node.uid)
+            if current is not None and (current[1] != node.status or current[2] != index - 1):
+                close(node.uid, ticks[current[2] + 1].stamp_ns if current[2] + 1 < len(ticks) else end_ns)
+                current = None
+            if node.status not in report_figures.STATUS_COLOURS:
+                continue
+            start = current[0] if current is not None else record.stamp_ns
+            open_bar[node.uid] = (start, node.status, index)
+        for uid in [u for u, (_, _, last) in open_bar.items() if last < index]:  # not ticked this tick: it ended
+            close(uid, record.stamp_ns)
+    for uid in list(open_bar):
+        last = open_bar[uid][2]
+        close(uid, ticks[last + 1].stamp_ns if last + 1 < len(ticks) else ticks[-1].stamp_ns + period_ns)
+    return bars
+
+
+def _bars_by_changes(run: RunLog, labels: dict[int, str]) -> list[report_figures.Bar]:
+    end_s = run.ticks[-1].stamp_ns * 1e-9
     open_bar: dict[int, tuple[float, str]] = {}
     bars: list[report_figures.Bar] = []
     for ch in replay.status_changes(run):
@@ -72,6 +111,27 @@ def _bars(run: RunLog, labels: dict[int, str]) -> list[report_figures.Bar]:
     for uid, (start, status) in open_bar.items():
         bars.append(report_figures.Bar(labels[uid], start, end_s - start, status))
     return bars
+
+
+def _fault_marks(run: RunLog) -> list[tuple[float, str]]:
+    """(simulated time, short text) of every injected fault that fired, for the timeline."""
+    marks = []
+    for fault in run.faults:
+        what = fault.get("fault")
+        text = str(what.get("label") or what.get("kind") or what) if isinstance(what, dict) else str(what)
+        marks.append((int(fault.get("stamp_ns", 0)) * 1e-9, text))
+    return marks
+
+
+def end_statuses(run: RunLog) -> dict[int, str]:
+    """Every node's status at the end of the run: the last status it returned when ticked (the final reset
+    to IDLE that follows the root's completion is not news; a node never ticked stays IDLE)."""
+    out: dict[int, str] = {}
+    for record in run.ticks:
+        for node in record.nodes:
+            if node.ticked and node.status != "IDLE":
+                out[node.uid] = node.status
+    return out
 
 
 def _joint_series(run: RunLog) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], list[str]]:
@@ -90,6 +150,11 @@ def _joint_series(run: RunLog) -> tuple[NDArray[np.float64], NDArray[np.float64]
 
 def _timed(run: RunLog, topic: str) -> list[tuple[int, Any]]:
     return [(m.log_time_ns, m.message) for m in run.iter_messages(topic)]
+
+
+def _at(items: list[tuple[int, Any]], stamp_ns: int) -> Any:
+    """The item written at exactly ``stamp_ns`` (a capture's own detections), else None."""
+    return next((value for t, value in items if t == stamp_ns), None)
 
 
 def _last_before(items: list[tuple[int, Any]], stamp_ns: int) -> Any:
@@ -147,7 +212,7 @@ def _frames(run: RunLog) -> list[tuple[str, bytes]]:
     poses = _camera_poses(run)
     out = []
     for im in images:
-        update = _last_before(detections, im.stamp_ns)
+        update = _at(detections, im.stamp_ns)  # boxes only on the capture they were detected in
         calib = _last_before(calibrations, im.stamp_ns) or (calibrations[0][1] if calibrations else None)
         K = np.array(calib.K, dtype=np.float64).reshape(3, 3) if calib is not None and len(calib.K) == 9 else None
         T_base_camera = _last_before(poses, im.stamp_ns)
@@ -178,6 +243,12 @@ def _tree_html(node: dict[str, Any], counts: dict[int, tuple[int, int, int]]) ->
     return f"<li>{head}" + (f"<ul>{children}</ul>" if children else "") + "</li>"
 
 
+def _with_end_statuses(node: dict[str, Any], statuses: dict[int, str]) -> None:
+    node["status"] = statuses.get(int(node["uid"]), node["status"])
+    for child in node.get("children", []):
+        _with_end_statuses(child, statuses)
+
+
 _CSS = """
 body{font-family:system-ui,-apple-system,'Segoe UI',sans-serif;margin:24px auto;max-width:1100px;color:#222}
 h1{margin-bottom:4px} h2{border-bottom:1px solid #ddd;padding-bottom:4px;margin-top:32px}
@@ -200,13 +271,14 @@ def build_report(run: RunLog, html_path: Path, png_dir: Path | None = None) -> R
     s = replay.summary(run)
     rows, labels = _leaf_rows(run)
     every_failure = replay.failures(run)
-    # leaves that failed with a reason (a condition answering "no" is control flow, not a failure to explain)
-    failures = [f for f in every_failure if f.reason] or every_failure
+    # failures to explain: not the conditions false by design (control flow: FailureIs in a Fallback, ForceFailure)
+    failures = [f for f in every_failure if f.kind != replay.FailureKind.BY_DESIGN]
+    by_design = len(every_failure) - len(failures)
     bars = _bars(run, labels)
     shown = {bar.row for bar in bars}
     rows = [row for row in rows if row in shown]  # leaves that never ran would be empty rows
     report.figures["gantt"] = report_figures.gantt(
-        rows, bars, [(f.stamp_ns * 1e-9, labels[f.uid]) for f in failures if f.uid in labels])
+        rows, bars, [(f.stamp_ns * 1e-9, labels[f.uid]) for f in failures if f.uid in labels], _fault_marks(run))
     fail_s = [f.stamp_ns * 1e-9 for f in failures]
     t, Q, width, names = _joint_series(run)
     if t.size:
@@ -240,14 +312,20 @@ def build_report(run: RunLog, html_path: Path, png_dir: Path | None = None) -> R
     if failures:
         items = []
         for f in failures:
-            recovery = ", ".join(f"{c.name} {c.new} (t={c.stamp_ns * 1e-9:.2f} s)" for c in f.recovery) or "nothing"
-            items.append(f"<tr><td>{f.stamp_ns * 1e-9:.2f} s</td><td>tick {f.tick}</td><td>{_esc(f.name)}</td>"
+            recovery = ", ".join(f"{c.path or c.name} {c.new} (t={c.stamp_ns * 1e-9:.2f} s)"
+                                 for c in f.recovery) or "nothing"
+            decided = "decided the outcome" if f.decided else "recovered"
+            items.append(f"<tr><td>{decided}</td><td>{f.stamp_ns * 1e-9:.2f} s</td><td>tick {f.tick}</td>"
+                         f"<td>{_esc(f.path or f.name)}</td>"
                          f'<td class="reason">{_esc(f.reason)}</td><td>{_esc(" > ".join(f.propagated_to))}</td>'
                          f"<td>{_esc(recovery)}</td></tr>")
-        parts.append("<table><tr><th>time</th><th>tick</th><th>leaf</th><th>reason</th><th>propagated to</th>"
-                     "<th>what ran next (recovery)</th></tr>" + "".join(items) + "</table>")
+        parts.append("<table><tr><th></th><th>time</th><th>tick</th><th>leaf</th><th>reason</th>"
+                     "<th>propagated to</th><th>what ran next (recovery)</th></tr>" + "".join(items) + "</table>")
     else:
         parts.append("<p>No leaf failed.</p>")
+    if by_design:
+        parts.append(f'<p class="type">Not listed: {by_design} conditions false by design (a FailureIs asked by '
+                     "a Fallback, ForceFailure): control flow, not failures.</p>")
     if run.faults:
         parts.append("<h3>Injected faults</h3><table>" + "".join(
             f"<tr><td>{f['stamp_ns'] * 1e-9:.2f} s</td><td>tick {_esc(f.get('tick'))}</td>"
@@ -259,7 +337,8 @@ def build_report(run: RunLog, html_path: Path, png_dir: Path | None = None) -> R
     last_tick = run.ticks[-1].tick if run.ticks else None
     if last_tick is not None:
         tree = replay.tree_at(run, last_tick)
-        parts.append(f"<h2>The tree at the end (tick {last_tick})</h2>"
+        _with_end_statuses(tree, end_statuses(run))
+        parts.append(f"<h2>The tree at the end (tick {last_tick}): each node's last status</h2>"
                      f'<div class="tree"><ul>{_tree_html(tree, replay.attempts(run))}</ul></div>')
     parts.append("<h2>Leaf statuses over time</h2>" + _img(report.figures["gantt"], "Gantt of leaf statuses"))
     if "joints" in report.figures:

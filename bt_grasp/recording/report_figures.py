@@ -15,6 +15,7 @@ from numpy.typing import NDArray
 from bt_grasp.recording.projection import BOX_EDGES, box_corners_px
 
 STATUS_COLOURS = {"RUNNING": "#4a7fd6", "SUCCESS": "#3aa657", "FAILURE": "#d64545", "SKIPPED": "#b0b0b0"}
+FAULT_COLOUR = "#e07b00"
 
 
 @dataclass(frozen=True)
@@ -47,8 +48,10 @@ def _png(fig: Any) -> bytes:
     return buf.getvalue()
 
 
-def gantt(rows: Sequence[str], bars: Sequence[Bar], failures: Sequence[tuple[float, str]]) -> bytes:
-    """One row per leaf (tree order, top to bottom); a red tick where a leaf failed."""
+def gantt(rows: Sequence[str], bars: Sequence[Bar], failures: Sequence[tuple[float, str]],
+          faults: Sequence[tuple[float, str]] = ()) -> bytes:
+    """One row per leaf (tree order, top to bottom); a black tick where a leaf failed; a dashed orange line
+    with its name where an injected fault fired."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(10, 0.42 * max(len(rows), 3) + 1.2))
     index = {name: i for i, name in enumerate(rows)}
@@ -62,13 +65,21 @@ def gantt(rows: Sequence[str], bars: Sequence[Bar], failures: Sequence[tuple[flo
     for t, row in failures:
         if row in index:
             ax.plot([t], [index[row]], marker="v", color="black", markersize=7)
+    for t, text in faults:
+        ax.axvline(t, color=FAULT_COLOUR, linestyle="--", linewidth=1.2)
+        ax.annotate(f"fault: {text}", (t, -0.6), rotation=90, fontsize=7, color=FAULT_COLOUR, va="top",
+                    ha="right", annotation_clip=False)
     ax.set_yticks(range(len(rows)))
     ax.set_yticklabels(rows)
     ax.invert_yaxis()
     ax.set_xlabel("simulated time (s)")
     ax.grid(axis="x", alpha=0.3)
-    handles = [plt.Rectangle((0, 0), 1, 1, color=c) for c in STATUS_COLOURS.values()]
-    ax.legend(handles, list(STATUS_COLOURS), loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=4, frameon=False)
+    handles: list[Any] = [plt.Rectangle((0, 0), 1, 1, color=c) for c in STATUS_COLOURS.values()]
+    names = list(STATUS_COLOURS)
+    if faults:
+        handles.append(plt.Line2D([0], [0], color=FAULT_COLOUR, linestyle="--"))
+        names.append("injected fault")
+    ax.legend(handles, names, loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=len(names), frameon=False)
     ax.set_title("Leaf statuses over simulated time (\u25bc: a FAILURE)", pad=24)
     return _png(fig)
 

@@ -19,8 +19,10 @@ RUN_METADATA_NAME = "bt_grasp.run"
 #: 1: log_time = simulated time from 0, publish_time = wall clock, frames "base"/"camera"/"tool", JSON schemas
 #:    Foxglove rejects. 2: log_time = publish_time = run start (wall) + simulated time (metadata
 #:    ``time_origin_ns``), URDF frame names, every link on /tf, the robot's meshes, CameraCalibration.
-LOG_FORMAT_VERSION = "2"
-READABLE_LOG_FORMATS: tuple[str, ...] = ("1", "2")
+#: 3: ``/bt/tick.leaves`` keyed by each leaf's path (:func:`leaf_key`), no longer by its bare name, and the
+#:    Foxglove layout of the tree that ran attached to the log (``foxglove/layout.json``).
+LOG_FORMAT_VERSION = "3"
+READABLE_LOG_FORMATS: tuple[str, ...] = ("1", "2", "3")
 #: metadata key: the wall-clock time (ns since the Unix epoch) at which simulated time 0 is placed
 TIME_ORIGIN_KEY = "time_origin_ns"
 
@@ -179,22 +181,28 @@ JSON_SCHEMAS: dict[str, dict[str, Any]] = {
 }
 
 
-def leaf_keys(names: Sequence[str]) -> list[str]:
-    """The keys of ``/bt/tick.leaves`` for the leaves' names in tree order: letters, digits and ``_`` only
-    (a Foxglove message path names them), a repeated name numbered ``_2``, ``_3``, ..."""
+def leaf_key(path: str) -> str:
+    """A node path as a key of ``/bt/tick.leaves`` (a Foxglove message path names it: letters, digits and
+    ``_`` only): ``/`` becomes ``__`` and ``::`` ``_``, so ``PickObject::18/OpenGripper::26`` is
+    ``PickObject_18__OpenGripper_26``. The layout's State Transitions rows are labelled with the path itself."""
+    key = re.sub(r"[^A-Za-z0-9_]", "_", path.replace("/", "__").replace("::", "_")) or "leaf"
+    return "_" + key if key[0].isdigit() else key
+
+
+def leaf_keys(paths: Sequence[str]) -> list[str]:
+    """The keys of ``/bt/tick.leaves`` for the leaves' paths in tree order (:func:`leaf_key`); a key met
+    twice (two leaves of one path) is numbered ``_2``, ``_3``, ... (logs of format 1 and 2 keyed by names)."""
     keys: list[str] = []
     seen: dict[str, int] = {}
-    for name in names:
-        key = re.sub(r"[^A-Za-z0-9_]", "_", name) or "leaf"
-        if key[0].isdigit():
-            key = "_" + key
+    for path in paths:
+        key = leaf_key(path)
         seen[key] = seen.get(key, 0) + 1
         keys.append(key if seen[key] == 1 else f"{key}_{seen[key]}")
     return keys
 
 
 def tick_schema(leaf_names: Sequence[str]) -> dict[str, Any]:
-    """The /bt/tick schema with the tree's leaves declared under ``leaves``."""
+    """The /bt/tick schema with the tree's leaves (their paths) declared under ``leaves``."""
     schema = copy.deepcopy(JSON_SCHEMAS[TICK])
     schema["properties"]["leaves"] = {"type": "object",
                                       "properties": {key: _STATUS for key in leaf_keys(leaf_names)}}

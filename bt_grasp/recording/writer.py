@@ -123,8 +123,8 @@ class RunRecorder:
             link names.
         joint_names: names on /robot/joint_state.
         max_array_elements: blackboard arrays larger than this are logged as a summary, not element-wise.
-        leaf_names: the tree's leaves' names in uid order, declared in the /bt/tick schema so Foxglove can
-            plot ``/bt/tick.leaves.<name>``.
+        leaf_names: the tree's leaves' paths in uid order, declared in the /bt/tick schema so Foxglove can
+            plot ``/bt/tick.leaves.<leaf_key(path)>`` (``topics.leaf_key``).
         robot_model: a :class:`bt_grasp.recording.robot_model.RobotModel`: every link's pose goes on /tf with
             each arm state (write its link entities with ``write_scene(ROBOT_MODEL, 0, robot_model_update())``);
             None writes only the tool frame.
@@ -365,7 +365,7 @@ class RunRecorder:
         changed_nodes = self._nodes.diff(nodes)
         bb_changed, bb_removed = self._blackboard.diff(blackboard)
         leaves = [n for n in nodes if n.get("kind") in _LEAF_KINDS]
-        names = tuple(str(n.get("name", "")) for n in leaves)
+        names = tuple(str(n.get("path") or n.get("name", "")) for n in leaves)  # keyed by path (format 3)
         if names != self._leaf_keys[0]:
             self._leaf_keys = (names, topics.leaf_keys(names))
         msg: dict[str, Any] = {"tick": int(tick), "stamp_ns": int(stamp_ns), "nodes": changed_nodes,

@@ -40,7 +40,9 @@ def _label(node: BtNode) -> str:
 
 def rich_tree(root: BtNode, *, with_status: bool = False) -> rich.tree.Tree:
     def add(node: BtNode, parent: rich.tree.Tree | None) -> rich.tree.Tree:
-        text = f"[{_STYLE[node.bt_kind]}]{rich.markup.escape(_label(node))}[/] [dim]#{node.bt_uid}[/]"
+        # the node's one name, its path (BT.CPP's fullPath), as replay, the report and Foxglove show it
+        text = (f"[{_STYLE[node.bt_kind]}]{rich.markup.escape(_label(node))}[/] [dim]#{node.bt_uid} "
+                f"{rich.markup.escape(node.bt_path)}[/]")
         if with_status:
             text += f" [bold]{bt_status_name(node)}[/]"
         branch = rich.tree.Tree(text) if parent is None else parent.add(text)
@@ -59,7 +61,8 @@ def to_dot(root: BtNode, title: str = "tree") -> str:
     lines = [f"digraph {_quote(title)} {{", "  node [fontname=Helvetica, fontsize=11];"]
 
     def add(node: BtNode) -> None:
-        lines.append(f"  n{node.bt_uid} [label={_quote(_label(node))}, shape={_SHAPE[node.bt_kind]}];")
+        label = _quote(_label(node))[:-1] + "\\n" + _quote(f"{node.bt_path} #{node.bt_uid}")[1:]
+        lines.append(f"  n{node.bt_uid} [label={label}, shape={_SHAPE[node.bt_kind]}];")
         for child in node.children:
             lines.append(f"  n{node.bt_uid} -> n{child.bt_uid};")  # type: ignore[attr-defined]
             add(child)  # type: ignore[arg-type]

@@ -55,12 +55,18 @@ class TickGate(Protocol):
 
 @dataclass
 class FailureEvent:
+    """A leaf's FAILURE. ``by_design``: a condition asked by a Fallback (or answering "no" with no reason):
+    control flow, not a fault. ``followed``: what came of it, filled in when the run ends ("retried at tick
+    N", "the run ended", "the tree went on without it")."""
+
     tick: int
     stamp_ns: int
     leaf: str
     path: str
     reason: str | None
     message: str
+    by_design: bool = False
+    followed: str = ""
 
 
 @dataclass
@@ -72,6 +78,8 @@ class RunOutcome:
     sim_time_s: float
     wall_time_s: float
     failures: list[FailureEvent] = field(default_factory=list)
+    #: every leaf FAILURE that was not by design, in order, each with what followed it: the causal chain
+    chain: list[FailureEvent] = field(default_factory=list)
     retried: dict[str, int] = field(default_factory=dict)  # leaf name -> attempts started after a FAILURE
     root_runs: int = 0  # root executions, wake-up re-runs included (>= ticks)
     stopped: bool = False  # a TickGate stopped the run (an operator's Stop)
@@ -99,6 +107,7 @@ class TreeRunner:
         robot_state: Callable[[], Mapping[str, Any]] | None = None,
         on_tick: Callable[[int, LoadedTree], None] | None = None,
         gate: TickGate | None = None,
+        on_failure: Callable[[FailureEvent], None] | None = None,
     ) -> None:
         self.tree = tree
         self.stepper = stepper
@@ -107,6 +116,8 @@ class TreeRunner:
         self.robot_state = robot_state
         self.on_tick = on_tick
         self.gate = gate
+        #: called as it happens with each leaf FAILURE that is not by design (the CLI's live failure line)
+        self.on_failure = on_failure
         self._watch = _TickWatch()
         for node in tree.nodes():
             node.bt_listener = self._watch
@@ -117,6 +128,7 @@ class TreeRunner:
         start_ns = self.stepper.now_ns()
         wall0 = time.perf_counter()
         failures: list[FailureEvent] = []
+        shown: list[tuple[FailureEvent, int]] = []  # the failures not by design, with their listener order
         watch = self._watch
         status = BtStatus.RUNNING
         tick = 0
@@ -125,7 +137,7 @@ class TreeRunner:
         stopped = gate is not None and gate.between_ticks(0)
         while tick < max_ticks and not stopped:
             tick += 1
-            watch.new_tick()
+            watch.new_tick(tick)
             status = self.tree.tick()
             root_runs += self.tree.runs
             stamp = self.stepper.now_ns()
@@ -141,10 +153,14 @@ class TreeRunner:
                 rec["feedback"] = rec.pop("feedback_message")
             self.stream.append({"tick": tick, "status": {rec["path"]: rec["status"] for rec in records}})
             # every FAILURE a leaf returned during this tick, also those a retry inside the tick hid again
-            for node, reason, message in watch.failed:
-                event = FailureEvent(tick, stamp, node.name, node.bt_path, reason, message)
+            for node, reason, message, order in watch.failed:
+                event = FailureEvent(tick, stamp, node.name, node.bt_path, reason, message, _by_design(node, reason))
                 if reason is not None:
                     failures.append(event)
+                if not event.by_design:
+                    shown.append((event, order))
+                    if self.on_failure is not None:
+                        self.on_failure(event)
                 if self.recorder is not None:
                     self.recorder.write_event(stamp, "failure", event.__dict__)
             if self.recorder is not None:
@@ -156,12 +172,13 @@ class TreeRunner:
             if status.completed:
                 break
             if gate is not None and gate.between_ticks(
-                    tick, [(n.bt_path, n.name, reason, message) for n, reason, message in watch.failed]):
+                    tick, [(n.bt_path, n.name, reason, message) for n, reason, message, _ in watch.failed]):
                 stopped = True
                 break
             self.stepper.step(self.steps_per_tick)
         if not status.completed:
             self.tree.halt()  # cancel motion of RUNNING leaves
+        _what_followed(shown, watch.restarts, status.value if status.completed else "RUNNING")
         sim_s = (self.stepper.now_ns() - start_ns) * 1e-9
         return RunOutcome(
             status=status.value if status.completed else "RUNNING",
@@ -169,6 +186,7 @@ class TreeRunner:
             sim_time_s=sim_s,
             wall_time_s=time.perf_counter() - wall0,
             failures=failures,
+            chain=[event for event, _ in shown],
             retried=dict(watch.retries),
             root_runs=root_runs,
             stopped=stopped,
@@ -182,18 +200,48 @@ class _TickWatch:
     def __init__(self) -> None:
         self.ticked: set[int] = set()
         self.returned: dict[int, str] = {}
-        self.failed: list[tuple[BtNode, str | None, str]] = []
+        self.failed: list[tuple[BtNode, str | None, str, int]] = []
         self.retries: Counter[str] = Counter()
+        #: (path, tick, order) of every leaf attempt started after its last attempt failed
+        self.restarts: list[tuple[str, int, int]] = []
+        self.tick = 0
+        self.order = 0  # counts listener calls: what happened first within one tick
 
-    def new_tick(self) -> None:
+    def new_tick(self, tick: int = 0) -> None:
         self.ticked.clear()
         self.failed.clear()
+        self.tick = tick
 
     def __call__(self, node: BtNode, before: BtStatus, result: BtStatus) -> None:
         uid = node.bt_uid
-        if node.bt_kind is NodeKind.ACTION and before is not BtStatus.RUNNING and self.returned.get(uid) == "FAILURE":
-            self.retries[node.name] += 1  # a new attempt of an action whose last attempt failed
+        self.order += 1
+        if before is not BtStatus.RUNNING and self.returned.get(uid) == "FAILURE" and not node.children:
+            self.restarts.append((node.bt_path, self.tick, self.order))
+            if node.bt_kind is NodeKind.ACTION:
+                self.retries[node.name] += 1  # a new attempt of an action whose last attempt failed
         self.ticked.add(uid)
         self.returned[uid] = result.value
         if not node.children and result is BtStatus.FAILURE:
-            self.failed.append((node, getattr(node, "failure_reason", None), node.feedback_message))
+            self.failed.append((node, getattr(node, "failure_reason", None), node.feedback_message, self.order))
+
+
+def _by_design(node: BtNode, reason: str | None) -> bool:
+    """A condition asked by a Fallback (its "no" selects the next child), or one answering "no" with no
+    reason: control flow, not a fault (replay's failures view applies the same rule to a log)."""
+    if node.bt_kind is not NodeKind.CONDITION:
+        return False
+    parent = node.parent
+    return reason is None or (parent is not None and "Fallback" in getattr(parent, "bt_type", ""))
+
+
+def _what_followed(shown: Sequence[tuple[FailureEvent, int]], restarts: Sequence[tuple[str, int, int]],
+                   status: str) -> None:
+    """Fill in each failure's ``followed``: the retry of the same leaf that came next, else how the run went."""
+    for index, (event, order) in enumerate(shown):
+        retry = next(((tick, o) for path, tick, o in restarts if path == event.path and o > order), None)
+        if retry is not None:
+            event.followed = f"retried at tick {retry[0]}"
+        elif index + 1 == len(shown):
+            event.followed = "the run ended" + (f" ({status})" if status != "RUNNING" else " (tick limit)")
+        else:
+            event.followed = "the tree went on without retrying it"

@@ -3,6 +3,7 @@ with one sentence naming its version."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
@@ -33,7 +34,7 @@ def test_a_format_2_log_reads_simulated_times_back(tmp_path: Path) -> None:
                        {"q_rad": [0.0] * 6, "gripper_width_m": 0.05})
         rec.write_log(10_000_000, "INFO", "test", "hello")
     log = open_log(path)
-    assert log.metadata["log_format"] == topics.LOG_FORMAT_VERSION == "2"
+    assert log.metadata["log_format"] == topics.LOG_FORMAT_VERSION == "3"
     assert log.time_origin_ns == 1_700_000_000 * 10**9
     assert log.ticks[0].stamp_ns == 10_000_000
     assert log.logs[0]["stamp_ns"] == 10_000_000
@@ -49,7 +50,7 @@ def test_an_unknown_format_is_refused_in_one_sentence(tmp_path: Path) -> None:
     with pytest.raises(LogFileError) as info:
         open_log(path)
     message = str(info.value)
-    assert "log format 99" in message and "reads formats 1 and 2" in message
+    assert "log format 99" in message and "reads formats 1 and 2 and 3" in message
     assert message.count(". ") == 0
 
 
@@ -71,5 +72,11 @@ def test_replay_reports_and_explains_foxglove_for_an_old_log(tmp_path: Path) -> 
     assert "<script" not in page and "http://" not in page and "https://" not in page  # self-contained
     assert "Leaf statuses over time" in page and "data:image/png;base64," in page
     assert (tmp_path / "png" / "gantt.png").stat().st_size > 1000
-    told = cli("replay", str(OLD), "--foxglove")
-    assert told.returncode == 0 and "bt_grasp.layout.json" in told.stdout and "format 1" in told.stdout
+    layout = tmp_path / "format1.layout.json"
+    told = cli("replay", str(OLD), "--foxglove", "--layout-out", str(layout))
+    assert told.returncode == 0 and str(layout) in told.stdout and "format 1" in told.stdout
+    # the layout made for that log's own tree: one row per leaf, labelled with the leaf's path
+    rows = json.loads(layout.read_text())["configById"]["StateTransitions!leaves"]["paths"]
+    nodes = open_log(OLD).nodes
+    leaves = [info.path for uid, info in sorted(nodes.items()) if all(n.parent != uid for n in nodes.values())]
+    assert leaves and [row["label"] for row in rows] == leaves

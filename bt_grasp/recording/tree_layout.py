@@ -1,0 +1,103 @@
+"""The Foxglove layout of the tree that ran: the shipped panels, with one State Transitions row per leaf of
+*this* tree, labelled with the leaf's path (the node's one name: ``tree show``, replay, the report and the
+campaign results show the same), read from ``/bt/tick.leaves.<leaf_key(path)>``.
+
+A run attaches its layout to its log (:data:`LAYOUT_ATTACHMENT`, log format 3); ``replay --foxglove`` writes
+it beside the log. For an older log the layout is made from the log's own tree and ``/bt/tick.leaves`` keys.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+from collections.abc import Iterator, Mapping, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from bt_grasp.recording import topics
+from bt_grasp.recording.layout import layout_path
+
+if TYPE_CHECKING:
+    from bt_grasp.recording.reader import RunLog
+
+#: the attachment holding the run's layout
+LAYOUT_ATTACHMENT = "foxglove/layout.json"
+#: the shipped layout's State Transitions panel, whose rows are replaced by the tree's leaves
+STATE_PANEL = "StateTransitions!leaves"
+_LEAF_KINDS = ("Action", "Condition")
+
+
+def _leaves(node: Mapping[str, Any]) -> Iterator[Mapping[str, Any]]:
+    if node.get("kind") in _LEAF_KINDS:
+        yield node
+    for child in node.get("children", ()):
+        yield from _leaves(child)
+
+
+def leaf_paths(structure: Mapping[str, Any]) -> list[str]:
+    """The leaves' paths in tree order (uid order: the order of ``/bt/tick.leaves``)."""
+    leaves = sorted(_leaves(structure), key=lambda n: int(n.get("uid", 0)))
+    return [str(n.get("path") or n.get("name", "")) for n in leaves]
+
+
+def tree_layout(rows: Sequence[tuple[str, str]], title: str = "") -> dict[str, Any]:
+    """The shipped layout with the State Transitions rows ``(label, key of /bt/tick.leaves)``."""
+    layout = json.loads(layout_path().read_text())
+    config = copy.deepcopy(layout["configById"])
+    panel = dict(config.get(STATE_PANEL, {}))
+    panel["paths"] = [{"value": f"{topics.TICK}.leaves.{key}", "timestampMethod": "receiveTime", "label": label}
+                      for label, key in rows]
+    if title:
+        panel["foxglovePanelTitle"] = title
+    config[STATE_PANEL] = panel
+    return {**layout, "configById": config}
+
+
+def layout_for_structure(structure: Mapping[str, Any], title: str = "") -> dict[str, Any]:
+    """The layout for a tree as ``tree_structure`` gives it (what a run attaches to its log)."""
+    paths = leaf_paths(structure)
+    return tree_layout(list(zip(paths, topics.leaf_keys(paths), strict=True)), title)
+
+
+def layout_bytes(structure: Mapping[str, Any], title: str = "") -> bytes:
+    return (json.dumps(layout_for_structure(structure, title), indent=2) + "\n").encode()
+
+
+def layout_for_log(run: RunLog) -> dict[str, Any]:
+    """The log's own layout (attached by the run), else one made from its tree and its leaves' keys."""
+    attached = run.attachments.get(LAYOUT_ATTACHMENT)
+    if attached is not None:
+        try:
+            value = json.loads(attached)
+        except ValueError:
+            value = None
+        if isinstance(value, dict) and STATE_PANEL in value.get("configById", {}):
+            return value
+    parents = {info.parent for info in run.nodes.values()}
+    # a log of format 1 spells node kinds in lower case: a leaf is also a node that is nobody's parent
+    leaves = [info for uid, info in sorted(run.nodes.items())
+              if info.is_leaf or uid not in parents]
+    keys: list[str] = []
+    for msg in run.iter_messages(topics.TICK):
+        found = msg.message.get("leaves") if isinstance(msg.message, dict) else None
+        if isinstance(found, dict) and found:
+            keys = [str(k) for k in found]
+            break
+    title = Path(str(run.metadata.get("tree_file", ""))).name
+    if len(keys) == len(leaves):  # format 1 and 2 logs keyed their leaves by name: label them by path
+        return tree_layout([(info.path or info.name, key) for info, key in zip(leaves, keys, strict=True)], title)
+    paths = [info.path or info.name for info in leaves]
+    return tree_layout(list(zip(paths, topics.leaf_keys(paths), strict=True)), title)
+
+
+def write_layout(run: RunLog, target: Path | None = None) -> Path:
+    """Write the log's layout to ``target`` (default ``<log>.layout.json`` beside the log); returns the file.
+    A place that cannot be written is an ``InputError`` naming it."""
+    from bt_grasp.errors import InputError
+
+    target = target if target is not None else run.path.with_name(run.path.stem + ".layout.json")
+    try:
+        target.write_text(json.dumps(layout_for_log(run), indent=2) + "\n", encoding="utf-8")
+    except OSError as exc:
+        raise InputError(str(target), f"the Foxglove layout cannot be written there ({exc.strerror})") from None
+    return target
