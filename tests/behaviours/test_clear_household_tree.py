@@ -1,0 +1,108 @@
+"""trees/clear_household.xml (issue 28): it fits scenes/household_clear.yaml, its YAML twin (made by
+`bt-grasp tree convert`) ticks identically, and tick by tick with stand-in robot leaves it clears objects
+whatever they are (chosen by SelectObject shape_class="any", nearest the bin) until a look sees none."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import pytest
+from behaviour_fakes import FakeRobot, fake_cell
+
+from bt_grasp.behaviours import robot_registry
+from bt_grasp.behaviours.library import ROBOT_LEAVES, check_tree_against_scene
+from bt_grasp.clock import ManualClock
+from bt_grasp.perception.results import Detection, PerceptionResult, PerceptionStatus, ShapeClass
+from bt_grasp.pose import Pose
+from bt_grasp.scene.format import load_scene
+from bt_grasp.tree.loader import load_tree
+
+REPO = Path(__file__).resolve().parents[2]
+TREE = REPO / "trees" / "clear_household.xml"
+#: every robot leaf a stand-in: RUNNING for 2 ticks, then SUCCESS (the object queries run for real)
+STAND_INS = {cls.bt_spec.name: "Running:2" for cls in ROBOT_LEAVES if cls.bt_spec.needs_robot}  # type: ignore[attr-defined]
+
+
+def _det(x: float, y: float, shape_class: ShapeClass) -> Detection:
+    return Detection("object", (0, 0, 1, 1), (x, y, 0.02), (0.05, 0.04, 0.04), 0.0, 100, 1.0,
+                     shape_class=shape_class)
+
+
+PEN, CAN, WEDGE = _det(0.60, -0.12, ShapeClass.ELONGATED), _det(0.42, 0.20, ShapeClass.CYLINDER_LIKE), \
+    _det(0.60, 0.15, ShapeClass.OTHER)
+
+
+def _walk(path: Path, views: list[tuple[Detection, ...]], monkeypatch: pytest.MonkeyPatch, holding: bool = False
+          ) -> tuple[str, list[dict[str, str]], list[Any]]:
+    """Tick the tree, PerceiveAll seeing the next of ``views`` at each look (an empty table after the last);
+    the other robot leaves are stand-ins. Returns the final status, every tick's node states and the objects
+    SelectObject chose, in order."""
+    from bt_grasp.behaviours import objects as leaves
+
+    looks = iter(views)
+
+    def fake_perceive(leaf: Any, color: str | None, accept_empty: bool = False) -> PerceptionResult:
+        seen = next(looks, ())
+        return PerceptionResult(PerceptionStatus.OK if seen else PerceptionStatus.NO_OBJECTS, seen[:1], others=seen)
+
+    monkeypatch.setattr(leaves, "perceive_once", fake_perceive)
+    clock = ManualClock()
+    # the round's own check whether a failed place left something in the fingers
+    stand_ins = {"already_holding": "Success" if holding else "Failure"}
+    stand_ins |= {n: how for n, how in STAND_INS.items() if n != "PerceiveAll"}
+    tree = load_tree(path, robot_registry(), substitutions=stand_ins, clock=clock)
+    cell = fake_cell(FakeRobot(), clock)
+    for node in tree.nodes():
+        node.setup(cell=cell)
+    tree.root_blackboard.set("bin_pose", Pose(0.30, 0.52, 0.0, 0.0))  # FixturePose is a stand-in
+    select = next(n for n in tree.nodes() if "SelectObject" in n.bt_path)
+    ticks: list[dict[str, str]] = []
+    chosen: list[Any] = []
+    for _ in range(3000):
+        status = tree.tick()
+        ticks.append({node.bt_path: node.bt_state.value for node in tree.nodes()})
+        if ticks[-1][select.bt_path] == "SUCCESS" and (len(ticks) < 2 or ticks[-2][select.bt_path] != "SUCCESS"):
+            chosen.append(tree.root_blackboard.get("target"))
+        if status.completed:
+            return status.value, ticks, chosen
+        clock.advance_s(0.01)
+    raise AssertionError("the tree did not finish in 3000 ticks")
+
+
+def test_clear_household_fits_its_scene() -> None:
+    scene = load_scene(REPO / "scenes" / "household_clear.yaml")
+    tree = load_tree(TREE, robot_registry(), clock=ManualClock())
+    check_tree_against_scene(tree.nodes(), scene)
+
+
+def test_clear_household_takes_whatever_is_nearest_the_bin_until_the_table_is_empty(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    views = [(PEN, CAN, WEDGE), (PEN, WEDGE), (PEN,), ()]
+    status, _, chosen = _walk(TREE, views, monkeypatch)
+    assert status == "SUCCESS"
+    assert chosen == [CAN, WEDGE, PEN]  # the bin is at (0.30, 0.52): the can is nearest, then the wedge
+
+
+def test_an_object_still_held_after_a_failed_place_is_placed_not_dropped(monkeypatch: pytest.MonkeyPatch) -> None:
+    status, ticks, chosen = _walk(TREE, [(PEN,), ()], monkeypatch, holding=True)
+    assert status == "SUCCESS" and chosen == []  # placed what it held: nothing chosen
+    opened = {path for t in ticks for path, state in t.items() if "OpenGripper" in path and state in ("RUNNING", "SUCCESS", "FAILURE")}
+    assert opened == set()
+    placing = {p for t in ticks for p, state in t.items() if p.endswith("/place") and state == "RUNNING"}
+    assert placing == {next(p for p in ticks[0] if p.startswith("PlaceObject") and p.endswith("/place"))}
+
+
+def test_clear_household_gives_up_after_twelve_rounds(monkeypatch: pytest.MonkeyPatch) -> None:
+    status, _, chosen = _walk(TREE, [(PEN,)] * 20, monkeypatch)  # the pen never leaves the table
+    assert status == "FAILURE" and len(chosen) == 12
+
+
+def test_yaml_twin_ticks_like_the_xml(monkeypatch: pytest.MonkeyPatch) -> None:
+    twin = TREE.with_suffix(".yaml")
+    views = [(PEN, CAN, WEDGE), (PEN, WEDGE), (PEN,), ()]
+    a, b = _walk(TREE, views, monkeypatch)[1], _walk(twin, views, monkeypatch)[1]
+    assert len(a) == len(b) > 50
+    for tick, (x, y) in enumerate(zip(a, b, strict=True), start=1):
+        assert x == y, f"tick {tick} differs"
