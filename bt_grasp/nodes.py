@@ -50,13 +50,13 @@ from bt_grasp.clock import Clock
 from bt_grasp.tree.builtins.controls import Control
 from bt_grasp.tree.builtins.decorators import Decorator
 from bt_grasp.tree.context import NodeContext
+from bt_grasp.tree.exceptions import DeclarationError
 from bt_grasp.tree.leaf import Leaf
 from bt_grasp.tree.node import BtNode, BtStatus
 from bt_grasp.tree.plugins import ENTRY_POINT_GROUP, PluginError
 from bt_grasp.tree.reasons import FailureReason, Reason
 from bt_grasp.tree.registry import (
     NO_DEFAULT,
-    DeclarationError,
     NodeKind,
     NodeRegistry,
     NodeSpec,

@@ -32,3 +32,9 @@ class ScriptSyntaxError(ValueError):
 
 class PortValueError(ValueError):
     """A literal port value cannot be converted to the port's type (a load error once located)."""
+
+
+class DeclarationError(ValueError):
+    """A node, port or failure reason declared wrongly, or a name registered twice (one sentence).
+
+    A ``ValueError``, so callers that caught those keep working; the plugin loader names the plugin with it."""

@@ -30,7 +30,8 @@ from pathlib import Path
 from types import ModuleType
 
 from bt_grasp.errors import InputError
-from bt_grasp.tree.registry import DeclarationError, NodeRegistry
+from bt_grasp.tree.exceptions import DeclarationError
+from bt_grasp.tree.registry import NodeRegistry
 
 #: the entry point group installed packages declare their ``register`` function in
 ENTRY_POINT_GROUP = "bt_grasp.leaves"
@@ -78,6 +79,12 @@ def _import_problem(exc: BaseException) -> str:
     if isinstance(exc, DeclarationError):  # a node, port or reason declared at import (``@action(ports=...)``)
         return f"bad declaration: {str(exc).strip().splitlines()[0]}"
     return f"import error: {_describe(exc)}"
+
+
+def _register_problem(exc: BaseException) -> str:
+    if isinstance(exc, DeclarationError):  # a duplicate name, a bad spec handed to the registry
+        return f"bad declaration: {str(exc).strip().splitlines()[0]}"
+    return f"register() failed: {_describe(exc)}"
 
 
 def _hook_of(module: ModuleType, source: str, path: str) -> Plugin:
@@ -165,9 +172,7 @@ def apply(registry: NodeRegistry, plugins: Iterable[Plugin]) -> NodeRegistry:
             plugin.register(registry)
         except Exception as exc:  # DeclarationError (duplicate, bad port), or any error of the user's code
             where = _error_line(exc, plugin.path) if plugin.path else None
-            kind = "bad declaration" if isinstance(exc, ValueError) else "register() failed"
-            problem = str(exc).strip().splitlines()[0] if isinstance(exc, ValueError) else _describe(exc)
-            raise PluginError(plugin.source, f"{kind}: {problem}", where=where) from None
+            raise PluginError(plugin.source, _register_problem(exc), where=where) from None
         for name in set(registry.names()) - before:
             registry.origins[name] = plugin.source
         for reason in registry.reasons():

@@ -14,6 +14,8 @@ import enum
 import re
 from dataclasses import dataclass
 
+from bt_grasp.tree.exceptions import DeclarationError
+
 _NAME = re.compile(r"[A-Z][A-Z0-9_]{0,63}")
 
 
@@ -54,7 +56,7 @@ class Reason:
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not _NAME.fullmatch(self.name):
-            raise ValueError(
+            raise DeclarationError(
                 f"failure reason {self.name!r} must be upper-case letters, digits and underscores, "
                 "starting with a letter (at most 64 characters)"
             )

@@ -20,18 +20,13 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from bt_grasp.errors import closest_names
+from bt_grasp.tree.exceptions import DeclarationError
 from bt_grasp.tree.reasons import Reason, builtin_reasons
 
 if TYPE_CHECKING:
     import py_trees
 
     from bt_grasp.tree.context import NodeContext
-
-
-class DeclarationError(ValueError):
-    """A node, port or failure reason declared wrongly, or a name registered twice (one sentence).
-
-    A ``ValueError``, so callers that caught those keep working; the plugin loader names the plugin with it."""
 
 
 class PortDirection(enum.Enum):
@@ -225,10 +220,7 @@ class NodeRegistry:
     def register_reason(self, reason: Reason | str, description: str = "") -> Reason:
         """Declare a failure reason leaves may report and ``FailureIs`` may test; a name registered twice
         raises (the built-in ones included)."""
-        try:
-            value = reason if isinstance(reason, Reason) else Reason(reason, description)
-        except ValueError as exc:
-            raise DeclarationError(str(exc)) from None
+        value = reason if isinstance(reason, Reason) else Reason(reason, description)
         if value.name in self._reasons:
             raise DeclarationError(f"a failure reason named {value.name!r} is already registered")
         self._reasons[value.name] = value

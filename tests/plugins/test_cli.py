@@ -123,6 +123,13 @@ BAD_PLUGINS = {
     "reserved_port": (
         HEADER + "@action(ports=[input_port('name')])\nclass Mine(Leaf):\n    pass\n",
         2, "bad declaration: port name 'name' is reserved or not letters, digits and underscores"),
+    "bad_reason_at_import": (
+        HEADER + "TOO_HEAVY = Reason('too-heavy', 'Heavier than allowed.')\n",
+        2, "bad declaration: failure reason 'too-heavy' must be upper-case letters, digits and underscores, "
+           "starting with a letter (at most 64 characters)"),
+    "register_value_error": (
+        HEADER + "def register(registry: NodeRegistry) -> None:\n    int('many')\n",
+        3, "register() failed: ValueError: invalid literal for int() with base 10: 'many'"),
     "register_fails": (
         HEADER + "def register(registry: NodeRegistry) -> None:\n    registry.register({}['x'])\n",
         3, "register() failed: KeyError: 'x'"),
