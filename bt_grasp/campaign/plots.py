@@ -1,4 +1,8 @@
-"""The campaign report's figures (matplotlib, no display): each function returns one figure's PNG bytes."""
+"""The campaign report's figures (matplotlib, no display): each function returns one figure's PNG bytes.
+
+Counts are drawn on integer axes; a colour means one tree everywhere, and every figure that colours by tree
+has a legend saying which; wall times leave out each worker's first episode, which pays the worker's warm-up
+(the axis says how many were left out)."""
 
 from __future__ import annotations
 
@@ -36,6 +40,31 @@ def _trees(rows: Sequence[dict[str, Any]]) -> list[str]:
     return sorted({tree_label(r) for r in rows})
 
 
+def _integer_axis(axis: Any) -> None:
+    """Ticks only at whole numbers (counts of episodes or retries)."""
+    from matplotlib.ticker import MaxNLocator
+
+    axis.set_major_locator(MaxNLocator(integer=True))
+
+
+def _tree_legend(ax: Any, trees: Sequence[str], **kwargs: Any) -> None:
+    from matplotlib.patches import Patch
+
+    ax.legend(handles=[Patch(facecolor=COLORS[i % len(COLORS)], label=t) for i, t in enumerate(trees)],
+              fontsize=8, **kwargs)
+
+
+def warm_up_rows(rows: Sequence[dict[str, Any]]) -> set[int]:
+    """Indexes of each worker's first episode (in the results file's order, the order they finished): it
+    builds the worker's first world, so its wall time is not the steady one. Rows without a worker: none."""
+    first: dict[str, int] = {}
+    for index, row in enumerate(rows):
+        worker = row.get("worker")
+        if isinstance(worker, str) and worker not in first:
+            first[worker] = index
+    return set(first.values())
+
+
 def success_by_group(rows: Sequence[dict[str, Any]], title: str) -> bytes:
     rates = success_rates(rows, GROUPS)
     fig = _figure(9, 0.9 + 0.38 * len(rates))
@@ -45,9 +74,10 @@ def success_by_group(rows: Sequence[dict[str, Any]], title: str) -> bytes:
     for y, r in zip(ys, rates, strict=True):
         lo, hi = r.interval
         color = COLORS[trees.index(r.group[0]) % len(COLORS)]
-        ax.barh(y, r.rate, color=color, alpha=0.8)
+        ax.barh(y, r.rate, color=color, alpha=0.8, label=r.group[0])
         ax.errorbar(r.rate, y, xerr=[[r.rate - lo], [hi - r.rate]], fmt="none", ecolor="black", capsize=3)
         ax.text(1.01, y, f"{r.successes}/{r.n}", va="center", fontsize=8)
+    _tree_legend(ax, trees, loc="lower right")
     ax.set_yticks(ys, [" / ".join(r.group) for r in rates], fontsize=8)
     ax.set_xlim(0, 1.12)
     ax.set_xlabel("success rate (bars: 95% Wilson interval)")
@@ -59,35 +89,44 @@ def success_by_group(rows: Sequence[dict[str, Any]], title: str) -> bytes:
 def failure_reasons(rows: Sequence[dict[str, Any]]) -> bytes:
     failed = [r for r in rows if not r["success"]]
     trees = _trees(rows)
-    keys = Counter(f"{r['failure_reason'] or '?'} ({r['failed_leaf'] or '-'})" for r in failed)
+    keys = Counter(_failure_key(r) for r in failed)
     labels = [k for k, _ in keys.most_common(15)] or ["no failures"]
     fig = _figure(9, 1.2 + 0.35 * len(labels))
     ax = fig.add_subplot()
     left = [0] * len(labels)
     ys = list(range(len(labels)))[::-1]
     for i, tree in enumerate(trees):
-        counts = Counter(
-            f"{r['failure_reason'] or '?'} ({r['failed_leaf'] or '-'})" for r in failed if tree_label(r) == tree
-        )
+        counts = Counter(_failure_key(r) for r in failed if tree_label(r) == tree)
         widths = [counts.get(k, 0) for k in labels]
         ax.barh(ys, widths, left=left, color=COLORS[i % len(COLORS)], label=tree)
         left = [a + b for a, b in zip(left, widths, strict=True)]
     ax.set_yticks(ys, labels, fontsize=8)
     ax.set_xlabel("failed episodes")
+    _integer_axis(ax.xaxis)
     ax.set_title("failure reasons (failing leaf)")
     ax.legend(fontsize=8, loc="lower right")
     return _png(fig)
 
 
+def _failure_key(row: dict[str, Any]) -> str:
+    return f"{row['failure_reason'] or '?'} ({row.get('failed_path') or row['failed_leaf'] or '-'})"
+
+
 def time_distributions(rows: Sequence[dict[str, Any]]) -> bytes:
     fig = _figure(10, 3.4)
     axes = fig.subplots(1, 2)
-    for ax, column, label in (
-        (axes[0], "sim_time_s", "simulated time per episode [s]"),
-        (axes[1], "episode_wall_s", "wall time per episode [s]"),
+    warm = warm_up_rows(rows)
+    steady = [r for i, r in enumerate(rows) if i not in warm] or list(rows)
+    left_out = len(rows) - len(steady)
+    wall_label = "wall time per episode [s]" + (
+        f"\n(each worker's first episode, which pays its warm-up, left out: {left_out})" if left_out else "")
+    for ax, column, label, chosen in (
+        (axes[0], "sim_time_s", "simulated time per episode [s]", rows),
+        (axes[1], "episode_wall_s", wall_label, steady),
     ):
-        data = [[float(r[column]) for r in rows if tree_label(r) == t] for t in _trees(rows)]
-        ax.boxplot(data, orientation="horizontal", tick_labels=_trees(rows))
+        trees = _trees(rows)
+        data = [[float(r[column]) for r in chosen if tree_label(r) == t] for t in trees]
+        ax.boxplot(data, orientation="horizontal", tick_labels=trees)
         ax.set_xlabel(label)
         ax.grid(axis="x", alpha=0.3)
     fig.suptitle("time distributions")
@@ -104,7 +143,7 @@ def retries(rows: Sequence[dict[str, Any]]) -> bytes:
     for i, tree in enumerate(trees):
         counts = Counter(int(r["retries_total"]) for r in rows if tree_label(r) == tree)
         axes[0].bar(
-            [x + i * width for x in xs],
+            [x + (i - (len(trees) - 1) / 2) * width for x in xs],  # around the whole number x
             [counts.get(x, 0) for x in xs],
             width,
             label=tree,
@@ -112,12 +151,23 @@ def retries(rows: Sequence[dict[str, Any]]) -> bytes:
         )
     axes[0].set_xlabel("retries in the episode")
     axes[0].set_ylabel("episodes")
+    _integer_axis(axes[0].xaxis)
+    _integer_axis(axes[0].yaxis)
     axes[0].legend(fontsize=8)
     by_leaf: Counter[str] = Counter()
     for r in rows:
         by_leaf.update(r["retries"])
     leaves = [k for k, _ in by_leaf.most_common(10)] or ["none"]
-    axes[1].barh(leaves[::-1], [by_leaf.get(k, 0) for k in leaves[::-1]], color=COLORS[0])
+    left = [0] * len(leaves)
+    for i, tree in enumerate(trees):  # stacked by tree, in the trees' colours (the legend on the left)
+        per_tree: Counter[str] = Counter()
+        for r in rows:
+            if tree_label(r) == tree:
+                per_tree.update(r["retries"])
+        widths = [per_tree.get(k, 0) for k in leaves[::-1]]
+        axes[1].barh(leaves[::-1], widths, left=left, color=COLORS[i % len(COLORS)], label=tree)
+        left = [a + b for a, b in zip(left, widths, strict=True)]
+    _integer_axis(axes[1].xaxis)
     axes[1].set_xlabel("retries, all episodes")
     axes[1].set_title("retried leaves", fontsize=9)
     fig.suptitle("retries")

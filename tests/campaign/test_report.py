@@ -115,7 +115,7 @@ def test_report_renders_in_headless_chromium(tmp_path: Path) -> None:
     ]
     dom = subprocess.run([*flags, "--dump-dom", out.as_uri()], capture_output=True, text=True, timeout=120)
     assert dom.returncode == 0, dom.stderr[-2000:]
-    assert "figures decoded: 5/5" in dom.stdout, "the browser did not decode every figure"
+    assert 'data-figures-decoded="5/5"' in dom.stdout, "the browser did not decode every figure"
     shot = tmp_path / "shot.png"
     subprocess.run(
         [*flags, "--hide-scrollbars", "--window-size=1100,1400", f"--screenshot={shot}", out.as_uri()],
