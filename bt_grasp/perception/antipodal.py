@@ -422,14 +422,42 @@ def detection_cloud(det: results.Detection, spacing_m: float = 0.005) -> ObjectC
                        np.vstack([fitted.normals_base, estimate_normals(pts)]))
 
 
+def _side_circle(det: results.Detection) -> tuple[float, float, float] | None:
+    """(x, y, radius) of the circle through the visible side of a round object (least squares, Kasa), from the
+    points of its lower 60 % (a bottle's body, not its neck); None without enough points or with a circle no
+    wider than the footprint (the camera sees a round object's side as an arc, its top as a smaller disc)."""
+    if det.points_base_m is None:
+        return None
+    pts = np.asarray(det.points_base_m, dtype=float).reshape(-1, 3)
+    low = pts[pts[:, 2] < det.table_z_m + 0.6 * det.size_m[2]]
+    if len(low) < 20:
+        return None
+    A = np.column_stack([low[:, 0], low[:, 1], np.ones(len(low))])
+    b = low[:, 0] ** 2 + low[:, 1] ** 2
+    (a0, a1, a2), *_ = np.linalg.lstsq(A, b, rcond=None)
+    cx, cy = a0 / 2, a1 / 2
+    r2 = a2 + cx**2 + cy**2
+    if r2 <= 0:
+        return None
+    r = math.sqrt(r2)
+    if not max(det.size_m[0], det.size_m[1]) / 2 <= r <= 0.1:
+        return None
+    return float(cx), float(cy), r
+
+
 def fitted_surface(det: results.Detection, spacing_m: float = 0.005) -> ObjectCloud:
-    """Points and outward normals on the detection's fitted shape (sides and top), ``spacing_m`` apart."""
+    """Points and outward normals on the detection's fitted shape (sides and top), ``spacing_m`` apart: the
+    gravity-aligned box, or for a round footprint an upright cylinder (fitted to the visible side's arc when the
+    detection carries its points: :func:`_side_circle`)."""
     length, width, height = (float(v) for v in det.size_m)
     cx, cy, _ = (float(v) for v in det.centroid_base_m)
     z0 = det.table_z_m
     zs = z0 + np.arange(spacing_m / 2, height, spacing_m)
     if det.shape == "round":
         r = max(length, width) / 2
+        circle = _side_circle(det)
+        if circle is not None:
+            cx, cy, r = circle
         n_around = max(12, math.ceil(2 * math.pi * r / spacing_m))
         ang = np.arange(n_around) * 2 * math.pi / n_around
         ring = np.stack([np.cos(ang), np.sin(ang), np.zeros_like(ang)], axis=1)
