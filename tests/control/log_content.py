@@ -2,7 +2,8 @@
 
 A log carries the run's start date: ``time_origin_ns`` (and ``start_unix_ns``) in the metadata, every message's
 log and publish time (origin + simulated time) and the timestamps inside Foxglove's protobuf messages; the
-command line (``argv``); and a few wall-clock durations: ``/run/result``'s ``wall_time_s`` and
+command line (``command_line``) and the HEAD commit (``git_commit``) when it started; and a few wall-clock
+durations: ``/run/result``'s ``wall_time_s`` and
 ``planning.wall_s``, the log's own path there, and ``/log`` lines quoting milliseconds. :func:`content` returns
 everything else exactly: every channel with its schema bytes, every message's topic, simulated times, sequence
 and bytes (protobuf messages with their timestamps moved to simulated time, re-serialised deterministically),
@@ -22,8 +23,10 @@ from mcap.reader import make_reader
 
 from bt_grasp.recording.schemas import PROTOBUF_CLASSES
 
-#: metadata keys that hold the start date or the command line
-WALL_METADATA = ("time_origin_ns", "start_unix_ns", "argv")
+#: metadata keys that hold the start date, the command line (``--interactive`` is on it) and the repository's HEAD
+#: when the run started (two runs in one test process run the same code; a commit landing between them in a
+#: shared checkout changes only this)
+WALL_METADATA = ("time_origin_ns", "start_unix_ns", "command_line", "git_commit")
 _MS = re.compile(r"\d+ ms")
 
 
