@@ -43,12 +43,14 @@ def test_the_pages_commands_work(example: tuple[Path, Path], tmp_path: Path,
     assert main(["tree", "models", "--leaves", str(plugin), "--out", str(models)]) == 0
     assert '<Action ID="WaitSettled">' in models.read_text() and '<Decorator ID="RateLimit">' in models.read_text()
     capsys.readouterr()
-    # one tick: MoveHome's stand-in succeeds, WaitSettled's fails with NOT_SETTLED, FailureIs recovers,
-    # RateLimit starts OpenGripper's stand-in
-    assert main(["tree", "run", "--dry", "--json", "--leaves", str(plugin), str(tree), "-s", "MoveHome=AlwaysSuccess",
-                 "-s", "WaitSettled=Failure:NOT_SETTLED", "-s", "OpenGripper=AlwaysSuccess"]) == 0
+    # one tick: MoveHome's stand-in succeeds, WaitSettled's (the user's robot leaf) fails with the user's
+    # NOT_SETTLED, FailureIs recovers, RateLimit (the user's decorator, real) starts OpenGripper's stand-in
+    assert main(["tree", "run", "--dry", "--json", "--leaves", str(plugin), str(tree),
+                 "--outcome", "WaitSettled=failure:NOT_SETTLED"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert (out["status"], out["ticks"], out["blackboard"]["failure_reason"]) == ("SUCCESS", 1, "NOT_SETTLED")
+    assert main(["tree", "run", "--dry", "--leaves", str(plugin), str(tree)]) == 0  # no set-up: all succeed
+    assert capsys.readouterr().out.startswith("SUCCESS after 1 ticks")
 
 
 class MovingArm:
