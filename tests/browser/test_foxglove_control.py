@@ -106,14 +106,17 @@ def test_foxglove_panels_drive_a_live_run(tmp_path: Path) -> None:
                  "--profile", str(tmp_path / "chromium-profile")],
                 capture_output=True, text=True, timeout=480, cwd=CACHE,
                 env={**os.environ, "NODE_PATH": str(CACHE / "node_modules")})
+        report = json.loads(out.read_text()) if out.is_file() else {}
+        if probe.returncode != 0 or "failure" in report:
+            proc.kill()  # a paused run waits for ever: no use waiting for it
         stdout, stderr = proc.communicate(timeout=120)  # Stop run ends it: the log is finished
     finally:
         if proc.poll() is None:
             proc.kill()
             proc.wait()
-    assert probe.returncode == 0 and out.is_file(), probe.stderr[-3000:]
-    report = json.loads(out.read_text())
-    assert "failure" not in report, f"{report.get('failure')}\nseen: {json.dumps(report['seen'])[-3000:]}"
+    assert probe.returncode == 0 and report, probe.stderr[-3000:]
+    assert "failure" not in report, (f"{report.get('failure')}\nseen: {json.dumps(report['seen'])[-3000:]}\n"
+                                     f"run: {stderr[-2000:]}")
     assert report["errors"] == []
     reads = {s["label"]: s["values"] for s in report["seen"] if s["op"] == "read"}
     assert reads["start"]["run.tick"] == 0 and reads["start"]["run.paused"] is True
@@ -135,7 +138,7 @@ def test_foxglove_panels_drive_a_live_run(tmp_path: Path) -> None:
     records = [(r["tick"], r["kind"], r["source"]) for r in run.interventions]
     t = paused["run.tick"]
     assert records == [(t, "set_blackboard", "foxglove"), (t, "choose_object", "foxglove"),
-                       (t, "fire_fault", "foxglove"), (t + 1, "stop", "foxglove")], records
+                       (t, "fire_fault", "foxglove"), (t + 1, "stop", "foxglove")], run.interventions
     assert run.interventions[0]["command"] == {"kind": "set_blackboard", "key": "lift_height", "value": 0.12}
     assert run.interventions[1]["command"]["choice"] == 2 and "blue" in run.interventions[1]["effect"]
     assert run.ticks[-1].tick == t + 1
