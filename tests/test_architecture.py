@@ -21,6 +21,8 @@ FORBIDDEN = {
     "campaign": ("sapien", "bt_grasp.sim", "bt_grasp.cli"),  # episodes only through bt_grasp.episode
     "resident": ("sapien", "bt_grasp.sim", "bt_grasp.cli"),  # episodes only through bt_grasp.episode
     "tasks": ("sapien", "bt_grasp.cli"),
+    # the control API sits on the tree: front ends and the episode use it, it uses neither
+    "control": ("sapien", "bt_grasp.sim", "bt_grasp.cli", "bt_grasp.episode", "bt_grasp.recording"),
     "scene": ("sapien", "bt_grasp.sim", "bt_grasp.perception", "bt_grasp.motion", "bt_grasp.behaviours",
               "bt_grasp.tree", "bt_grasp.episode", "bt_grasp.cli"),
 }
