@@ -88,7 +88,8 @@ def test_clear_household_takes_whatever_is_nearest_the_bin_until_the_table_is_em
 def test_an_object_still_held_after_a_failed_place_is_placed_not_dropped(monkeypatch: pytest.MonkeyPatch) -> None:
     status, ticks, chosen = _walk(TREE, [(PEN,), ()], monkeypatch, holding=True)
     assert status == "SUCCESS" and chosen == []  # placed what it held: nothing chosen
-    opened = {path for t in ticks for path, state in t.items() if "OpenGripper" in path and state in ("RUNNING", "SUCCESS", "FAILURE")}
+    ran = ("RUNNING", "SUCCESS", "FAILURE")
+    opened = {path for t in ticks for path, state in t.items() if "OpenGripper" in path and state in ran}
     assert opened == set()
     placing = {p for t in ticks for p, state in t.items() if p.endswith("/place") and state == "RUNNING"}
     assert placing == {next(p for p in ticks[0] if p.startswith("PlaceObject") and p.endswith("/place"))}
