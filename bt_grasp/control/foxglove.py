@@ -88,8 +88,16 @@ ParamValue = bool | int | float | str | list[Any] | dict[str, Any]
 READ_ONLY = ("run.tick", "run.sim_time_s", "run.status", "run.message", "run.last_failure", "detections",
              "fault.kinds")
 
-#: the sentences of a controller that are no refusal (an intervention applied, a breakpoint set or cleared)
+#: the sentences of a controller that are no refusal: an intervention applied ("tick 12: lift_height = 0.12"), a
+#: breakpoint set or cleared, an intervention sent while the run holds inside a tick (before a node)
 _APPLIED_PREFIXES = ("tick ", "breakpoint ")
+_WAITING = " waits for the end of tick "
+
+
+def is_refusal(message: str) -> bool:
+    """Whether a controller's answer (``RunState.message``) refuses a command: every other answer says what was
+    applied or that it waits for the tick boundary."""
+    return bool(message) and not message.startswith(_APPLIED_PREFIXES) and _WAITING not in message
 
 
 def is_loopback(host: str) -> bool:
@@ -173,7 +181,7 @@ class FoxgloveControl:
             self._last_message = message
         if changed and self._on_change is not None:
             self._on_change(changed)
-        if fresh and message and not message.startswith(_APPLIED_PREFIXES) and self._on_refusal is not None:
+        if fresh and is_refusal(message) and self._on_refusal is not None:
             self._on_refusal(message)
 
     # ---- parameters -> commands -------------------------------------------------------------------------------

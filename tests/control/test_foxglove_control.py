@@ -34,6 +34,7 @@ from bt_grasp.control.foxglove import (
     FoxgloveControl,
     fault_kinds,
     is_loopback,
+    is_refusal,
     parameter_commands,
     state_parameters,
 )
@@ -195,6 +196,17 @@ def test_commands_published_on_the_command_topic() -> None:
     unknown = fox.command_message(b'{"kind": "jump"}')
     assert unknown.sent == () and "unknown command kind 'jump'" in unknown.problems[0]
     assert "'n'" in fox.command_message(b'{"kind": "step", "n": "two"}').problems[0]
+
+
+def test_which_answers_are_refusals() -> None:
+    # the controller's answers, as tests/control/test_controller.py and the runs above see them
+    applied = ["tick 2: height = 0.07", "tick 0: target = object 1 (blue)", "breakpoint tick:2 set",
+               "breakpoint (all) cleared", "stop waits for the end of tick 3 (interventions apply between ticks)", ""]
+    refused = ["blackboard entry 'mode' = 'medium' does not fit main/Move's port: ...; the run goes on unchanged",
+               "object 5 is not among the 2 detections (0..1)", "this run has no fault injector, so no fault can be "
+               "fired", "'node:Nope' names no node of the tree; nodes: Check, Move, See"]
+    assert [is_refusal(m) for m in applied] == [False] * len(applied)
+    assert [is_refusal(m) for m in refused] == [True] * len(refused)
 
 
 @pytest.mark.parametrize(("host", "loopback"), [("127.0.0.1", True), ("127.8.0.1", True), ("::1", True),
