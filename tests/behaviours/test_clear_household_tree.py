@@ -33,8 +33,8 @@ PEN, CAN, WEDGE = _det(0.60, -0.12, ShapeClass.ELONGATED), _det(0.42, 0.20, Shap
     _det(0.60, 0.15, ShapeClass.OTHER)
 
 
-def _walk(path: Path, views: list[tuple[Detection, ...]], monkeypatch: pytest.MonkeyPatch, holding: bool = False
-          ) -> tuple[str, list[dict[str, str]], list[Any]]:
+def _walk(path: Path, views: list[tuple[Detection, ...]], monkeypatch: pytest.MonkeyPatch, holding: bool = False,
+          place: str = "Running:2") -> tuple[str, list[dict[str, str]], list[Any]]:
     """Tick the tree, PerceiveAll seeing the next of ``views`` at each look (an empty table after the last);
     the other robot leaves are stand-ins. Returns the final status, every tick's node states and the objects
     SelectObject chose, in order."""
@@ -49,7 +49,7 @@ def _walk(path: Path, views: list[tuple[Detection, ...]], monkeypatch: pytest.Mo
     monkeypatch.setattr(leaves, "perceive_once", fake_perceive)
     clock = ManualClock()
     # the round's own check whether a failed place left something in the fingers
-    stand_ins = {"already_holding": "Success" if holding else "Failure"}
+    stand_ins = {"already_holding": "Success" if holding else "Failure", "Place": place}
     stand_ins |= {n: how for n, how in STAND_INS.items() if n != "PerceiveAll"}
     tree = load_tree(path, robot_registry(), substitutions=stand_ins, clock=clock)
     cell = fake_cell(FakeRobot(), clock)
@@ -65,6 +65,7 @@ def _walk(path: Path, views: list[tuple[Detection, ...]], monkeypatch: pytest.Mo
         if ticks[-1][select.bt_path] == "SUCCESS" and (len(ticks) < 2 or ticks[-2][select.bt_path] != "SUCCESS"):
             chosen.append(tree.root_blackboard.get("target"))
         if status.completed:
+            chosen.append(("slot", tree.root_blackboard.get("slot")))
             return status.value, ticks, chosen
         clock.advance_s(0.01)
     raise AssertionError("the tree did not finish in 3000 ticks")
@@ -82,12 +83,13 @@ def test_clear_household_takes_whatever_is_nearest_the_bin_until_the_table_is_em
     views = [(PEN, CAN, WEDGE), (PEN, WEDGE), (PEN,), ()]
     status, _, chosen = _walk(TREE, views, monkeypatch)
     assert status == "SUCCESS"
-    assert chosen == [CAN, WEDGE, PEN]  # the bin is at (0.30, 0.52): the can is nearest, then the wedge
+    # the bin is at (0.30, 0.52): the can is nearest, then the wedge; one slot each
+    assert chosen == [CAN, WEDGE, PEN, ("slot", 3)]
 
 
 def test_an_object_still_held_after_a_failed_place_is_placed_not_dropped(monkeypatch: pytest.MonkeyPatch) -> None:
     status, ticks, chosen = _walk(TREE, [(PEN,), ()], monkeypatch, holding=True)
-    assert status == "SUCCESS" and chosen == []  # placed what it held: nothing chosen
+    assert status == "SUCCESS" and chosen == [("slot", 1)]  # placed what it held: nothing chosen
     ran = ("RUNNING", "SUCCESS", "FAILURE")
     opened = {path for t in ticks for path, state in t.items() if "OpenGripper" in path and state in ran}
     assert opened == set()
@@ -97,7 +99,13 @@ def test_an_object_still_held_after_a_failed_place_is_placed_not_dropped(monkeyp
 
 def test_clear_household_gives_up_after_twelve_rounds(monkeypatch: pytest.MonkeyPatch) -> None:
     status, _, chosen = _walk(TREE, [(PEN,)] * 20, monkeypatch)  # the pen never leaves the table
-    assert status == "FAILURE" and len(chosen) == 12
+    assert status == "FAILURE" and chosen[:-1] == [PEN] * 12
+
+
+def test_a_slot_the_place_cannot_reach_is_left_for_the_next(monkeypatch: pytest.MonkeyPatch) -> None:
+    # every place fails (PLACE_BLOCKED after lib/place.xml's 3 attempts): each round moves on one slot
+    status, _, chosen = _walk(TREE, [(PEN,)] * 20, monkeypatch, place="Failure:PLACE_BLOCKED")
+    assert status == "FAILURE" and chosen == [PEN] * 12 + [("slot", 12)]
 
 
 def test_yaml_twin_ticks_like_the_xml(monkeypatch: pytest.MonkeyPatch) -> None:
