@@ -488,6 +488,9 @@ def _fuzz_part(indices: range, seed: int, corpus: Corpus, root: Path) -> Outcome
                 for leftover in worker_tmp.iterdir():  # so one leak is reported once, not by every later case
                     shutil.rmtree(leftover) if leftover.is_dir() else leftover.unlink()
             shutil.rmtree(folder)
+            done = sum(outcome.kinds.values())
+            if done % 100 == 0:  # a long run under load shows where it is, and whether anything failed yet
+                print(f"{root.name}: {done} cases, {outcome.counts['failed']} failed", file=sys.stderr, flush=True)
     finally:
         runner.close()
     return outcome
