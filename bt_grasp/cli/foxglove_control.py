@@ -4,6 +4,9 @@ tree before anything moves."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from dataclasses import replace
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 from rich.console import Console
@@ -12,7 +15,9 @@ from bt_grasp.errors import InputError
 
 if TYPE_CHECKING:
     from bt_grasp.control.breakpoints import Breakpoint
+    from bt_grasp.control.foxglove import FoxgloveControl
     from bt_grasp.episode import TickCallback
+    from bt_grasp.episode.episode import Episode
     from bt_grasp.episode.request import EpisodeRequest
     from bt_grasp.episode.result import EpisodeResult
 
@@ -24,11 +29,11 @@ def remote_control_warning(host: str) -> str:
 
 def run_foxglove_control(request: EpisodeRequest, breakpoints: tuple[Breakpoint, ...], *, allow_remote: bool,
                          console: Console, on_tick: tuple[TickCallback, ...] = ()) -> EpisodeResult:
-    """Run one episode whose live server takes commands from its viewers."""
-    from bt_grasp.control import Controller, check_breakpoints
+    """Run an episode whose live server takes commands from its viewers (and, after a restart from them, the
+    next one: same port, logs run-2.mcap, ...); returns the last episode's result."""
+    from bt_grasp.control import Controller, SeedPolicy, check_breakpoints, parse_breakpoint
     from bt_grasp.control.foxglove import FoxgloveControl, is_loopback
     from bt_grasp.episode.episode import Episode
-    from bt_grasp.recording.layout import control_layout_path
 
     if not is_loopback(request.live_host) and not allow_remote:
         raise InputError("--control", f"--live-host {request.live_host} can be reached from other machines and the "
@@ -36,10 +41,31 @@ def run_foxglove_control(request: EpisodeRequest, breakpoints: tuple[Breakpoint,
                          "--allow-remote-control")
     if not is_loopback(request.live_host):
         console.print(remote_control_warning(request.live_host), highlight=False, markup=False)
-    episode = Episode(request)
-    check_breakpoints(episode.tree, breakpoints)
-    controller = Controller(breakpoints, start_paused=True)
-    control = FoxgloveControl(controller, host=request.live_host, allow_remote=allow_remote)
+    first = Episode(request)  # bad input stops here
+    check_breakpoints(first.tree, breakpoints)
+    number, seed = 0, request.seed
+    while True:
+        episode = first if number == 0 else Episode(replace(request, seed=seed, log=_numbered(request.log, number)))
+        controller = Controller(breakpoints, start_paused=True)
+        control = FoxgloveControl(controller, host=request.live_host, allow_remote=allow_remote)
+        episode.on_live.append(_server(episode, control, console))
+        result = episode.run(on_tick=on_tick, controller=controller)
+        if controller.restart is None:
+            return result
+        # a restart: the next episode keeps the breakpoints and serves on the same port (a viewer reconnects)
+        breakpoints = tuple(parse_breakpoint(spec) for spec in controller.state().breakpoints)
+        seed += 1 if controller.restart is SeedPolicy.NEXT else 0
+        number += 1
+        console.print(f"restart: episode {number + 1}, seed {seed}", highlight=False, markup=False)
+
+
+def _numbered(log: Path | None, number: int) -> Path | None:
+    """Episode ``number``'s log after restarts: run.mcap, run-2.mcap, run-3.mcap, ... (as --interactive)."""
+    return None if log is None or number == 0 else log.with_name(f"{log.stem}-{number + 1}{log.suffix}")
+
+
+def _server(episode: Episode, control: FoxgloveControl, console: Console) -> Callable[[str], None]:
+    from bt_grasp.recording.layout import control_layout_path
 
     def serve(url: str) -> None:
         assert episode.live is not None
@@ -48,5 +74,4 @@ def run_foxglove_control(request: EpisodeRequest, breakpoints: tuple[Breakpoint,
                       f"{control_layout_path()}; the run is paused: set run.paused to false (or press Resume)",
                       highlight=False, markup=False)
 
-    episode.on_live.append(serve)
-    return episode.run(on_tick=on_tick, controller=controller)
+    return serve

@@ -13,6 +13,8 @@ parameter                 meaning (writable unless marked *read*)
 ``run.paused``            ``true`` pauses at the next tick boundary, ``false`` resumes
 ``run.step``              ``N`` (>= 1) runs N ticks, then pauses; reads 0
 ``run.stop``              ``true`` ends the run (the log is finished, the run judged as it stands); reads false
+``run.restart``           ``"same"`` or ``"next"``: ends this episode and starts it again with the same seed or the
+                          next (a new episode, a new log); reads ""
 ``run.tick``              *read*: the last tick finished (0: before the first)
 ``run.sim_time_s``        *read*: simulated time
 ``run.status``            *read*: ``running``, ``paused: <why>`` or ``finished``
@@ -61,7 +63,9 @@ from bt_grasp.control.commands import (
     CommandError,
     FireFault,
     Pause,
+    Restart,
     Resume,
+    SeedPolicy,
     SetBlackboard,
     SetBreakpoint,
     Source,
@@ -234,6 +238,7 @@ def state_parameters(state: RunState, kinds: Sequence[str]) -> dict[str, ParamVa
         "run.paused": state.paused,
         "run.step": 0,
         "run.stop": False,
+        "run.restart": "",
         "run.tick": state.tick,
         "run.sim_time_s": round(state.sim_time_s, 6),
         "run.status": status,
@@ -280,6 +285,12 @@ def parameter_commands(name: str, value: Any, state: RunState, kinds: Sequence[s
         return [Step(n)]
     if name == "run.stop":
         return [Stop()] if _bool(value) else []
+    if name == "run.restart":
+        if value in ("", None):
+            return []
+        if value not in {p.value for p in SeedPolicy}:
+            raise CommandError(f'it takes "same" or "next" (the seed of the new episode), got {_shown(value)}')
+        return [Restart(SeedPolicy(value))]
     if name == "breakpoints":
         return _breakpoint_commands(value, state)
     if name.startswith(BB_PREFIX):

@@ -35,10 +35,15 @@ def control_layout_path() -> Path:
 
 
 def control_layout() -> dict[str, Any]:
-    """The control layout: the main layout's panels beside a Parameters panel and the command buttons."""
+    """The shipped control layout: the main layout's panels beside a Parameters panel and the command buttons."""
+    return with_control_panels(json.loads(layout_path().read_text()))
+
+
+def with_control_panels(base: dict[str, Any]) -> dict[str, Any]:
+    """A layout (the shipped one, or a tree's own: ``tree_layout.layout_for_structure``) with the control panels
+    on its right: the Parameters panel above the Publish buttons of :data:`CONTROL_BUTTONS`."""
     from bt_grasp.control.foxglove import COMMAND_SCHEMA, COMMAND_TOPIC
 
-    base = json.loads(layout_path().read_text())
     config = dict(base["configById"])
     config["Parameters!control"] = {"title": "bt_grasp control (Parameters)"}
     for panel_id, text, colour, command in CONTROL_BUTTONS:

@@ -11,8 +11,11 @@ Step by step (what each answer proves):
   bb.lift_height 0.12               a blackboard edit, applied and answered in run.message
   bb.lift_height "high"             refused by Lift's port: one sentence under Problems, the entry stays 0.12
   choose.object 2, fault.fire       the object choice (blue: entry target) and a fault fired by hand
-  Step 1 tick, Stop run             one tick more, then the run ends; its log holds the four interventions
-                                    (source foxglove) at the ticks they took effect
+  Step 1 tick                       one tick more
+  run.restart "next"                the episode ends (its log holds the four interventions, source foxglove, at
+                                    the ticks they took effect); the next one (seed 1, run-2.mcap) is served on
+                                    the same port and Studio reconnects to it, paused before its first tick
+  Step 1 tick, Stop run             the second episode runs one tick and ends (exit 1, STOPPED)
 """
 
 from __future__ import annotations
@@ -77,6 +80,12 @@ def _steps(shot: Path) -> list[dict[str, Any]]:
         wait("run.status", has="stepped to tick"),
         read("stepped"),
         {"op": "screenshot", "path": str(shot)},
+        # restart with the next seed: a new episode (run-2.mcap) on the same port; Studio reconnects by itself
+        {"op": "set", "name": "run.restart", "text": '"next"'},
+        wait("run.status", 180, eq="paused: paused before the first tick"),
+        read("restarted"),
+        {"op": "press", "text": "Step 1 tick"},
+        wait("run.status", eq="paused: stepped to tick 1"),
         {"op": "press", "text": "Stop run"},
         wait("run.status", eq="finished"),
     ]
@@ -131,16 +140,21 @@ def test_foxglove_panels_drive_a_live_run(tmp_path: Path) -> None:
     assert "blackboard entry 'lift_height' = 'high' does not fit" in problems, problems
     assert reads["stepped"]["run.tick"] == paused["run.tick"] + 1
 
+    assert reads["restarted"]["run.tick"] == 0 and reads["restarted"]["bb.lift_height"] == 0.15  # a new episode
     assert proc.returncode == 1, stderr[-2000:]  # stopped: no pick, judged as it stands
-    assert "STOPPED" in stdout, stdout
+    assert "STOPPED" in stdout and "seed 1" in stdout, stdout
     run = open_log(log)
     assert run.result is not None and run.result["reason"] == "STOPPED" and not run.truncated
     records = [(r["tick"], r["kind"], r["source"]) for r in run.interventions]
     t = paused["run.tick"]
     assert records == [(t, "set_blackboard", "foxglove"), (t, "choose_object", "foxglove"),
-                       (t, "fire_fault", "foxglove"), (t + 1, "stop", "foxglove")], run.interventions
+                       (t, "fire_fault", "foxglove"), (t + 1, "restart", "foxglove")], run.interventions
     assert run.interventions[0]["command"] == {"kind": "set_blackboard", "key": "lift_height", "value": 0.12}
     assert run.interventions[1]["command"]["choice"] == 2 and "blue" in run.interventions[1]["effect"]
+    assert run.interventions[3]["command"] == {"kind": "restart", "seed": "next"}
     assert run.ticks[-1].tick == t + 1
+    second = open_log(tmp_path / "run-2.mcap")
+    assert [(r["tick"], r["kind"], r["source"]) for r in second.interventions] == [(1, "stop", "foxglove")]
+    assert second.result is not None and second.result["reason"] == "STOPPED" and second.result["ticks"] == 1
     if os.environ.get("BT_GRASP_UPDATE_DOC_IMAGES"):
         shutil.copyfile(shot, DOC_IMAGE)
