@@ -97,11 +97,13 @@ def test_ten_thousand_tick_summary_is_fast(tmp_path):
                       "failure_reason": None, "ticked": u in (1, 1 + tick // 500)} for u in range(1, 31)]
             rec.write_tick(tick, tick * 10_000_000, nodes, {"counter": tick // 10}, robot)
             rec.flush_tick()
+    # CPU time of this process, not wall time: other jobs on a loaded machine stretch the wall clock (2.4-2.8 s
+    # wall was seen at a load of 12 on 2 cores for ~0.5 s of CPU), never this process's own CPU time.
     best = float("inf")
-    for _ in range(2):  # best of two: the machine is shared
-        t0 = time.perf_counter()
+    for _ in range(2):
+        t0 = time.process_time()
         result = summary(open_log(path))
-        best = min(best, time.perf_counter() - t0)
+        best = min(best, time.process_time() - t0)
     assert result["ticks"] == 10_000 and not result["truncated"]
-    assert best < 2.0, f"summary of 10,000 ticks took {best:.2f} s"
+    assert best < 2.0, f"summary of 10,000 ticks took {best:.2f} s of CPU"
     json.dumps(result)  # the summary is JSON-able
