@@ -5,6 +5,7 @@ layout and the run command's guards. The stand-in run is tests/control/stand_ins
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 import threading
@@ -261,3 +262,15 @@ def test_the_run_commands_guards(tmp_path: Path, extra: list[str], words: str) -
          str(ROOT / "scenes/tabletop.yaml"), *extra], capture_output=True, text=True, cwd=tmp_path, timeout=120)
     assert proc.returncode == 2, proc.stderr
     assert words in proc.stderr and "Traceback" not in proc.stderr, proc.stderr
+
+
+def test_remote_control_is_warned(tmp_path: Path) -> None:
+    # allowed on 0.0.0.0: the warning comes before anything is built (here a missing scene ends the run, exit 2)
+    proc = subprocess.run(
+        [sys.executable, "-m", "bt_grasp.cli.main", "run", str(ROOT / "trees/pick.xml"), "--scene",
+         str(tmp_path / "missing.yaml"), "--live", "0", "--live-host", "0.0.0.0", "--control",
+         "--allow-remote-control"], capture_output=True, text=True, cwd=tmp_path, timeout=120,
+        env={**os.environ, "COLUMNS": "400"})
+    assert proc.returncode == 2 and "missing.yaml: no such file" in proc.stderr, proc.stderr
+    assert "warning: --allow-remote-control: anyone who can reach 0.0.0.0:PORT can pause, edit and stop this run" \
+        in proc.stderr, proc.stderr
