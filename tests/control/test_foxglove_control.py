@@ -10,6 +10,7 @@ import subprocess
 import sys
 import threading
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import pytest
@@ -274,3 +275,47 @@ def test_remote_control_is_warned(tmp_path: Path) -> None:
     assert proc.returncode == 2 and "missing.yaml: no such file" in proc.stderr, proc.stderr
     assert "warning: --allow-remote-control: anyone who can reach 0.0.0.0:PORT can pause, edit and stop this run" \
         in proc.stderr, proc.stderr
+
+
+def test_the_live_servers_listener_hands_viewers_requests_to_the_control(monkeypatch: pytest.MonkeyPatch) -> None:
+    # a real server on a free port; the SDK's callbacks called as it calls them, what it tells viewers noted; the
+    # stand-in tree's controller driven by hand between "ticks"
+    from foxglove.websocket import Parameter
+
+    from bt_grasp.recording.live import NO_CONTROL, LiveServer, _Listener
+
+    server = LiveServer(port=0)
+    said: list[str] = []
+    monkeypatch.setattr(server, "status", said.append)
+    listener = _Listener(server)
+    client = SimpleNamespace(id=1)
+    try:
+        # no control attached (a run without --control): nothing listed, every attempt answered
+        assert listener.on_get_parameters(client, []) == []
+        assert listener.on_set_parameters(client, [Parameter("run.paused", value=False)]) == []
+        assert said == [NO_CONTROL]
+        tree, stepper = build()
+        control = Controller()
+        control.attach(tree, stepper.now_ns)
+        assert control.between_ticks(0) is False  # the first view
+        server.serve_control(FoxgloveControl(control))
+        shown = {p.name: p.get_value() for p in listener.on_get_parameters(client, ["run.tick", "bb.height"])}
+        assert shown == {"run.tick": 0, "bb.height": 0.05}
+        asked = [Parameter("run.tick", value=5), Parameter("bb.mode", value="medium")]
+        back = listener.on_set_parameters(client, asked)
+        assert {p.name for p in back} >= {"run.paused", "run.tick", "bb.height"}  # every value, as the run stands
+        assert said[1:] == ["parameter 'run.tick': it shows the run and cannot be set"]
+        assert control.between_ticks(0) is False  # Move's port refuses "medium" at the boundary: told too
+        assert said[2].startswith("blackboard entry 'mode' = 'medium' does not fit") and len(said) == 3
+        listener.on_client_advertise(client, SimpleNamespace(id=7, topic=COMMAND_TOPIC))
+        listener.on_client_advertise(client, SimpleNamespace(id=8, topic="/elsewhere"))
+        listener.on_message_data(client, 8, b'{"kind": "stop"}')  # not the command topic: ignored
+        listener.on_message_data(client, 7, b'{"kind": "jump"}')
+        assert said[3].startswith(f"a message on {COMMAND_TOPIC}: unknown command kind 'jump'")
+        listener.on_message_data(client, 7, b'{"kind": "set_breakpoint", "breakpoint": "tick:9"}')
+        listener.on_client_unadvertise(client, 7)
+        listener.on_message_data(client, 7, b'{"kind": "stop"}')  # unadvertised: ignored
+        assert control.between_ticks(0) is False  # no stop came through
+        assert control.state().breakpoints == ("tick:9",) and control.interventions == ()
+    finally:
+        server.close()
