@@ -123,6 +123,16 @@ def _fault_marks(run: RunLog) -> list[tuple[float, str]]:
     return marks
 
 
+def _fault_text(fault: Any) -> str:
+    """A fired fault as its label and effect (``frame_drop@Perceive#1: no frame``), else as recorded."""
+    if not isinstance(fault, dict):
+        return str(fault)
+    details = fault.get("details")
+    effect = details.get("effect") if isinstance(details, dict) else None
+    label = fault.get("label") or fault.get("kind")
+    return f"{label}: {effect}" if label and effect else str(label or fault)
+
+
 def end_statuses(run: RunLog) -> dict[int, str]:
     """Every node's status at the end of the run: the last status it returned when ticked (the final reset
     to IDLE that follows the root's completion is not news; a node never ticked stays IDLE)."""
@@ -292,7 +302,8 @@ def build_report(run: RunLog, html_path: Path, png_dir: Path | None = None) -> R
     result = run.result or {}
     success = result.get("success")
     verdict = ('<span class="ok">SUCCESS</span>' if success else '<span class="bad">FAILURE</span>'
-               if success is not None else "<span>unfinished (no result recorded)</span>")
+               if success is not None else f"<span>interrupted (Ctrl-C) at tick {_esc(result.get('ticks'))}</span>"
+               if result.get("interrupted") else "<span>unfinished (no result recorded)</span>")
     summary_rows = [
         ("outcome", verdict),
         ("reason", _esc(result.get("reason"))), ("failed leaf", _esc(result.get("failed_leaf"))),
@@ -329,7 +340,7 @@ def build_report(run: RunLog, html_path: Path, png_dir: Path | None = None) -> R
     if run.faults:
         parts.append("<h3>Injected faults</h3><table>" + "".join(
             f"<tr><td>{f['stamp_ns'] * 1e-9:.2f} s</td><td>tick {_esc(f.get('tick'))}</td>"
-            f"<td>{_esc(f.get('fault'))}</td></tr>" for f in run.faults) + "</table>")
+            f"<td>{_esc(_fault_text(f.get('fault')))}</td></tr>" for f in run.faults) + "</table>")
     if run.interventions:
         from bt_grasp.recording.interventions import interventions_html
 

@@ -47,8 +47,8 @@ def tree_layout(rows: Sequence[tuple[str, str]], title: str = "") -> dict[str, A
     panel = dict(config.get(STATE_PANEL, {}))
     panel["paths"] = [{"value": f"{topics.TICK}.leaves.{key}", "timestampMethod": "receiveTime", "label": label}
                       for label, key in rows]
-    if title:
-        panel["foxglovePanelTitle"] = title
+    if title:  # Foxglove shows it as the panel's title
+        panel["foxglovePanelTitle"] = f"State Transitions: {title}"
     config[STATE_PANEL] = panel
     return {**layout, "configById": config}
 
@@ -101,3 +101,14 @@ def write_layout(run: RunLog, target: Path | None = None) -> Path:
     except OSError as exc:
         raise InputError(str(target), f"the Foxglove layout cannot be written there ({exc.strerror})") from None
     return target
+
+
+def layout_for_tree_file(tree: Path, leaves: Sequence[str] = ()) -> dict[str, Any]:
+    """The layout a run of this tree file attaches to its log (for a live view, before any log exists).
+    ``leaves``: the ``--leaves`` plugins the tree needs."""
+    from bt_grasp.behaviours.library import robot_registry
+    from bt_grasp.tree.introspect import tree_structure
+    from bt_grasp.tree.loader import load_tree
+
+    loaded = load_tree(tree, robot_registry(leaves))
+    return layout_for_structure(tree_structure(loaded.root), Path(tree).name)

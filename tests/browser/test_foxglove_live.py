@@ -5,6 +5,7 @@ only picture while nobody watched: the latched topics must reach a viewer that j
 
 from __future__ import annotations
 
+import json
 import os
 import socket
 import subprocess
@@ -16,8 +17,9 @@ from pathlib import Path
 import pytest
 from studio_driver import ROBOT_LINKS, open_in_studio, serving, skip_without_browser
 
+from bt_grasp.recording.tree_layout import layout_for_tree_file
+
 ROOT = Path(__file__).resolve().parents[2]
-LAYOUT = ROOT / "bt_grasp" / "foxglove_layouts" / "bt_grasp.layout.json"
 
 pytestmark = [pytest.mark.sim, pytest.mark.slow]
 
@@ -72,7 +74,9 @@ def test_live_run_shows_whole_in_foxglove(tmp_path: Path) -> None:
     try:
         _wait_for_port(port, proc, 120)
         _wait_for_line(proc, "tick   100", 120)  # Perceive (tick 1) is over; nobody has watched yet
-        with serving(tmp_path, LAYOUT) as server:
+        layout = tmp_path / "pick.layout.json"  # the layout of the tree that runs (its leaves' rows by path)
+        layout.write_text(json.dumps(layout_for_tree_file(ROOT / "trees/pick.xml")))
+        with serving(tmp_path, layout) as server:
             report = open_in_studio(server.url_for_websocket(), tmp_path, wait_s=25,
                                     screenshot=tmp_path / "live.png", ws_bridge=f"ws://127.0.0.1:{port}")
         assert proc.poll() is None, "the run ended before the viewer looked: the test proves nothing"
