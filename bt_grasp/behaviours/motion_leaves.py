@@ -115,6 +115,29 @@ def straight_up(height_m: float) -> PoseFn:
     return up
 
 
+def back_along_approach(distance_m: float) -> PoseFn:
+    """The goal of a Cartesian segment backing the tool off along its own -z (the way a grasp approached)."""
+
+    def back(T_now: NDArray[np.float64]) -> NDArray[np.float64]:
+        T = T_now.copy()
+        T[:3, 3] -= distance_m * T_now[:3, 2]
+        return T
+
+    return back
+
+
+def retreat_after_release(T_release: NDArray[np.float64], distance_m: float,
+                          object_height_m: float) -> list[tuple[str, PoseFn]]:
+    """How the open gripper leaves a released object, as named tool-pose steps: straight up ``distance_m`` when
+    the tool points down (within 1 degree: every top-down grasp); else (a side grasp) back along the approach
+    by ``distance_m``, then up by the object's height, so the arm's next motion starts above it (straight up
+    at once would drag the pads along a standing object and leave them around its top)."""
+    pointing_down = float(-np.asarray(T_release, dtype=float)[2, 2]) > np.cos(np.deg2rad(1.0))
+    if pointing_down:
+        return [("retreat", straight_up(distance_m))]
+    return [("retreat", back_along_approach(distance_m)), ("rise", straight_up(object_height_m))]
+
+
 def cartesian_fn(leaf: RobotLeaf, T_goal_fn: PoseFn, scene: PlanningScene) -> PathFn:
     """A straight tool line from the current pose to ``T_goal_fn(T_now)``."""
 

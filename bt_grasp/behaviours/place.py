@@ -146,6 +146,7 @@ class _PlaceBase(RobotLeaf):
         gap = self.input_float("release_gap")
         T_place = tool_pose_for(pose, T_tcp_obj, np.asarray(grasp.T_base_tcp_grasp), height, gap, surface)
         self._T_place = T_place
+        self._height = height
         self._target_text = f"{pose.x_m:.3f};{pose.y_m:.3f};{surface:.3f}"
         margin = 0.004
         held_box = detection_box(held, "held", margin_m=margin)
@@ -212,12 +213,13 @@ class _PlaceBase(RobotLeaf):
                 if self.now_s() - self._t_open > OPEN_TIMEOUT_S:
                     return self.failed(FailureReason.TIMEOUT, f"the gripper opened only to {width * 1e3:.1f} mm")
                 return Status.RUNNING
-            from bt_grasp.behaviours.motion_leaves import straight_up
+            from bt_grasp.behaviours.motion_leaves import retreat_after_release
             from bt_grasp.motion.planning_scene import PlanningScene
 
             scene = PlanningScene.from_scene(self.cell.scene)
-            self.job = MotionJob(self.cell, [Segment("retreat", cartesian_fn(self, straight_up(
-                self.input_float("retreat")), scene))])
+            # straight up; after a side grasp back along the approach, then up past the object's top
+            steps = retreat_after_release(self._T_place, self.input_float("retreat"), self._height)
+            self.job = MotionJob(self.cell, [Segment(name, cartesian_fn(self, fn, scene)) for name, fn in steps])
             self.phase = "retreat"
         outcome = self.job.update()
         if outcome is None:
