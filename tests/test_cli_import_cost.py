@@ -11,7 +11,8 @@ from pathlib import Path
 import pytest
 
 HEAVY = ("open3d", "matplotlib", "pyarrow", "ray", "foxglove", "sapien", "cv2", "pinocchio", "ompl", "scipy", "mcap",
-         "textual")  # textual: only `run --interactive` draws a terminal UI
+         "textual",  # textual: only `run --interactive` draws a terminal UI
+         "onnxruntime", "onnx")  # only a learned detector loads a model
 
 _PROBE = """
 import json, sys
@@ -21,8 +22,9 @@ print(json.dumps({"code": code, "modules": sorted(m for m in sys.modules if "." 
 """
 
 
-@pytest.mark.parametrize("argv", [["--help"], ["tree", "validate", "trees/pick.xml"], ["run", "--help"]],
-                         ids=["help", "validate", "run-help"])
+@pytest.mark.parametrize("argv", [["--help"], ["tree", "validate", "trees/pick.xml"], ["run", "--help"],
+                                  ["detector", "--help"]],
+                         ids=["help", "validate", "run-help", "detector-help"])
 def test_the_command_imports_no_heavy_library(repo_root: Path, argv: list[str]) -> None:
     done = subprocess.run(
         [sys.executable, "-c", _PROBE, *argv], cwd=repo_root, capture_output=True, text=True, timeout=120
