@@ -44,7 +44,7 @@ def _register() -> None:
 
     scene_cmd.register(app)
     commands = ("demo_cmd", "run_cmd", "tree_cmd", "calibrate_cmd", "replay_cmd", "bench_extra_cmd", "bench_cmd")
-    for name in (*commands, "eval_cmd", "bench_eval_cmd", "resident_cmd"):
+    for name in (*commands, "eval_cmd", "bench_eval_cmd", "resident_cmd", "detector_cmd"):
         try:
             module = __import__(f"bt_grasp.cli.{name}", fromlist=["register"])
         except ModuleNotFoundError as exc:
