@@ -263,7 +263,11 @@ class PlanGrasp(RobotLeaf):
         self._target: Detection = target
         self._objects: tuple[Detection, ...] = self.input_detections("objects")
         self._q = self.cell.robot.joint_positions()
-        result = rank_grasps(target, self._objects, self.cell.grasp_settings, reachable=self._reachable)
+        from bt_grasp.motion.planning_scene import fixture_boxes
+
+        fixtures = [(box.T_base_shape, box.size_m) for box in fixture_boxes(self.cell.scene)]
+        result = rank_grasps(target, self._objects, self.cell.grasp_settings, reachable=self._reachable,
+                             fixtures=fixtures)
         if not result.ok:
             return self.failed(FailureReason.NOTHING_TO_GRASP, f"{result.status.value}: {result.message}")
         self.cell.media.grasps(result.candidates)

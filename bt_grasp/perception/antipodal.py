@@ -24,7 +24,8 @@ from 40 to 80 mm behind the tcp; opening 85 mm.
 Score (higher is better), the weighted sum of the terms kept in :class:`ScoreTerms`, each in [0, 1]:
   antipodal  = how well both normals line up with the closing line (cosine of the worse one);
   clearance  = min(1, d / 30 mm), d = distance from the open pads and the palm (swept along the approach) to
-               the nearest point not grasped (the object's own and the neighbours') or the table;
+               the nearest point not grasped (the object's own, the neighbours', the known fixtures') or the
+               table;
   reach      = 1 when the grasp and pre-grasp poses have an IK solution (a candidate without one is dropped),
                when the caller gives a reachability test; else 1;
   approach   = how short the arm's way in is: 1 top-down, else ``side_approach_factor`` (0.5) x (1 + cos of the
@@ -424,6 +425,23 @@ def detection_cloud(det: results.Detection, spacing_m: float = 0.005) -> ObjectC
                        np.vstack([fitted.normals_base, normals[keep]]))
 
 
+def box_surface(T_base_box: Mat4, size_m: Sequence[float], spacing_m: float = 0.01) -> NDArray[np.float64]:
+    """Points on the six faces of a box (full sizes ``size_m`` along its axes), about ``spacing_m`` apart."""
+    half = np.asarray(size_m, dtype=float) / 2
+    faces = []
+    for axis in range(3):
+        u_ax, v_ax = [a for a in range(3) if a != axis]
+        u = np.linspace(-half[u_ax], half[u_ax], max(2, math.ceil(2 * half[u_ax] / spacing_m) + 1))
+        v = np.linspace(-half[v_ax], half[v_ax], max(2, math.ceil(2 * half[v_ax] / spacing_m) + 1))
+        uu, vv = np.meshgrid(u, v)
+        for sign in (1.0, -1.0):
+            local = np.zeros((uu.size, 3))
+            local[:, axis], local[:, u_ax], local[:, v_ax] = sign * half[axis], uu.ravel(), vv.ravel()
+            faces.append(local)
+    T = np.asarray(T_base_box, dtype=float)
+    return np.asarray(np.vstack(faces) @ T[:3, :3].T + T[:3, 3], dtype=float)
+
+
 def voxel_indices(points: NDArray[np.float64], voxel_m: float) -> NDArray[np.intp]:
     """One point per ``voxel_m`` cube (the first in the input's order), sorted: a thinned cloud, deterministic."""
     keys = np.floor(np.asarray(points, dtype=float) / voxel_m).astype(np.int64)
@@ -519,6 +537,7 @@ def rank_grasps(
     settings: AntipodalSettings | None = None,
     reachable: Callable[[Mat4, Mat4], bool] | None = None,
     seed: int = 0,
+    fixtures: Sequence[tuple[Mat4, tuple[float, float, float]]] = (),
 ) -> results.GraspResult:
     """The grasps PlanGrasp tries, in order, as 6-DoF candidates.
 
@@ -526,7 +545,8 @@ def rank_grasps(
     :func:`bt_grasp.perception.grasps.synthesize_grasps` unchanged (the colour-block scenes' runs stay as
     they were). A tall object (:func:`is_tall`), or one with no top-down grasp, gets the antipodal candidates
     sampled from its cloud first (seeded by ``seed``; only reachable ones when ``reachable`` is given), the
-    footprint's top-down ones after them.
+    footprint's top-down ones after them. ``fixtures``: the known fixtures' solid parts as (``T_base_box``,
+    full sizes), kept clear of the open gripper like the objects seen.
     """
     from bt_grasp.perception.grasps import synthesize_grasps
 
@@ -542,6 +562,7 @@ def rank_grasps(
         if d.points_base_m is not None:
             pts = np.asarray(d.points_base_m, dtype=float).reshape(-1, 3)
             others.append(pts[voxel_indices(pts, 0.005)])
+    others += [box_surface(T, size) for T, size in fixtures]
     other_points = np.vstack(others) if others else None
     sampled = sample_grasps(detection_cloud(target), target.table_z_m, other_points, s,
                             np.random.default_rng(seed), reachable)

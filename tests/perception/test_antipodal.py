@@ -231,3 +231,33 @@ def test_a_round_object_s_hidden_side_is_completed_from_its_visible_arc() -> Non
     best = sample_grasps(cloud, 0.0)[0]
     assert best.kind is ApproachKind.SIDE and best.width_m == pytest.approx(0.058, abs=0.004), best.reason
     assert np.hypot(best.T_base_tcp_grasp[0, 3] - 0.48, best.T_base_tcp_grasp[1, 3]) < 0.004  # on the axis
+
+
+def test_a_known_fixture_beside_a_tall_object_is_kept_clear() -> None:
+    """A fixture wall 20 mm from the bottle's side on +y: no side grasp that would put a pad (open: 42.5 to
+    54.5 mm from the tcp) or the palm (40 mm behind it) into it survives; the fixture is installation data,
+    given as a box, not seen."""
+    from bt_grasp.geometry import make_T
+    from bt_grasp.perception.antipodal import box_surface
+
+    bottle = _det((0.48, 0.0), (0.058, 0.058, 0.187), "round")
+    wall_T, wall_size = make_T(translation=[0.48, 0.029 + 0.020 + 0.005, 0.1]), (0.3, 0.01, 0.2)
+    free = rank_grasps(bottle).candidates
+    walled = rank_grasps(bottle, fixtures=[(wall_T, wall_size)]).candidates
+    wall_pts = box_surface(wall_T, wall_size)
+    assert wall_pts[:, 1].min() == pytest.approx(0.049) and len(wall_pts) > 500
+
+    def gripper_max_y(c: GraspCandidate) -> float:
+        """The largest base y of the open pads' and the palm's corners at the grasp (gripper.urdf's boxes)."""
+        boxes = [((-0.010, 0.0425, -0.035), (0.010, 0.0545, 0.020)),
+                 ((-0.010, -0.0545, -0.035), (0.010, -0.0425, 0.020)),
+                 ((-0.025, -0.065, -0.080), (0.025, 0.065, -0.040))]
+        corners = np.array([[x, y, z] for lo, hi in boxes for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                            for z in (lo[2], hi[2])])
+        T = c.T_base_tcp_grasp
+        return float((corners @ T[:3, :3].T + T[:3, 3])[:, 1].max())
+
+    side_free = [c for c in free if c.kind is ApproachKind.SIDE]
+    side_walled = [c for c in walled if c.kind is ApproachKind.SIDE]
+    assert any(gripper_max_y(c) > 0.049 for c in side_free)  # without the wall some grasps reach its place
+    assert side_walled and all(gripper_max_y(c) < 0.049 - 0.003 for c in side_walled)
