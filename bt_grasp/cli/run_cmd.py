@@ -192,7 +192,6 @@ def run(
     from bt_grasp.control.breakpoints import parse_breakpoints
     from bt_grasp.episode.episode import Episode
     from bt_grasp.episode.request import EpisodeRequest, parse_assignments
-    from bt_grasp.recording.layout import layout_path
     from bt_grasp.scene.run_goal import goal_from_options
 
     blackboard: dict[str, BlackboardValue] = {"color": color, "lift_height": lift_height}
@@ -248,9 +247,13 @@ def run(
         episode = Episode(request)
         if not quiet:
             episode.on_failure.append(failure_line(console))
-        episode.on_live.append(lambda url: console.print(
-            f"live: in Foxglove, Open connection > Foxglove WebSocket > {url} (layout: {layout_path()})",
-            highlight=False))
+        if live is not None:  # the layout of this tree (its leaves' rows), beside the log or in a temporary folder
+            from bt_grasp.recording.tree_layout import write_live_layout
+
+            layout = write_live_layout(request.tree, request.leaves, request.log)
+            episode.on_live.append(lambda url: console.print(
+                f"live: in Foxglove, Open connection > Foxglove WebSocket > {url} (layout: {layout})",
+                highlight=False, markup=False, soft_wrap=True))
         summary = episode.run(on_tick=() if quiet else (live_progress(console),))
     if summary_json is not None:  # written first: nothing printed may stand between a run and its record
         summary_json.parent.mkdir(parents=True, exist_ok=True)

@@ -112,3 +112,15 @@ def layout_for_tree_file(tree: Path, leaves: Sequence[str] = ()) -> dict[str, An
 
     loaded = load_tree(tree, robot_registry(leaves))
     return layout_for_structure(tree_structure(loaded.root), Path(tree).name)
+
+
+def write_live_layout(tree: Path, leaves: Sequence[str] = (), log: Path | None = None) -> Path:
+    """Write the layout of ``tree`` for a live view: beside the run's log (``<log>.layout.json``) when it has
+    one, else in a new private temporary folder; returns the file."""
+    import tempfile
+
+    target = (log.with_name(log.stem + ".layout.json") if log is not None
+              else Path(tempfile.mkdtemp(prefix="bt_grasp_layout_")) / f"{Path(tree).stem}.layout.json")
+    target.parent.mkdir(parents=True, exist_ok=True)
+    target.write_text(json.dumps(layout_for_tree_file(tree, leaves), indent=2) + "\n", encoding="utf-8")
+    return target

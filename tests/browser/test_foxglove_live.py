@@ -42,14 +42,17 @@ def _wait_for_port(port: int, proc: subprocess.Popen[str], timeout_s: float) -> 
     raise AssertionError(f"nothing listens on {port} after {timeout_s} s")
 
 
-def _wait_for_line(proc: subprocess.Popen[str], prefix: str, timeout_s: float) -> None:
+def _wait_for_line(proc: subprocess.Popen[str], prefix: str, timeout_s: float,
+                   seen: list[str] | None = None) -> None:
     """Read the run's progress (stderr) until a line starts with ``prefix`` (a reader thread: it may stay
-    silent)."""
+    silent); the lines read are appended to ``seen``."""
     found = threading.Event()
 
     def read() -> None:
         assert proc.stderr is not None
         for line in proc.stderr:
+            if seen is not None:
+                seen.append(line)
             if line.startswith(prefix):
                 found.set()
                 return
@@ -69,13 +72,17 @@ def test_live_run_shows_whole_in_foxglove(tmp_path: Path) -> None:
          "--scene", str(ROOT / "scenes/tabletop.yaml"), "--live", str(port), "--realtime", "0.05",
          "--max-ticks", "1000"],
         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
-        env={**os.environ, "PYTHONPATH": str(ROOT), "PYTHONUNBUFFERED": "1", "COLUMNS": "200"},
+        env={**os.environ, "PYTHONPATH": str(ROOT), "PYTHONUNBUFFERED": "1", "COLUMNS": "200",
+             "TMPDIR": str(tmp_path)},  # where the run writes its layout (it has no log)
     )
     try:
         _wait_for_port(port, proc, 120)
-        _wait_for_line(proc, "tick   100", 120)  # Perceive (tick 1) is over; nobody has watched yet
-        layout = tmp_path / "pick.layout.json"  # the layout of the tree that runs (its leaves' rows by path)
-        layout.write_text(json.dumps(layout_for_tree_file(ROOT / "trees/pick.xml")))
+        said: list[str] = []
+        _wait_for_line(proc, "tick   100", 120, said)  # Perceive (tick 1) is over; nobody has watched yet
+        # the layout the run wrote for its tree (its leaves' rows, by path), as it told the user
+        told = next(line for line in said if line.startswith("live: "))
+        layout = Path(told.rsplit("(layout: ", 1)[1].strip().rstrip(")"))
+        assert json.loads(layout.read_text()) == layout_for_tree_file(ROOT / "trees/pick.xml")
         with serving(tmp_path, layout) as server:
             report = open_in_studio(server.url_for_websocket(), tmp_path, wait_s=25,
                                     screenshot=tmp_path / "live.png", ws_bridge=f"ws://127.0.0.1:{port}")
