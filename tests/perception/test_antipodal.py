@@ -1,5 +1,6 @@
-"""Antipodal 6-DoF grasp sampling on synthetic clouds (issue 28): a box is grasped top-down, a tall cylinder
-from the side, a long thin rod across its long axis; seeded; neighbours kept clear; PlanGrasp's ranking.
+"""Antipodal 6-DoF grasp sampling (perception/antipodal.py, object_cloud.py) on synthetic clouds (issue 28): a
+box is grasped top-down, a tall cylinder from the side, a long thin rod across its long axis; seeded;
+neighbours and fixtures kept clear; a round object's hidden side completed; PlanGrasp's ranking.
 
 The clouds are sampled surfaces (sides and top, no bottom) with 1 mm of noise and normals ESTIMATED from the
 points (``estimate_normals``), as an observed cloud would have them; nothing here hands the sampler a true
@@ -17,14 +18,13 @@ from bt_grasp.perception.antipodal import (
     AntipodalSettings,
     ApproachKind,
     GraspCandidate,
-    ObjectCloud,
-    estimate_normals,
     is_tall,
     rank_grasps,
     sample_grasps,
 )
 from bt_grasp.perception.config import GraspSettings
 from bt_grasp.perception.grasps import synthesize_grasps
+from bt_grasp.perception.object_cloud import ObjectCloud, box_surface, detection_cloud, estimate_normals
 from bt_grasp.perception.results import Detection
 
 NOISE_M = 0.001
@@ -218,8 +218,6 @@ def test_a_round_object_s_hidden_side_is_completed_from_its_visible_arc() -> Non
     """Perception reports a standing bottle's footprint from its top (the 26 mm cap) while the camera sees half
     of its 58 mm body: the completed cloud is the 58 mm cylinder through the visible arc, so the side grasp
     squeezes a diameter (58 mm), not a 40 mm chord that lets the bottle slip out sideways."""
-    from bt_grasp.perception.antipodal import detection_cloud
-
     body = cylinder_points((0.48, 0.0), 0.029, 0.187)
     seen_from_plus_x = body[body[:, 0] > 0.48 - 0.002]  # the camera looks from +x: the near half of the side
     footprint = _det((0.49, 0.0), (0.026, 0.026, 0.187), "round")
@@ -238,7 +236,6 @@ def test_a_known_fixture_beside_a_tall_object_is_kept_clear() -> None:
     54.5 mm from the tcp) or the palm (40 mm behind it) into it survives; the fixture is installation data,
     given as a box, not seen."""
     from bt_grasp.geometry import make_T
-    from bt_grasp.perception.antipodal import box_surface
 
     bottle = _det((0.48, 0.0), (0.058, 0.058, 0.187), "round")
     wall_T, wall_size = make_T(translation=[0.48, 0.029 + 0.020 + 0.005, 0.1]), (0.3, 0.01, 0.2)
