@@ -77,3 +77,27 @@ def test_classes_are_the_catalogue_then_the_primitives(tmp_path: Path) -> None:
     with pytest.raises(ConfigError, match=r"s.yaml: object 'duck' \(mesh meshes/duck.stl\) is not a household "
                                           r"catalogue object nor a primitive.* at objects.duck"):
         object_class("mesh", "meshes/duck.stl", tmp_path / "s.yaml", "duck")
+
+
+def _cli_error(capsys: pytest.CaptureFixture[str]) -> str:
+    err = capsys.readouterr().err.strip()
+    assert "error: " in err and "\n" not in err and "Traceback" not in err
+    return err
+
+
+def test_dataset_command_refuses_bad_input_before_rendering(
+    repo_root: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from bt_grasp.cli.main import main
+
+    base = ["detector", "dataset", "--images", "1", "--out", str(tmp_path / "ds")]
+    assert main([*base, "--scenes", str(repo_root / "scenes" / "tabletop.yaml"), "--mount", "sideways"]) == 2
+    assert "--mount: expected one of scene, eye-to-hand, eye-in-hand, both, got 'sideways'" in _cli_error(capsys)
+    assert main([*base, "--scenes", str(tmp_path / "absent.yaml")]) == 2
+    assert "absent.yaml" in _cli_error(capsys)
+    # a mesh outside the household catalogue has no class: refused, the scene and the object named
+    colourless = repo_root / "tests" / "data" / "scenes" / "colourless.yaml"
+    assert main([*base, "--scenes", str(repo_root / "scenes" / "tabletop.yaml"), str(colourless)]) == 2
+    err = _cli_error(capsys)
+    assert "colourless.yaml: object '" in err and "is not a household catalogue object nor a primitive" in err
+    assert not (tmp_path / "ds" / "images").exists()  # nothing was rendered or written
