@@ -98,7 +98,7 @@ _COLUMNS: dict[str, tuple[str, Any]] = {
     "sim_time_s": ("a finite number", _is_finite),
     "episode_wall_s": ("a finite number", _is_finite),
     "retries_total": (f"an integer from 0 to {MAX_RETRIES}", lambda v: _is_int(v, 0, MAX_RETRIES)),
-    "retries": (f"an object of leaf names to retry counts (0 to {MAX_RETRIES})",
+    "retries": (f"an object of leaf paths to retry counts (0 to {MAX_RETRIES})",
                 lambda v: isinstance(v, dict) and all(_is_int(n, 0, MAX_RETRIES) for n in v.values())),
 }
 _OPTIONAL_COLUMNS: dict[str, tuple[str, Any]] = {

@@ -80,13 +80,13 @@ class RunOutcome:
     failures: list[FailureEvent] = field(default_factory=list)
     #: every leaf FAILURE that was not by design, in order, each with what followed it: the causal chain
     chain: list[FailureEvent] = field(default_factory=list)
-    retried: dict[str, int] = field(default_factory=dict)  # leaf name -> attempts started after a FAILURE
+    retried: dict[str, int] = field(default_factory=dict)  # leaf path -> attempts started after a FAILURE
     root_runs: int = 0  # root executions, wake-up re-runs included (>= ticks)
     stopped: bool = False  # a TickGate stopped the run (an operator's Stop)
 
     @property
     def retries(self) -> dict[str, int]:
-        """Leaf name -> how many times it was tried again after it had failed."""
+        """Leaf path (its one name in every output) -> how many times it was tried again after it had failed."""
         return dict(self.retried)
 
     @property
@@ -218,7 +218,7 @@ class _TickWatch:
         if before is not BtStatus.RUNNING and self.returned.get(uid) == "FAILURE" and not node.children:
             self.restarts.append((node.bt_path, self.tick, self.order))
             if node.bt_kind is NodeKind.ACTION:
-                self.retries[node.name] += 1  # a new attempt of an action whose last attempt failed
+                self.retries[node.bt_path] += 1  # a new attempt of an action whose last attempt failed
         self.ticked.add(uid)
         self.returned[uid] = result.value
         if not node.children and result is BtStatus.FAILURE:

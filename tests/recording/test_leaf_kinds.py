@@ -90,7 +90,7 @@ def test_replay_counts_retries_and_failures_per_leaf_of_a_real_tree(tmp_path: Pa
     outcome = TreeRunner(tree, Stepper(clock), steps_per_tick=1, recorder=recorder).run(max_ticks=50)
     recorder.close()
     assert outcome.status == "SUCCESS"
-    assert outcome.retries == {"FlakyReach": 2}
+    assert outcome.retries == {"FlakyReach::3": 2}
 
     run = open_log(path)
     kinds = {info.name: (info.kind, info.is_leaf) for info in run.nodes.values()}

@@ -117,6 +117,7 @@ def test_every_output_names_a_node_by_the_same_path(walked: dict[str, Any], monk
 
     # the campaign's results row
     assert row["failed_path"] in names and row["failed_path"] == run.result["failed_path"]
+    assert row["retries"] == {"PickObject::18/Perceive::27": 1} == run.result["retries"]
     assert row["failed_leaf"] == row["failed_path"].rsplit("/", 1)[-1].split("::")[0]
 
     # Foxglove: the leaves on /bt/tick and the layout attached to the log, one row per leaf, by path

@@ -93,7 +93,7 @@ def test_failures_within_one_tick_and_retries() -> None:
     # tick 2: Slow RUNNING; tick 3: Slow SUCCESS -> Sequence SUCCESS
     assert outcome.status == "SUCCESS" and outcome.ticks == 3
     assert [(f.tick, f.leaf, f.reason) for f in outcome.failures] == [(1, "FailTwice", "FLAKY")] * 2
-    assert outcome.retries == {"FailTwice": 2}
+    assert outcome.retries == {"FailTwice::3": 2}  # by path (BT.CPP's fullPath), the node's name everywhere
     assert [e["message"] for e in recorder.events if "message" in e] == ["attempt 1 failed", "attempt 2 failed"]
     assert [e for e in recorder.events if "runs" in e] == [{"tick": 1, "runs": 3}]
     assert outcome.root_runs == 5
