@@ -65,13 +65,16 @@ def _numbered(log: Path | None, number: int) -> Path | None:
 
 
 def _server(episode: Episode, control: FoxgloveControl, console: Console) -> Callable[[str], None]:
-    from bt_grasp.recording.layout import control_layout_path
+    from bt_grasp.recording.tree_layout import write_live_layout
+
+    request = episode.request  # the control layout of the tree that runs: its leaves' rows, by path
+    layout = write_live_layout(request.tree, request.leaves, request.log, control=True)
 
     def serve(url: str) -> None:
         assert episode.live is not None
         episode.live.serve_control(control)
         console.print(f"live control: in Foxglove, Open connection > Foxglove WebSocket > {url}, layout "
-                      f"{control_layout_path()}; the run is paused: set run.paused to false (or press Resume)",
+                      f"{layout}; the run is paused: set run.paused to false (or press Resume)",
                       highlight=False, markup=False)
 
     return serve

@@ -1,8 +1,9 @@
 """The Foxglove layouts shipped with bt_grasp (``bt_grasp/foxglove_layouts/``).
 
 ``bt_grasp.layout.json``: 3D (the arm, fixtures, point cloud, detections, grasp candidates; the judge's true
-poses off by default), the camera image with the detections overlaid, State Transitions of the pick tree's
-leaves from ``/bt/tick.leaves.<leaf>``, joint-angle and gripper plots, the log and the run result.
+poses off by default), the camera image with the detections overlaid, a State Transitions panel with no rows,
+joint-angle and gripper plots, the log and the run result: the base of the layout made for the tree that
+runs (``bt_grasp.recording.tree_layout`` fills in one row per leaf of that tree, by path).
 
 ``bt_grasp_control.layout.json`` (a run with ``--live --control``): the same panels and, on the right, the
 stock Parameters panel (the run's state, breakpoints, settings, object choice and faults:

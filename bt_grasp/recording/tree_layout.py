@@ -114,13 +114,19 @@ def layout_for_tree_file(tree: Path, leaves: Sequence[str] = ()) -> dict[str, An
     return layout_for_structure(tree_structure(loaded.root), Path(tree).name)
 
 
-def write_live_layout(tree: Path, leaves: Sequence[str] = (), log: Path | None = None) -> Path:
-    """Write the layout of ``tree`` for a live view: beside the run's log (``<log>.layout.json``) when it has
-    one, else in a new private temporary folder; returns the file."""
+def write_live_layout(tree: Path, leaves: Sequence[str] = (), log: Path | None = None,
+                      control: bool = False) -> Path:
+    """Write the layout of ``tree`` for a live view (``control``: with the control panels of ``--control``)
+    beside the run's log (``<log>.layout.json``) when it has one, else in a new private temporary folder;
+    returns the file."""
     import tempfile
+
+    from bt_grasp.recording.layout import with_control_panels
 
     target = (log.with_name(log.stem + ".layout.json") if log is not None
               else Path(tempfile.mkdtemp(prefix="bt_grasp_layout_")) / f"{Path(tree).stem}.layout.json")
     target.parent.mkdir(parents=True, exist_ok=True)
-    target.write_text(json.dumps(layout_for_tree_file(tree, leaves), indent=2) + "\n", encoding="utf-8")
+    layout = layout_for_tree_file(tree, leaves)
+    layout = with_control_panels(layout) if control else layout
+    target.write_text(json.dumps(layout, indent=2) + "\n", encoding="utf-8")
     return target
