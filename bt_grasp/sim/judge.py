@@ -1,8 +1,10 @@
 """The judge: did the run achieve its :data:`bt_grasp.scene.goals.Goal`, by physics? Reads the oracle (judge only).
 
 One checker per goal kind (a table, not a chain of ifs); each returns the conditions it checked, so a
-verdict says which one failed. The pipeline never calls this: only the episode's summary, tests and
-benchmarks do.
+verdict says which one failed. Where an object is comes from its true geometry (:func:`object_extent`): its
+centre is the centre of its own-frame bounds, its bottom and top the lowest and highest point of its shape as
+it lies now, so a mesh whose origin is its bottom, or a bottle lying on its side, is judged like a box.
+The pipeline never calls this: only the episode's summary, tests and benchmarks do.
 """
 
 from __future__ import annotations
@@ -18,11 +20,12 @@ from bt_grasp.geometry import Mat4
 from bt_grasp.interfaces import Mount
 from bt_grasp.scene.fixtures import Container
 from bt_grasp.scene.goals import ClearGoal, Goal, PickGoal, PlaceGoal, SortGoal, StackGoal
+from bt_grasp.sim.judge_view import Extent, object_extent
 from bt_grasp.sim.oracle import GroundTruthOracle
 from bt_grasp.sim.placement import Placement, PlacementTracker
 from bt_grasp.sim.world import World
 
-#: an object counts as lifted once its centre rose this much
+#: an object counts as lifted once its centre (the centre of its own-frame bounds) rose this much
 LIFTED_M = 0.02
 #: slack on a pick's lift height (the grip settles a little)
 LIFT_SLACK_M = 0.01
@@ -76,10 +79,10 @@ class Verdict:
 class Judge:
     """Built at the start of a run (it remembers where every object started); ``check`` at its end."""
 
-    def __init__(self, world: World) -> None:
+    def __init__(self, world: World, oracle: GroundTruthOracle | None = None) -> None:
         self._world = world
-        self._oracle = GroundTruthOracle(world)
-        self._start_z = {n: self._oracle.T_world_object(n)[2, 3] for n in self._oracle.object_names()}
+        self._oracle = GroundTruthOracle(world) if oracle is None else oracle
+        self._start_z = {n: self.extent(n).center_m[2] for n in self._oracle.object_names()}
         self.tracker = PlacementTracker(self._oracle)
         self.observe()
 
@@ -114,8 +117,16 @@ class Judge:
             raise ValueError(problem)
         return _CHECKS[goal.kind](self, goal)
 
+    def extent(self, name: str) -> Extent:
+        """Where object ``name``'s true geometry is now (centre, bottom, top; world frame)."""
+        spec = self._world.config.object_spec(name)
+        if spec is None:
+            raise ValueError(f"no object '{name}' in the scene file")
+        return object_extent(spec, self._oracle.T_world_object(name))
+
     def rises(self) -> dict[str, float]:
-        return {n: float(self._oracle.T_world_object(n)[2, 3] - z) for n, z in self._start_z.items()}
+        """How far each object's centre rose since the start of the run."""
+        return {n: self.extent(n).center_m[2] - z for n, z in self._start_z.items()}
 
     def object_poses(self) -> dict[str, list[list[float]]]:
         """Every object's ``T_world_object`` now (4x4 lists): the end of a run's fingerprint."""
@@ -126,7 +137,7 @@ class Judge:
         ws = self._world.config.workspace
         inside = []
         for name in self._oracle.object_names():
-            x, y = self._oracle.T_world_object(name)[:2, 3]
+            x, y = self.extent(name).center_xy_m
             if ws.x_m[0] <= x <= ws.x_m[1] and ws.y_m[0] <= y <= ws.y_m[1]:
                 inside.append(name)
         return tuple(inside)
@@ -200,11 +211,9 @@ def _check_place(judge: Judge, goal: Goal) -> Verdict:
     fixture = scene.fixture(goal.at) if goal.at is not None else None
     xy = goal.at_xy_m if goal.at_xy_m is not None else (fixture.center_xy_m if fixture else (0.0, 0.0))
     surface = float(fixture.surface_z_m) if fixture is not None else 0.0
-    p = judge.placement(goal.object)
-    spec = scene.object_spec(goal.object)
-    height = spec.height_m if spec is not None else 0.0
-    off = float(np.hypot(p.xyz_m[0] - xy[0], p.xyz_m[1] - xy[1]))
-    bottom = p.xyz_m[2] - height / 2 - surface
+    p, extent = judge.placement(goal.object), judge.extent(goal.object)
+    off = float(np.hypot(extent.center_m[0] - xy[0], extent.center_m[1] - xy[1]))
+    bottom = extent.bottom_z_m - surface
     at = off <= goal.tolerance_m and abs(bottom) <= 0.005
     detail = (f"{goal.object} {off * 100:.1f} cm from the target (tolerance {goal.tolerance_m * 100:.1f} cm), "
               f"its bottom {bottom * 1000:.0f} mm above the target surface")
@@ -218,12 +227,10 @@ def _check_stack(judge: Judge, goal: Goal) -> Verdict:
     missing = _missing(goal, [goal.object, goal.on], judge)
     if missing is not None:
         return missing
-    scene = judge._world.config
     top, lower = judge.placement(goal.object), judge.placement(goal.on)
-    h_top = scene.object_spec(goal.object).height_m  # type: ignore[union-attr]
-    h_low = scene.object_spec(goal.on).height_m  # type: ignore[union-attr]
-    off = float(np.hypot(top.xyz_m[0] - lower.xyz_m[0], top.xyz_m[1] - lower.xyz_m[1]))
-    dz = top.xyz_m[2] - (lower.xyz_m[2] + h_low / 2 + h_top / 2)
+    upper_at, lower_at = judge.extent(goal.object), judge.extent(goal.on)
+    off = float(np.hypot(upper_at.center_m[0] - lower_at.center_m[0], upper_at.center_m[1] - lower_at.center_m[1]))
+    dz = upper_at.bottom_z_m - lower_at.top_z_m
     ok = off <= goal.xy_tolerance_m and abs(dz) <= goal.z_tolerance_m and lower.upright
     detail = (f"{goal.object} {off * 100:.1f} cm off {goal.on}'s centre (at most {goal.xy_tolerance_m * 100:.0f}), "
               f"{dz * 1000:+.0f} mm from resting on its top (at most {goal.z_tolerance_m * 1000:.0f})"
@@ -242,10 +249,9 @@ def _in_container(judge: Judge, goal: Goal, wanted: dict[str, str]) -> Verdict:
     outside = []
     for p in placements:
         box = scene.fixture(wanted[p.name])
-        spec = scene.object_spec(p.name)
-        bottom = p.xyz_m[2] - (spec.height_m if spec else 0.0) / 2
-        inside = (isinstance(box, Container) and box.contains_xy(p.xyz_m[:2])
-                  and bottom <= box.surface_z_m + 0.01)
+        extent = judge.extent(p.name)
+        inside = (isinstance(box, Container) and box.contains_xy(extent.center_xy_m)
+                  and extent.bottom_z_m <= box.surface_z_m + 0.01)
         if not inside:
             outside.append(f"{p.name} not on the floor of {wanted[p.name]}")
     conditions = [Condition(Criterion.TARGET_EXISTS, True, ", ".join(wanted)), *_placed_conditions(judge, placements),

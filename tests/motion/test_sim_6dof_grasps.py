@@ -91,9 +91,9 @@ def test_a_side_grasped_bottle_is_placed_upright_on_the_marker(tmp_path: Path) -
     side grasp, leaves backwards along the approach and then up past the bottle's top; MoveHome then starts
     above it (straight up first left the pads around the bottle's neck and MoveHome knocked it over).
 
-    The judge's own ``at_target`` is not asserted: it takes the object's pose as its centre (bottom =
-    z - height / 2) while the household meshes have their origin at the bottom, so it reports the bottom
-    93 mm under the surface for a bottle standing on it. The same check is made here from the mesh's bounds."""
+    The judge's verdict is asserted whole (at_target from the bottle's true geometry: the household meshes have
+    their origin at the bottom, so the bottom is not z - height / 2), and the same check is made here from the
+    mesh's bounds."""
     from bt_grasp.sim.oracle import GroundTruthOracle
 
     episode = _prepare(tmp_path, "bottle_place", "red", seed=0, tree="pick_and_place.xml")
@@ -102,6 +102,7 @@ def test_a_side_grasped_bottle_is_placed_upright_on_the_marker(tmp_path: Path) -
     assert result.tree_status == "SUCCESS", result.to_json()
     met = {c: m for c, m, _ in result.judged.conditions}
     assert met.get("upright") and met.get("resting") and met.get("released"), result.judged.conditions
+    assert met.get("at_target") and result.judged.success and result.success, result.judged.conditions
     T_world_bottle = GroundTruthOracle(episode.world).T_world_object("bottle")
     tilt_deg = math.degrees(math.acos(min(1.0, float(T_world_bottle[2, 2]))))
     assert tilt_deg < 3.0, f"the bottle stands {tilt_deg:.1f} deg off upright"
