@@ -29,11 +29,17 @@ def pick(
     warm: bool = typer.Option(
         False, "--warm", help="Keep the renderer warm between episodes (each episode's world is still built afresh)."
     ),
+    color: str | None = typer.Option(
+        None, "--color", help="Colour the tree picks ('' = any object, by geometry). Default: red, or any object "
+                              "on a scene with mesh or URDF objects."),
 ) -> None:
-    """Pick success over seeded episodes, judged by physics (object held 15 cm up at the end)."""
+    """Pick success over seeded episodes, judged by physics (object held 15 cm up at the end), per tree and per
+    object picked, with why each failure failed."""
     from bt_grasp.episode.pick_bench import run_pick_bench
 
-    report = run_pick_bench(trees, scene, seeds, first_seed, calibration, log_dir, warm)
+    err = Console(stderr=True)  # progress on stderr: stdout stays one JSON object with --json
+    report = run_pick_bench(trees, scene, seeds, first_seed, calibration, log_dir, warm, color,
+                            progress=lambda line: err.print(line, highlight=False, markup=False, soft_wrap=True))
     if as_json:
         typer.echo(json.dumps(report))
         return
@@ -52,7 +58,12 @@ def pick(
             str(r["retries_total"]),
             json.dumps(r["failures"]),
         )
-    Console().print(table)
+    console = Console()
+    console.print(table)
+    for tree, r in report["trees"].items():
+        for name, o in r["per_object"].items():
+            reasons = ", ".join(f"{k} x{v}" for k, v in o["failure_reasons"].items()) or "-"
+            console.print(f"{tree}: {name} {o['successes']}/{o['runs']} (failures: {reasons})", highlight=False)
 
 
 @bench_app.command("sim")
