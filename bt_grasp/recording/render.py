@@ -64,6 +64,10 @@ def summary_table(s: dict[str, Any]) -> Table:
         rows.append(("  retries of", f"{name}: {count}"))
     for name, count in s["failures_per_leaf"].items():
         rows.append(("  failures of", f"{name}: {count}"))
+    by_design = s.get("false_by_design_per_leaf") or {}
+    if by_design:  # counted, not listed: a condition asked by a Fallback, a ForceFailure (--failures lists them)
+        rows.append(("  false by design", f"{sum(by_design.values())} (conditions and decorators; --failures "
+                                          "lists them)"))
     if s["faults"]:
         rows.append(("faults fired", str(len(s["faults"]))))
     if s.get("interventions"):

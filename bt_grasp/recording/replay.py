@@ -197,7 +197,9 @@ def summary(run: RunLog) -> dict[str, Any]:
     nodes = run.nodes
     per_leaf = {_info(run, uid).path or _info(run, uid).name: c[2] for uid, c in counts.items()
                 if c[2] and (uid not in nodes or nodes[uid].is_leaf or not nodes[uid].kind)}
-    failures_per_leaf = Counter(f.path or f.name for f in failures(run))
+    every_failure = failures(run)
+    failures_per_leaf = Counter(f.path or f.name for f in every_failure if f.kind != FailureKind.BY_DESIGN)
+    by_design_per_leaf = Counter(f.path or f.name for f in every_failure if f.kind == FailureKind.BY_DESIGN)
     first, last = (run.ticks[0], run.ticks[-1]) if run.ticks else (None, None)
     sim_s = (last.stamp_ns - first.stamp_ns) * 1e-9 if first and last else 0.0
     retries = _result_field(run, "retries")
@@ -217,7 +219,8 @@ def summary(run: RunLog) -> dict[str, Any]:
         "sim_duration_s": round(sim_s, 6),
         "retries": retries if retries is not None else sum(per_leaf.values()),
         "retries_per_leaf": dict(sorted(per_leaf.items())),
-        "failures_per_leaf": dict(sorted(failures_per_leaf.items())),
+        "failures_per_leaf": dict(sorted(failures_per_leaf.items())),  # not the ones false by design:
+        "false_by_design_per_leaf": dict(sorted(by_design_per_leaf.items())),  # conditions asked, ForceFailure
         "truncated": run.truncated,
         "ticks_recovered": run.ticks_recovered,
         "result": run.result,

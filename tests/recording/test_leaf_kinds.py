@@ -99,7 +99,9 @@ def test_replay_counts_retries_and_failures_per_leaf_of_a_real_tree(tmp_path: Pa
     assert kinds["Fallback"] == (NodeKind.CONTROL.value, False)
     info = summary(run)
     # three attempts of FlakyReach, two failed, each followed by a retry; Recover ran twice, never retried;
-    # ForceFailure failed on its own (its child succeeded), so it is reported, as a decorator, not a leaf
-    # (keyed by each node's path, its one name: BT.CPP's fullPath, "name::uid" for a node without a name)
-    assert info["failures_per_leaf"] == {"FlakyReach::3": 2, "ForceFailure::4": 2}
+    # ForceFailure failed on its own (its child succeeded), so it is reported, as a decorator, not a leaf, and
+    # counted apart: false by design (keyed by each node's path, its one name: BT.CPP's fullPath, "name::uid"
+    # for a node without a name)
+    assert info["failures_per_leaf"] == {"FlakyReach::3": 2}
+    assert info["false_by_design_per_leaf"] == {"ForceFailure::4": 2}
     assert info["retries_per_leaf"] == {"FlakyReach::3": 2}
