@@ -162,7 +162,7 @@ def test_scene_validate_refuses_a_broken_scene_in_one_line() -> None:
     assert proc.returncode == 2 and proc.stdout == "", proc.stdout
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1, proc.stderr
-    assert re.fullmatch(rf"error: {re.escape(bad)}:\d+: .*unknown key 'colr'.*", lines[0]), lines[0]
+    assert re.fullmatch(rf"bt-grasp: error: {re.escape(bad)}:\d+: .*unknown key 'colr'.*", lines[0]), lines[0]
 
 
 # --- demo and calibrate --------------------------------------------------------------------------------------------

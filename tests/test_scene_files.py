@@ -68,6 +68,6 @@ def test_cli_exit_code_2_and_one_line(name: str, tmp_path: Path) -> None:
     assert proc.returncode == 2, proc.stderr
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1, proc.stderr
-    assert lines[0].startswith(f"error: {path}"), lines[0]
+    assert lines[0].startswith(f"bt-grasp: error: {path}"), lines[0]
     assert "Traceback" not in proc.stderr
     assert not any(tmp_path.iterdir()), "nothing is written for a bad scene"

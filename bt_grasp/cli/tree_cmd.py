@@ -1,6 +1,6 @@
 """`bt-grasp tree ...`: validate, show, convert and dry-run behaviour-tree files; write Groot2's node models.
 
-Every problem with a file or argument prints one line on stderr (``file:line: problem``) and exits 2.
+Every problem with a file or argument prints one line on stderr (``bt-grasp: error: file:line: problem``) and exits 2.
 """
 
 from __future__ import annotations
@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 
 import typer
 
+from bt_grasp.cli import ERROR_PREFIX
 from bt_grasp.cli.plugin_option import leaves_option
 from bt_grasp.errors import InputError
 
@@ -44,7 +45,7 @@ def tree_registry(leaves: list[str] | None = None) -> NodeRegistry:
 
 
 def _fail(exc: InputError) -> typer.Exit:
-    typer.echo(exc.message, err=True)
+    typer.echo(f"{ERROR_PREFIX}{exc.message}", err=True)
     return typer.Exit(exc.exit_code)
 
 
@@ -113,15 +114,20 @@ def show_cmd(
 def convert_cmd(
     source: Path = typer.Argument(..., help="Input tree file (.xml, .yaml, .yml)."),
     target: Path = typer.Argument(..., help="Output file; its extension chooses the format."),
+    force: bool = typer.Option(False, "--force", help="Overwrite OUT if it exists."),
     leaves: list[str] = leaves_option(),
 ) -> None:
     """Convert between BT.CPP v4 XML and the YAML twin format (node types are not resolved: --leaves plugins
-    are only loaded and checked)."""
+    are only loaded and checked). An existing OUT is kept unless --force."""
     from bt_grasp.tree.formats.convert import convert_file, format_of
 
     _quiet_library_logs()
     try:
         format_of(target)
+        if target.exists() and source.exists() and target.resolve() == source.resolve():
+            raise InputError(target, "is the input file; write the converted tree to another file")
+        if target.exists() and not force:
+            raise InputError(target, "exists; pass --force to overwrite it")
         if leaves:
             tree_registry(leaves)
         convert_file(source, target)

@@ -43,7 +43,8 @@ def _one_line_error(capsys: pytest.CaptureFixture[str]) -> str:
     assert "Traceback" not in err
     lines = err.strip().splitlines()
     assert len(lines) == 1, err
-    return lines[0]
+    assert lines[0].startswith("bt-grasp: error: "), err  # the one error format of every command
+    return lines[0].removeprefix("bt-grasp: error: ")
 
 
 def test_validate_needs_the_plugin_and_passes_with_it(tree_file: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -105,4 +105,4 @@ def test_a_bad_installed_plugin_is_named_with_its_distribution(
     err = capsys.readouterr().err.strip()
     assert "Traceback" not in err and len(err.splitlines()) == 1
     source = "entry point 'scanner = scan_pkg.nodes:register' of scan-pkg (group bt_grasp.leaves)"
-    assert err == f"{source}: {problem}"
+    assert err == f"bt-grasp: error: {source}: {problem}"

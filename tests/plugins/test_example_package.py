@@ -142,5 +142,5 @@ def test_users_leaves_in_a_real_run_replay_and_report(venv_python: Path, tmp_pat
     resim = subprocess.run([*bt, "replay", str(log), "--resim"], capture_output=True, text=True, timeout=300,
                            cwd=REPO)
     assert resim.returncode == 2
-    assert resim.stderr.strip() == (f"error: {log}: the run used --leaves {USER_FILE}; pass them again with "
+    assert resim.stderr.strip() == (f"bt-grasp: error: {log}: the run used --leaves {USER_FILE}; pass them again with "
                                     "--leaves (a log never loads code by itself)")

@@ -192,7 +192,7 @@ def run_cli(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, s
         app(args=args, standalone_mode=False)
         code = 0
     except BtGraspError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        print(f"bt-grasp: error: {exc}", file=sys.stderr)
         code = exc.exit_code
     captured = capsys.readouterr()
     return code, captured.out, captured.err

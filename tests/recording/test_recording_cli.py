@@ -117,7 +117,7 @@ def test_bad_logs_exit_2_with_one_sentence(name, capsys):
     code, out, err = run_cli(["replay", str(path)], capsys)
     assert code == 2
     lines = err.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith(f"error: {path}: ")
+    assert len(lines) == 1 and lines[0].startswith(f"bt-grasp: error: {path}: ")
     assert "Traceback" not in err and out == ""
 
 
@@ -125,5 +125,5 @@ def test_bad_log_through_the_real_entry_point():
     proc = subprocess.run([sys.executable, "-m", "bt_grasp.cli.main", "replay", str(BAD_LOGS / "text.mcap")],
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2, proc.stderr
-    assert proc.stderr.strip() == (f"error: {BAD_LOGS / 'text.mcap'}: is not an MCAP file "
+    assert proc.stderr.strip() == (f"bt-grasp: error: {BAD_LOGS / 'text.mcap'}: is not an MCAP file "
                                    "(it does not start with the MCAP magic bytes)")

@@ -44,7 +44,7 @@ def test_bad_mesh_input_exits_2_with_file_line_and_one_sentence(name: str, capsy
     assert main(["scene", "validate", str(MESHES / name)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1, err
-    assert err[0].startswith(f"error: {MESHES / named}:{line}: "), err[0]
+    assert err[0].startswith(f"bt-grasp: error: {MESHES / named}:{line}: "), err[0]
     assert fragment in err[0], err[0]
     assert not any(_private_mesh_cache.rglob("*")), "validating writes nothing, not even to the cache"
 
@@ -55,7 +55,7 @@ def test_a_missing_mesh_is_one_sentence_from_the_command_line_too() -> None:
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2, proc.stderr
     assert proc.stderr.strip().splitlines() == [
-        f"error: {path}:5: object 'thing': cannot read '{MESHES / 'no_such_file.obj'}': no such file"]
+        f"bt-grasp: error: {path}:5: object 'thing': cannot read '{MESHES / 'no_such_file.obj'}': no such file"]
 
 
 @pytest.mark.parametrize(("name", "extents_m", "rgb", "mass_kg"), [

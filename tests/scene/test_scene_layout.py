@@ -155,7 +155,7 @@ def test_bad_choose_or_rest_pose_is_one_sentence_with_file_line(case: str, tmp_p
     assert main(["scene", "validate", str(path)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1, err
-    assert err[0].startswith(f"error: {path}:{line}: "), err[0]
+    assert err[0].startswith(f"bt-grasp: error: {path}:{line}: "), err[0]
     assert fragment in err[0], err[0]
 
 

@@ -94,7 +94,7 @@ def test_run_with_a_missing_scene_calibration_exits_2_naming_the_scene_line(tmp_
     proc = _bt("run", "trees/pick.xml", "--scene", str(scene), "--log", str(log))
     assert proc.returncode == 2, proc.stderr
     lines = proc.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith(f"error: {scene}:2:"), proc.stderr
+    assert len(lines) == 1 and lines[0].startswith(f"bt-grasp: error: {scene}:2:"), proc.stderr
     assert "bt-grasp calibrate" in lines[0]
     assert not log.exists()
 

@@ -43,6 +43,6 @@ def test_tree_not_fitting_the_scene_exits_2(name: str, tmp_path: Path) -> None:
     )
     assert proc.returncode == 2, proc.stdout + proc.stderr
     lines = proc.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith(f"error: {BAD / name}:{line}:"), proc.stderr
+    assert len(lines) == 1 and lines[0].startswith(f"bt-grasp: error: {BAD / name}:{line}:"), proc.stderr
     assert fragment in lines[0], lines[0]
     assert not log.exists() and proc.stdout.strip() == ""

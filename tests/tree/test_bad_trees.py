@@ -41,7 +41,7 @@ def _check_one_line(name: str, code: int, stdout: str, stderr: str) -> None:
     lines = stderr.strip().splitlines()
     assert len(lines) == 1, stderr
     shown = str(BAD / str(expected.get("file", name)))
-    assert lines[0].startswith(f"{shown}:{expected['line']}: "), lines[0]
+    assert lines[0].startswith(f"bt-grasp: error: {shown}:{expected['line']}: "), lines[0]
     assert "Traceback" not in stderr and stdout == ""
 
 

@@ -80,13 +80,13 @@ def test_run_substitute(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> N
     assert code == 0 and json.loads(out)["ticks"] == 3
     code, _, err = run_cli(capsys, "tree", "run", str(path), "--dry", "--substitute", "Perceive")
     assert code == 2 and err.strip().splitlines() == [
-        "--substitute: 'Perceive' is not NODE=REPLACEMENT (e.g. Perceive=AlwaysSuccess)"
+        "bt-grasp: error: --substitute: 'Perceive' is not NODE=REPLACEMENT (e.g. Perceive=AlwaysSuccess)"
     ]
 
 
 def test_run_requires_dry(tree_file: Path, capsys: pytest.CaptureFixture[str]) -> None:
     code, _, err = run_cli(capsys, "tree", "run", str(tree_file))
-    assert code == 2 and err.startswith("--dry:")
+    assert code == 2 and err.startswith("bt-grasp: error: --dry:")
 
 
 def test_show_text_and_dot(tree_file: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -120,7 +120,7 @@ def test_convert_round_trip(tree_file: Path, tmp_path: Path, capsys: pytest.Capt
 def test_missing_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     missing = tmp_path / "nope.xml"
     code, _, err = run_cli(capsys, "tree", "validate", str(missing))
-    assert code == 2 and err == f"{missing}: no such file\n"
+    assert code == 2 and err == f"bt-grasp: error: {missing}: no such file\n"
 
 
 def test_tick_overhead_reports_microseconds() -> None:

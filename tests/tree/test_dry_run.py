@@ -208,7 +208,7 @@ def test_a_bad_outcome_is_one_sentence_and_exit_2(
     outcome: str, sentence: str, capsys: pytest.CaptureFixture[str]
 ) -> None:
     code, out, err = run_cli(capsys, "tree", "run", "--dry", RECOVERY, "--outcome", outcome)
-    assert (code, out, err) == (2, "", sentence + "\n")
+    assert (code, out, err) == (2, "", "bt-grasp: error: " + sentence + "\n")
 
 
 def test_a_wildcard_substitutes_robot_leaves_only_unless_a_kind_is_named() -> None:

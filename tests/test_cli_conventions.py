@@ -1,0 +1,85 @@
+"""CLI conventions (issue 24): one error format (``bt-grasp: error: ...``, one line) on every command, usage
+errors included (the prefixes differed by command: ``error:`` from main, none at all from ``tree``); shell
+completion on (commands and an enum option's choices complete); ``tree convert`` refuses to overwrite."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from bt_grasp.cli.main import main
+
+REPO = Path(__file__).resolve().parents[1]
+PREFIX = "bt-grasp: error: "
+MISSING = "no_such_file_for_bt_grasp"
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["tree", "validate", f"{MISSING}.xml"],
+        ["tree", "show", f"{MISSING}.xml"],
+        ["tree", "convert", f"{MISSING}.xml", "out.yaml"],
+        ["tree", "run", "--dry", f"{MISSING}.xml"],
+        ["scene", "validate", f"{MISSING}.yaml"],
+        ["replay", f"{MISSING}.mcap"],
+        ["run", f"{MISSING}.xml", "--scene", "scenes/tabletop.yaml"],
+        ["eval", "run", f"{MISSING}.yaml"],
+        ["eval", "report", f"{MISSING}.jsonl", "--out", "r.html"],
+        ["eval", "export", f"{MISSING}.jsonl", "--out", "r.parquet"],
+        ["tree", "validate"],  # usage errors: click's message, the same prefix
+        ["eval", "run", "--workers", "many"],
+        ["bench", "plan", "--no-such-option"],
+        ["no-such-command"],
+    ],
+    ids=lambda argv: "-".join(a for a in argv if MISSING not in a)[:40],
+)
+def test_every_command_has_the_one_error_format(
+    argv: list[str], capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    monkeypatch.chdir(REPO)
+    argv = [str(tmp_path / a) if a.startswith(("r.", "out.")) else a for a in argv]
+    code = main(argv)
+    captured = capsys.readouterr()
+    lines = captured.err.splitlines()
+    assert code == 2 and captured.out == "", captured
+    assert len(lines) == 1 and lines[0].startswith(PREFIX), captured.err
+    assert "Traceback" not in captured.err
+
+
+def _complete(words: str) -> list[str]:
+    env = {**os.environ, "_BT_GRASP_COMPLETE": "complete_bash", "COMP_WORDS": words,
+           "COMP_CWORD": str(len(words.split()) - (0 if words.endswith(" ") else 1))}
+    done = subprocess.run([sys.executable, "-m", "bt_grasp.cli.main"], env=env, cwd=REPO, capture_output=True,
+                          text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    return done.stdout.split()
+
+
+def test_shell_completion_is_on() -> None:
+    assert _complete("bt-grasp ev") == ["eval"]
+    assert _complete("bt-grasp eval run --keep-logs ") == ["failures", "all", "none"]  # a typed choice
+
+
+def test_install_completion_is_offered(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["--help"]) == 0
+    out = capsys.readouterr().out
+    assert "--install-completion" in out and "--show-completion" in out
+
+
+def test_tree_convert_refuses_to_overwrite_without_force(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    source = tmp_path / "pick.xml"
+    source.write_text((REPO / "trees/pick.xml").read_text())
+    target = tmp_path / "pick.yaml"
+    target.write_text("# my notes\n")
+    assert main(["tree", "convert", str(source), str(target)]) == 2
+    assert capsys.readouterr().err == f"{PREFIX}{target}: exists; pass --force to overwrite it\n"
+    assert target.read_text() == "# my notes\n"  # untouched (on main as it was: silently overwritten)
+    assert main(["tree", "convert", str(source), str(target), "--force"]) == 0
+    assert capsys.readouterr().out == f"wrote {target}\n" and "Sequence" in target.read_text()
+    assert main(["tree", "convert", str(source), str(source), "--force"]) == 2
+    assert capsys.readouterr().err == f"{PREFIX}{source}: is the input file; write the converted tree to another file\n"
