@@ -17,6 +17,7 @@ cluster the actors went and the cluster stayed (``tests/campaign/test_worker_lif
 from __future__ import annotations
 
 import logging
+import socket
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
@@ -46,6 +47,33 @@ class EpisodeActor:
         return self.worker.run(episode)
 
 
+#: how long the head's address may take to accept a TCP connection before the campaign gives up on it
+PROBE_TIMEOUT_S = 3.0
+
+
+def probe_address(address: str, timeout: float = PROBE_TIMEOUT_S) -> None:
+    """Refuse, within ``timeout`` seconds and in one sentence, a ``--ray HOST:PORT`` nobody answers on.
+
+    ``ray.init`` on an unreachable address retries for about two minutes while Ray's C++ core prints its own
+    warnings; a plain TCP connection to the head's GCS port answers the same question at once. ``local``,
+    ``auto`` and ``ray://`` client addresses are left to Ray (they fail fast, or are not a GCS port)."""
+    if address in ("local", "auto") or "://" in address:
+        return
+    host, sep, port_text = address.rpartition(":")
+    if not sep or not host or not port_text.isdigit() or not 0 < int(port_text) < 65536:
+        raise InputError("--ray", f"expected HOST:PORT (the head's GCS port, 6379 by default), 'auto' or 'local', "
+                                  f"got '{address}'")
+    try:
+        with socket.create_connection((host.strip("[]"), int(port_text)), timeout=timeout):
+            pass
+    except OSError as exc:
+        reason = "no answer" if isinstance(exc, TimeoutError) else (exc.strerror or str(exc)).lower()
+        raise InputError(
+            "--ray", f"cannot reach the Ray cluster at '{address}' ({reason} within {timeout:g} s); is "
+            "`ray start --head` running there, and the port open?"
+        ) from None
+
+
 class RayEngine:
     def __init__(
         self,
@@ -62,6 +90,7 @@ class RayEngine:
         self.keep_logs = keep_logs
 
     def _connect(self) -> Any:
+        probe_address(self.address)
         import ray
 
         address = None if self.address == "local" else self.address

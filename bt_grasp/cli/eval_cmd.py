@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -56,23 +57,48 @@ def progress_printer(console: Console) -> Any:
     return show
 
 
+class KeepLogsChoice(StrEnum):
+    """Which episodes keep their MCAP log (``bt_grasp.campaign.worker.KeepLogs``, kept literal: --help imports
+    no campaign code)."""
+
+    failures = "failures"
+    all = "all"
+    none = "none"
+
+
 @eval_app.command("run")
 def run(
-    campaign_file: Path = typer.Argument(..., help="Campaign YAML file."),
-    out: Path = typer.Option(..., "--out", help="Folder for the results (NAME.jsonl) and kept MCAP logs."),
+    campaign_file: Path | None = typer.Argument(
+        None, help="Campaign YAML file (docs/campaigns.md); or give --tree and --scene instead."
+    ),
+    trees: list[Path] = typer.Option(
+        [], "--tree", help="Without a campaign file: the tree to evaluate (repeatable).", show_default=False
+    ),
+    scenes: list[Path] = typer.Option(
+        [], "--scene", help="Without a campaign file: the scene to run it on (repeatable).", show_default=False
+    ),
+    seeds: int = typer.Option(10, "--seeds", min=1, help="Without a campaign file: seeded episodes per tree x scene."),
+    first_seed: int = typer.Option(0, "--first-seed", min=0, help="Without a campaign file: the first seed."),
+    name: str | None = typer.Option(
+        None, "--name", help="Without a campaign file: the campaign's name (default: TREE-SCENE)."
+    ),
+    out: Path | None = typer.Option(
+        None, "--out", help="Folder for the results (NAME.jsonl) and kept MCAP logs (default: out/NAME)."
+    ),
     workers: int = typer.Option(0, "--workers", min=0, help="Local worker processes (0 = one per core)."),
     ray: str | None = typer.Option(
         None, "--ray", metavar="ADDRESS",
         help="Run on a Ray cluster: its head's host:port, 'auto' (the cluster this machine belongs to) or 'local' "
-        "(start a throw-away one here).",
+        "(start a throw-away one here). An address nobody answers on is refused within seconds.",
     ),
-    keep_logs: str = typer.Option(
-        "failures", "--keep-logs", help="Which episodes keep their MCAP log: failures|all|none."
+    keep_logs: KeepLogsChoice = typer.Option(
+        KeepLogsChoice.failures, "--keep-logs", help="Which episodes keep their MCAP log."
     ),
     parquet: bool = typer.Option(True, "--parquet/--no-parquet", help="Also export the results as NAME.parquet."),
     leaves: list[str] = leaves_option(),
 ) -> None:
-    """Run every episode of a campaign that has no result yet (so running it again resumes it)."""
+    """Evaluate: every episode of a campaign file, or of `--tree T --scene S --seeds N`, that has no result yet
+    (so running it again resumes it)."""
     from bt_grasp.campaign.backend import warm_backend
     from bt_grasp.campaign.results import export_parquet, read_rows, results_path
     from bt_grasp.campaign.runner import run_campaign
@@ -80,13 +106,26 @@ def run(
     from bt_grasp.campaign.worker import KeepLogs
     from bt_grasp.errors import InputError
 
-    try:
-        keep = KeepLogs(keep_logs)
-    except ValueError:
-        raise InputError("--keep-logs", f"expected failures, all or none, got '{keep_logs}'") from None
+    keep = KeepLogs(keep_logs.value)
+    if ray is not None:
+        from bt_grasp.campaign.ray_engine import probe_address
+
+        probe_address(ray)  # before anything else: an unreachable head is one sentence, within seconds
+    if campaign_file is None:
+        if not trees or not scenes:
+            raise InputError("eval run", "give a campaign file, or --tree and --scene (e.g. `bt-grasp eval run "
+                                         "--tree trees/pick.xml --scene scenes/tabletop.yaml --seeds 50`)")
+        campaign_file = _options_campaign(trees, scenes, seeds, first_seed, name, out)
+    else:
+        given = [flag for flag, value in (("--tree", trees), ("--scene", scenes), ("--name", name)) if value]
+        if given:
+            raise InputError(given[0], f"does not go with a campaign file; {campaign_file} already names the trees, "
+                                       "scenes and seeds")
     # plugin files as absolute paths: every worker loads them (on a Ray cluster, the same path on each node)
     plugins = tuple(str(Path(v).absolute()) if v.endswith(".py") else v for v in leaves)
     campaign = load_campaign(campaign_file, leaves=plugins)
+    if out is None:
+        out = Path("out") / campaign.name
     log_dir = out / "logs"
     if ray is not None:
         from bt_grasp.campaign.ray_engine import RayEngine
@@ -109,6 +148,43 @@ def run(
     typer.echo(f"{len(rows)} episodes, {ok} succeeded ({progress.done} run now): {path}")
 
 
+def _options_campaign(
+    trees: list[Path], scenes: list[Path], seeds: int, first_seed: int, name: str | None, out: Path | None
+) -> Path:
+    """The campaign file `eval run --tree T --scene S --seeds N` stands for, written into the output folder
+    (``NAME.campaign.yaml``: the run is resumable and its inputs are on record). Paths in it are absolute."""
+    import re
+
+    import yaml
+
+    from bt_grasp.errors import InputError
+
+    for flag, paths in (("--tree", trees), ("--scene", scenes)):
+        for path in paths:
+            if not path.is_file():
+                raise InputError(flag, f"no such file '{path}'")
+    if name is None:
+        name = "-".join(dict.fromkeys(p.stem for p in [*trees, *scenes]))
+    if not re.fullmatch(r"[A-Za-z0-9_.-]+", name):
+        raise InputError("--name", f"'{name}' may hold only letters, digits, '_', '.' and '-' (it names the results "
+                                   "file)")
+    folder = Path("out") / name if out is None else out
+    data = {
+        "name": name,
+        "description": "written by `bt-grasp eval run --tree ... --scene ...`",
+        "trees": [str(p.resolve()) for p in trees],
+        "scenes": [str(p.resolve()) for p in scenes],
+        "seeds": {"first": first_seed, "count": seeds},
+    }
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        path = folder / f"{name}.campaign.yaml"
+        path.write_text(yaml.safe_dump(data, sort_keys=False))
+    except OSError as exc:
+        raise InputError(folder, f"cannot write the campaign file there: {exc.strerror or exc}") from None
+    return path
+
+
 @eval_app.command("export")
 def export(
     results: Path = typer.Argument(..., help="A campaign's results file (NAME.jsonl)."),
@@ -117,7 +193,11 @@ def export(
     """Export a results file to Parquet."""
     from bt_grasp.campaign.results import export_parquet, read_rows
 
-    typer.echo(str(export_parquet(read_rows(results), out)))
+    _writable_file(out, "Parquet")
+    try:
+        typer.echo(str(export_parquet(read_rows(results), out)))
+    except OSError as exc:
+        raise _cannot_write(out, exc) from None
 
 
 @eval_app.command("report")
@@ -129,8 +209,27 @@ def report(
     """A self-contained HTML report (no network needed) with success rates, failures, times, retries."""
     from bt_grasp.campaign.report import build_report
 
-    written = build_report(results, out, compare)
+    _writable_file(out, "HTML")
+    try:
+        written = build_report(results, out, compare)
+    except OSError as exc:
+        raise _cannot_write(out, exc) from None
     typer.echo(f"{written[0]}  (figures: {written[1].parent})")
+
+
+def _writable_file(out: Path, kind: str) -> None:
+    """``--out`` names a file to write, not a folder (a folder was a traceback: issue 24)."""
+    from bt_grasp.errors import InputError
+
+    if out.is_dir():
+        raise InputError("--out", f"'{out}' is a folder; give the {kind} file to write, e.g. "
+                                  f"{out / ('report.html' if kind == 'HTML' else 'results.parquet')}")
+
+
+def _cannot_write(out: Path, exc: OSError) -> Exception:
+    from bt_grasp.errors import InputError
+
+    return InputError("--out", f"cannot write '{exc.filename or out}': {(exc.strerror or str(exc)).lower()}")
 
 
 def register(app: typer.Typer) -> None:
