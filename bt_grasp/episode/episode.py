@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from bt_grasp.episode.request import BlackboardValue, EpisodeRequest
-from bt_grasp.episode.result import ChainStep, EpisodeResult, Judged
+from bt_grasp.episode.result import ChainStep, EpisodeResult, Judged, interrupted_result
 from bt_grasp.episode.worlds import FreshWorlds, WorldSource
 from bt_grasp.errors import InputError
 from bt_grasp.scene.goals import Goal, PickGoal
@@ -216,7 +216,10 @@ class Episode:
             # spent on a pick, `bt-grasp bench budget`); reading changes nothing in the world
             observe = judge.observe if judge.places(self.inputs.goal) else None
 
+            ticked = [0]  # the last tick started (an interrupted run's result says where it stopped)
+
             def tick_hook(tick: int, tree: LoadedTree) -> None:
+                ticked[0] = tick
                 if observe is not None:
                     observe()
                 if injector is not None:
@@ -241,7 +244,12 @@ class Episode:
             runner = TreeRunner(self.tree, world, steps_per_tick=world.steps_per_tick, recorder=tick_recorder,
                                 robot_state=read_robot, on_tick=tick_hook, gate=controller,
                                 on_failure=self._failure_seen if self.on_failure else None)
-            outcome = runner.run(request.max_ticks)
+            try:
+                outcome = runner.run(request.max_ticks)
+            except KeyboardInterrupt:  # Ctrl-C: the log is finished and says the run was interrupted, not ended
+                if recorder is not None:
+                    recorder.write_result(world.now_ns(), interrupted_result(ticked[0], world.now_ns(), request.seed))
+                raise
             # a placement goal's "resting for 1 s after release" needs the world to run on a little
             for _ in range(judge.settle_ticks(self.inputs.goal)):
                 world.step_tick()

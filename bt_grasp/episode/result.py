@@ -120,3 +120,23 @@ class EpisodeResult:
             "faults_fired": self.faults_fired,
             "planning": {k: v for k, v in self.planning.to_json().items()},
         }
+
+
+#: ``reason`` of a run a Ctrl-C ended (its result is not judged: ``success`` is null)
+INTERRUPTED = "INTERRUPTED"
+
+
+def interrupted_result(tick: int, now_ns: int, seed: int) -> dict[str, JsonValue]:
+    """The result a run ended by Ctrl-C records before its log is finished: not judged (``success`` null),
+    ``interrupted`` true, and the tick and simulated time it stopped at (replay and the report say so)."""
+    return {
+        "success": None,
+        "interrupted": True,
+        "tree_status": "RUNNING",
+        "reason": INTERRUPTED,
+        "failed_leaf": None,
+        "failed_path": None,
+        "ticks": tick,
+        "sim_time_s": round(now_ns * 1e-9, 3),
+        "seed": seed,
+    }

@@ -42,7 +42,10 @@ def summary_table(s: dict[str, Any]) -> Table:
     table.add_column(style="bold")
     table.add_column()
     outcome: Text
-    if s["success"] is None:
+    if s.get("interrupted"):
+        outcome = Text(f"INTERRUPTED (Ctrl-C) at tick {(s['result'] or {}).get('ticks', '?')}: not judged",
+                       style="bold yellow")
+    elif s["success"] is None:
         outcome = Text("no result recorded", style="yellow")
     else:
         ok = bool(s["success"])
@@ -51,7 +54,7 @@ def summary_table(s: dict[str, Any]) -> Table:
         ("log", s["file"]),
         ("tree", s["tree"] or "-"),
         ("scene", s["scene"] or "-"),
-        ("seed", str(s["seed"]) or "-"),
+        ("seed", "-" if s["seed"] is None else str(s["seed"])),
         ("fault plan", s["fault_plan"] or "-"),
         ("result", outcome),
         ("reason", str(s["reason"]) if s["reason"] else "-"),

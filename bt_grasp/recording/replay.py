@@ -190,6 +190,14 @@ def _result_field(run: RunLog, key: str) -> Any:
     return run.result.get(key) if run.result else None
 
 
+def _int_or_none(text: str | None) -> int | None:
+    """A metadata value that holds an integer, as an int (None when absent or not an integer)."""
+    try:
+        return int(text) if text is not None else None
+    except ValueError:
+        return None
+
+
 def summary(run: RunLog) -> dict[str, Any]:
     """The replay summary as JSON-able data."""
     meta = run.metadata
@@ -207,9 +215,10 @@ def summary(run: RunLog) -> dict[str, Any]:
         "file": str(run.path),
         "tree": meta.get("tree_file", ""),
         "scene": meta.get("scene_file", ""),
-        "seed": meta.get("seed", ""),
+        "seed": _int_or_none(meta.get("seed")),  # MCAP metadata is text: the seed is a number here
         "fault_plan": meta.get("fault_plan", ""),
         "success": _result_field(run, "success"),
+        "interrupted": bool(_result_field(run, "interrupted")),  # Ctrl-C ended the run (success is null)
         "reason": _result_field(run, "reason"),
         "failed_leaf": _result_field(run, "failed_leaf"),
         "failed_path": _result_field(run, "failed_path"),
