@@ -151,6 +151,10 @@ def run(
         DEFAULT_LIFT_HEIGHT_M, "--lift-height", help="The pick goal's lift height in metres, also {lift_height}."
     ),
     quiet: bool = typer.Option(False, "--quiet", help="No live progress."),
+    as_json: bool = typer.Option(
+        False, "--json", help="Print the summary as exactly one JSON object on stdout (the text summary is left out; "
+        "progress stays on stderr)."
+    ),
     live: int | None = typer.Option(
         None, "--live", metavar="[PORT]",
         help=f"Serve the run live to Foxglove (WebSocket on 127.0.0.1, port {LIVE_DEFAULT_PORT} unless given).",
@@ -224,6 +228,8 @@ def run(
                          "(--control), not both; drop one of the two")
     if control and live is None:
         raise InputError("--control", "takes commands from a live viewer, so it needs --live")
+    if interactive and as_json:
+        raise InputError("--json", "an interactive run draws on the terminal; drop --json or --interactive")
     if interactive and resident:
         raise InputError("--interactive", "an interactive run cannot be --resident; drop one of the two")
     console = Console(stderr=True)
@@ -258,7 +264,10 @@ def run(
     if summary_json is not None:  # written first: nothing printed may stand between a run and its record
         summary_json.parent.mkdir(parents=True, exist_ok=True)
         summary_json.write_text(json.dumps(summary.to_json(), indent=2) + "\n")
-    print_summary(Console(), summary)
+    if as_json:
+        typer.echo(json.dumps(summary.to_json()))
+    else:
+        print_summary(Console(), summary)
     raise typer.Exit(0 if summary.success else 1)
 
 
