@@ -65,6 +65,26 @@ def test_shell_completion_is_on() -> None:
     assert _complete("bt-grasp eval run --keep-logs ") == ["failures", "all", "none"]  # a typed choice
 
 
+@pytest.mark.parametrize(
+    ("words", "choices", "bad"),
+    [
+        ("bt-grasp tree show trees/pick.xml --format ", ["text", "dot", "png", "svg"], ["--format", "jpg"]),
+        ("bt-grasp calibrate --mount ", ["eye-to-hand", "eye-in-hand"], ["--mount", "wrist"]),
+        ("bt-grasp eval run --keep-logs ", ["failures", "all", "none"], ["--keep-logs", "some"]),
+    ],
+    ids=["tree-show-format", "calibrate-mount", "eval-keep-logs"],
+)
+def test_fixed_sets_are_typed_choices(words: str, choices: list[str], bad: list[str],
+                                      capsys: pytest.CaptureFixture[str]) -> None:
+    """A fixed set of values is an enum: the shell completes it and the parser refuses what is not in it (these were
+    free strings checked, or not, by each command: nothing to complete)."""
+    assert _complete(words) == choices
+    argv = [w for w in words.split()[1:] if not w.startswith("--")][:2] + bad
+    assert main(argv + (["--out", "x.yaml"] if argv[0] == "calibrate" else [])) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"{PREFIX}Invalid value for '{bad[0]}'") and f"'{bad[1]}' is not one of" in err, err
+
+
 def test_install_completion_is_offered(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["--help"]) == 0
     out = capsys.readouterr().out

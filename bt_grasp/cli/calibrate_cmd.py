@@ -24,7 +24,7 @@ MOUNTS = tuple(m.value for m in Mount)
 
 def calibrate(
     scene: Path = typer.Option(Path("scenes/tabletop.yaml"), "--scene", help="Scene YAML file."),
-    mount: str = typer.Option("eye-to-hand", "--mount", help="eye-to-hand or eye-in-hand."),
+    mount: Mount = typer.Option(Mount.EYE_TO_HAND, "--mount", help="Where the camera is."),
     out: Path = typer.Option(..., "--out", help="Calibration YAML file to write."),
     seed: int = typer.Option(0, "--seed", help="Seed of the world (camera noise) and of the view planner."),
     poses: int = typer.Option(20, "--poses", min=4, max=60, help="Number of board views to collect."),

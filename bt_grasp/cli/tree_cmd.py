@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import logging
+from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -69,10 +70,19 @@ def validate_cmd(
     typer.echo(f"{file}: OK ({count} nodes, main tree {tree.main_tree})")
 
 
+class ShowFormat(StrEnum):
+    """`tree show --format`: a typed choice (completed by the shell, refused by the parser when unknown)."""
+
+    text = "text"
+    dot = "dot"
+    png = "png"
+    svg = "svg"
+
+
 @tree_app.command("show")
 def show_cmd(
     file: Path = typer.Argument(..., help="XML or YAML tree file."),
-    fmt: str = typer.Option("text", "--format", "-f", help="text, dot, png or svg."),
+    fmt: ShowFormat = typer.Option(ShowFormat.text, "--format", "-f", help="How to draw it."),
     out: Path | None = typer.Option(None, "--out", "-o", help="Write here instead of the terminal."),
     leaves: list[str] = leaves_option(),
 ) -> None:
@@ -84,8 +94,6 @@ def show_cmd(
 
     _quiet_library_logs()
     try:
-        if fmt not in ("text", "dot", "png", "svg"):
-            raise InputError("--format", f"unknown format '{fmt}'; use text, dot, png or svg")
         if fmt in ("png", "svg") and out is None:
             raise InputError("--out", f"--format {fmt} needs --out FILE")
         tree = load_tree(file, tree_registry(leaves))
