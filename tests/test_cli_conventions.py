@@ -5,6 +5,7 @@ completion on (commands and an enum option's choices complete); ``tree convert``
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -103,3 +104,56 @@ def test_tree_convert_refuses_to_overwrite_without_force(tmp_path: Path, capsys:
     assert capsys.readouterr().out == f"wrote {target}\n" and "Sequence" in target.read_text()
     assert main(["tree", "convert", str(source), str(source), "--force"]) == 2
     assert capsys.readouterr().err == f"{PREFIX}{source}: is the input file; write the converted tree to another file\n"
+
+
+def _comments_of_xml(text: str) -> list[str]:
+    return [" ".join(c.split()) for c in re.findall(r"<!--(.*?)-->", text, re.S)]
+
+
+def _comments_of_yaml(text: str) -> list[str]:
+    """The YAML's comment lines, each XML comment's lines joined back into one."""
+    found: list[str] = []
+    previous = -2
+    for number, line in enumerate(text.splitlines()):
+        if line.lstrip().startswith("#"):
+            words = line.lstrip()[1:].strip()
+            if number == previous + 1 and found:
+                found[-1] = f"{found[-1]} {words}".strip()
+            else:
+                found.append(words)
+            previous = number
+    return found
+
+
+def test_tree_convert_keeps_xml_comments_where_they_were(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """All six comments of pick_with_recovery.xml survive XML -> YAML and XML -> XML (none did on main as it was),
+    each right before the node it stood before; both outputs load to the same tree."""
+    from bt_grasp.tree.loader import read_single
+
+    source = REPO / "trees/pick_with_recovery.xml"
+    expected = _comments_of_xml(source.read_text())
+    assert len(expected) == 6
+    as_yaml, as_xml = tmp_path / "r.yaml", tmp_path / "r.xml"
+    assert main(["tree", "convert", str(source), str(as_yaml)]) == 0
+    assert main(["tree", "convert", str(source), str(as_xml)]) == 0
+    capsys.readouterr()
+    yaml_text, xml_text = as_yaml.read_text(), as_xml.read_text()
+    assert _comments_of_yaml(yaml_text) == expected
+    assert _comments_of_xml(xml_text) == expected
+    lines = yaml_text.splitlines()
+    first = next(i for i, line in enumerate(lines) if "planning failed for the best grasp" in line)
+    assert lines[first + 1].strip() == "- Sequence:" and lines[first + 2].strip() == "name: next_candidate"
+    assert re.search(r"<!-- planning failed for the best grasp[^>]*-->\s*<Sequence name=\"next_candidate\"", xml_text)
+    trees = [read_single(p) for p in (source, as_yaml, as_xml)]
+    assert {t.trees["Recover"].root.structure() for t in trees} == {trees[0].trees["Recover"].root.structure()}
+    assert [sorted(t.trees) for t in trees] == [sorted(trees[0].trees)] * 3
+
+
+def test_a_comment_before_no_node_goes_to_the_top(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    source = tmp_path / "m.xml"
+    source.write_text('<root BTCPP_format="4"><!-- top --><BehaviorTree ID="M"><!-- only --><AlwaysSuccess/>'
+                      "<!-- closing --></BehaviorTree></root>\n")
+    target = tmp_path / "m.yaml"
+    assert main(["tree", "convert", str(source), str(target)]) == 0
+    capsys.readouterr()
+    assert target.read_text() == "# top\n# closing\nbtcpp_format: 4\ntrees:\n  # only\n  M: AlwaysSuccess\n"

@@ -1,12 +1,17 @@
 """Convert tree files between BT.CPP v4 XML and the YAML twin format.
 
 Both directions go through :class:`Document`, so a converted file loads to the same tree. Includes stay
-references (their paths are copied as written); comments are not carried over.
+references (their paths are copied as written). An XML file's comments are carried over: a comment stands
+before the node that follows it in the source (XML or YAML ``#`` lines at that node), and a comment before no
+node (the file's header, one before ``<BehaviorTree>``, one closing a block) goes to the top of the file.
+YAML comments are not read (YAML's loaders drop them).
 """
 
 from __future__ import annotations
 
+import re
 import xml.etree.ElementTree as ET
+from collections import defaultdict
 from pathlib import Path
 
 from bt_grasp.errors import InputError
@@ -16,19 +21,55 @@ from bt_grasp.tree.formats.yaml_format import write_yaml
 _PORT_TAGS = {"input": "input_port", "output": "output_port", "inout": "inout_port"}
 
 
-def _node_element(decl: NodeDecl) -> ET.Element:
+class Comments:
+    """An XML source's comments: those before a node, by the node's line, and the rest (the header)."""
+
+    def __init__(self, before: dict[int, list[str]] | None = None, header: list[str] | None = None) -> None:
+        self.before: dict[int, list[str]] = before if before is not None else {}
+        self.header: list[str] = header if header is not None else []
+
+    def take(self, decl: NodeDecl) -> list[str]:
+        """The comments before ``decl`` (once: two nodes on one line do not both get them)."""
+        return self.before.pop(decl.line, []) if decl.line else []
+
+
+_STRUCTURE = frozenset({"root", "BehaviorTree", "TreeNodesModel", "include"})  # elements that are no node
+_COMMENT = re.compile(r"<!--(.*?)-->", re.S)
+_NEXT_TAG = re.compile(r"<\s*(/?)\s*([A-Za-z_][\w.:-]*)")
+
+
+def xml_comments(text: str, node_lines: set[int]) -> Comments:
+    """The comments of XML ``text`` (already parsed safely), each placed before the next element that starts
+    after it when that element is a node (its start line in ``node_lines``), else in the header."""
+    comments = Comments(defaultdict(list), [])
+    for match in _COMMENT.finditer(text):
+        body = match.group(1)
+        following = _NEXT_TAG.search(text, match.end())
+        line = text.count("\n", 0, following.start()) + 1 if following is not None else 0
+        if (following is not None and not following.group(1) and following.group(2) not in _STRUCTURE
+                and line in node_lines):
+            comments.before[line].append(body)
+        else:
+            comments.header.append(body)
+    comments.before = dict(comments.before)
+    return comments
+
+
+def _node_element(decl: NodeDecl, comments: Comments | None = None) -> ET.Element:
     element = ET.Element(decl.type_id)
     if decl.subtree_id is not None:
         element.set("ID", decl.subtree_id)
     for key, value in decl.attributes:
         element.set(key, value)
     for child in decl.children:
-        element.append(_node_element(child))
+        for body in comments.take(child) if comments is not None else ():
+            element.append(ET.Comment(body))
+        element.append(_node_element(child, comments))
     return element
 
 
-def write_xml(document: Document) -> str:
-    """``document`` as BT.CPP v4 XML (compact form)."""
+def write_xml(document: Document, comments: Comments | None = None) -> str:
+    """``document`` as BT.CPP v4 XML (compact form), with ``comments`` (an XML source's) where they were."""
     root = ET.Element("root", {"BTCPP_format": "4"})
     if document.main_tree is not None:
         root.set("main_tree_to_execute", document.main_tree)
@@ -36,7 +77,9 @@ def write_xml(document: Document) -> str:
         ET.SubElement(root, "include", {"path": inc.path})
     for tree_id, tree in document.trees.items():
         tree_element = ET.SubElement(root, "BehaviorTree", {"ID": tree_id})
-        tree_element.append(_node_element(tree.root))
+        for body in comments.take(tree.root) if comments is not None else ():
+            tree_element.append(ET.Comment(body))
+        tree_element.append(_node_element(tree.root, comments))
     if document.models:
         models = ET.SubElement(root, "TreeNodesModel")
         for model in document.models:
@@ -51,7 +94,44 @@ def write_xml(document: Document) -> str:
                 if port.description:
                     port_element.text = port.description
     ET.indent(root, space="  ")
-    return ET.tostring(root, encoding="unicode") + "\n"
+    header = "".join(f"<!--{body}-->\n" for body in (comments.header if comments is not None else ()))
+    return header + ET.tostring(root, encoding="unicode") + "\n"
+
+
+def _hash_lines(body: str, pad: str) -> list[str]:
+    """An XML comment's text as YAML comment lines (its own indentation dropped)."""
+    return [f"{pad}# {text.strip()}".rstrip() for text in body.strip().splitlines()]
+
+
+def _yaml_with_comments(document: Document, comments: Comments) -> str:
+    """The YAML twin with each comment as ``#`` lines before its node's line (nodes are the list items and each
+    tree's root, in the order the writer emits them: depth first, as the document holds them)."""
+    order: list[NodeDecl] = []
+
+    def walk(decl: NodeDecl) -> None:
+        order.append(decl)
+        for child in decl.children:
+            walk(child)
+
+    for tree in document.trees.values():
+        walk(tree.root)
+    lines = write_yaml(document).splitlines()
+    out = [text for body in comments.header for text in _hash_lines(body, "")]
+    nodes = iter(order)
+    in_trees = False
+    for line in lines:
+        indent = len(line) - len(line.lstrip())
+        if indent == 0:
+            in_trees = line.startswith("trees:")
+        stripped = line.lstrip()
+        # a list item, a tree's root (``    Sequence:``), or a tree whose root is a bare name (``  Main: Leaf``)
+        is_node = in_trees and (stripped.startswith("- ") or indent == 4 or (indent == 2 and not line.endswith(":")))
+        if is_node:
+            decl = next(nodes, None)
+            for body in comments.take(decl) if decl is not None else ():
+                out.extend(_hash_lines(body, " " * indent))
+        out.append(line)
+    return "\n".join(out) + "\n"
 
 
 def format_of(path: Path) -> str:
@@ -63,14 +143,33 @@ def format_of(path: Path) -> str:
     raise InputError(path, f"unknown tree file extension '{suffix}'; use .xml, .yaml or .yml")
 
 
-def write_document(document: Document, fmt: str) -> str:
-    return write_xml(document) if fmt == "xml" else write_yaml(document)
+def write_document(document: Document, fmt: str, comments: Comments | None = None) -> str:
+    if fmt == "xml":
+        return write_xml(document, comments)
+    return write_yaml(document) if comments is None else _yaml_with_comments(document, comments)
+
+
+def _node_lines(document: Document) -> set[int]:
+    lines: set[int] = set()
+
+    def walk(decl: NodeDecl) -> None:
+        lines.add(decl.line)
+        for child in decl.children:
+            walk(child)
+
+    for tree in document.trees.values():
+        walk(tree.root)
+    return lines
 
 
 def convert_file(source: Path, target: Path) -> Document:
-    """Read ``source`` (one file, includes not followed) and write it to ``target`` in the other format."""
+    """Read ``source`` (one file, includes not followed) and write it to ``target`` in the other format; an XML
+    source's comments are kept (see the module's docstring)."""
     from bt_grasp.tree.loader import read_single
 
     document = read_single(source)
-    target.write_text(write_document(document, format_of(target)), encoding="utf-8")
+    comments = None
+    if format_of(source) == "xml":  # read_single parsed it (no DTD, no entities): its text is plain XML
+        comments = xml_comments(source.read_text(encoding="utf-8"), _node_lines(document))
+    target.write_text(write_document(document, format_of(target), comments), encoding="utf-8")
     return document
