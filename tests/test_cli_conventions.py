@@ -157,3 +157,40 @@ def test_a_comment_before_no_node_goes_to_the_top(tmp_path: Path, capsys: pytest
     assert main(["tree", "convert", str(source), str(target)]) == 0
     capsys.readouterr()
     assert target.read_text() == "# top\n# closing\nbtcpp_format: 4\ntrees:\n  # only\n  M: AlwaysSuccess\n"
+
+
+def test_tree_show_png_is_readable_and_coloured(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """pick_with_recovery.xml drew 7673 x 1065 px, grey on white, on main as it was: now left to right with a
+    port a line (about 3400 x 1700), every node filled with its kind's colour, legend included."""
+    import shutil
+
+    import cv2
+    import numpy as np
+
+    from bt_grasp.tree.render import KIND_FILL
+
+    if shutil.which("dot") is None:
+        pytest.fail("Graphviz 'dot' is not installed (tools/setup_system.sh installs it)")
+    out = tmp_path / "tree.png"
+    assert main(["tree", "show", str(REPO / "trees/pick_with_recovery.xml"), "-f", "png", "-o", str(out)]) == 0
+    capsys.readouterr()
+    image = cv2.imread(str(out))
+    assert image is not None
+    height, width = image.shape[:2]
+    assert width <= 4000 and width / height <= 2.5, (width, height)
+    pixels = {tuple(int(c) for c in bgr[::-1]) for bgr in image.reshape(-1, 3)[:: 7]}
+    for kind, fill in KIND_FILL.items():
+        rgb = tuple(int(fill[i: i + 2], 16) for i in (1, 3, 5))
+        assert rgb in pixels, f"no {kind.value} fill {fill} in the picture"
+    assert np.ptp(image.reshape(-1, 3).astype(int), axis=1).max() > 40  # colour, not only greys
+
+
+def test_tree_show_dot_with_statuses_fills_by_status() -> None:
+    from bt_grasp.cli.tree_cmd import tree_registry
+    from bt_grasp.tree.loader import load_tree
+    from bt_grasp.tree.render import STATUS_FILL, to_dot
+
+    tree = load_tree(REPO / "trees/pick.xml", tree_registry())
+    dot = to_dot(tree.root, tree.main_tree, with_status=True)
+    nodes = [line for line in dot.splitlines() if re.match(r"\s+n\d+ \[", line)]
+    assert nodes and all(f'fillcolor="{STATUS_FILL["IDLE"]}"' in n and '\\nIDLE"' in n for n in nodes), nodes

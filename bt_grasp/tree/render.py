@@ -29,13 +29,21 @@ _SHAPE = {
 }
 
 
-def _label(node: BtNode) -> str:
+def _title(node: BtNode) -> str:
     title = node.bt_type if node.name == node.bt_type else f"{node.bt_type} {node.name!r}"
     if node.bt_type == "SubTree":
         title = f"SubTree {getattr(node, 'subtree_id', '')}" + (f" {node.name!r}" if node.name != getattr(
             node, "subtree_id", "") else "")  # fmt: skip
-    ports = [f"{k}={v}" for k, v in node.bt_attributes.items() if k != "name"]
-    return title + (f" ({', '.join(ports)})" if ports else "")
+    return title
+
+
+def _ports(node: BtNode) -> list[str]:
+    return [f"{k}={v}" for k, v in node.bt_attributes.items() if k != "name"]
+
+
+def _label(node: BtNode) -> str:
+    ports = _ports(node)
+    return _title(node) + (f" ({', '.join(ports)})" if ports else "")
 
 
 def rich_tree(root: BtNode, *, with_status: bool = False) -> rich.tree.Tree:
@@ -57,17 +65,49 @@ def _quote(text: str) -> str:
     return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
 
 
-def to_dot(root: BtNode, title: str = "tree") -> str:
-    lines = [f"digraph {_quote(title)} {{", "  node [fontname=Helvetica, fontsize=11];"]
+#: fill colours of the picture, by node kind (as Groot2 tells kinds apart) and, with statuses, by status
+KIND_FILL = {
+    NodeKind.CONTROL: "#cfe2f3",
+    NodeKind.DECORATOR: "#ead1dc",
+    NodeKind.ACTION: "#d9ead3",
+    NodeKind.CONDITION: "#fff2cc",
+    NodeKind.SUBTREE: "#d0e0e3",
+}
+STATUS_FILL = {"SUCCESS": "#93c47d", "FAILURE": "#e06666", "RUNNING": "#f6b26b", "IDLE": "#eeeeee",
+               "INVALID": "#eeeeee"}
+
+
+def to_dot(root: BtNode, title: str = "tree", *, with_status: bool = False) -> str:
+    """Graphviz dot of the tree, drawn left to right (a wide tree is a tall picture that stays readable: its
+    depth runs across, its siblings down), filled by node kind, or by status with ``with_status``, legend
+    included."""
+    lines = [
+        f"digraph {_quote(title)} {{",
+        "  rankdir=LR; nodesep=0.12; ranksep=0.35;",
+        '  node [fontname=Helvetica, fontsize=11, style="filled,rounded", color="#666666"];',
+        '  edge [color="#888888", arrowsize=0.6];',
+    ]
 
     def add(node: BtNode) -> None:
-        label = _quote(_label(node))[:-1] + "\\n" + _quote(f"{node.bt_path} #{node.bt_uid}")[1:]
-        lines.append(f"  n{node.bt_uid} [label={label}, shape={_SHAPE[node.bt_kind]}];")
+        # one line each: the title, every port, the node's path and uid (and its status): narrow boxes
+        parts = [_title(node), *_ports(node), f"{node.bt_path} #{node.bt_uid}"]
+        fill = KIND_FILL[node.bt_kind]
+        if with_status:
+            status = bt_status_name(node)
+            parts.append(status)
+            fill = STATUS_FILL.get(status, fill)
+        label = '"' + "\\n".join(_quote(part)[1:-1] for part in parts) + '"'
+        lines.append(f'  n{node.bt_uid} [label={label}, shape={_SHAPE[node.bt_kind]}, fillcolor="{fill}"];')
         for child in node.children:
             lines.append(f"  n{node.bt_uid} -> n{child.bt_uid};")  # type: ignore[attr-defined]
             add(child)  # type: ignore[arg-type]
 
     add(root)
+    legend = STATUS_FILL if with_status else {kind.value: fill for kind, fill in KIND_FILL.items()}
+    lines.append('  subgraph cluster_legend { label="legend"; fontname=Helvetica; fontsize=10; color="#bbbbbb";')
+    lines.extend(f'    legend_{i} [label={_quote(str(name).lower())}, shape=box, fontsize=9, fillcolor="{fill}"];'
+                 for i, (name, fill) in enumerate(legend.items()) if name != "INVALID")
+    lines.append("  }")
     lines.append("}")
     return "\n".join(lines) + "\n"
 
