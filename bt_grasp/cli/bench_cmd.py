@@ -15,7 +15,11 @@ from bt_grasp.environment import machine_description
 
 PLAN_BUDGET_DEFAULT = 40_000  # = PlannerOptions().max_state_checks (kept literal: the CLI imports lazily)
 
-bench_app = typer.Typer(help="Benchmarks (planning; perception; the task suite).", no_args_is_help=True)
+bench_app = typer.Typer(
+    help="Developer benchmarks: measurements of bt_grasp itself (planning, perception, the simulator, the tree, "
+    "logging, the task suite). To evaluate a tree: `bt-grasp eval run --tree T --scene S --seeds N`.",
+    no_args_is_help=True,
+)
 
 
 @bench_app.command("plan")
@@ -124,7 +128,8 @@ def tasks(
     as_json: bool = typer.Option(False, "--json", help="Print exactly one JSON object."),
 ) -> None:
     """Run every shipped task (trees/T.xml on scenes/T.yaml, judged by the scene's goal) over N seeds in one
-    process; print the success rate per task and why the failures failed."""
+    process; print the success rate per task and why the failures failed. (A developer benchmark: for one task as
+    a resumable campaign, `bt-grasp eval run --tree trees/T.xml --scene scenes/T.yaml --seeds N`.)"""
     from bt_grasp.errors import InputError
     from bt_grasp.tasks import TASKS, run_task_bench
 

@@ -34,7 +34,8 @@ def pick(
                               "on a scene with mesh or URDF objects."),
 ) -> None:
     """Pick success over seeded episodes, judged by physics (object held 15 cm up at the end), per tree and per
-    object picked, with why each failure failed."""
+    object picked, with why each failure failed. (A developer benchmark, in one process: to evaluate a tree,
+    `bt-grasp eval run --tree T --scene S --seeds N`.)"""
     from bt_grasp.episode.pick_bench import run_pick_bench
 
     err = Console(stderr=True)  # progress on stderr: stdout stays one JSON object with --json
