@@ -359,3 +359,38 @@ def _line(lines: dict[KeyPath, int], key: KeyPath) -> int | None:
             return lines[key]
         key = key[:-1]
     return None
+
+
+def write_options_campaign(
+    trees: list[Path], scenes: list[Path], seeds: int, first_seed: int, name: str | None, out: Path | None
+) -> Path:
+    """The campaign file `eval run --tree T --scene S --seeds N` stands for, written into the output folder
+    (``NAME.campaign.yaml``: the run is resumable and its inputs are on record). Paths in it are absolute."""
+    import re
+
+    import yaml
+
+    for flag, paths in (("--tree", trees), ("--scene", scenes)):
+        for path in paths:
+            if not path.is_file():
+                raise InputError(flag, f"no such file '{path}'")
+    if name is None:
+        name = "-".join(dict.fromkeys(p.stem for p in [*trees, *scenes]))
+    if not re.fullmatch(r"[A-Za-z0-9_.-]+", name):
+        raise InputError("--name", f"'{name}' may hold only letters, digits, '_', '.' and '-' (it names the results "
+                                   "file)")
+    folder = Path("out") / name if out is None else out
+    data = {
+        "name": name,
+        "description": "written by `bt-grasp eval run --tree ... --scene ...`",
+        "trees": [str(p.resolve()) for p in trees],
+        "scenes": [str(p.resolve()) for p in scenes],
+        "seeds": {"first": first_seed, "count": seeds},
+    }
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        path = folder / f"{name}.campaign.yaml"
+        path.write_text(yaml.safe_dump(data, sort_keys=False))
+    except OSError as exc:
+        raise InputError(folder, f"cannot write the campaign file there: {exc.strerror or exc}") from None
+    return path

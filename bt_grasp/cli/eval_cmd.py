@@ -115,7 +115,9 @@ def run(
         if not trees or not scenes:
             raise InputError("eval run", "give a campaign file, or --tree and --scene (e.g. `bt-grasp eval run "
                                          "--tree trees/pick.xml --scene scenes/tabletop.yaml --seeds 50`)")
-        campaign_file = _options_campaign(trees, scenes, seeds, first_seed, name, out)
+        from bt_grasp.campaign.spec import write_options_campaign
+
+        campaign_file = write_options_campaign(trees, scenes, seeds, first_seed, name, out)
     else:
         given = [flag for flag, value in (("--tree", trees), ("--scene", scenes), ("--name", name)) if value]
         if given:
@@ -146,43 +148,6 @@ def run(
         export_parquet(rows, path.with_suffix(".parquet"))
     ok = sum(1 for r in rows if r["success"])
     typer.echo(f"{len(rows)} episodes, {ok} succeeded ({progress.done} run now): {path}")
-
-
-def _options_campaign(
-    trees: list[Path], scenes: list[Path], seeds: int, first_seed: int, name: str | None, out: Path | None
-) -> Path:
-    """The campaign file `eval run --tree T --scene S --seeds N` stands for, written into the output folder
-    (``NAME.campaign.yaml``: the run is resumable and its inputs are on record). Paths in it are absolute."""
-    import re
-
-    import yaml
-
-    from bt_grasp.errors import InputError
-
-    for flag, paths in (("--tree", trees), ("--scene", scenes)):
-        for path in paths:
-            if not path.is_file():
-                raise InputError(flag, f"no such file '{path}'")
-    if name is None:
-        name = "-".join(dict.fromkeys(p.stem for p in [*trees, *scenes]))
-    if not re.fullmatch(r"[A-Za-z0-9_.-]+", name):
-        raise InputError("--name", f"'{name}' may hold only letters, digits, '_', '.' and '-' (it names the results "
-                                   "file)")
-    folder = Path("out") / name if out is None else out
-    data = {
-        "name": name,
-        "description": "written by `bt-grasp eval run --tree ... --scene ...`",
-        "trees": [str(p.resolve()) for p in trees],
-        "scenes": [str(p.resolve()) for p in scenes],
-        "seeds": {"first": first_seed, "count": seeds},
-    }
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        path = folder / f"{name}.campaign.yaml"
-        path.write_text(yaml.safe_dump(data, sort_keys=False))
-    except OSError as exc:
-        raise InputError(folder, f"cannot write the campaign file there: {exc.strerror or exc}") from None
-    return path
 
 
 @eval_app.command("export")
