@@ -35,26 +35,13 @@ import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
+from bt_grasp.colors import COLOR_NAMES as COLORS
 from bt_grasp.robot_description import MAX_OPENING_M
 
 REPO = Path(__file__).resolve().parents[1]
 DEFAULT_OUT = REPO / "bt_grasp" / "assets" / "household"
 CATALOGUE = "objects.yaml"
 DECIMALS = 6  # metres: one micrometre
-
-# The colour names bt_grasp knows (bt_grasp/colors.py), with their RGB.
-COLORS: dict[str, tuple[float, float, float]] = {
-    "red": (0.85, 0.08, 0.08),
-    "green": (0.10, 0.70, 0.15),
-    "blue": (0.08, 0.20, 0.85),
-    "yellow": (0.90, 0.80, 0.05),
-    "orange": (0.95, 0.45, 0.05),
-    "purple": (0.50, 0.10, 0.70),
-    "white": (0.92, 0.92, 0.92),
-    "grey": (0.5, 0.5, 0.5),
-    "black": (0.05, 0.05, 0.05),
-    "wood": (0.62, 0.48, 0.33),
-}
 
 
 @dataclass(frozen=True)
