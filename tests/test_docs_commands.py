@@ -13,6 +13,7 @@ What is done with each command line (``$ `` prompts, ``\\`` continuations and ``
 
 from __future__ import annotations
 
+import itertools
 import re
 import shlex
 from dataclasses import dataclass
@@ -151,3 +152,39 @@ def test_cheap_docs_commands_run(doc: DocCommand, monkeypatch: pytest.MonkeyPatc
         code = cli.main(list(args))
         captured = capsys.readouterr()
         assert code == 0, f"{doc.where}: `bt-grasp {' '.join(args)}` exited {code}: {captured.err}"
+
+
+def inline_mentions() -> list[DocCommand]:
+    """Every `bt-grasp ...` code span in the prose and tables (code blocks left out: checked above)."""
+    found: list[DocCommand] = []
+    for path in DOCS:
+        text = re.sub(r"^```.*?^```", lambda m: "\n" * m.group(0).count("\n"), path.read_text(), flags=re.S | re.M)
+        for match in re.finditer(r"`(bt-grasp [^`]+)`", text):
+            line = text[: match.start()].count("\n") + 1
+            found.append(DocCommand(f"{path.relative_to(REPO)}:{line}", match.group(1).replace("\\|", "|")))
+    return found
+
+
+MENTIONS = inline_mentions()
+
+
+def test_every_inline_mention_names_a_command_and_its_options() -> None:
+    """A mention in prose (`bt-grasp replay LOG --resim`) is no whole command line, so it is not parsed; its
+    words must still name a command or group (alternatives such as `plan|perception` each), and every --option it
+    shows must be one of that command's options."""
+    assert len(MENTIONS) >= 100
+    problems: list[str] = []
+    for doc in MENTIONS:
+        words = doc.text.split()[1:]
+        head = [w for w in words if re.fullmatch(r"[a-z][a-z-]*(\|[a-z][a-z-]*)*", w)]
+        lead = words[: next((i for i, w in enumerate(words) if w not in head), len(words))]
+        alternatives = [w.split("|") for w in lead]
+        for choice in (list(c) for c in itertools.product(*alternatives)):
+            command, named, _ = _resolve(choice)
+            if not named and not (words and words[0].startswith("--")):
+                problems.append(f"{doc.where}: `{doc.text}` names no command")
+                continue
+            known = {o for p in command.params for o in (*p.opts, *p.secondary_opts)} | {"--help"}
+            problems += [f"{doc.where}: `{doc.text}`: bt-grasp {' '.join(named)} has no option {option}"
+                         for option in re.findall(r"(?<![\w-])--[a-z][\w-]*", doc.text) if option not in known]
+    assert not problems, "\n".join(problems)
