@@ -160,6 +160,8 @@ def inline_mentions() -> list[DocCommand]:
     for path in DOCS:
         text = re.sub(r"^```.*?^```", lambda m: "\n" * m.group(0).count("\n"), path.read_text(), flags=re.S | re.M)
         for match in re.finditer(r"`(bt-grasp [^`]+)`", text):
+            if text[max(0, match.start() - 3): match.start()] == "no ":  # "no `bt-grasp detector train` yet"
+                continue
             line = text[: match.start()].count("\n") + 1
             found.append(DocCommand(f"{path.relative_to(REPO)}:{line}", match.group(1).replace("\\|", "|")))
     return found
@@ -180,9 +182,10 @@ def test_every_inline_mention_names_a_command_and_its_options() -> None:
         lead = words[: next((i for i, w in enumerate(words) if w not in head), len(words))]
         alternatives = [w.split("|") for w in lead]
         for choice in (list(c) for c in itertools.product(*alternatives)):
-            command, named, _ = _resolve(choice)
-            if not named and not (words and words[0].startswith("--")):
-                problems.append(f"{doc.where}: `{doc.text}` names no command")
+            command, named, _ = _resolve(list(choice))
+            if (not named and not (words and words[0].startswith("--"))) or (
+                    hasattr(command, "commands") and len(named) < len(choice)):  # a group, then no command of it
+                problems.append(f"{doc.where}: `{doc.text}` names no command ({' '.join(choice)})")
                 continue
             known = {o for p in command.params for o in (*p.opts, *p.secondary_opts)} | {"--help"}
             problems += [f"{doc.where}: `{doc.text}`: bt-grasp {' '.join(named)} has no option {option}"
