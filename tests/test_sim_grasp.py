@@ -145,6 +145,11 @@ def test_no_product_code_moves_objects_by_hand(repo_root: Path) -> None:
         # the slat leaving the downstream end goes back under the upstream one with nothing on it
         "bt_grasp/sim/conveyor.py: set_kinematic_target",
         "bt_grasp/sim/conveyor.py: set_pose(",
+        # a mesh/URDF object's entity placed where the scene draws it before it joins the scene (no time has
+        # passed; World.settle then lets physics bring it to rest)
+        "bt_grasp/sim/objects.py: set_pose(",
+        # socket.create_connection: a TCP probe of a Ray address, not a physics connection
+        "bt_grasp/campaign/ray_engine.py: create_connection",
     }
     assert sorted(set(offenders) - allowed) == []
     _ = sapien  # the test module needs sapien installed

@@ -61,6 +61,18 @@ function meets(value, until) {
 }
 
 async function setParam(page, name, text) {
+  // A running run pushes parameter updates every tick and the panel re-renders its rows: a row re-drawn
+  // between typing and submitting loses what was typed (seen on a loaded machine). Type and submit again, as a
+  // person would, a bounded number of times.
+  for (let attempt = 1; ; attempt++) {
+    if (await typeAndSubmit(page, name, text)) break;
+    if (attempt >= 5) throw new Error("no 'Submit change' button for parameter " + name + " after typing " + text + " (5 tries)");
+    await sleep(200);
+  }
+  await sleep(700);  // the panel debounces a submitted value by 500 ms
+}
+
+async function typeAndSubmit(page, name, text) {
   const box = await page.evaluateHandle((name) => {
     for (const row of document.querySelectorAll("tr")) {
       const cells = row.querySelectorAll("td, th");
@@ -75,7 +87,7 @@ async function setParam(page, name, text) {
   await page.keyboard.press("Backspace");
   await page.keyboard.type(text);
   await sleep(300);
-  const pressed = await page.evaluate((name) => {
+  return page.evaluate((name) => {
     for (const row of document.querySelectorAll("tr")) {
       const cells = row.querySelectorAll("td, th");
       if (cells.length < 2 || cells[0].innerText.trim() !== name) continue;
@@ -84,8 +96,6 @@ async function setParam(page, name, text) {
     }
     return false;
   }, name);
-  if (!pressed) throw new Error("no 'Submit change' button for parameter " + name + " after typing " + text);
-  await sleep(700);  // the panel debounces a submitted value by 500 ms
 }
 
 async function problems(page) {

@@ -75,7 +75,7 @@ def test_every_output_names_a_node_by_the_same_path(walked: dict[str, Any], monk
     assert len(paths) > 60 and len(set(paths.values())) == len(paths)
     assert _tree_show_paths(folder) == paths
     dot = _cli("tree", "show", str(TREE), "--format", "dot", cwd=folder)
-    assert {int(u): p for u, p in re.findall(r'n(\d+) \[label=".*?\\n(\S+) #\1"', dot)} == paths
+    assert {int(u): p for u, p in re.findall(r'n(\d+) \[label=".*\\n([^\s\\]+) #\1"', dot)} == paths
     assert "PickObject::18/OpenGripper::26" in paths.values()
     names = set(paths.values())
 
