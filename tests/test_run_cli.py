@@ -31,7 +31,7 @@ def _bt(*args: str, timeout: float = 600) -> subprocess.CompletedProcess[str]:
         (["trees/pick.xml", "--scene", str(SCENE), "--calibration", "missing.yaml"], "missing.yaml"),
         (["tests/data/bad_trees/unknown_node.xml", "--scene", str(SCENE)], "unknown node"),
         (["trees/pick.xml", "--scene", str(SCENE), "--set", "novalue"], "expected KEY=VALUE"),
-        (["trees/pick.xml", "--scene", str(SCENE), "--goal", "place"], "--goal: expected one of pick, clear"),
+        (["trees/pick.xml", "--scene", str(SCENE), "--goal", "place"], "'place' is not one of 'pick', 'clear'"),
         (["trees/pick.xml", "--scene", str(SCENE), "--goal", "pick", "--lift-height", "2"], "--lift-height"),
         (["trees/pick.xml", "--scene", str(SCENE), "--color", "purple"], "--color"),
     ],

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import typer
 
+from bt_grasp.cli.choices import MOUNT_LIST, Mount, PlannerChoice, TaskChoice
 from bt_grasp.environment import machine_description
 
 PLAN_BUDGET_DEFAULT = 40_000  # = PlannerOptions().max_state_checks (kept literal: the CLI imports lazily)
@@ -26,7 +27,7 @@ bench_app = typer.Typer(
 def plan(
     problems: int = typer.Option(60, "--problems", min=1, help="Number of tabletop problems."),
     seed: int = typer.Option(0, "--seed", help="Seed of the problem set (same seed, same problems)."),
-    planner: str = typer.Option("RRTConnect", "--planner", help="OMPL planner name."),
+    planner: PlannerChoice = typer.Option(PlannerChoice.RRTConnect, "--planner", help="OMPL planner."),
     budget: int = typer.Option(PLAN_BUDGET_DEFAULT, "--budget", min=1,
                                help="The search's work budget per problem: state validity checks."),
     scene: Path = typer.Option(Path("scenes/tabletop.yaml"), "--scene", help="Scene file (table, mount)."),
@@ -34,15 +35,12 @@ def plan(
     export: Path = typer.Option(None, "--export", help="Also write the problems as JSON (for tools/)."),
 ) -> None:
     """Plan a fixed seeded set of tabletop problems: success rate, planning/IK/trajectory times."""
-    from bt_grasp.errors import InputError
     from bt_grasp.motion.bench import make_problems, run_plan_bench
-    from bt_grasp.motion.planner import PLANNERS, PlannerOptions
+    from bt_grasp.motion.planner import PlannerOptions
     from bt_grasp.scene.format import load_scene
 
-    if planner not in PLANNERS:
-        raise InputError("--planner", f"unknown planner '{planner}'; known: {', '.join(PLANNERS)}")
     config = load_scene(scene)
-    options = PlannerOptions(planner=planner, max_state_checks=budget)
+    options = PlannerOptions(planner=planner.value, max_state_checks=budget)
     if export is not None:
         export.write_text(json.dumps([p.to_json() for p in make_problems(config, problems, seed)], indent=1))
     report = run_plan_bench(config, problems, seed, options)
@@ -124,20 +122,18 @@ def _nan_to_null(value: object) -> object:
 def tasks(
     seeds: int = typer.Option(10, "--seeds", min=1, help="Episodes per task (seeds first-seed .. +N-1)."),
     first_seed: int = typer.Option(0, "--first-seed", help="The first seed."),
-    task: list[str] = typer.Option([], "--task", help="Only this task (repeatable; default: every shipped task)."),
+    task: list[TaskChoice] = typer.Option(
+        [], "--task", help="Only this task (repeatable; default: every shipped task).", show_default=False
+    ),
     as_json: bool = typer.Option(False, "--json", help="Print exactly one JSON object."),
 ) -> None:
     """Run every shipped task (trees/T.xml on scenes/T.yaml, judged by the scene's goal) over N seeds in one
     process; print the success rate per task and why the failures failed. (A developer benchmark: for one task as
     a resumable campaign, `bt-grasp eval run --tree trees/T.xml --scene scenes/T.yaml --seeds N`.)"""
-    from bt_grasp.errors import InputError
     from bt_grasp.tasks import TASKS, run_task_bench
 
     known = {t.name: t for t in TASKS}
-    for name in task:
-        if name not in known:
-            raise InputError("--task", f"unknown task '{name}'; shipped: {', '.join(known)}")
-    chosen = [known[n] for n in task] if task else list(TASKS)
+    chosen = [known[n.value] for n in task] if task else list(TASKS)
     from rich.console import Console
 
     err = Console(stderr=True)
@@ -168,32 +164,32 @@ def tasks(
 def follow(
     seeds: int = typer.Option(3, "--seeds", min=0, help="Tracking episodes per mount and belt speed (0: none)."),
     speeds: str = typer.Option("0.02,0.05,0.10", "--speeds", help="Belt speeds, m/s, comma-separated."),
-    mounts: str = typer.Option("eye-to-hand,eye-in-hand", "--mounts", help="Camera mounts, comma-separated."),
+    mounts: str = typer.Option(
+        "eye-to-hand,eye-in-hand", "--mounts", parser=MOUNT_LIST, autocompletion=MOUNT_LIST.complete,
+        metavar=MOUNT_LIST.metavar, help="Camera mounts, comma-separated."
+    ),
     pick_seeds: int = typer.Option(0, "--pick-seeds", min=0,
                                    help="Also pick from the conveyor this many seeds per speed (eye-to-hand)."),
-    pick_mount: str = typer.Option("eye-to-hand", "--pick-mount", help="Camera mount of the pick episodes."),
+    pick_mount: Mount = typer.Option(Mount.EYE_TO_HAND, "--pick-mount", help="Camera mount of the pick episodes."),
     first_seed: int = typer.Option(0, "--first-seed", min=0, help="First seed of the pick episodes."),
     as_json: bool = typer.Option(False, "--json", help="Print exactly one JSON object."),
 ) -> None:
     """Visual following on the conveyor: tracking error against the simulator's truth, and the pick rate."""
-    from bt_grasp.episode.follow_bench import SCENES, run_conveyor_pick_bench, run_tracking_bench
+    from bt_grasp.episode.follow_bench import run_conveyor_pick_bench, run_tracking_bench
     from bt_grasp.errors import InputError
 
     try:
         speed_list = [float(v) for v in speeds.split(",") if v.strip()]
     except ValueError:
         raise InputError("--speeds", f"expected numbers separated by commas, got '{speeds}'") from None
-    mount_list = [m.strip() for m in mounts.split(",") if m.strip()]
-    for m in [*mount_list, pick_mount]:
-        if m not in SCENES:
-            raise InputError("--mounts", f"unknown mount '{m}'; known: {', '.join(SCENES)}")
+    mount_list = mounts.split(",")  # checked by the parser (MOUNT_LIST): each one a key of SCENES
     repo = Path.cwd()
     say = None if as_json else typer.echo
     summary: dict[str, object] = {}
     if seeds:
         summary["tracking"] = run_tracking_bench(repo, speed_list, seeds, mount_list, progress=say)
     if pick_seeds:
-        summary["picks"] = [run_conveyor_pick_bench(repo, v, pick_seeds, pick_mount, first_seed=first_seed,
+        summary["picks"] = [run_conveyor_pick_bench(repo, v, pick_seeds, pick_mount.value, first_seed=first_seed,
                                                     progress=say) for v in speed_list]
     summary["machine"] = machine_description()
     typer.echo(json.dumps(summary, indent=None if as_json else 1))

@@ -12,6 +12,7 @@ import typer
 from rich.console import Console
 from rich.markup import escape
 
+from bt_grasp.cli.choices import GoalChoice
 from bt_grasp.cli.plugin_option import leaves_option
 from bt_grasp.defaults import DEFAULT_LIFT_HEIGHT_M, DEFAULT_MAX_TICKS
 from bt_grasp.errors import InputError
@@ -142,9 +143,9 @@ def run(
     faults: Path | None = typer.Option(None, "--faults", help="Fault plan YAML."),
     inject: list[str] = typer.Option([], "--inject", help="A fault, e.g. 'frame_drop@Perceive#1' (repeatable)."),
     set_: list[str] = typer.Option([], "--set", help="Blackboard entry KEY=VALUE before the first tick."),
-    goal: str | None = typer.Option(
+    goal: GoalChoice | None = typer.Option(
         None, "--goal", help="What the judge checks: pick (held and lifted) or clear; default: the scene's goal, "
-        "else pick."
+        "else pick (the other goals, e.g. stack, are declared in the scene file)."
     ),
     color: str = typer.Option("red", "--color", help="The pick goal's colour, also {color} for the tree ('' = any)."),
     lift_height: float = typer.Option(
@@ -204,7 +205,7 @@ def run(
         tree=tree,
         scene=scene,
         seed=seed,
-        goal=goal_from_options(goal, color, lift_height) if goal is not None else None,
+        goal=goal_from_options(goal.value, color, lift_height) if goal is not None else None,
         calibration=calibration,
         log=log,
         max_ticks=max_ticks,

@@ -27,17 +27,14 @@ def render(
     scene: Path = typer.Argument(..., help="Scene YAML file."),
     seed: int = typer.Option(0, "--seed", help="Seed for object poses and camera noise."),
     out: Path = typer.Option(Path("out"), "--out", help="Folder to write color.png, depth.png, camera.json."),
-    mount: str | None = typer.Option(None, "--mount", help="eye-to-hand or eye-in-hand (default: the scene's)."),
+    mount: Mount | None = typer.Option(None, "--mount", help="Where the camera is (default: the scene's)."),
 ) -> None:
     """Render one RGB-D capture: color.png, a colour-mapped depth.png and camera.json."""
     import cv2
     import numpy as np
 
-    from bt_grasp.errors import InputError
     from bt_grasp.scene.format import load_scene
 
-    if mount is not None and mount not in tuple(Mount):
-        raise InputError("--mount", f"expected eye-to-hand or eye-in-hand, got '{mount}'")
     config = load_scene(scene)
     from bt_grasp.sim.world import World
 

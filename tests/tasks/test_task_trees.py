@@ -68,6 +68,6 @@ def test_bench_tasks_refuses_an_unknown_task_in_one_line() -> None:
                           capture_output=True, text=True, timeout=120, cwd=REPO)
     assert proc.returncode == 2
     assert proc.stderr.strip().splitlines() == [
-        "bt-grasp: error: --task: unknown task 'juggle'; shipped: "
-        "pick, pick_and_place, stack, sort_by_color, clear_table"
+        "bt-grasp: error: Invalid value for '--task': Value error, 'juggle' is not one of 'pick', 'pick_and_place', "
+        "'stack', 'sort_by_color', 'clear_table'. (see `bt-grasp bench tasks --help`)"
     ]
