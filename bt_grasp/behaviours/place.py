@@ -23,13 +23,21 @@ from numpy.typing import NDArray
 from py_trees.common import Status
 
 from bt_grasp.behaviours.base import RobotLeaf
-from bt_grasp.behaviours.grasp_plan import GraspPose
+from bt_grasp.behaviours.grasp_plan import MOVED_RAD, GraspPose
 from bt_grasp.behaviours.gripper import EMPTY_WIDTH_M
 from bt_grasp.behaviours.motion_job import MotionJob, PathFailure, PathFn, Segment
-from bt_grasp.behaviours.motion_leaves import _MovingLeaf, cartesian_fn, detection_box, plan_to_pose_fn
+from bt_grasp.behaviours.motion_leaves import (
+    _MovingLeaf,
+    cartesian_fn,
+    cartesian_reason,
+    detection_box,
+    plan_failure,
+    plan_to_pose_fn,
+)
 from bt_grasp.behaviours.objects import is_detection, object_list
 from bt_grasp.behaviours.reasons import FailureReason
 from bt_grasp.geometry import Mat4, inv, make_T, rot_z
+from bt_grasp.motion.place_orientation import PlaceYaw, footprint_kind, footprint_turns_rad, place_yaws
 from bt_grasp.pose import Pose
 from bt_grasp.robot_description import MAX_OPENING_M, TCP_LINK
 from bt_grasp.tree.registry import PortDirection, PortSpec, leaf
@@ -52,6 +60,9 @@ _HELD_PORTS = [
     PortSpec("release_gap", PortDirection.INPUT, float, 0.003, "the object's bottom above the surface at release, m"),
     PortSpec("contact_window", PortDirection.INPUT, float, 0.02, "contact this close above the target = set down, m"),
     PortSpec("retreat", PortDirection.INPUT, float, 0.08, "how far to back off upwards after opening, m"),
+    PortSpec("turns", PortDirection.INPUT, bool, True, "when the first orientation is blocked or unreachable, "
+             "try the held object's footprint symmetries (half, quarter or any turn) in order"),
+    PortSpec("free_yaw", PortDirection.INPUT, bool, False, "the goal allows any yaw: try turns of 30 degrees too"),
 ]
 
 
@@ -76,29 +87,49 @@ def held_offset(grasp: GraspPose, held: Detection) -> Mat4:
     return inv(np.asarray(grasp.T_base_tcp_grasp, dtype=float)) @ T_base_obj
 
 
-def tool_pose_for(target: Pose, T_tcp_obj: Mat4, T_base_tcp_grasp: Mat4, height_m: float, gap_m: float,
-                  surface_z_m: float) -> Mat4:
-    """The tool pose that puts the held object's centre over (x, y), its bottom ``gap_m`` above the surface
-    and its yaw at ``target.yaw_deg`` (or, with no yaw, the tool turned as it was at the grasp). Of the two
-    object yaws 180 degrees apart (a top-down grasp is symmetric) the one nearer the grasp's tool yaw."""
+def place_options(target: Pose, held: Detection, T_tcp_obj: Mat4, height_m: float, gap_m: float,
+                  surface_z_m: float, turns: bool = True, free_yaw: bool = False) -> list[tuple[PlaceYaw, Mat4]]:
+    """The orientations to try, in order, each with its release tool pose: the held object's centre over
+    (x, y), its bottom ``gap_m`` above the surface, its yaw ``target.yaw_deg`` (no yaw: as it was held) turned
+    by one of its footprint's symmetries (``bt_grasp.motion.place_orientation``; any turn with ``free_yaw``),
+    smallest turn of the wrist first. Without ``turns`` only the first: of the two half-turns of a footprint
+    the one nearer the grasp's tool yaw (the one orientation Place tried before it tried several)."""
     z = surface_z_m + height_m / 2 + gap_m
+    held_yaw = float(held.yaw_rad)
+    requested = held_yaw if target.yaw_deg is None else math.radians(target.yaw_deg)
+    if turns:
+        kind = footprint_kind(float(held.size_m[0]), float(held.size_m[1]), held.shape == "round")
+        turns_rad = footprint_turns_rad(kind, free_yaw)
+    else:
+        turns_rad = (0.0, math.pi)
+    yaws = place_yaws(requested, held_yaw, turns_rad)
+    if not turns:
+        yaws = yaws[:1]
     T_obj_tcp = inv(T_tcp_obj)
-    grasp_yaw = math.atan2(T_base_tcp_grasp[1, 0], T_base_tcp_grasp[0, 0])
-    if target.yaw_deg is None:  # the object turned as it was held at the grasp
-        R_obj = T_base_tcp_grasp[:3, :3] @ inv(T_obj_tcp)[:3, :3]
-        return make_T(R_obj, [target.x_m, target.y_m, z]) @ T_obj_tcp
-    best: Mat4 | None = None
-    for flip in (0.0, math.pi):
-        T = make_T(rot_z(math.radians(target.yaw_deg) + flip), [target.x_m, target.y_m, z]) @ T_obj_tcp
-        yaw = math.atan2(T[1, 0], T[0, 0])
-        if best is None or abs(_wrap(yaw - grasp_yaw)) < abs(_wrap(math.atan2(best[1, 0], best[0, 0]) - grasp_yaw)):
-            best = T
-    assert best is not None
-    return best
+    return [(c, make_T(rot_z(c.object_yaw_rad), [target.x_m, target.y_m, z]) @ T_obj_tcp) for c in yaws]
 
 
-def _wrap(angle: float) -> float:
-    return (angle + math.pi) % (2 * math.pi) - math.pi
+def _flag(value: object) -> bool:
+    """A bool port's value (a blackboard entry may hold the text 'true' or 'false')."""
+    if isinstance(value, str):
+        return value.strip().lower() in ("true", "1", "yes")
+    return bool(value)
+
+
+def _blocked(reason: FailureReason) -> FailureReason:
+    """A collision at the place is an occupied target: PLACE_BLOCKED."""
+    return FailureReason.PLACE_BLOCKED if reason is FailureReason.COLLISION else reason
+
+
+def _planned_or(path: NDArray[np.float64], replan: PathFn) -> PathFn:
+    """The path checked when the orientation was chosen while the arm is where it starts; else ``replan``."""
+
+    def compute(q: NDArray[np.float64]) -> NDArray[np.float64] | PathFailure:
+        if float(np.max(np.abs(np.asarray(q, dtype=float) - path[0]))) < MOVED_RAD:
+            return path
+        return replan(q)
+
+    return compute
 
 
 def _raised(T: Mat4, dz: float) -> Mat4:
@@ -108,25 +139,28 @@ def _raised(T: Mat4, dz: float) -> Mat4:
 
 
 class _PlaceBase(RobotLeaf):
-    """Carry, descend, open, retreat. Subclasses say where the object goes (:meth:`target_pose`)."""
+    """Choose the orientation, carry, descend, open, retreat. Subclasses say where the object goes
+    (:meth:`target_pose`)."""
 
     def target_pose(self) -> tuple[Pose, Detection | None] | str:
         """(object pose in the base frame with z = surface height, the support detection or None)."""
         raise NotImplementedError
 
     def initialise(self) -> None:
-        self.phase = "move"
+        self.phase = "choose"
         self.job: MotionJob | None = None
         self._early: Status | None = None
         self._t_open = 0.0
         self._T_place: Mat4 | None = None
+        self._options: list[tuple[PlaceYaw, Mat4]] = []
+        self._next = 0
+        self._rejected: list[tuple[PlaceYaw, PathFailure]] = []
         setup = self._setup_motion()
         if isinstance(setup, Status):
             self._early = setup
-        else:
-            self.job = MotionJob(self.cell, setup)
 
-    def _setup_motion(self) -> list[Segment] | Status:
+    def _setup_motion(self) -> Status | None:
+        """Read the ports, build the planning scenes and the ordered place orientations (tried in update)."""
         from bt_grasp.motion.planning_scene import PlanningScene
 
         grasp, held = self.input("grasp"), self.input("held")
@@ -144,8 +178,8 @@ class _PlaceBase(RobotLeaf):
         T_tcp_obj = held_offset(grasp, held)
         height = float(held.size_m[2])
         gap = self.input_float("release_gap")
-        T_place = tool_pose_for(pose, T_tcp_obj, np.asarray(grasp.T_base_tcp_grasp), height, gap, surface)
-        self._T_place = T_place
+        self._options = place_options(pose, held, T_tcp_obj, height, gap, surface,
+                                      turns=_flag(self.input("turns")), free_yaw=_flag(self.input("free_yaw")))
         self._height = height
         self._target_text = f"{pose.x_m:.3f};{pose.y_m:.3f};{surface:.3f}"
         margin = 0.004
@@ -153,17 +187,65 @@ class _PlaceBase(RobotLeaf):
         held_shape = type(held_box).at("held", held_box.size_m, T_tcp_obj)
         others = [d for d in object_list(self.input("objects")) or () if not same_object(d, held)]
         obstacles = tuple(detection_box(d, f"object_{i}") for i, d in enumerate(others))
-        carry_scene = PlanningScene.from_scene(self.cell.scene, obstacles).with_attached(held_shape, TCP_LINK)
+        self._carry_scene = PlanningScene.from_scene(self.cell.scene, obstacles).with_attached(held_shape, TCP_LINK)
         # the descent may end touching what the object is set on (the support), nothing else
         below = tuple(o for o, d in zip(obstacles, others, strict=True)
                       if support is None or not same_object(d, support))
-        descent_scene = PlanningScene.from_scene(self.cell.scene, below).with_attached(held_shape, TCP_LINK)
-        pre = _raised(T_place, self.input_float("approach"))
+        self._descent_scene = PlanningScene.from_scene(self.cell.scene, below).with_attached(held_shape, TCP_LINK)
+        self._q_start = self.cell.robot.joint_positions()
         self.feedback_message = f"placing at {self._target_text}"
-        return [
-            Segment("carry", self._blocked_if_collision(plan_to_pose_fn(self, pre, carry_scene))),
-            Segment("descend", self._blocked_if_collision(cartesian_fn(self, lambda _T: T_place, descent_scene))),
-        ]
+        return None
+
+    def _try_option(self, option: PlaceYaw, T_place: Mat4) -> tuple[NDArray[np.float64], ...] | PathFailure:
+        """The carry path to the pre-place pose and the straight descent to the release pose, both checked in
+        the perceived scene (the open fingers, the palm, the arm and the held object against what was seen and
+        the fixtures), or why this orientation does not work."""
+        turn = f"turned {math.degrees(option.turn_rad):.0f} deg"
+        pre = _raised(T_place, self.input_float("approach"))
+        plan = self.cell.planner.plan_to_pose(self._q_start, pre, self._carry_scene, self.cell.planner_options)
+        if not plan.ok:
+            failure = plan_failure(plan)
+            return PathFailure(_blocked(failure.reason), f"{turn}: the carry fails: {failure.sentence}")
+        path = np.asarray(plan.path, dtype=float)
+        descent = self.cell.planner.straight_line(path[-1], T_place, self._descent_scene)
+        if not descent.ok:
+            sentence = f"{turn}: the descent fails ({descent.status.value}): {descent.message}"
+            return PathFailure(_blocked(cartesian_reason(descent.status)), sentence)
+        return path, np.asarray(descent.path, dtype=float)
+
+    def _choose(self) -> Status:
+        """Try the next orientation (one per tick: a plan and a straight line, tens of ms); start the motion
+        with the first that works; FAILURE when none does."""
+        option, T_place = self._options[self._next]
+        self._next += 1
+        tried = self._try_option(option, T_place)
+        if isinstance(tried, PathFailure):
+            self._rejected.append((option, tried))
+            if self._next < len(self._options):
+                self.feedback_message = f"placing at {self._target_text}: {tried.sentence}"
+                return Status.RUNNING
+            return self._none_works()
+        carry_path, descent_path = tried
+        self._T_place = T_place
+        self._chosen = option
+        carry = _planned_or(carry_path, self._blocked_if_collision(
+            plan_to_pose_fn(self, _raised(T_place, self.input_float("approach")), self._carry_scene)))
+        descend = _planned_or(descent_path, self._blocked_if_collision(
+            cartesian_fn(self, lambda _T: T_place, self._descent_scene)))
+        self.job = MotionJob(self.cell, [Segment("carry", carry), Segment("descend", descend)])
+        self.phase = "move"
+        turned = f", turned {math.degrees(option.turn_rad):.0f} deg" if option.turn_rad else ""
+        self.feedback_message = f"placing at {self._target_text}{turned}"
+        return Status.RUNNING
+
+    def _none_works(self) -> Status:
+        """FAILURE: PLACE_BLOCKED when any orientation was reachable but blocked, else the first one's reason."""
+        failures = [f for _, f in self._rejected]
+        blocked = [f for f in failures if f.reason is FailureReason.PLACE_BLOCKED]
+        first = blocked[0] if blocked else failures[0]
+        n = len(failures)
+        what = "the one place orientation" if n == 1 else f"none of {n} place orientations works"
+        return self.failed(first.reason, f"{what} at {self._target_text}: {first.sentence}")
 
     @staticmethod
     def _blocked_if_collision(fn: PathFn) -> PathFn:
@@ -183,6 +265,8 @@ class _PlaceBase(RobotLeaf):
     def update(self) -> Status:
         if self._early is not None:
             return self._early
+        if self.phase == "choose":
+            return self._choose()
         assert self.job is not None and self._T_place is not None
         if self.phase == "move":
             if self.cell.robot.gripper_width_m() < EMPTY_WIDTH_M:
