@@ -9,32 +9,40 @@ from __future__ import annotations
 
 import os
 import sys
-from importlib.metadata import version as _dist_version
 
 import typer
 
 from bt_grasp.cli import ERROR_PREFIX
 from bt_grasp.errors import BtGraspError
 
-app = typer.Typer(
-    name="bt-grasp",
-    help="Behaviour-tree vision-guided grasping with a simulated UR5 and RealSense D435.",
-    no_args_is_help=True,
-    add_completion=True,  # --install-completion / --show-completion (bash, zsh, fish, PowerShell)
-    pretty_exceptions_enable=False,
-)
-
-
 INTERRUPTED = 130  # the exit code of a command Ctrl-C ended (128 + SIGINT)
+
+#: every top-level command and the ``bt_grasp.cli`` modules that register it, in the order of ``--help``.
+#: A command line that names one of them imports only its modules (issue 27: importing all ten cost
+#: ~30-60 ms of every command); anything else (``--help``, ``--version``, no command, a mistyped one, shell
+#: completion) imports them all. ``tests/test_cli_import_cost.py`` checks the table against the modules.
+COMMAND_MODULES: dict[str, tuple[str, ...]] = {
+    "scene": ("scene_cmd",),
+    "demo": ("demo_cmd",),
+    "run": ("run_cmd",),
+    "tree": ("tree_cmd",),
+    "calibrate": ("calibrate_cmd",),
+    "replay": ("replay_cmd",),
+    "bench": ("bench_extra_cmd", "bench_cmd", "bench_eval_cmd"),
+    "eval": ("eval_cmd",),
+    "resident": ("resident_cmd",),
+    "detector": ("detector_cmd",),
+}
 
 
 def _version_callback(value: bool) -> None:
     if value:
-        typer.echo(f"bt-grasp {_dist_version('bt-grasp')}")
+        from importlib.metadata import version
+
+        typer.echo(f"bt-grasp {version('bt-grasp')}")
         raise typer.Exit()
 
 
-@app.callback()
 def _root(
     version: bool = typer.Option(
         False, "--version", callback=_version_callback, is_eager=True, help="Print the version and exit."
@@ -43,13 +51,26 @@ def _root(
     """bt-grasp: run, inspect and debug behaviour trees that pick objects with a simulated UR5."""
 
 
-def _register() -> None:
-    # Each command group registers itself on `app`; import order is the order in --help.
-    from bt_grasp.cli import scene_cmd
+def modules_for(args: list[str]) -> tuple[str, ...]:
+    """The command modules a command line needs: its command's, or all of them (see COMMAND_MODULES)."""
+    completing = any(name.startswith("_BT_GRASP") and name.endswith("_COMPLETE") for name in os.environ)
+    if args and args[0] in COMMAND_MODULES and not completing:
+        return COMMAND_MODULES[args[0]]
+    return tuple(name for names in COMMAND_MODULES.values() for name in names)
 
-    scene_cmd.register(app)
-    commands = ("demo_cmd", "run_cmd", "tree_cmd", "calibrate_cmd", "replay_cmd", "bench_extra_cmd", "bench_cmd")
-    for name in (*commands, "eval_cmd", "bench_eval_cmd", "resident_cmd", "detector_cmd"):
+
+def build_app(modules: tuple[str, ...]) -> typer.Typer:
+    """The ``bt-grasp`` application with the commands of ``modules`` (``bt_grasp.cli`` module names)."""
+    app = typer.Typer(
+        name="bt-grasp",
+        help="Behaviour-tree vision-guided grasping with a simulated UR5 and RealSense D435.",
+        no_args_is_help=True,
+        add_completion=True,  # --install-completion / --show-completion (bash, zsh, fish, PowerShell)
+        pretty_exceptions_enable=False,
+    )
+    app.callback()(_root)
+    # Each command group registers itself on `app`; import order is the order in --help.
+    for name in modules:
         try:
             module = __import__(f"bt_grasp.cli.{name}", fromlist=["register"])
         except ModuleNotFoundError as exc:
@@ -57,15 +78,16 @@ def _register() -> None:
                 raise
             continue
         module.register(app)
+    return app
 
 
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI; returns the process exit code."""
-    _register()
-    from bt_grasp.cli.run_cmd import fill_optional_values
-
     args = sys.argv[1:] if argv is None else list(argv)
+    app = build_app(modules_for(args))
     if args[:1] == ["run"]:
+        from bt_grasp.cli.run_cmd import fill_optional_values
+
         args = fill_optional_values(args)
     try:
         rv = app(args=args, standalone_mode=False, prog_name="bt-grasp")  # also names the completion variable
