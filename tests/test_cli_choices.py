@@ -17,7 +17,7 @@ from bt_grasp.cli.main import main
 REPO = Path(__file__).resolve().parents[1]
 PREFIX = "bt-grasp: error: "
 MOUNTS = ["eye-to-hand", "eye-in-hand"]
-TASKS = ["pick", "pick_and_place", "stack", "sort_by_color", "clear_table"]
+TASKS = ["pick", "pick_and_place", "stack", "sort_by_color", "clear_table", "clear_household"]
 PLANNERS = ["RRTConnect", "RRT", "RRTstar", "InformedRRTstar", "SORRTstar", "BITstar", "AORRTC"]
 
 

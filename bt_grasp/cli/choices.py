@@ -43,6 +43,7 @@ class TaskChoice(StrEnum):
     stack = "stack"
     sort_by_color = "sort_by_color"
     clear_table = "clear_table"
+    clear_household = "clear_household"
 
 
 class ChoiceList:

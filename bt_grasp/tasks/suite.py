@@ -36,6 +36,7 @@ TASKS: tuple[Task, ...] = (
     Task("stack", Path("trees/stack.xml"), Path("scenes/stack.yaml")),
     Task("sort_by_color", Path("trees/sort_by_color.xml"), Path("scenes/sort_by_color.yaml")),
     Task("clear_table", Path("trees/clear_table.xml"), Path("scenes/clear_table.yaml")),
+    Task("clear_household", Path("trees/clear_household.xml"), Path("scenes/household_clear.yaml")),
 )
 
 

@@ -69,5 +69,5 @@ def test_bench_tasks_refuses_an_unknown_task_in_one_line() -> None:
     assert proc.returncode == 2
     assert proc.stderr.strip().splitlines() == [
         "bt-grasp: error: Invalid value for '--task': Value error, 'juggle' is not one of 'pick', 'pick_and_place', "
-        "'stack', 'sort_by_color', 'clear_table'. (see `bt-grasp bench tasks --help`)"
+        "'stack', 'sort_by_color', 'clear_table', 'clear_household'. (see `bt-grasp bench tasks --help`)"
     ]
