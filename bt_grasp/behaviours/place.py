@@ -33,6 +33,7 @@ from bt_grasp.behaviours.motion_leaves import (
     detection_box,
     plan_failure,
     plan_to_pose_fn,
+    retreat_after_release,
 )
 from bt_grasp.behaviours.objects import is_detection, object_list
 from bt_grasp.behaviours.reasons import FailureReason
@@ -49,6 +50,9 @@ if TYPE_CHECKING:
 
 #: the tool points down: tcp z along base -z
 R_DOWN = np.diag([1.0, -1.0, -1.0])
+#: the release pose's arm configurations tried when the nearest one does not work (seeded IK: reproducible)
+RELEASE_IK_SEEDS = 16
+RELEASE_IK_SOLUTIONS = 8
 #: how long opening the fingers may take (simulated time)
 OPEN_TIMEOUT_S = 1.5
 
@@ -192,6 +196,7 @@ class _PlaceBase(RobotLeaf):
         below = tuple(o for o, d in zip(obstacles, others, strict=True)
                       if support is None or not same_object(d, support))
         self._descent_scene = PlanningScene.from_scene(self.cell.scene, below).with_attached(held_shape, TCP_LINK)
+        self._retreat_scene = PlanningScene.from_scene(self.cell.scene)
         self._q_start = self.cell.robot.joint_positions()
         self.feedback_message = f"placing at {self._target_text}"
         return None
@@ -199,19 +204,57 @@ class _PlaceBase(RobotLeaf):
     def _try_option(self, option: PlaceYaw, T_place: Mat4) -> tuple[NDArray[np.float64], ...] | PathFailure:
         """The carry path to the pre-place pose and the straight descent to the release pose, both checked in
         the perceived scene (the open fingers, the palm, the arm and the held object against what was seen and
-        the fixtures), or why this orientation does not work."""
+        the fixtures), and the way out after the release; or why this orientation does not work.
+
+        First as Place always planned it (the carry to the pre-place configuration nearest the arm's, then
+        the straight line down from there); when that fails, from the release pose's other arm configurations
+        (each: free at the release, the straight line up to the pre-place pose, the way out, then the carry to
+        where the line up ends), since a wrist or elbow the other way round may clear a bin's wall."""
         turn = f"turned {math.degrees(option.turn_rad):.0f} deg"
         pre = _raised(T_place, self.input_float("approach"))
-        plan = self.cell.planner.plan_to_pose(self._q_start, pre, self._carry_scene, self.cell.planner_options)
-        if not plan.ok:
+        planner, options = self.cell.planner, self.cell.planner_options
+        failures: list[PathFailure] = []
+        plan = planner.plan_to_pose(self._q_start, pre, self._carry_scene, options)
+        if plan.ok:
+            path = np.asarray(plan.path, dtype=float)
+            descent = planner.straight_line(path[-1], T_place, self._descent_scene)
+            if descent.ok:
+                down = np.asarray(descent.path, dtype=float)
+                out = self._way_out(down[-1], T_place, turn)
+                if out is None:
+                    return path, down
+                failures.append(out)
+            else:
+                sentence = f"{turn}: the descent fails ({descent.status.value}): {descent.message}"
+                failures.append(PathFailure(_blocked(cartesian_reason(descent.status)), sentence))
+        else:
             failure = plan_failure(plan)
-            return PathFailure(_blocked(failure.reason), f"{turn}: the carry fails: {failure.sentence}")
-        path = np.asarray(plan.path, dtype=float)
-        descent = self.cell.planner.straight_line(path[-1], T_place, self._descent_scene)
-        if not descent.ok:
-            sentence = f"{turn}: the descent fails ({descent.status.value}): {descent.message}"
-            return PathFailure(_blocked(cartesian_reason(descent.status)), sentence)
-        return path, np.asarray(descent.path, dtype=float)
+            failures.append(PathFailure(_blocked(failure.reason), f"{turn}: the carry fails: {failure.sentence}"))
+        releases, _ = self.cell.kinematics.ik_solutions(T_place, self._q_start, seeds=RELEASE_IK_SEEDS,
+                                                        max_solutions=RELEASE_IK_SOLUTIONS)
+        checker = planner.checker(self._descent_scene, 0.0)
+        for q_release in releases:
+            if not checker.is_valid(q_release):
+                continue
+            up = planner.straight_line(q_release, pre, self._descent_scene)
+            if not up.ok or self._way_out(q_release, T_place, turn) is not None:
+                continue
+            line = np.asarray(up.path, dtype=float)
+            carry = planner.plan_to_joints(self._q_start, line[-1], self._carry_scene, options)
+            if carry.ok:
+                return np.asarray(carry.path, dtype=float), line[::-1].copy()
+        return failures[0]
+
+    def _way_out(self, q_release: NDArray[np.float64], T_place: Mat4, turn: str) -> PathFailure | None:
+        """Why the open gripper cannot leave the released object from ``q_release`` (None: it can)."""
+        q = q_release
+        for name, fn in retreat_after_release(T_place, self.input_float("retreat"), self._height):
+            line = self.cell.planner.straight_line(q, fn(self.cell.kinematics.fk(q)), self._retreat_scene)
+            if not line.ok:
+                sentence = f"{turn}: the {name} after the release fails ({line.status.value}): {line.message}"
+                return PathFailure(_blocked(cartesian_reason(line.status)), sentence)
+            q = np.asarray(line.path, dtype=float)[-1]
+        return None
 
     def _choose(self) -> Status:
         """Try the next orientation (one per tick: a plan and a straight line, tens of ms); start the motion
@@ -297,10 +340,7 @@ class _PlaceBase(RobotLeaf):
                 if self.now_s() - self._t_open > OPEN_TIMEOUT_S:
                     return self.failed(FailureReason.TIMEOUT, f"the gripper opened only to {width * 1e3:.1f} mm")
                 return Status.RUNNING
-            from bt_grasp.behaviours.motion_leaves import retreat_after_release
-            from bt_grasp.motion.planning_scene import PlanningScene
-
-            scene = PlanningScene.from_scene(self.cell.scene)
+            scene = self._retreat_scene
             # straight up; after a side grasp back along the approach, then up past the object's top
             steps = retreat_after_release(self._T_place, self.input_float("retreat"), self._height)
             self.job = MotionJob(self.cell, [Segment(name, cartesian_fn(self, fn, scene)) for name, fn in steps])
