@@ -1,6 +1,6 @@
 """What recording, extra camera frames and the live server cost a pick, measured in one process.
 
-    python tools/bench_log_overhead.py [--reps 3] [--seed 0] [--fresh] [--out FILE.json]
+    python tools/bench_log_overhead.py [--reps 3] [--seed 0] [--fresh] [--out FILE.json] [--configs NAME ...]
     python tools/bench_log_overhead.py --cli [--reps 8]     # whole one-off `bt-grasp run` commands
 
 Runs the default pick (trees/pick.xml on scenes/tabletop.yaml, one warm world reused) in each configuration,
@@ -102,7 +102,12 @@ def main() -> None:
     parser.add_argument("--fresh", action="store_true",
                         help="build a fresh world per run and time the whole episode (world, tree, ticks, judge)")
     parser.add_argument("--cli", action="store_true", help="time whole one-off `bt-grasp run` processes instead")
+    parser.add_argument("--configs", nargs="+", choices=sorted(CONFIGS), default=None,
+                        help="only these configurations (in-process mode; 'no log' is always measured)")
     args = parser.parse_args()
+    if args.configs is not None:
+        for name in [n for n in CONFIGS if n != "no log" and n not in args.configs]:
+            del CONFIGS[name]
     if args.cli:
         cli_main(args.reps, args.seed, args.out)
         return
