@@ -7,7 +7,7 @@ Everything a plugin author needs is importable from here (see docs/own-leaves.md
     BARCODE_UNREADABLE = Reason("BARCODE_UNREADABLE", "The label could not be read.")
 
     @action(ports=[input_port("timeout_s", float, 2.0, "give up after this much simulated time")],
-            needs_robot=True)
+            needs_robot=True, reasons=[BARCODE_UNREADABLE])
     class ReadBarcode(RobotLeaf):
         '''Reads the barcode of the object in front of the camera.'''
 
@@ -54,7 +54,7 @@ from bt_grasp.tree.exceptions import DeclarationError
 from bt_grasp.tree.leaf import Leaf
 from bt_grasp.tree.node import BtNode, BtStatus
 from bt_grasp.tree.plugins import ENTRY_POINT_GROUP, PluginError
-from bt_grasp.tree.reasons import FailureReason, Reason
+from bt_grasp.tree.reasons import FailureReason, Reason, ReasonLike
 from bt_grasp.tree.registry import (
     NO_DEFAULT,
     NodeKind,
@@ -115,21 +115,24 @@ def inout_port(name: str, type: type = object, description: str = "") -> PortSpe
 
 def action(
     *, name: str | None = None, ports: Iterable[PortSpec] = (), needs_robot: bool = False,
-    description: str | None = None,
+    description: str | None = None, reasons: Iterable[ReasonLike] = (),
 ) -> Callable[[T], T]:
     """Class decorator for a :class:`Leaf` that acts; the spec is stored as ``cls.bt_spec`` (register it in
     ``register(registry)``). ``needs_robot``: it uses the cell (robot, camera, planner); it then updates at most
-    once per control period, and ``tree run --dry`` needs a stand-in for it."""
-    return leaf(None, name=name, kind=NodeKind.ACTION, ports=ports, needs_robot=needs_robot, description=description)
+    once per control period, and ``tree run --dry`` replaces it by a stand-in. ``reasons``: the failure reasons it
+    may report (register each with ``registry.register_reason`` first); the stand-in fails with them."""
+    return leaf(None, name=name, kind=NodeKind.ACTION, ports=ports, needs_robot=needs_robot, description=description,
+                reasons=reasons)
 
 
 def condition(
     *, name: str | None = None, ports: Iterable[PortSpec] = (), needs_robot: bool = False,
-    description: str | None = None,
+    description: str | None = None, reasons: Iterable[ReasonLike] = (),
 ) -> Callable[[T], T]:
     """Class decorator for a :class:`Leaf` that checks something (SUCCESS or FAILURE, never RUNNING)."""
     return leaf(
-        None, name=name, kind=NodeKind.CONDITION, ports=ports, needs_robot=needs_robot, description=description
+        None, name=name, kind=NodeKind.CONDITION, ports=ports, needs_robot=needs_robot, description=description,
+        reasons=reasons,
     )
 
 

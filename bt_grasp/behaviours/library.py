@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterable, Sequence
 
 from bt_grasp.behaviours import (
@@ -14,6 +15,7 @@ from bt_grasp.behaviours import (
     place,
     viewing,
 )
+from bt_grasp.behaviours.reasons import FailureReason as R
 from bt_grasp.errors import TreeFileError
 from bt_grasp.perception.results import Detection
 from bt_grasp.scene.format import Scene
@@ -48,6 +50,45 @@ ROBOT_LEAVES = (
     viewing.LookAt,
     follow.FollowTarget,
 )
+
+_MOTION = (R.IK_UNREACHABLE, R.COLLISION, R.PLAN_FAILED, R.TRACKING_ERROR)  # a planned, executed motion
+_PERCEPTION = (R.CALIBRATION_MISSING, R.NO_FRAME, R.BAD_INPUT, R.NO_DETECTION)  # one capture + detection
+
+#: per robot leaf, the reasons it may fail with (its own ``failed`` calls plus those of the motion or perception
+#: job it runs), declared on its spec below (``NodeSpec.failure_reasons``) for those that do not declare them in
+#: their ``@leaf(..., reasons=...)``: what a dry run's stand-in fails with (``tree run --dry --outcome/--random``)
+DECLARED_REASONS: dict[str, tuple[R, ...]] = {
+    "LoadCalibration": (R.CALIBRATION_MISSING,),
+    "Calibrate": (R.CALIBRATION_FAILED, R.PLAN_FAILED, R.TRACKING_ERROR),
+    "Perceive": _PERCEPTION,
+    "ObjectVisible": _PERCEPTION,
+    "PerceiveAll": _PERCEPTION,
+    "PlanGrasp": (R.NO_DETECTION, R.NOTHING_TO_GRASP, R.IK_UNREACHABLE, R.PLAN_FAILED),
+    "Approach": (R.BAD_INPUT, *_MOTION),
+    "Lift": (R.BAD_INPUT, R.SLIPPED, *_MOTION),
+    "Retreat": _MOTION,
+    "MoveHome": _MOTION,
+    "MoveAbove": _MOTION,
+    "MoveTo": (R.BAD_INPUT, *_MOTION),
+    "LookAt": (R.BAD_INPUT, R.CALIBRATION_MISSING, *_MOTION),
+    "OpenGripper": (R.TIMEOUT,),
+    "Grasp": (R.GRASP_EMPTY, R.TIMEOUT),
+    "IsGrasped": (R.GRASP_EMPTY, R.SLIPPED),
+    "FixturePose": (R.BAD_INPUT,),
+    "Place": (R.BAD_INPUT, R.NOT_HOLDING, R.PLACE_BLOCKED, R.DROPPED, R.TIMEOUT, *_MOTION),
+    "PlaceOn": (R.BAD_INPUT, R.NOT_HOLDING, R.PLACE_BLOCKED, R.DROPPED, R.TIMEOUT, *_MOTION),
+    "FollowTarget": (R.BAD_INPUT, R.TARGET_LOST, R.IK_UNREACHABLE),
+    "SelectObject": (R.BAD_INPUT, R.NO_DETECTION),
+    "ObjectPose": (R.BAD_INPUT,),
+    "ObjectInfo": (R.BAD_INPUT,),
+    "ObjectCount": (R.BAD_INPUT, R.NO_DETECTION, R.COUNT_EXCEEDED),
+}
+
+for _cls in ROBOT_LEAVES:  # each spec carries its reasons (a leaf's own declaration wins)
+    _spec = _cls.bt_spec  # type: ignore[attr-defined]
+    if not _spec.failure_reasons:
+        _cls.bt_spec = dataclasses.replace(  # type: ignore[attr-defined]
+            _spec, failure_reasons=tuple(r.value for r in DECLARED_REASONS.get(_spec.name, ())))
 
 
 #: BT.CPP's LoopNode over an object list (from PerceiveAll): pops each perceived object into ``value``

@@ -194,7 +194,7 @@ def run_cmd(
         clock = ManualClock()
         registry, catalog = tree_registry(leaves), RobotStandIns()
         rules = tuple(parse_outcome(text) for text in outcome)
-        plan = DryRunPlan(rules, random_seed, catalog, known_reason_names(registry, catalog))
+        plan = DryRunPlan(rules, random_seed, catalog, known_reason_names(registry))
         tree = load_dry(file, registry, plan, substitutions=_parse_substitutions(substitute), clock=clock)
         result = run_dry(tree, clock, max_ticks, 1.0 / tick_hz)
     except InputError as exc:

@@ -10,6 +10,10 @@ steer it::
 
 and a seeded random mode (``seed``) draws each robot leaf's outcome at the start of every attempt among
 SUCCESS and the leaf's declared failure reasons, from one generator, so the same seed walks the same way.
+A leaf's failure reasons are those its spec declares (:attr:`NodeSpec.failure_reasons`: ``@action(reasons=...)``
+for a plugin's leaf, the robot leaves' declarations in ``bt_grasp.behaviours.library``), so a new leaf, or a
+user's, gets its reasons here with no table to edit; a leaf that declares none may fail with any reason the
+registry knows.
 Control, decorator and script nodes are never replaced; a non-robot leaf only when an outcome rule names
 it (then it becomes a stand-in too, with the same ports).
 
@@ -48,11 +52,7 @@ _SYNTAX = "NAME=success, NAME=failure[:REASON] or NAME=running:N"
 
 
 class StandInCatalog(Protocol):
-    """What the application knows about its robot leaves, for their stand-ins."""
-
-    def failure_reasons(self, spec: NodeSpec) -> tuple[str, ...]:
-        """The reasons the real leaf may fail with (empty: unknown, any reason the registry knows)."""
-        ...
+    """What the application knows about its robot leaves' outputs, for their stand-ins."""
 
     def placeholder(self, spec: NodeSpec, port: PortSpec) -> Any:
         """The value a stand-in writes to an output port on SUCCESS (typed like the real leaf's)."""
@@ -61,9 +61,6 @@ class StandInCatalog(Protocol):
 
 class TypedPlaceholders:
     """A catalog that knows nothing about particular leaves: placeholders by port type only."""
-
-    def failure_reasons(self, spec: NodeSpec) -> tuple[str, ...]:
-        return ()
 
     def placeholder(self, spec: NodeSpec, port: PortSpec) -> Any:
         return type_placeholder(port, spec.name)
@@ -139,8 +136,9 @@ def parse_outcome(text: str) -> OutcomeRule:
 
 @dataclass
 class DryRunPlan:
-    """How the stand-ins behave: outcome rules, the random seed (None: no random mode), the catalog, and
-    the names of the reasons the registry knows (to check a rule's reason when a leaf declares none)."""
+    """How the stand-ins behave: outcome rules, the random seed (None: no random mode), the catalog of output
+    placeholders, and the names of the reasons the registry knows (to check a rule's reason when a leaf declares
+    none)."""
 
     rules: tuple[OutcomeRule, ...] = ()
     seed: int | None = None
@@ -159,7 +157,7 @@ class DryRunPlan:
 
     def reasons(self, spec: NodeSpec) -> tuple[str, ...]:
         """The reasons a stand-in for ``spec`` may fail with: the leaf's declared ones, else every known one."""
-        return self.catalog.failure_reasons(spec) or tuple(sorted(self.known_reasons))
+        return spec.failure_reasons or tuple(sorted(self.known_reasons))
 
 
 class StandIn(Leaf):
@@ -192,7 +190,7 @@ class StandIn(Leaf):
             self.running_left -= 1
             return Status.RUNNING
         if self.outcome.kind is OutcomeKind.FAILURE:
-            declared = self.plan.catalog.failure_reasons(self.original)
+            declared = self.original.failure_reasons
             reason = self.outcome.reason or (declared[0] if declared else None)
             if reason is None:  # a leaf that declares no reason (Script) fails as it would: without one
                 self.feedback_message = f"stand-in for {self.name} was told to fail"
@@ -230,12 +228,9 @@ def dry_registry(registry: NodeRegistry, plan: DryRunPlan) -> NodeRegistry:
     return dry
 
 
-def known_reason_names(registry: NodeRegistry, catalog: StandInCatalog) -> frozenset[str]:
-    """Every reason name the registry (built-in and plugins' reasons) or the catalog's leaves declare."""
-    names = {r.name for r in registry.reasons()}
-    for spec in registry.specs():
-        names.update(catalog.failure_reasons(spec))
-    return frozenset(names)
+def known_reason_names(registry: NodeRegistry) -> frozenset[str]:
+    """Every reason name the registry knows (built-in and plugins' reasons; a leaf declares only those)."""
+    return frozenset(r.name for r in registry.reasons())
 
 
 def _check_rules(tree: LoadedTree, plan: DryRunPlan) -> None:
@@ -251,7 +246,7 @@ def _check_rules(tree: LoadedTree, plan: DryRunPlan) -> None:
             )
         reason = rule.outcome.reason
         for node in matched:
-            declared = plan.catalog.failure_reasons(node.original) if isinstance(node, StandIn) else ()
+            declared = node.original.failure_reasons if isinstance(node, StandIn) else ()
             if reason is not None and declared and reason not in declared:
                 raise InputError(
                     where, f"{node.bt_type} does not fail with {reason}; it declares {', '.join(declared)}"

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 from bt_grasp.errors import closest_names
 from bt_grasp.tree.exceptions import DeclarationError
-from bt_grasp.tree.reasons import Reason, builtin_reasons
+from bt_grasp.tree.reasons import Reason, ReasonLike, builtin_reasons, reason_name
 
 if TYPE_CHECKING:
     import py_trees
@@ -145,6 +145,9 @@ class NodeSpec:
         description: one sentence for ``tree show`` and TreeNodesModel
         needs_robot: the node talks to the robot or camera; ``tree run --dry`` requires it substituted
         children: ``(min, max)`` number of children, ``max`` None for unbounded; defaults from ``kind``
+        failure_reasons: the names of the reasons the leaf may fail with (its own and those of the jobs it runs),
+            each registered in the registry it goes into; a dry run's stand-in fails with them
+            (``tree run --dry --outcome``, ``--random``)
     """
 
     name: str
@@ -154,6 +157,7 @@ class NodeSpec:
     description: str = ""
     needs_robot: bool = False
     children: tuple[int, int | None] | None = None
+    failure_reasons: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name or not self.name.replace("_", "a").isalnum():
@@ -169,6 +173,10 @@ class NodeSpec:
         names = [p.name for p in self.ports]
         if len(set(names)) != len(names):
             raise DeclarationError(f"node {self.name!r} declares a port twice: {names}")
+        reasons = tuple(reason_name(r) for r in self.failure_reasons)  # a Reason or FailureReason: its name
+        for reason in reasons:
+            Reason(reason)  # the name's form (DeclarationError otherwise)
+        object.__setattr__(self, "failure_reasons", tuple(dict.fromkeys(reasons)))
 
     def port(self, name: str) -> PortSpec | None:
         for p in self.ports:
@@ -202,10 +210,10 @@ class NodeRegistry:
         self.origins: dict[str, str] = {}
         #: the same for failure reasons (reason name -> plugin)
         self.reason_origins: dict[str, str] = {}
-        for spec in specs:
-            self.register(spec)
         for reason in reasons:
             self.register_reason(reason)
+        for spec in specs:
+            self.register(spec)
 
     def register(self, spec: NodeSpec) -> NodeSpec:
         if not isinstance(spec, NodeSpec):
@@ -214,6 +222,10 @@ class NodeRegistry:
             raise DeclarationError(f"a node named {spec.name!r} is already registered")
         if spec.factory is None or not callable(spec.factory):
             raise DeclarationError(f"node {spec.name!r} has no factory")
+        for reason in spec.failure_reasons:
+            if reason not in self._reasons:
+                raise DeclarationError(f"node {spec.name!r} declares the failure reason {reason!r}, which is not "
+                                       "registered (registry.register_reason(...) before registry.register(...))")
         self._specs[spec.name] = spec
         return spec
 
@@ -278,8 +290,10 @@ def leaf(
     ports: Iterable[PortSpec] = (),
     needs_robot: bool = False,
     description: str | None = None,
+    reasons: Iterable[ReasonLike] = (),
 ) -> Callable[[T], T]:
-    """Class decorator: describe a :class:`bt_grasp.tree.leaf.Leaf` subclass as a node type.
+    """Class decorator: describe a :class:`bt_grasp.tree.leaf.Leaf` subclass as a node type (``reasons``: the
+    failure reasons it may report, see :attr:`NodeSpec.failure_reasons`).
 
     The spec is stored on the class as ``bt_spec``; with a registry it is also registered there. With
     ``None`` the caller registers later: ``registry.register(Approach.bt_spec)``.
@@ -294,6 +308,7 @@ def leaf(
             factory=cls,  # type: ignore[arg-type]
             description=description if description is not None else (doc[0] if doc else ""),
             needs_robot=needs_robot,
+            failure_reasons=tuple(reason_name(r) for r in reasons),
         )
         cls.bt_spec = spec  # type: ignore[attr-defined]
         if registry is not None:
