@@ -117,7 +117,10 @@ def robot_registry(leaves: Sequence[str] = (), installed: bool = True) -> NodeRe
 
 def check_tree_against_scene(nodes: Iterable[BtNode], scene: Scene) -> None:
     """Literal ports that name scene things (a fixture, a place pose) must fit the scene: TreeFileError with
-    the node's file:line before anything runs. A leaf says how with ``check_scene(scene) -> str | None``."""
+    the node's file:line before anything runs. A leaf says how with ``check_scene(scene) -> str | None``.
+    A SelectObject's literal class must be one of the tree's learned models' (``check_detector_classes``)."""
+    nodes = list(nodes)
+    objects.check_detector_classes(nodes)
     for node in nodes:
         check = getattr(node, "check_scene", None)
         problem = check(scene) if check is not None else None

@@ -2,8 +2,9 @@
 
 A perceived object is a :class:`bt_grasp.perception.results.Detection` (base frame; ``label`` is its colour
 name, ``color_name`` its dominant colour, ``shape`` "box" or "round", ``shape_class`` box-like,
-cylinder-like, elongated, flat or other, ``size_m`` length/width/height). Objects are found by geometry;
-colour, shape class and size are attributes to choose by. A list of them (an *object list*) is a tuple of
+cylinder-like, elongated, flat or other, ``size_m`` length/width/height, ``class_name`` the learned detector's
+class, "" when it named none). Objects are found by geometry; colour, shape class, size and (with
+``detector="learned"``) class are attributes to choose by. A list of them (an *object list*) is a tuple of
 detections; the object loop (``ForEachObject``) walks one. Poses are :class:`bt_grasp.pose.Pose`.
 """
 
@@ -17,16 +18,21 @@ import numpy as np
 from py_trees.common import Status
 
 from bt_grasp.behaviours.base import RobotLeaf
-from bt_grasp.behaviours.perceive import perceive_once
+from bt_grasp.behaviours.perceive import DETECTOR_PORTS, DetectorLeaf, perceive_once
 from bt_grasp.behaviours.reasons import FailureReason
+from bt_grasp.detector.kinds import DetectorKind, parse_detector
+from bt_grasp.errors import TreeFileError
 from bt_grasp.pose import Pose
 from bt_grasp.tree.leaf import Leaf
 from bt_grasp.tree.registry import NodeKind, PortDirection, PortSpec, leaf
 
 if TYPE_CHECKING:
+    from collections.abc import Iterable
+
     from bt_grasp.perception.results import Detection
     from bt_grasp.scene.fixtures import Fixture
     from bt_grasp.scene.format import Scene
+    from bt_grasp.tree.node import BtNode
 
 _OBJECTS_IN = PortSpec("objects", PortDirection.INPUT, object, "{objects}", "an object list (from PerceiveAll)")
 ORDERS = ("first", "nearest", "farthest", "largest", "smallest")
@@ -63,12 +69,20 @@ def shape_class_of(det: Detection) -> str:
     return str(getattr(value, "value", value or "other"))
 
 
+def class_of(det: Detection) -> str:
+    """The class the learned detector named the object ("" when none did, or a hand-made detection)."""
+    return str(getattr(det, "class_name", "") or "")
+
+
 def matches(det: Detection, color: str, shape: str, min_size_m: float, max_size_m: float,
-            shape_class: str = "") -> bool:
-    """Colour (its label or its dominant colour), shape, shape class, and the footprint's long side within
-    [min_size_m, max_size_m]; an empty or "any" colour, shape or class matches every object."""
-    color, shape, shape_class = _wanted(color), _wanted(shape), _wanted(shape_class)
+            shape_class: str = "", class_name: str = "") -> bool:
+    """Colour (its label or its dominant colour), shape, shape class, class (the learned detector's), and the
+    footprint's long side within [min_size_m, max_size_m]; an empty or "any" colour, shape, shape class or class
+    matches every object."""
+    color, shape, shape_class, class_name = _wanted(color), _wanted(shape), _wanted(shape_class), _wanted(class_name)
     if color and color not in (det.label, getattr(det, "color_name", "")):
+        return False
+    if class_name and class_of(det) != class_name:
         return False
     if shape and det.shape != shape:
         return False
@@ -81,23 +95,33 @@ def matches(det: Detection, color: str, shape: str, min_size_m: float, max_size_
 @leaf(
     None,
     name="PerceiveAll",
-    ports=[PortSpec("objects", PortDirection.OUTPUT, object, "{objects}", "every object seen, as an object list")],
+    ports=[
+        PortSpec("objects", PortDirection.OUTPUT, object, "{objects}", "every object seen, as an object list"),
+        *DETECTOR_PORTS,
+    ],
     needs_robot=True,
 )
-class PerceiveAll(RobotLeaf):
+class PerceiveAll(DetectorLeaf):
     """Capture one RGB-D frame and list every object standing on the table (an empty list when none).
 
+    With ``detector="learned"`` each object a box of the model covers carries the box's ``class_name`` and
+    ``class_score`` (objects no box covered are listed too, without a class: they matter for clearance).
     FAILURE: CALIBRATION_MISSING (no calibration loaded), NO_FRAME (the camera returned nothing),
-    NO_DETECTION (no table was found in the image at all).
+    NO_DETECTION (no table was found in the image at all), BAD_INPUT (a detector that is neither geometric nor
+    learned).
     """
 
     def update(self) -> Status:
-        result = perceive_once(self, None, accept_empty=True)
+        detector = self.detector_now()
+        if isinstance(detector, Status):
+            return detector
+        result = (perceive_once(self, None, accept_empty=True) if detector is None
+                  else perceive_once(self, None, accept_empty=True, detector=detector))
         if isinstance(result, Status):
             return result
         objects = tuple(result.others)
         self.ports.set("objects", objects)
-        self.feedback_message = f"{len(objects)} object(s): " + ", ".join(d.label for d in objects)
+        self.feedback_message = f"{len(objects)} object(s): " + ", ".join(class_of(d) or d.label for d in objects)
         return Status.SUCCESS
 
 
@@ -112,6 +136,8 @@ class PerceiveAll(RobotLeaf):
         PortSpec("shape_class", PortDirection.INPUT, str, "",
                  "only this shape class: box-like, cylinder-like, elongated, flat, other (empty or any: any)",
                  SHAPE_CLASSES),
+        PortSpec("class", PortDirection.INPUT, str, "",
+                 "only objects of this class of the learned detector's model, e.g. mug (empty or any: any)"),
         PortSpec("min_size", PortDirection.INPUT, float, 0.0, "only footprints whose long side is at least this, m"),
         PortSpec("max_size", PortDirection.INPUT, float, 1.0, "only footprints whose long side is at most this, m"),
         PortSpec("order", PortDirection.INPUT, str, "first", "which match: " + ", ".join(ORDERS), ORDERS),
@@ -121,10 +147,12 @@ class PerceiveAll(RobotLeaf):
     ],
 )
 class SelectObject(Leaf):
-    """Choose one object from a list by colour, footprint shape, shape class and size (each empty or "any":
-    every object), then by order (first in the list, nearest to or farthest from ``point`` -- a fixture's
-    pose from FixturePose --, largest or smallest footprint). FAILURE: NO_DETECTION (nothing matches),
-    BAD_INPUT (``objects`` is not an object list)."""
+    """Choose one object from a list by colour, footprint shape, shape class, class and size (each empty or
+    "any": every object), then by order (first in the list, nearest to or farthest from ``point`` -- a
+    fixture's pose from FixturePose --, largest or smallest footprint). ``class`` names a class of the learned
+    detector's model (objects from ``PerceiveAll detector="learned"``); a literal class the tree's model does not
+    have is a load error with the closest name. FAILURE: NO_DETECTION (nothing matches), BAD_INPUT (``objects``
+    is not an object list, or ``class`` is asked of objects no learned detector named)."""
 
     def update(self) -> Status:
         objects = object_list(self.ports.get("objects") if self.ports.has("objects") else None)
@@ -132,11 +160,18 @@ class SelectObject(Leaf):
             return self.fail(FailureReason.BAD_INPUT.value, "'objects' is not an object list: run PerceiveAll first")
         color, shape = _wanted(str(self.ports.get("color"))), _wanted(str(self.ports.get("shape")))
         shape_class = _wanted(str(self.ports.get("shape_class")))
+        class_name = _wanted(str(self.ports.get("class")) if self.ports.has("class") else "")
+        if class_name and objects and not any(class_of(d) for d in objects):
+            return self.fail(FailureReason.BAD_INPUT.value,
+                             f"class '{class_name}' asked of {len(objects)} object(s) no learned detector named: "
+                             f"perceive them with detector=\"learned\"")
         lo, hi = float(self.ports.get("min_size")), float(self.ports.get("max_size"))
-        found = [d for d in objects if matches(d, color, shape, lo, hi, shape_class)]
+        found = [d for d in objects if matches(d, color, shape, lo, hi, shape_class, class_name)]
         if not found:
-            wanted = " ".join(w for w in (color, shape_class, shape or "object") if w)
-            return self.fail(FailureReason.NO_DETECTION.value, f"no {wanted} among {len(objects)} object(s)")
+            wanted = " ".join(w for w in (color, class_name, shape_class, shape or "object") if w)
+            seen = sorted({class_of(d) for d in objects if class_of(d)})
+            classes = f" (classes seen: {', '.join(seen)})" if class_name and seen else ""
+            return self.fail(FailureReason.NO_DETECTION.value, f"no {wanted} among {len(objects)} object(s){classes}")
         order = str(self.ports.get("order"))
         point: Pose = self.ports.get("point")
         chosen = found[0]
@@ -148,9 +183,48 @@ class SelectObject(Leaf):
             chosen = found[int(np.argmax(area) if order == "largest" else np.argmin(area))]
         self.ports.set("object", chosen)
         c = chosen.centroid_base_m
-        self.feedback_message = (f"{chosen.label} {shape_class_of(chosen)} {chosen.shape} at ({c[0]:.3f}, {c[1]:.3f}) "
-                                 f"of {len(found)} match(es)")
+        named = f"{class_of(chosen)} " if class_of(chosen) else ""
+        self.feedback_message = (f"{named}{chosen.label} {shape_class_of(chosen)} {chosen.shape} at "
+                                 f"({c[0]:.3f}, {c[1]:.3f}) of {len(found)} match(es)")
         return Status.SUCCESS
+
+
+def check_detector_classes(nodes: Iterable[BtNode]) -> None:
+    """A literal ``class`` of a SelectObject must be a class of the learned models the tree's perceiving leaves
+    name literally (loaded with the tree): :class:`TreeFileError` at the SelectObject's line, with the closest
+    class name. Not checked when a perceiving leaf names its detector or model on the blackboard (known only
+    when it runs); a tree whose perceiving leaves all use the geometric detector has no classes at all."""
+    nodes = list(nodes)
+    perceivers = [n for n in nodes if isinstance(n, DetectorLeaf)]
+    if not perceivers or any(n.literal_model is None and _detector_unknown(n) for n in perceivers):
+        return
+    models = {n.literal_model.path: n.literal_model for n in perceivers if n.literal_model is not None}
+    for node in nodes:
+        if not isinstance(node, SelectObject) or node.ports.key("class") is not None:
+            continue
+        wanted = _wanted(str(node.ports.get("class")))
+        if not wanted or any(wanted in m.names for m in models.values()):
+            continue
+        ctx = node.ctx
+        if not models:
+            problem = (f"class '{wanted}' asked, but every perceiving leaf of the tree uses the geometric "
+                       f"detector, which names no classes (give PerceiveAll detector=\"learned\")")
+        else:
+            from bt_grasp.detector.model import ModelError
+
+            try:
+                next(iter(models.values())).class_id(wanted)
+                problem = ""
+            except ModelError as exc:
+                problem = exc.problem
+        raise TreeFileError(ctx.source or "tree", f"{node.name}: port 'class': {problem}", where=ctx.line or None)
+
+
+def _detector_unknown(node: DetectorLeaf) -> bool:
+    """The leaf's detector is named on the blackboard, or is learned with a model named there."""
+    if node.ports.key("detector") is not None:
+        return True
+    return parse_detector(str(node.ports.get("detector"))) is DetectorKind.LEARNED
 
 
 @leaf(

@@ -1,7 +1,17 @@
-"""Perceive and ObjectVisible: one RGB-D capture through the perception pipeline, in the base frame."""
+"""Perceive and ObjectVisible: one RGB-D capture through the perception pipeline, in the base frame.
+
+``Perceive`` and ``PerceiveAll`` (objects.py) take ``detector``: ``geometric`` (the default: the point-cloud
+pipeline alone) or ``learned`` (a YOLO-OBB model's oriented boxes by class, joined with the point cloud:
+``bt_grasp.perception.learned``), and ``model``, the ONNX export ('' = the shipped household model). A literal
+``detector="learned"`` with a literal ``model`` is loaded and checked when the tree is loaded: a file that is not an
+OBB export, or an ``imgsz`` it does not take, is a load error naming the tree file's line. onnxruntime is imported
+only then (or at the first tick, for a model named on the blackboard).
+"""
 
 from __future__ import annotations
 
+from dataclasses import replace
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -12,13 +22,27 @@ from bt_grasp.behaviours.base import RobotLeaf
 from bt_grasp.behaviours.cell import Cell
 from bt_grasp.behaviours.fixture_mask import without_fixtures
 from bt_grasp.behaviours.reasons import FailureReason
+from bt_grasp.detector.kinds import DetectorKind, model_path, parse_detector
 from bt_grasp.interfaces import Mount, RGBDFrame
+from bt_grasp.tree.context import NodeContext
+from bt_grasp.tree.exceptions import PortValueError
 from bt_grasp.tree.registry import NodeKind, PortDirection, PortSpec, leaf
 
 if TYPE_CHECKING:
+    from bt_grasp.detector.inference import LearnedDetector
     from bt_grasp.perception.results import PerceptionResult
 
 _COLOR = PortSpec("color", PortDirection.INPUT, str, "", "target colour name (empty: the most graspable)")
+#: the ports that choose the detector (Perceive, PerceiveAll)
+DETECTOR_PORTS = (
+    PortSpec("detector", PortDirection.INPUT, str, DetectorKind.GEOMETRIC.value,
+             "what finds the objects: geometric (the point cloud) or learned (a YOLO-OBB model's boxes by class, "
+             "joined with the point cloud)", tuple(k.value for k in DetectorKind)),
+    PortSpec("model", PortDirection.INPUT, str, "",
+             "the learned detector's YOLO-OBB ONNX export, relative to the tree file (empty: the shipped household "
+             "model)"),
+    PortSpec("imgsz", PortDirection.INPUT, int, 0, "the input size the model must take, px (0: its own)"),
+)
 
 
 def camera_pose(cell: Cell) -> NDArray[np.float64] | None:
@@ -32,9 +56,53 @@ def camera_pose(cell: Cell) -> NDArray[np.float64] | None:
     return np.asarray(calibration.T_base_camera_at(T_base_tool), dtype=float)
 
 
-def perceive_once(leaf: RobotLeaf, color: str | None, accept_empty: bool = False) -> Status | PerceptionResult:
+class DetectorLeaf(RobotLeaf):
+    """A leaf that perceives with the detector its ports name (``DETECTOR_PORTS``); keeps each learned model it
+    loaded (one onnxruntime session per model and input size)."""
+
+    def __init__(self, ctx: NodeContext) -> None:
+        super().__init__(ctx)
+        self._models: dict[tuple[Path, int], LearnedDetector] = {}
+        #: the learned detector the tree file names literally, loaded and checked with the tree (else None)
+        self.literal_model: LearnedDetector | None = None
+        literal = all(self.ports.key(p) is None for p in ("detector", "model", "imgsz"))
+        if literal and parse_detector(str(self.ports.get("detector"))) is DetectorKind.LEARNED:
+            from bt_grasp.detector.model import ModelError
+
+            try:
+                self.literal_model = self._model(str(self.ports.get("model")), int(self.ports.get("imgsz")), True)
+            except ModelError as exc:
+                raise PortValueError(f"port 'model': {exc.message}") from None
+
+    def _model(self, text: str, imgsz: int, from_tree: bool) -> LearnedDetector:
+        from bt_grasp.detector.inference import LearnedDetector
+
+        path = model_path(text, self.ctx.source if from_tree else None)
+        key = (path, imgsz)
+        if key not in self._models:
+            self._models[key] = LearnedDetector.load(path, imgsz=imgsz or None)
+        return self._models[key]
+
+    def detector_now(self) -> LearnedDetector | Status | None:
+        """The learned detector the ports name now (a model named on the blackboard is loaded on first use; a
+        bad one is a :class:`bt_grasp.detector.model.ModelError`: exit 2), None for the geometric detector, or
+        the FAILURE status for a detector name that is neither."""
+        text = self.input_str("detector")
+        kind = parse_detector(text)
+        if kind is None:
+            return self.failed(FailureReason.BAD_INPUT, f"detector must be geometric or learned, not '{text}'")
+        if kind is DetectorKind.GEOMETRIC:
+            return None
+        if self.literal_model is not None:
+            return self.literal_model
+        return self._model(self.input_str("model"), self.input_int("imgsz"), self.ports.key("model") is None)
+
+
+def perceive_once(leaf: RobotLeaf, color: str | None, accept_empty: bool = False,
+                  detector: LearnedDetector | None = None) -> Status | PerceptionResult:
     """Capture + pipeline: the leaf's FAILURE status, or the (successful) PerceptionResult. With
-    ``accept_empty`` a table with nothing on it is a result (no detections), not a failure."""
+    ``accept_empty`` a table with nothing on it is a result (no detections), not a failure, and so (with a
+    learned ``detector``) is a table whose objects the detector named none of."""
     from bt_grasp.perception.pipeline import perceive
 
     cell = leaf.cell
@@ -49,9 +117,19 @@ def perceive_once(leaf: RobotLeaf, color: str | None, accept_empty: bool = False
     if color and color not in config.color.ranges:
         known = ", ".join(config.color.ranges)
         return leaf.failed(FailureReason.BAD_INPUT, f"unknown colour '{color}'; known: {known}")
-    result = without_fixtures(perceive(frame, T_base_camera, config, color or None), cell.scene)
+    if detector is None:
+        result = perceive(frame, T_base_camera, config, color or None)
+    else:
+        from bt_grasp.perception.learned import join_boxes
+
+        found = detector.detect(frame.color)
+        result = join_boxes(perceive(frame, T_base_camera, config), found.boxes, frame, T_base_camera, config,
+                            color or None)
+        result = replace(result, timings_ms={**result.timings_ms, "detector_network": found.network_ms,
+                                             "detector_decode": found.decode_ms})
+    result = without_fixtures(result, cell.scene)
     cell.media.perception(result, T_base_camera)
-    if accept_empty and result.status.value == "no_objects":
+    if accept_empty and (result.status.value == "no_objects" or (detector is not None and result.others)):
         return result
     if not result.ok:
         return leaf.failed(FailureReason.NO_DETECTION, f"{result.status.value}: {result.message}")
@@ -65,14 +143,21 @@ def perceive_once(leaf: RobotLeaf, color: str | None, accept_empty: bool = False
         _COLOR,
         PortSpec("target", PortDirection.OUTPUT, object, "{target}", "the chosen detection"),
         PortSpec("objects", PortDirection.OUTPUT, object, "{objects}", "every object seen (for clearance)"),
+        *DETECTOR_PORTS,
     ],
     needs_robot=True,
 )
-class Perceive(RobotLeaf):
-    """Capture one RGB-D frame and find the target object on the table (base frame, via the calibration)."""
+class Perceive(DetectorLeaf):
+    """Capture one RGB-D frame and find the target object on the table (base frame, via the calibration).
+
+    With ``detector="learned"`` the target is the object the model's best-scoring box named (of ``color``,
+    when given); its ``class_name``/``class_score`` say what and how sure."""
 
     def update(self) -> Status:
-        result = perceive_once(self, self.input_str("color"))
+        detector = self.detector_now()
+        if isinstance(detector, Status):
+            return detector
+        result = perceive_once(self, self.input_str("color"), detector=detector)
         if isinstance(result, Status):
             return result
         best = result.best
@@ -81,8 +166,9 @@ class Perceive(RobotLeaf):
         self.ports.set("target", best)
         self.ports.set("objects", tuple(result.others))
         c = best.centroid_base_m
+        named = f"{best.class_name} ({best.class_score:.2f}) " if best.class_name else ""
         self.feedback_message = (
-            f"{best.label} at ({c[0]:.3f}, {c[1]:.3f}, {c[2]:.3f}) m, yaw {np.rad2deg(best.yaw_rad):.1f} deg"
+            f"{named}{best.label} at ({c[0]:.3f}, {c[1]:.3f}, {c[2]:.3f}) m, yaw {np.rad2deg(best.yaw_rad):.1f} deg"
         )
         return Status.SUCCESS
 

@@ -64,6 +64,9 @@ def validate_cmd(
     _quiet_library_logs()
     try:
         tree = load_tree(file, tree_registry(leaves))
+        from bt_grasp.behaviours.objects import check_detector_classes
+
+        check_detector_classes(tree.nodes())  # a SelectObject's class against the tree's learned models
     except InputError as exc:
         raise _fail(exc) from None
     count = sum(1 for _ in tree.nodes())

@@ -76,6 +76,8 @@ class Detection:
     points (x = ``principal_axis_base``, extents between robust quantiles). ``points_base_m`` are the
     visible points (N, 3), base frame, read-only; ``cluster_note`` says why a cluster may hold more than one
     object (empty when nothing suggests it) and ``split_from`` how many clusters it was cut from (0: not cut).
+    ``class_name``/``class_score``: the class and score of the learned detector's box joined with this object
+    (``bt_grasp.perception.learned``); "" and 0 when the geometric detector found it or no box covered it.
     """
 
     label: str  # a colour name when the colour matched, else "object"
@@ -100,6 +102,9 @@ class Detection:
     shape_class: ShapeClass = ShapeClass.OTHER
     cluster_note: str = ""  # e.g. why this cluster may be several touching objects
     split_from: int = 0  # >0: this detection was cut out of one cluster holding that many objects
+    # added with issue 23 (the learned detector): the class its oriented box named, "" when no box named it
+    class_name: str = ""
+    class_score: float = 0.0  # the box's class score (sigmoid), 0..1; 0 when no box named it
 
     @property
     def centroid(self) -> NDArray[np.float64]:
