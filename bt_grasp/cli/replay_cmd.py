@@ -105,7 +105,7 @@ def replay_command(
     if not views and topic is None and not exports:
         console.print(render.summary_table(replay.summary(run)))
         console.print()
-        console.print(render.timeline_table(replay.timeline(run), max_rows))
+        console.print(render.timeline_table(replay.timeline(run), max_rows, replay.fault_marks(run)))
         if run.interventions:
             from bt_grasp.recording.interventions import interventions_table
 
@@ -183,6 +183,8 @@ def _print_views(
         view = views["tick"]
         stamp = view["stamp_ns"] * 1e-9 if view["stamp_ns"] is not None else float("nan")
         console.print(render.tree_render(view["tree"], f"{name} at tick {view['tick']} ({stamp:.3f} s)"))
+        for fault in view.get("faults", ()):  # injected faults that fired in this tick
+            console.print(render.fault_text(replay.FaultMark(**fault)))
         console.print(render.mapping_table("blackboard", view["blackboard"]))
         console.print(render.robot_table(view["robot"]))
     if "failures" in views:

@@ -15,7 +15,7 @@ from rich.table import Table
 from rich.text import Text
 from rich.tree import Tree
 
-from bt_grasp.recording.replay import FailureKind, FailureReport, StatusChange
+from bt_grasp.recording.replay import FailureKind, FailureReport, FaultMark, StatusChange
 from bt_grasp.tree.values import display
 
 STATUS_STYLES = {"SUCCESS": "green", "FAILURE": "bold red", "RUNNING": "yellow", "IDLE": "dim",
@@ -83,12 +83,29 @@ def summary_table(s: dict[str, Any]) -> Table:
     return table
 
 
-def timeline_table(rows: Sequence[tuple[int, int, list[StatusChange]]], max_rows: int) -> RenderableType:
-    table = Table(title="status changes", title_justify="left", box=None, pad_edge=False)
+FAULT_STYLE = "bold magenta"
+
+
+def fault_text(mark: FaultMark) -> Text:
+    """``FAULT frame_drop@Perceive#1 (frame_drop) on pick/Perceive: no frame`` (text from the log: never markup)."""
+    line = Text("FAULT ", style=FAULT_STYLE)
+    line.append(mark.text(), style="magenta")
+    return line
+
+
+def timeline_table(rows: Sequence[tuple[int, int, list[StatusChange]]], max_rows: int,
+                   faults: Sequence[FaultMark] = ()) -> RenderableType:
+    """The ticks in which some node changed status, with every injected fault marked on its own row at the tick
+    it fired (after that tick's status changes, if any)."""
+    table = Table(title="status changes" + (" and injected faults" if faults else ""), title_justify="left",
+                  box=None, pad_edge=False)
     table.add_column("tick", justify="right", style="cyan")
     table.add_column("sim time", justify="right")
     table.add_column("changes")
-    for tick, stamp, changes in rows[:max_rows]:
+    entries: list[tuple[int, int, int, Text]] = []
+    for mark in faults:
+        entries.append((mark.tick, 1, mark.stamp_ns, fault_text(mark)))
+    for tick, stamp, changes in rows:
         line = Text()
         for i, ch in enumerate(changes):
             if i:
@@ -96,10 +113,16 @@ def timeline_table(rows: Sequence[tuple[int, int, list[StatusChange]]], max_rows
             line.append(ch.path or ch.name)  # the node's one name (tree show, the report, Foxglove)
             line.append(" ")
             line.append_text(status_text(ch.new, short=True))
-        table.add_row(str(tick), _seconds(stamp), line)
-    if len(rows) > max_rows:
-        hidden = len(rows) - max_rows
-        more = Text(f"… {hidden} more ticks with changes (--max-rows to show more)", style="dim")
+        entries.append((tick, 0, stamp, line))
+    entries.sort(key=lambda e: (e[0], e[1]))
+    for tick, _order, stamp, line in entries[:max_rows]:
+        table.add_row(str(tick) if tick >= 0 else "?", _seconds(stamp), line)
+    if len(entries) > max_rows:
+        hidden = entries[max_rows:]
+        faults_hidden = sum(1 for e in hidden if e[1] == 1)
+        more = Text(f"… {len(hidden) - faults_hidden} more ticks with changes"
+                    + (f" and {faults_hidden} more faults" if faults_hidden else "")
+                    + " (--max-rows to show more)", style="dim")
         return Group(table, more)
     return table
 

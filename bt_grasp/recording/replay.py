@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from typing import Any
 
 from bt_grasp.errors import InputError
@@ -252,6 +252,60 @@ def timeline(run: RunLog) -> list[tuple[int, int, list[StatusChange]]]:
     return rows
 
 
+@dataclass(frozen=True)
+class FaultMark:
+    """An injected fault that fired, as the text timeline marks it: its name (label), kind, the node or object it
+    hit (``target``: the leaf's path when the log names one node by it, else the leaf's name, the nudged object or
+    the trigger), the tick and simulated time, and what it did (``effect``)."""
+
+    tick: int
+    stamp_ns: int
+    label: str
+    kind: str
+    target: str
+    effect: str
+
+    def text(self) -> str:
+        """``frame_drop@Perceive#1 (frame_drop) on pick/Perceive: no frame``"""
+        kind = f" ({self.kind})" if self.kind and self.kind != self.label else ""
+        target = f" on {self.target}" if self.target else ""
+        return f"{self.label}{kind}{target}" + (f": {self.effect}" if self.effect else "")
+
+
+def _text(value: Any) -> str:
+    return "" if value is None else str(value)
+
+
+def _mapping(value: Any) -> dict[str, Any]:
+    return value if isinstance(value, dict) else {}
+
+
+def fault_marks(run: RunLog) -> list[FaultMark]:
+    """Every injected fault that fired (the log's /faults), in tick order, for the timeline."""
+    by_name: dict[str, list[str]] = {}
+    for node in run.nodes.values():
+        by_name.setdefault(node.name, []).append(node.path or node.name)
+    marks = []
+    for record in run.faults:
+        fault = record.get("fault")
+        fault = fault if isinstance(fault, dict) else {"label": _text(fault)}
+        details, params, trigger = (_mapping(fault.get(k)) for k in ("details", "params", "trigger"))
+        leaf = _text(fault.get("leaf"))
+        paths = by_name.get(leaf, [])
+        target = (paths[0] if len(paths) == 1 else leaf) or _text(params.get("object")) or _text(
+            trigger.get("on_leaf")) or _text(fault.get("target"))
+        tick = record.get("tick")
+        marks.append(FaultMark(
+            tick=int(tick) if isinstance(tick, int) and not isinstance(tick, bool) else -1,
+            stamp_ns=int(record.get("stamp_ns", 0)),
+            label=_text(fault.get("label") or fault.get("name") or fault.get("kind")) or "fault",
+            kind=_text(fault.get("kind")),
+            target=target,
+            effect=_text(details.get("effect")),
+        ))
+    return sorted(marks, key=lambda m: (m.tick, m.stamp_ns))
+
+
 def find_nodes(run: RunLog, name: str) -> list[NodeInfo]:
     """Nodes whose name, path or uid is ``name``; raises InputError naming the choices when none is."""
     nodes = run.nodes
@@ -311,8 +365,9 @@ def tree_at(run: RunLog, tick: int) -> dict[str, Any]:
 def tick_view(run: RunLog, tick: int) -> dict[str, Any]:
     record = run.tick_record(tick)
     tree = tree_at(run, tick)
+    faults = [asdict(mark) for mark in fault_marks(run) if mark.tick == tick]  # those that fired in this tick
     return {"tick": tick, "stamp_ns": record.stamp_ns if record else None, "tree": tree,
-            "blackboard": run.blackboard_at(tick), "robot": run.robot_at(tick)}
+            "blackboard": run.blackboard_at(tick), "robot": run.robot_at(tick), "faults": faults}
 
 
 def topic_messages(run: RunLog, topic: str) -> Iterator[dict[str, Any]]:
