@@ -1,10 +1,13 @@
 """Convert tree files between BT.CPP v4 XML and the YAML twin format.
 
 Both directions go through :class:`Document`, so a converted file loads to the same tree. Includes stay
-references (their paths are copied as written). An XML file's comments are carried over: a comment stands
-before the node that follows it in the source (XML or YAML ``#`` lines at that node), and a comment before no
-node (the file's header, one before ``<BehaviorTree>``, one closing a block) goes to the top of the file.
-YAML comments are not read (YAML's loaders drop them).
+references (their paths are copied as written). Comments are carried over both ways, by one rule: a comment
+stands before the node that follows it in the source, and a comment before no node (the file's header, one
+before ``<BehaviorTree>`` or a tree's name, one closing a block, one among a node's attributes or the models)
+goes to the top of the file. An XML comment becomes ``#`` lines before its node's YAML line; in YAML, a run of
+``#`` lines with no blank line between them is one comment (an XML comment's lines), a blank line starts the next,
+and a comment at the end of a node's first line (``- Lift  # then up``) stands before that node. YAML comments
+are found with PyYAML's scanner (what lies between its tokens), so a ``#`` inside a quoted value is not one.
 """
 
 from __future__ import annotations
@@ -13,6 +16,8 @@ import re
 import xml.etree.ElementTree as ET
 from collections import defaultdict
 from pathlib import Path
+
+import yaml
 
 from bt_grasp.errors import InputError
 from bt_grasp.tree.formats.document import Document, NodeDecl
@@ -51,6 +56,56 @@ def xml_comments(text: str, node_lines: set[int]) -> Comments:
             comments.before[line].append(body)
         else:
             comments.header.append(body)
+    comments.before = dict(comments.before)
+    return comments
+
+
+_YAML_COMMENT = re.compile(r"#[^\n]*")
+
+
+def _xml_body(lines: list[str]) -> str:
+    """A YAML comment's lines as an XML comment's text (``--`` is not allowed there: spaced out)."""
+    text = "\n     ".join(lines).replace("--", "- -")
+    return f" {text} " if not text.endswith("-") else f" {text}  "
+
+
+def yaml_comments(text: str, node_lines: set[int]) -> Comments:
+    """The ``#`` comments of YAML ``text`` (already parsed safely), placed as :func:`xml_comments` places XML
+    ones: a block of full-line comments before the node whose type starts the next scalar after it (its line in
+    ``node_lines``), a comment ending a node's first line before that node, any other in the header."""
+    tokens = [t for t in yaml.scan(text, Loader=yaml.SafeLoader) if t.start_mark.index != t.end_mark.index
+              or isinstance(t, yaml.ScalarToken)]
+    comments = Comments(defaultdict(list), [])
+    block: list[str] = []
+    block_line = -2
+
+    def place(lines: list[str], line: int | None) -> None:
+        if lines:
+            (comments.before[line] if line is not None else comments.header).append(_xml_body(lines))
+
+    previous_end = 0
+    for index, token in enumerate([*tokens, None]):
+        gap_end = token.start_mark.index if token is not None else len(text)
+        for match in _YAML_COMMENT.finditer(text, previous_end, gap_end):
+            line = text.count("\n", 0, match.start()) + 1
+            body = match.group()[1:].removeprefix(" ").rstrip()
+            line_start = text.rfind("\n", 0, match.start()) + 1
+            if text[line_start:match.start()].strip():  # after code on its line: about the node it ends
+                place([body], line if line in node_lines else None)
+                continue
+            if block and line != block_line + 1:  # a blank line (or code) between: a new comment
+                place(block, None)
+                block = []
+            block.append(body)
+            block_line = line
+        if block and token is not None:
+            following = next((t for t in tokens[index:] if isinstance(t, yaml.ScalarToken)), None)
+            line = following.start_mark.line + 1 if following is not None else 0
+            place(block, line if line in node_lines and line > block_line else None)
+            block = []
+        if token is not None:
+            previous_end = max(previous_end, token.end_mark.index)
+    place(block, None)
     comments.before = dict(comments.before)
     return comments
 
@@ -163,13 +218,15 @@ def _node_lines(document: Document) -> set[int]:
 
 
 def convert_file(source: Path, target: Path) -> Document:
-    """Read ``source`` (one file, includes not followed) and write it to ``target`` in the other format; an XML
-    source's comments are kept (see the module's docstring)."""
+    """Read ``source`` (one file, includes not followed) and write it to ``target`` in the other format, its
+    comments kept (see the module's docstring)."""
     from bt_grasp.tree.loader import read_single
 
     document = read_single(source)
-    comments = None
-    if format_of(source) == "xml":  # read_single parsed it (no DTD, no entities): its text is plain XML
-        comments = xml_comments(source.read_text(encoding="utf-8"), _node_lines(document))
+    text = source.read_text(encoding="utf-8")  # read_single parsed it safely (no DTD, no YAML tags): plain text
+    if format_of(source) == "xml":
+        comments = xml_comments(text, _node_lines(document))
+    else:
+        comments = yaml_comments(text, _node_lines(document))
     target.write_text(write_document(document, format_of(target), comments), encoding="utf-8")
     return document
