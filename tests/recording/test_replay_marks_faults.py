@@ -18,7 +18,6 @@ import pytest
 
 from bt_grasp.cli.main import main
 from bt_grasp.recording.reader import open_log
-from bt_grasp.recording.replay import FaultMark, fault_marks
 from bt_grasp.recording.writer import RunRecorder
 
 TICK_NS = 10_000_000
@@ -115,6 +114,8 @@ def test_the_tick_view_lists_the_faults_of_that_tick(log_path: Path, capsys: pyt
 
 
 def test_fault_marks_read_what_the_log_holds(log_path: Path) -> None:
+    from bt_grasp.recording.replay import FaultMark, fault_marks
+
     assert fault_marks(open_log(log_path)) == [
         FaultMark(3, 20_000_000, "frame_drop@Perceive#1", "frame_drop", "pick/Perceive", "no frame"),
         FaultMark(5, 40_000_000, "nudge", "object_nudge", "red_box", "pushed red_box 20 mm"),
