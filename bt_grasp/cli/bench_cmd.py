@@ -18,12 +18,19 @@ PLAN_BUDGET_DEFAULT = 40_000  # = PlannerOptions().max_state_checks (kept litera
 
 bench_app = typer.Typer(
     help="Developer benchmarks: measurements of bt_grasp itself (planning, perception, the simulator, the tree, "
-    "logging, the task suite). To evaluate a tree: `bt-grasp eval run --tree T --scene S --seeds N`.",
+    "logging, the task suite). To evaluate a tree: `bt-grasp eval run --tree T --scene S --seeds N` (the one "
+    "evaluation entry point; docs/campaigns.md says why each command here is not one).",
     no_args_is_help=True,
 )
 
+#: ``bench --help``'s two panels. Episode benchmarks run whole seeded episodes, as ``eval run`` does, but they
+#: measure bt_grasp (planning per pick, the whole task suite at once, campaign throughput) in one process and
+#: keep no results file; micro-benchmarks measure one part. Neither is a way to evaluate a tree.
+EPISODE_BENCHMARKS = "Episode benchmarks (developer; to evaluate a tree: eval run --tree T --scene S --seeds N)"
+MICRO_BENCHMARKS = "Micro-benchmarks (developer: one part of bt_grasp measured)"
 
-@bench_app.command("plan")
+
+@bench_app.command("plan", rich_help_panel=MICRO_BENCHMARKS)
 def plan(
     problems: int = typer.Option(60, "--problems", min=1, help="Number of tabletop problems."),
     seed: int = typer.Option(0, "--seed", help="Seed of the problem set (same seed, same problems)."),
@@ -75,7 +82,7 @@ def plan(
     Console().print(table)
 
 
-@bench_app.command("perception")
+@bench_app.command("perception", rich_help_panel=MICRO_BENCHMARKS)
 def perception(
     scenes: int = typer.Option(100, "--scenes", min=1, help="Number of random tabletop scenes."),
     seed: int = typer.Option(0, "--seed", help="Seed of the scene set (same seed, same scenes)."),
@@ -118,7 +125,7 @@ def _nan_to_null(value: object) -> object:
     return value
 
 
-@bench_app.command("tasks")
+@bench_app.command("tasks", rich_help_panel=EPISODE_BENCHMARKS)
 def tasks(
     seeds: int = typer.Option(10, "--seeds", min=1, help="Episodes per task (seeds first-seed .. +N-1)."),
     first_seed: int = typer.Option(0, "--first-seed", help="The first seed."),
@@ -160,7 +167,7 @@ def tasks(
     Console().print(f"machine: {summary['machine']}")
 
 
-@bench_app.command("follow")
+@bench_app.command("follow", rich_help_panel=MICRO_BENCHMARKS)
 def follow(
     seeds: int = typer.Option(3, "--seeds", min=0, help="Tracking episodes per mount and belt speed (0: none)."),
     speeds: str = typer.Option("0.02,0.05,0.10", "--speeds", help="Belt speeds, m/s, comma-separated."),

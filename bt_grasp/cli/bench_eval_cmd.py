@@ -7,10 +7,10 @@ from pathlib import Path
 
 import typer
 
-from bt_grasp.cli.bench_cmd import bench_app
+from bt_grasp.cli.bench_cmd import EPISODE_BENCHMARKS, bench_app
 
 
-@bench_app.command("eval")
+@bench_app.command("eval", rich_help_panel=EPISODE_BENCHMARKS)
 def bench_eval(
     trees: list[Path] = typer.Option(
         [Path("trees/pick.xml"), Path("trees/pick_with_recovery.xml")], "--tree", help="Tree(s) to run."
@@ -21,7 +21,8 @@ def bench_eval(
     workers: list[int] = typer.Option([1, 2], "--workers", help="Worker counts to measure (repeatable)."),
     as_json: bool = typer.Option(False, "--json"),
 ) -> None:
-    """Episodes per minute, side by side: `bench pick`'s loop, then a campaign on each worker count."""
+    """Episodes per minute, side by side: `bench pick`'s loop, then a campaign on each worker count. (A developer
+    benchmark of campaigns themselves: to evaluate a tree, `bt-grasp eval run --tree T --scene S --seeds N`.)"""
     from bt_grasp.campaign.bench import run_eval_bench
 
     report = run_eval_bench(trees, scene, seeds, first_seed, workers)

@@ -11,11 +11,11 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from bt_grasp.cli.bench_cmd import bench_app
+from bt_grasp.cli.bench_cmd import EPISODE_BENCHMARKS, MICRO_BENCHMARKS, bench_app
 from bt_grasp.environment import machine_description
 
 
-@bench_app.command("pick")
+@bench_app.command("pick", rich_help_panel=EPISODE_BENCHMARKS)
 def pick(
     trees: list[Path] = typer.Option(
         [Path("trees/pick.xml"), Path("trees/pick_with_recovery.xml")], "--tree", help="Tree(s) to run."
@@ -67,7 +67,7 @@ def pick(
             console.print(f"{tree}: {name} {o['successes']}/{o['runs']} (failures: {reasons})", highlight=False)
 
 
-@bench_app.command("sim")
+@bench_app.command("sim", rich_help_panel=MICRO_BENCHMARKS)
 def sim(
     scene: Path = typer.Option(Path("scenes/tabletop.yaml"), "--scene"),
     as_json: bool = typer.Option(False, "--json"),
@@ -79,7 +79,7 @@ def sim(
     typer.echo(json.dumps(report) if as_json else "\n".join(f"{k:24s} {v}" for k, v in report.items()))
 
 
-@bench_app.command("tree")
+@bench_app.command("tree", rich_help_panel=MICRO_BENCHMARKS)
 def tree(
     nodes: int = typer.Option(100, "--nodes"),
     ticks: int = typer.Option(2000, "--ticks"),
@@ -92,7 +92,7 @@ def tree(
     typer.echo(json.dumps(report) if as_json else "\n".join(f"{k:24s} {v}" for k, v in report.items()))
 
 
-@bench_app.command("logging")
+@bench_app.command("logging", rich_help_panel=MICRO_BENCHMARKS)
 def logging_bench(
     ticks: int = typer.Option(6000, "--ticks"),
     nodes: int = typer.Option(40, "--nodes"),
@@ -113,7 +113,7 @@ def register(app: typer.Typer) -> None:
     """The commands above attach themselves to bench_cmd's group when this module is imported."""
 
 
-@bench_app.command("budget")
+@bench_app.command("budget", rich_help_panel=MICRO_BENCHMARKS)
 def budget(
     tree: Path = typer.Option(Path("trees/pick.xml"), "--tree"),
     scene: Path = typer.Option(Path("scenes/tabletop.yaml"), "--scene"),
