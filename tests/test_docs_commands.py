@@ -94,8 +94,7 @@ def _resolve(args: list[str]) -> tuple[Any, list[str], list[str]]:
     """(click command, its words, its remaining arguments)."""
     from typer.main import get_command
 
-    cli._register()
-    command = get_command(cli.app)
+    command = get_command(cli.build_app(cli.modules_for([])))  # every command (main builds only the named one's)
     words: list[str] = []
     while args and hasattr(command, "commands") and args[0] in command.commands:
         words.append(args[0])
