@@ -67,6 +67,8 @@ _HELD_PORTS = [
     PortSpec("turns", PortDirection.INPUT, bool, True, "when the first orientation is blocked or unreachable, "
              "try the held object's footprint symmetries (half, quarter or any turn) in order"),
     PortSpec("free_yaw", PortDirection.INPUT, bool, False, "the goal allows any yaw: try turns of 30 degrees too"),
+    PortSpec("placed", PortDirection.INOUT, object, None, "objects this tree set down inside a tray or bin (the "
+             "camera's object lists leave them out): obstacles here, and this place is added (not set: not kept)"),
 ]
 
 
@@ -111,6 +113,12 @@ def place_options(target: Pose, held: Detection, T_tcp_obj: Mat4, height_m: floa
         yaws = yaws[:1]
     T_obj_tcp = inv(T_tcp_obj)
     return [(c, make_T(rot_z(c.object_yaw_rad), [target.x_m, target.y_m, z]) @ T_obj_tcp) for c in yaws]
+
+
+def _wrap_half(angle: float) -> float:
+    """A footprint's yaw in (-pi/2, pi/2] (a rectangle is the same half a turn on)."""
+    out = (angle + math.pi / 2) % math.pi - math.pi / 2
+    return out if out > -math.pi / 2 else out + math.pi
 
 
 def _flag(value: object) -> bool:
@@ -182,6 +190,7 @@ class _PlaceBase(RobotLeaf):
         T_tcp_obj = held_offset(grasp, held)
         height = float(held.size_m[2])
         gap = self.input_float("release_gap")
+        self._T_tcp_obj, self._gap = T_tcp_obj, gap
         self._options = place_options(pose, held, T_tcp_obj, height, gap, surface,
                                       turns=_flag(self.input("turns")), free_yaw=_flag(self.input("free_yaw")))
         self._height = height
@@ -189,7 +198,9 @@ class _PlaceBase(RobotLeaf):
         margin = 0.004
         held_box = detection_box(held, "held", margin_m=margin)
         held_shape = type(held_box).at("held", held_box.size_m, T_tcp_obj)
-        others = [d for d in object_list(self.input("objects")) or () if not same_object(d, held)]
+        seen = object_list(self.input("objects")) or ()
+        remembered = [d for d in self._placed_before() if not any(same_object(d, o) for o in seen)]
+        others = [d for d in (*seen, *remembered) if not same_object(d, held)]
         obstacles = tuple(detection_box(d, f"object_{i}") for i, d in enumerate(others))
         self._carry_scene = PlanningScene.from_scene(self.cell.scene, obstacles).with_attached(held_shape, TCP_LINK)
         # the descent may end touching what the object is set on (the support), nothing else
@@ -351,7 +362,35 @@ class _PlaceBase(RobotLeaf):
         if isinstance(outcome, PathFailure):
             return self.failed(outcome.reason, f"after release: {outcome.sentence}")
         self.feedback_message = f"placed at {self._target_text}"
+        self._remember_place()
         return Status.SUCCESS
+
+    def _placed_before(self) -> tuple[Detection, ...]:
+        """What the ``placed`` port holds (empty when it is not set or holds nothing yet)."""
+        if not self.ports.has("placed"):
+            return ()
+        return object_list(self.input("placed")) or ()
+
+    def _remember_place(self) -> None:
+        """Add the object just set down to ``placed`` when it went inside a tray or bin (where perception no
+        longer reports it): the held detection moved to where the robot released it, turned as it was."""
+        if "placed" not in self.ports.names() or self.ports.key("placed") is None:
+            return
+        from dataclasses import replace
+
+        from bt_grasp.behaviours.fixture_mask import inside_fixture
+
+        held = self.input("held")
+        assert self._T_place is not None and is_detection(held)
+        T_obj = self._T_place @ self._T_tcp_obj
+        xyz = T_obj[:3, 3]
+        world = np.asarray(self.cell.scene.T_world_base()) @ np.array([xyz[0], xyz[1], 0.0, 1.0])
+        if inside_fixture(self.cell.scene, (float(world[0]), float(world[1]))) is None:
+            return
+        yaw = _wrap_half(math.atan2(T_obj[1, 0], T_obj[0, 0]))
+        placed = replace(held, centroid_base_m=(float(xyz[0]), float(xyz[1]), float(xyz[2] - self._gap)),
+                         yaw_rad=yaw, footprint_base_m=(), points_base_m=None)
+        self.ports.set("placed", (*self._placed_before(), placed))
 
     def terminate(self, new_status: Status) -> None:
         job = getattr(self, "job", None)
