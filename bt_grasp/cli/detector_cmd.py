@@ -1,17 +1,20 @@
 """`bt-grasp detector`: the learned oriented-box detector's tools (docs/detector.md).
 
 `check MODEL` opens a YOLO-OBB ONNX export as the pipeline would and says what it is (or, in one sentence, why it
-cannot be used); `dataset` renders labelled pictures of bt_grasp's scenes in the Ultralytics OBB format.
+cannot be used); `dataset` renders labelled pictures of bt_grasp's scenes in the Ultralytics OBB format; `train`
+trains a YOLO11n-OBB from scratch with the `train` extra (Ultralytics, AGPL-3.0) and writes the ONNX export and its
+model card; `eval` scores a model on a dataset through bt_grasp's own inference path.
 """
 
 from __future__ import annotations
 
+import json
 import time
 from pathlib import Path
 
 import typer
 
-detector_app = typer.Typer(help="The learned oriented-box detector: check a model, make a dataset.",
+detector_app = typer.Typer(help="The learned oriented-box detector: check a model, make a dataset, train, evaluate.",
                            no_args_is_help=True)
 
 
@@ -53,6 +56,67 @@ def dataset(
     counts = ", ".join(f"{name} {n}" for name, n in summary.per_class.items()) or "none"
     typer.echo(f"{out}: {summary.images} pictures, {summary.labels} labels ({counts}) in "
                f"{time.perf_counter() - t0:.0f} s; preview {out / 'preview.png'}")
+
+
+@detector_app.command("train")
+def train(
+    datasets: list[Path] = typer.Argument(..., help="Dataset folders made by `bt-grasp detector dataset` (joined)."),
+    out: Path = typer.Option(..., "--out", help="Folder for NAME.onnx, MODEL_CARD.md/.json and the run's files."),
+    val: Path | None = typer.Option(None, "--val", help="A held-out dataset folder (other seeds): validation and "
+                                                        "the card's figures. Without it: the training images."),
+    name: str = typer.Option("model", "--name", help="The ONNX file's name: OUT/NAME.onnx."),
+    epochs: int = typer.Option(30, "--epochs", min=1, help="Training epochs."),
+    imgsz: int = typer.Option(320, "--imgsz", min=32, help="Input size (pixels, a multiple of 32)."),
+    seed: int = typer.Option(0, "--seed", help="Ultralytics' seed (deterministic=True, workers=0)."),
+    batch: int = typer.Option(16, "--batch", min=1, help="Batch size."),
+    threads: int = typer.Option(2, "--threads", min=1, help="torch threads."),
+) -> None:
+    """Train a YOLO11n-OBB from scratch on CPU (needs the `train` extra: Ultralytics, AGPL-3.0, and torch), export it
+    to ONNX and write its model card with the held-out figures measured as `detector eval` measures them."""
+    from bt_grasp.detector.card import ModelCard, machine, sha256
+    from bt_grasp.detector.evaluate import dataset_images, evaluate_model, format_report
+    from bt_grasp.detector.train import ARCHITECTURE, TrainRequest, dataset_command, train_model
+    from bt_grasp.errors import InputError
+
+    if imgsz % 32:
+        raise InputError("--imgsz", f"must be a multiple of 32 (the network's stride), got {imgsz}")
+    if not name or "/" in name or name.startswith("."):
+        raise InputError("--name", f"must be a plain file name, got '{name}'")
+    request = TrainRequest(tuple(datasets), val, out, name, epochs, imgsz, seed, batch, threads)
+    result = train_model(request)
+    held_out = evaluate_model(result.onnx, val) if val is not None else None
+    folders = [(d, "train") for d in datasets] + ([(val, "val")] if val is not None else [])
+    card = ModelCard(
+        model_file=result.onnx.name, sha256=sha256(result.onnx),
+        architecture=f"YOLO11n-OBB (Ultralytics {ARCHITECTURE}, from scratch)", classes=result.names, imgsz=imgsz,
+        datasets=tuple({"folder": str(d), "role": role, "images": len(dataset_images(d)),
+                        "command": dataset_command(d)} for d, role in folders),
+        train_command=request.command(),
+        eval_command=f"bt-grasp detector eval {out / (name + '.onnx')} {val}" if val is not None else "",
+        epochs=result.epochs_run or epochs, seed=seed, training_seconds=result.seconds, held_out=held_out,
+        ultralytics_metrics=result.ultralytics_metrics, versions=result.versions, machine=machine())
+    md, js = card.write(out)
+    typer.echo(f"{result.onnx}: trained {result.epochs_run} epochs in {result.seconds / 60:.1f} min; card {md}, {js}")
+    if held_out is not None:
+        typer.echo(format_report(held_out))
+
+
+@detector_app.command("eval")
+def evaluate(
+    model: Path = typer.Argument(..., help="A YOLO-OBB ONNX export."),
+    dataset: Path = typer.Argument(..., help="A dataset folder (images/, labels/, data.yaml) with the model's "
+                                             "classes."),
+    as_json: bool = typer.Option(False, "--json", help="Print the report as one JSON object."),
+) -> None:
+    """mAP50, mAP50-95, the median angle error of elongated objects, per class, and the confusion between classes,
+    measured through bt_grasp's own inference path (onnxruntime, its decoder and rotated NMS)."""
+    from bt_grasp.detector.evaluate import evaluate_model, format_report
+
+    report = evaluate_model(model, dataset)
+    if as_json:
+        typer.echo(json.dumps({"model": str(model), "dataset": str(dataset), **report.to_json()}))
+    else:
+        typer.echo(format_report(report))
 
 
 def register(app: typer.Typer) -> None:
