@@ -54,6 +54,11 @@ def test_a_false_positive_ranked_first_halves_the_precision() -> None:
     # the right box of the wrong class is a false positive of that class, never a true one
     wrong_class = evaluate(truth, [Boxes.of([BAR], [1], [0.9])], NAMES)
     assert wrong_class.map50 == 0.0
+    # a "block" on the bar, ranked above the right block: a false positive of the block class (0.4975 again), not
+    # a match of the bar's label
+    both = [Boxes.of([BAR, BLOCK], [0, 1])]
+    mixed = evaluate(both, [Boxes.of([BAR, BLOCK], [1, 1], [0.9, 0.8])], NAMES)
+    assert mixed.per_class[1].ap50 == pytest.approx(0.4975) and mixed.per_class[0].ap50 == 0.0
 
 
 def test_map50_95_counts_the_thresholds_a_match_passes() -> None:
