@@ -12,6 +12,7 @@ from rich.console import Console
 from rich.table import Table
 
 from bt_grasp.cli.bench_cmd import EPISODE_BENCHMARKS, MICRO_BENCHMARKS, bench_app
+from bt_grasp.detector.kinds import DetectorKind
 from bt_grasp.environment import machine_description
 
 
@@ -32,6 +33,11 @@ def pick(
     color: str | None = typer.Option(
         None, "--color", help="Colour the tree picks ('' = any object, by geometry). Default: red, or any object "
                               "on a scene with mesh or URDF objects."),
+    detector: DetectorKind = typer.Option(
+        DetectorKind.GEOMETRIC, "--detector",
+        help="learned: pick by class; each seed names a target on its table, its class as {class} (e.g. "
+             "trees/pick_class.xml) and its colour as {color} (e.g. trees/pick_with_recovery.xml: the geometric "
+             "detector on the same targets), judged on that object."),
 ) -> None:
     """Pick success over seeded episodes, judged by physics (object held 15 cm up at the end), per tree and per
     object picked, with why each failure failed. (A developer benchmark, in one process: to evaluate a tree,
@@ -40,7 +46,8 @@ def pick(
 
     err = Console(stderr=True)  # progress on stderr: stdout stays one JSON object with --json
     report = run_pick_bench(trees, scene, seeds, first_seed, calibration, log_dir, warm, color,
-                            progress=lambda line: err.print(line, highlight=False, markup=False, soft_wrap=True))
+                            progress=lambda line: err.print(line, highlight=False, markup=False, soft_wrap=True),
+                            detector=detector.value)
     if as_json:
         typer.echo(json.dumps(report))
         return

@@ -6,6 +6,13 @@ Which object a run picks is the tree's choice, never the simulator's: the ``colo
 today's figures); on a scene that declares mesh or URDF objects, no colour at all, so ``Perceive`` takes the most
 graspable object it sees, by geometry. The judge (ground truth, benchmark side) then names the object that rose
 most as the one picked.
+
+With ``detector="learned"`` (issue 23: picking by class) each seed names its target: one of the objects that seed
+puts on the table (:func:`class_target`, drawn from the scene file and the seed on the benchmark side, as the
+world draws them), whose class goes to the tree's ``class`` entry and whose colour to its ``color`` entry; the
+judge checks that very object (``PickGoal.object``). A tree that picks by class (``trees/pick_class.xml``) and one
+that picks by colour (``trees/pick_with_recovery.xml``, the geometric detector) thus chase the same objects on the
+same seeds.
 """
 
 from __future__ import annotations
@@ -29,9 +36,11 @@ if TYPE_CHECKING:
 def run_pick_bench(
     trees: list[Path], scene: Path, seeds: int, first_seed: int, calibration: Path | None, log_dir: Path | None,
     warm: bool = False, color: str | None = None, progress: Callable[[str], None] | None = None,
+    detector: str = "geometric",
 ) -> dict[str, Any]:
     """``color``: the colour the tree picks ('' = any object: the most graspable one Perceive sees); None: red,
-    or any object when the scene declares a mesh or URDF object (:func:`default_color`)."""
+    or any object when the scene declares a mesh or URDF object (:func:`default_color`). ``detector``:
+    "learned" names a target per seed (see the module's text; ``color`` is then ignored)."""
     from bt_grasp.episode import (
         FreshWorlds,
         WarmWorlds,
@@ -56,6 +65,12 @@ def run_pick_bench(
         "machine": machine_description(), "scene": str(scene), "calibration": str(calibration),
         "color": color or "any (the most graspable object Perceive sees)", "trees": {}
     }
+    targets = ({seed: class_target(scene, seed) for seed in range(first_seed, first_seed + seeds)}
+               if detector == "learned" else None)
+    if targets is not None:
+        report["detector"] = "learned"
+        report["color"] = "per seed: the target's colour"
+        report["targets"] = {seed: f"{t[0]} (class {t[1]}, {t[2]})" for seed, t in targets.items()}
     worlds: WorldSource = WarmWorlds() if warm else FreshWorlds()
     report["worlds"] = ("warm (a renderer kept warm; each episode's world built afresh)" if warm
                         else "fresh (a new world per episode)")
@@ -64,7 +79,11 @@ def run_pick_bench(
         for seed in range(first_seed, first_seed + seeds):
             log = (log_dir / f"{tree.stem}_seed{seed}.mcap") if log_dir is not None else None
             request = pick_request(tree, scene, seed, calibration=calibration, log=log)
-            if color != "red":
+            if targets is not None:
+                name, class_name, target_color = targets[seed]
+                request = replace(request, goal=PickGoal(kind="pick", object=name), blackboard={
+                    **request.blackboard, "class": class_name, "color": target_color, "detector": detector})
+            elif color != "red":
                 request = replace(request, goal=PickGoal(kind="pick", color=color or None),
                                   blackboard={**request.blackboard, "color": color})
             runs.append(run_episode(request, worlds=worlds))
@@ -87,6 +106,24 @@ def run_pick_bench(
             "plan_wall_s_per_pick_mean": round(statistics.mean(r.planning.wall_s for r in runs), 4),
         }
     return report
+
+
+def class_target(scene: Path, seed: int) -> tuple[str, str, str]:
+    """The object a learned-detector pick chases on ``seed``: (scene object name, its detector class, its colour).
+    One of the objects the seed puts on the table (the world's own draw: the scene's ``choose`` from the seed's
+    object stream), the (seed mod their number)-th in file order, so the targets go round the classes."""
+    import numpy as np
+
+    from bt_grasp.detector.dataset import object_class
+    from bt_grasp.scene.format import load_scene
+    from bt_grasp.scene.layout import draw_layout
+    from bt_grasp.sim.world import _STREAM_OBJECTS
+
+    config = load_scene(scene)
+    stream = np.random.default_rng(np.random.SeedSequence(int(seed)).spawn(3)[_STREAM_OBJECTS])
+    drawn = draw_layout(config, stream).objects
+    target = drawn[seed % len(drawn)]
+    return target.name, object_class(target.shape, target.mesh, scene, target.name), str(target.color)
 
 
 def default_color(objects: Sequence[SceneObject]) -> str:

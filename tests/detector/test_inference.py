@@ -105,3 +105,11 @@ def test_the_same_frame_gives_the_same_boxes(tmp_path: Path) -> None:
     b = LearnedDetector.load(path).detect(rgb).boxes
     assert a == b and len(a) >= 2
     assert all(0 <= d.angle_rad < math.pi / 2 for d in a)
+
+
+def test_bench_pick_takes_the_detector_as_a_typed_choice(capsys: pytest.CaptureFixture[str]) -> None:
+    from bt_grasp.cli.main import main
+
+    assert main(["bench", "pick", "--detector", "yolo"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "'yolo'" in err and "geometric" in err and "learned" in err

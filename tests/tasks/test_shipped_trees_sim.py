@@ -31,6 +31,9 @@ Runs that already exist elsewhere (not repeated here with the same checks):
 * ``pick_eye_in_hand.xml``: ``tests/eye_in_hand/test_look_at.py::
   test_eye_in_hand_pick_xml_and_yaml_twins_succeed_and_tick_identically`` (seed 3, success by physics, the four
   views in order, the YAML twin ticks identically).
+* ``pick_class.xml``: ``tests/behaviours/test_pick_class_sim.py::test_pick_class_xml_picks_the_mug_by_class``
+  (household seed 0, the mug picked by class, success by physics; its detector a stand-in that sees the true
+  masks, the shipped model's figures being ``bench pick --detector learned``'s).
 * ``pick_from_conveyor.xml``: ``tests/conveyor/test_conveyor.py::
   test_pick_from_the_conveyor_succeeds_by_physics_and_logs_the_servo`` (seed 2, both mounts, success by
   physics, the servo's phases logged).
@@ -261,6 +264,7 @@ ELSEWHERE: dict[str, str] = {
                               "test_pick_from_the_conveyor_succeeds_by_physics_and_logs_the_servo",
     "clear_household.xml": "tests/perception/test_clear_household_sim.py::"
                            "test_clear_household_puts_every_object_in_the_bin",
+    "pick_class.xml": "tests/behaviours/test_pick_class_sim.py::test_pick_class_xml_picks_the_mug_by_class",
 }
 
 
