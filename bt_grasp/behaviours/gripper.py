@@ -9,8 +9,25 @@ from bt_grasp.behaviours.reasons import FailureReason
 from bt_grasp.robot_description import MAX_OPENING_M
 from bt_grasp.tree.registry import NodeKind, PortDirection, PortSpec, leaf
 
-#: the fingers count as closed on nothing below this width
+#: the fingers count as closed on nothing below this width (when the width of what they close on is not known)
 EMPTY_WIDTH_M = 0.004
+#: the joints' closed limit is 0: with nothing between the pads they come this close to it
+CLOSED_ON_NOTHING_M = 0.001
+
+
+def empty_below_m(expected_width_m: float | None) -> float:
+    """The measured finger gap under which a grip holds nothing, given the width of the object seen between the
+    pads (the grasp's planned width): ``EMPTY_WIDTH_M``, or half the width seen when that is less (a 4 mm plate
+    held flat closes the pads to ~3.9 mm, not on nothing), never under ``CLOSED_ON_NOTHING_M``."""
+    if expected_width_m is None or not expected_width_m > 0.0:
+        return EMPTY_WIDTH_M
+    return max(CLOSED_ON_NOTHING_M, min(EMPTY_WIDTH_M, 0.5 * expected_width_m))
+
+
+def planned_width_m(grasp: object) -> float | None:
+    """The width seen between the pads of a grasp on the blackboard (a GraspPlan or a candidate), else None."""
+    width = getattr(grasp, "width_m", None)
+    return float(width) if isinstance(width, int | float) and not isinstance(width, bool) else None
 #: the width must change less than this per tick to count as settled
 SETTLED_M = 2e-5
 
@@ -62,11 +79,14 @@ class OpenGripper(_GripperMove):
     ports=[
         PortSpec("force", PortDirection.INPUT, float, 40.0, "grip force per finger, N"),
         PortSpec("width", PortDirection.OUTPUT, object, "{grasp_width_m}", "measured width once closed, m"),
+        PortSpec("grasp", PortDirection.INPUT, object, "{grasp}",
+                 "the grasp being closed (from PlanGrasp): its width seen says what an empty grip is"),
     ],
     needs_robot=True,
 )
 class Grasp(_GripperMove):
-    """Close the fingers with a bounded force; FAILURE (GRASP_EMPTY) when they close on nothing."""
+    """Close the fingers with a bounded force; FAILURE (GRASP_EMPTY) when they close on nothing: a gap under
+    :func:`empty_below_m` of the planned grasp's width (a thin object is held at a gap of a few mm)."""
 
     def command(self) -> None:
         self.cell.robot.close_gripper(self.input_float("force"))
@@ -79,7 +99,8 @@ class Grasp(_GripperMove):
         self.ports.set("width", width)
         if width > MAX_OPENING_M - 0.003:
             return self.failed(FailureReason.TIMEOUT, f"the fingers did not close (still {width * 1e3:.1f} mm open)")
-        if width < EMPTY_WIDTH_M:
+        empty_below = empty_below_m(planned_width_m(self.input("grasp")))
+        if width < empty_below:
             return self.failed(FailureReason.GRASP_EMPTY, f"the fingers closed to {width * 1e3:.1f} mm: nothing held")
         self.feedback_message = f"holding an object {width * 1e3:.1f} mm wide"
         return Status.SUCCESS

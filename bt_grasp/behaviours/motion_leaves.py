@@ -14,7 +14,7 @@ from numpy.typing import NDArray
 from py_trees.common import Status
 
 from bt_grasp.behaviours.base import RobotLeaf
-from bt_grasp.behaviours.gripper import EMPTY_WIDTH_M
+from bt_grasp.behaviours.gripper import empty_below_m, planned_width_m
 from bt_grasp.behaviours.motion_job import MotionJob, PathFailure, PathFn, Segment
 from bt_grasp.behaviours.reasons import FailureReason
 from bt_grasp.defaults import DEFAULT_LIFT_HEIGHT_M
@@ -266,8 +266,13 @@ class PlanGrasp(RobotLeaf):
         from bt_grasp.motion.planning_scene import fixture_boxes
 
         fixtures = [(box.T_base_shape, box.size_m) for box in fixture_boxes(self.cell.scene)]
+        from bt_grasp.behaviours.perceive import camera_pose
+
+        # where the camera saw the target from (eye-in-hand: the arm has not moved since Perceive)
+        T_base_camera = camera_pose(self.cell)
+        viewpoint = None if T_base_camera is None else tuple(float(v) for v in T_base_camera[:3, 3])
         result = rank_grasps(target, self._objects, self.cell.grasp_settings, reachable=self._reachable,
-                             fixtures=fixtures)
+                             fixtures=fixtures, viewpoint_base_m=viewpoint)
         if not result.ok:
             return self.failed(FailureReason.NOTHING_TO_GRASP, f"{result.status.value}: {result.message}")
         self.cell.media.grasps(result.candidates)
@@ -362,13 +367,20 @@ def planned_path_fn(plan: GraspPlan, replan: PathFn) -> PathFn:
 @leaf(
     None,
     name="Lift",
-    ports=[PortSpec("height", PortDirection.INPUT, float, DEFAULT_LIFT_HEIGHT_M, "how far to lift, m")],
+    ports=[
+        PortSpec("height", PortDirection.INPUT, float, DEFAULT_LIFT_HEIGHT_M, "how far to lift, m"),
+        PortSpec("grasp", PortDirection.INPUT, object, "{grasp}",
+                 "the grasp holding the object (from PlanGrasp): its width seen says what an empty grip is"),
+    ],
     needs_robot=True,
 )
 class Lift(_MovingLeaf):
-    """Lift straight up; FAILURE (SLIPPED) when the fingers lose the object on the way."""
+    """Lift straight up; FAILURE (SLIPPED) when the fingers lose the object on the way: their gap falls under
+    :func:`~bt_grasp.behaviours.gripper.empty_below_m` of the grasp's width seen (a thin plate is held at
+    ~4 mm), as Grasp judges it."""
 
     def segments(self) -> list[Segment] | Status:
+        self._empty_below = empty_below_m(planned_width_m(self.input("grasp")))
         height = self.input_float("height")
         if not 0.0 < height < 0.6:
             return self.failed(FailureReason.BAD_INPUT, f"lift height {height} m is outside (0, 0.6)")
@@ -379,13 +391,13 @@ class Lift(_MovingLeaf):
 
     def check_during(self) -> Status | None:
         width = self.cell.robot.gripper_width_m()
-        if width < EMPTY_WIDTH_M:
+        if width < self._empty_below:
             return self.failed(FailureReason.SLIPPED, f"the object slipped out: fingers at {width * 1e3:.1f} mm")
         return None
 
     def finished(self) -> Status:
         width = self.cell.robot.gripper_width_m()
-        if width < EMPTY_WIDTH_M:
+        if width < self._empty_below:
             return self.failed(FailureReason.SLIPPED, f"the object slipped out: fingers at {width * 1e3:.1f} mm")
         self.feedback_message = f"lifted, holding {width * 1e3:.1f} mm"
         return Status.SUCCESS

@@ -4,8 +4,9 @@ The executor never advances time: a behaviour-tree leaf calls :meth:`TrajectoryE
 per tick (the caller steps the world between ticks) and returns RUNNING while the executor does. Each
 update reads the injected clock, commands the trajectory's position and velocity at that time, and
 watches the tracking error: above ``max_tracking_error_rad`` for longer than ``tracking_error_grace_s``
-(a stall or a collision) it fails. After the last sample it holds the goal until the arm has settled
-or ``settle_timeout_s`` of simulated time passed.
+(a stall or a collision) it fails. After the last sample it holds the goal until the arm has settled (within
+``settle_tolerance_rad``, slower than ``settle_velocity_rad_s``; or at rest, its measured joints unchanged for
+``rest_periods`` updates, within ``rest_tolerance_rad``) or ``settle_timeout_s`` of simulated time passed.
 """
 
 from __future__ import annotations
@@ -44,6 +45,12 @@ class ExecutorOptions:
     settle_tolerance_rad: float = 1e-3  # joint error that counts as arrived
     settle_velocity_rad_s: float = 0.01  # joint speed that counts as at rest
     settle_timeout_s: float = 2.0  # after the last sample
+    # an arm that has come to rest (its measured joints unchanged, within rest_still_rad, for rest_periods
+    # updates: the physics engine may stop it, reported velocities notwithstanding) within this of the goal has
+    # arrived as near as it will: waiting longer changes nothing
+    rest_tolerance_rad: float = 3e-3
+    rest_still_rad: float = 1e-6
+    rest_periods: int = 10
 
 
 class TrajectoryExecutor:
@@ -60,6 +67,8 @@ class TrajectoryExecutor:
         self.max_tracking_error_rad = 0.0
         self._start_ns: int | None = None
         self._error_since_ns: int | None = None
+        self._last_q: NDArray[np.float64] | None = None  # after the last sample: to tell when the arm is at rest
+        self._still_periods = 0
 
     @property
     def elapsed_s(self) -> float:
@@ -69,6 +78,7 @@ class TrajectoryExecutor:
         """Start now (the clock's current time is trajectory time 0) and command the first sample."""
         self._start_ns = self.clock.now_ns()
         self._error_since_ns = None
+        self._last_q, self._still_periods = None, 0
         self.status = ExecStatus.RUNNING
         self.reason = None
         q, qd, _ = self.trajectory.sample(0.0)
@@ -102,10 +112,14 @@ class TrajectoryExecutor:
         goal = self.trajectory.q[-1]
         self.robot.set_joint_targets(goal, np.zeros(6))
         speed = float(np.max(np.abs(self.robot.joint_velocities())))
-        if error < opts.settle_tolerance_rad and speed < opts.settle_velocity_rad_s:
+        still = self._last_q is not None and float(np.max(np.abs(q_measured - self._last_q))) < opts.rest_still_rad
+        self._still_periods = self._still_periods + 1 if still else 0
+        self._last_q = q_measured
+        at_rest = self._still_periods >= opts.rest_periods and error < opts.rest_tolerance_rad
+        if (error < opts.settle_tolerance_rad and speed < opts.settle_velocity_rad_s) or at_rest:
             self.status = ExecStatus.SUCCEEDED
-            log.debug("trajectory done after %.3f s (max tracking error %.4f rad)", t,
-                      self.max_tracking_error_rad)
+            log.debug("trajectory done after %.3f s (max tracking error %.4f rad, final %.4f rad%s)", t,
+                      self.max_tracking_error_rad, error, ", at rest" if at_rest else "")
         elif t > self.trajectory.duration_s + opts.settle_timeout_s:
             return self._fail(ExecFailure.SETTLE_TIMEOUT, q_measured,
                               f"not settled {opts.settle_timeout_s} s after the end (error {error:.4f} rad)")

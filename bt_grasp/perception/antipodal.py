@@ -5,16 +5,17 @@ points of everything else seen (neighbours, for clearance), and the table height
 or pose: the cloud is what perception saw (:mod:`bt_grasp.perception.object_cloud` makes it from a detection).
 
 Sampling (seeded, GPD-style): draw contact points; the closing line of each runs along its inward normal; the
-partner contact is the farthest point of the cloud on that line (within ``line_tolerance_m``) whose normal
-opposes the first one's within the friction cone. Each pair is a grasp axis (the tool's closing direction y);
-around it the tool may approach from any direction perpendicular to y: the directions tried are the most
-vertical one (top-down when y is horizontal) and the two horizontal ones (side grasps). Seen along the approach,
-an elongated cloud (``elongation_ratio``) has the closing direction turned to lie exactly across its long axis
-(noisy normals tilt it otherwise; a pair whose turn would leave the friction cone is dropped). The tcp starts on the
-pair's midpoint, moved along the approach towards the centre-of-mass estimate as far as the pads still hold the
-contacts, then is pulled back along -approach while the finger tips would meet the table or the open gripper
-(pads and palm, swept along the approach from the pre-grasp) would come within ``min_clearance_m`` of a point
-it does not grasp.
+partner contacts are the nearest and the farthest points of the cloud on that line (within ``line_tolerance_m``,
+at least ``min_width_m`` and at most the opening away) whose normals oppose the first one's within the friction
+cone: the farthest spans a solid object whole, the nearest ends a thin wall, a rim, or one arm of a T or an L.
+Each pair is a grasp axis (the tool's closing direction y); around it the tool may approach from any direction
+perpendicular to y: the directions tried are the most vertical one (top-down when y is horizontal) and the two
+horizontal ones (side grasps). Seen along the approach, an elongated cloud (``elongation_ratio``) has the closing
+direction turned to lie exactly across its long axis (noisy normals tilt it otherwise; a pair whose turn would
+leave the friction cone is dropped). The tcp starts on the pair's midpoint, moved along the approach towards the
+centre-of-mass estimate as far as the pads still hold the contacts, then is pulled back along -approach while the
+finger tips would meet the table or the open gripper (pads and palm, swept along the approach from the pre-grasp)
+would come within ``min_clearance_m`` of a point it does not grasp.
 
 Frames: ``T_base_tcp`` as everywhere, tcp z = the approach direction, tcp y = the closing direction,
 tcp x = y cross z. The gripper model is bt_grasp/assets/gripper.urdf: pads 20 mm (tcp x) by 12 mm (tcp y)
@@ -83,8 +84,10 @@ class AntipodalSettings:
     pregrasp_offset_m: float = 0.10  # the pre-grasp pose lies this far back along -approach
     samples: int = 64  # contact points drawn
     line_tolerance_m: float = 0.004  # a partner contact lies this close to the closing line
+    min_width_m: float = 0.002  # ... and at least this far from the first (a 4 mm plate is grasped)
     friction_cone_deg: float = 25.0  # normals within this angle of the closing line count as antipodal
     min_contact_points: int = 3  # points between the pads needed to call it a grasp
+    max_off_centre_m: float = 0.010  # a footprint grasp's material may lie this far off centre between the pads
     max_backoff_m: float = 0.06  # how far the tcp may be pulled back along -approach to clear the palm
     backoff_step_m: float = 0.005
     stability_scale_m: float = 0.08
@@ -197,6 +200,40 @@ class _Gripper:
                                  for y in (-half_open - s.pad_thickness_m, half_open + s.pad_thickness_m)
                                  for z in (s.tcp_to_fingertip_m, -s.palm_behind_tcp_m - s.palm_depth_m)])
 
+        # points along the edges of those boxes (tcp frame), 3 mm apart: measured against known fixture boxes
+        edges = []
+        for lo, hi in [*self.pads, self.palm]:
+            for axis in range(3):
+                n = max(2, math.ceil(float(hi[axis] - lo[axis]) / 0.003) + 1)
+                run = np.linspace(lo[axis], hi[axis], n)
+                for a in (lo, hi):
+                    for b in (lo, hi):
+                        e = np.empty((n, 3))
+                        e[:, axis] = run
+                        u, v = [k for k in range(3) if k != axis]
+                        e[:, u], e[:, v] = a[u], b[v]
+                        edges.append(e)
+        self.edges = np.vstack(edges)
+        self.fixtures: list[tuple[NDArray[np.float64], NDArray[np.float64]]] = []
+
+    def with_fixtures(self, fixtures: Sequence[tuple[Mat4, tuple[float, float, float]]]) -> _Gripper:
+        """Keep known boxes (``T_base_box``, full sizes) clear too, measured exactly (:meth:`fixture_distance`)."""
+        self.fixtures = [(np.linalg.inv(np.asarray(T, dtype=float)), np.asarray(size, dtype=float) / 2)
+                         for T, size in fixtures]
+        return self
+
+    def fixture_distance(self, T_base_tcp: NDArray[np.float64]) -> float:
+        """Distance from the gripper's box edges (at the tool pose, swept along the approach) to the nearest
+        known fixture box: exact wherever a corner or an edge of the gripper is what comes nearest."""
+        if not self.fixtures:
+            return math.inf
+        p_base = self.edges @ T_base_tcp[:3, :3].T + T_base_tcp[:3, 3]
+        best = math.inf
+        for T_box_base, half in self.fixtures:
+            local = p_base @ T_box_base[:3, :3].T + T_box_base[:3, 3]
+            best = min(best, math.sqrt(float(_box_distance2(local, -half, half).min())))
+        return best
+
     def distance(self, p_tcp: NDArray[np.float64]) -> float:
         """Distance from the nearest of the points (tcp frame) to the gripper (boxes swept along the approach)."""
         return math.sqrt(min(float(_box_distance2(p_tcp, lo, hi).min()) for lo, hi in [*self.pads, self.palm]))
@@ -209,12 +246,14 @@ def sample_grasps(
     settings: AntipodalSettings | None = None,
     rng: np.random.Generator | None = None,
     reachable: Callable[[Mat4, Mat4], bool] | None = None,
+    fixtures: Sequence[tuple[Mat4, tuple[float, float, float]]] = (),
 ) -> tuple[GraspCandidate, ...]:
     """Ranked antipodal grasps of the object in ``cloud`` (best first, at most ``settings.keep``, distinct).
 
     ``others_base_m`` (M, 3): points of everything else seen, kept clear of the open gripper; ``rng`` seeds the
     contact sampling (default: seed 0); ``reachable(T_grasp, T_pregrasp)`` drops candidates the arm cannot
-    reach (IK) when given.
+    reach (IK) when given; ``fixtures`` (``T_base_box``, full sizes): known boxes kept clear, measured exactly
+    against the gripper's edges (``others_base_m`` may hold points on them too).
     """
     s = settings or AntipodalSettings()
     rng = rng if rng is not None else np.random.default_rng(0)
@@ -225,7 +264,7 @@ def sample_grasps(
     others = np.zeros((0, 3)) if others_base_m is None else np.asarray(others_base_m, dtype=float).reshape(-1, 3)
     com = cloud.centre_of_mass_estimate
     radial = _unit(np.array([com[0], com[1], 0.0]))
-    gripper = _Gripper(s)
+    gripper = _Gripper(s).with_fixtures(fixtures)
     cos_cone = math.cos(math.radians(s.friction_cone_deg))
     cov = np.cov((pts - pts.mean(axis=0)).T)
     found: list[GraspCandidate] = []
@@ -235,29 +274,42 @@ def sample_grasps(
         rel = pts - pts[i]
         along = rel @ closing
         off_line = np.linalg.norm(rel - np.outer(along, closing), axis=1)
-        partner = (off_line < s.line_tolerance_m) & (along > 0.0) & (nrm @ closing > cos_cone)
+        partner = ((off_line < s.line_tolerance_m) & (along > s.min_width_m) & (nrm @ closing > cos_cone)
+                   & (along <= s.max_opening_m - s.width_margin_m))
         if not partner.any():
             continue
-        j = int(np.flatnonzero(partner)[np.argmax(along[partner])])
-        width = float(along[j])
-        if width > s.max_opening_m - s.width_margin_m:
-            continue
-        line = _unit(pts[j] - pts[i])
-        if line is None:
-            continue
-        antipodal = min(float(-nrm[i] @ line), float(nrm[j] @ line))
-        if antipodal < cos_cone:
-            continue
-        centre = (pts[i] + pts[j]) / 2
-        for approach in _approaches(line):
-            closing = _across_long_axis(line, approach, cov, cos_cone, s.elongation_ratio)
-            if closing is None:
-                continue
-            cand = _place_tool(centre, approach, closing, width, antipodal, pts, others, table_z_m, com, radial,
-                               gripper, s)
-            if cand is not None:
-                found.append(cand)
+        # the farthest opposing point spans a solid object whole; the nearest is where a thin wall, a rim or
+        # one arm of a T or an L ends (the farthest is then across the hollow, often too wide)
+        options = np.flatnonzero(partner)
+        for j in sorted({int(options[np.argmax(along[options])]), int(options[np.argmin(along[options])])}):
+            found.extend(_pair_grasps(pts, nrm, i, j, float(along[j]), cos_cone, cov, others, table_z_m, com,
+                                      radial, gripper, s))
     return _distinct(sorted(found, key=lambda c: -c.score), s.keep, reachable)
+
+
+def _pair_grasps(
+    pts: NDArray[np.float64], nrm: NDArray[np.float64], i: int, j: int, width: float, cos_cone: float,
+    cov: NDArray[np.float64], others: NDArray[np.float64], table_z_m: float, com: NDArray[np.float64],
+    radial: NDArray[np.float64] | None, gripper: _Gripper, s: AntipodalSettings,
+) -> list[GraspCandidate]:
+    """The grasps of one contact pair: one per approach direction the tool can be placed on."""
+    line = _unit(pts[j] - pts[i])
+    if line is None:
+        return []
+    antipodal = min(float(-nrm[i] @ line), float(nrm[j] @ line))
+    if antipodal < cos_cone:
+        return []
+    centre = (pts[i] + pts[j]) / 2
+    out = []
+    for approach in _approaches(line):
+        closing = _across_long_axis(line, approach, cov, cos_cone, s.elongation_ratio)
+        if closing is None:
+            continue
+        cand = _place_tool(centre, approach, closing, width, antipodal, pts, others, table_z_m, com, radial,
+                           gripper, s)
+        if cand is not None:
+            out.append(cand)
+    return out
 
 
 def _across_long_axis(
@@ -311,7 +363,7 @@ def _place_tool(
         free = local[~inside]
         if len(others):
             free = np.vstack([free, (others - t) @ R])
-        dist = gripper.distance(free) if len(free) else math.inf
+        dist = min(gripper.distance(free) if len(free) else math.inf, gripper.fixture_distance(T))
         if dist < s.min_clearance_m:
             continue  # the palm or a pad (on its way in) meets a point, or nearly: back off
         table_gap = lowest - table_z
@@ -389,24 +441,31 @@ def rank_grasps(
     reachable: Callable[[Mat4, Mat4], bool] | None = None,
     seed: int = 0,
     fixtures: Sequence[tuple[Mat4, tuple[float, float, float]]] = (),
+    viewpoint_base_m: Sequence[float] | None = None,
 ) -> results.GraspResult:
     """The grasps PlanGrasp tries, in order, as 6-DoF candidates.
 
     An object a top-down grasp holds near its middle keeps the footprint's top-down ranking of
     :func:`bt_grasp.perception.grasps.synthesize_grasps` unchanged (the colour-block scenes' runs stay as
-    they were). A tall object (:func:`is_tall`), or one with no top-down grasp, gets the antipodal candidates
-    sampled from its cloud first (seeded by ``seed``; only reachable ones when ``reachable`` is given), the
-    footprint's top-down ones after them. ``fixtures``: the known fixtures' solid parts as (``T_base_box``,
-    full sizes), kept clear of the open gripper like the objects seen.
+    they were), as long as the visible points bear each of those grasps out (:func:`fits_seen_points`: something
+    between the pads, nothing under them). A tall object (:func:`is_tall`), one with no top-down grasp, or one
+    whose footprint grasps the visible points refute (the footprint's centre over an L's or a T's empty corner, a
+    pad landing on a mug's rim) gets the antipodal candidates sampled from its cloud first (seeded by ``seed``;
+    only reachable ones when ``reachable`` is given), the footprint's borne-out top-down ones after them.
+    ``fixtures``: the known fixtures' solid parts as (``T_base_box``, full sizes), kept clear of the open gripper
+    like the objects seen. ``viewpoint_base_m``: where the camera that saw the target was (orients the visible
+    points' normals: :func:`bt_grasp.perception.object_cloud.estimate_normals`).
     """
     from bt_grasp.perception.grasps import synthesize_grasps
 
     gs = grasp_settings or GraspSettings()
-    top = synthesize_grasps(target, neighbours, gs)
-    top_list = tuple(from_top_down(c) for c in top.candidates)
-    if top.ok and not is_tall(target, gs):
-        return results.GraspResult(top.status, top_list, top.message)
     s = settings or AntipodalSettings(pregrasp_offset_m=gs.pregrasp_offset_m)
+    top = synthesize_grasps(target, neighbours, gs)
+    top_all = tuple(from_top_down(c) for c in top.candidates)
+    top_list = tuple(c for c in top_all if fits_seen_points(c, target, s))
+    refuted = len(top_all) - len(top_list)
+    if top.ok and not is_tall(target, gs) and not refuted:
+        return results.GraspResult(top.status, top_list, top.message)
     seen = [d for d in neighbours if d is not target and d.centroid_base_m != target.centroid_base_m]
     others = [fitted_surface(d).points_base_m for d in seen]
     for d in seen:
@@ -415,12 +474,47 @@ def rank_grasps(
             others.append(pts[voxel_indices(pts, 0.005)])
     others += [box_surface(T, size) for T, size in fixtures]
     other_points = np.vstack(others) if others else None
-    sampled = sample_grasps(detection_cloud(target), target.table_z_m, other_points, s,
-                            np.random.default_rng(seed), reachable)
+    cloud = detection_cloud(target, viewpoint_base_m=viewpoint_base_m)
+    sampled = sample_grasps(cloud, target.table_z_m, other_points, s, np.random.default_rng(seed), reachable,
+                            fixtures)
     candidates = sampled + top_list
     if not candidates:
+        if top.ok:  # every footprint grasp refuted, nothing sampled
+            return results.GraspResult(
+                results.GraspStatus.NO_CLEARANCE, (),
+                f"the visible points refute all {refuted} top-down grasp(s) of the footprint and no antipodal pair "
+                "of the cloud fits the gripper")
         return top
-    why = "tall for a top-down grasp" if top.ok else f"no top-down grasp ({top.message})"
+    if not top.ok:
+        why = f"no top-down grasp ({top.message})"
+    elif refuted:
+        why = f"the visible points refute {refuted} of {len(top_all)} top-down grasp(s) of the footprint"
+    else:
+        why = "tall for a top-down grasp"
     message = (f"{len(candidates)} candidate(s) ({len(sampled)} sampled from the cloud: {why}); "
                f"best: {candidates[0].reason}")
     return results.GraspResult(results.GraspStatus.OK, candidates, message)
+
+
+def fits_seen_points(candidate: GraspCandidate, target: results.Detection, s: AntipodalSettings) -> bool:
+    """Whether the target's visible points bear out a grasp computed from its footprint: at least
+    ``min_contact_points`` of them between the pads where they close, centred between them within
+    ``max_off_centre_m`` (the footprint's centre over an L's empty corner holds one arm near a pad), and none
+    inside the open pads or the palm on their way in (a pad would land on the object). True when the detection
+    carries no points to judge by."""
+    if target.points_base_m is None or len(target.points_base_m) < 10:
+        return True
+    pts = np.asarray(target.points_base_m, dtype=float).reshape(-1, 3)
+    pts = pts[voxel_indices(pts, 0.003)]
+    T = np.asarray(candidate.T_base_tcp_grasp, dtype=float)
+    local = (pts - T[:3, 3]) @ T[:3, :3]
+    gripper = _Gripper(s)
+    lo, hi = gripper.between
+    between = np.all((local >= lo) & (local <= hi), axis=1)
+    if int(between.sum()) < s.min_contact_points:
+        return False
+    held = local[between, 1]
+    if abs(float(held.max() + held.min()) / 2) > s.max_off_centre_m:
+        return False  # one pad would shove the object that far before the other touches it
+    rest = local[~between]
+    return not len(rest) or gripper.distance(rest) > 0.0

@@ -33,9 +33,13 @@ class ObjectCloud:
         return np.asarray((lo + hi) / 2, dtype=float)
 
 
-def estimate_normals(points: NDArray[np.float64], k: int = 12) -> NDArray[np.float64]:
-    """Unit normals by PCA of each point's k nearest neighbours, turned away from the cloud's vertical axis
-    (outward for a convex object; a normal facing straight up or down keeps pointing up)."""
+def estimate_normals(points: NDArray[np.float64], k: int = 12,
+                     viewpoint_base_m: Sequence[float] | None = None) -> NDArray[np.float64]:
+    """Unit normals by PCA of each point's k nearest neighbours. With ``viewpoint_base_m`` (the camera that saw
+    the points) each is turned towards it: a surface the camera sees faces it, so this is outward for any
+    object, concave ones too (a bowl's or a mug's inner wall faces into its hollow). Without, turned away from
+    the cloud's vertical axis (outward for a convex object only; a normal facing straight up or down keeps
+    pointing up)."""
     from scipy.spatial import cKDTree
 
     pts = np.asarray(points, dtype=float)
@@ -44,30 +48,111 @@ def estimate_normals(points: NDArray[np.float64], k: int = 12) -> NDArray[np.flo
     nb = pts[idx] - pts[idx].mean(axis=1, keepdims=True)
     _, _, vt = np.linalg.svd(nb, full_matrices=False)
     normals = vt[:, -1, :]
-    lo, hi = pts.min(axis=0), pts.max(axis=0)
-    centre = (lo + hi) / 2
-    outward = pts - centre
-    outward[:, 2] = np.where(np.abs(normals[:, 2]) > 0.9, 1.0, outward[:, 2])
+    if viewpoint_base_m is not None:
+        outward = np.asarray(viewpoint_base_m, dtype=float).reshape(1, 3) - pts
+    else:
+        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        centre = (lo + hi) / 2
+        outward = pts - centre
+        outward[:, 2] = np.where(np.abs(normals[:, 2]) > 0.9, 1.0, outward[:, 2])
     flip = np.sum(normals * outward, axis=1) < 0
     normals[flip] *= -1
     return np.asarray(normals / np.linalg.norm(normals, axis=1, keepdims=True), dtype=float)
 
 
-def detection_cloud(det: results.Detection, spacing_m: float = 0.005) -> ObjectCloud:
+def seen_through(fitted_m: NDArray[np.float64], visible_m: NDArray[np.float64], viewpoint_base_m: Sequence[float],
+                 near_m: float = 0.006, ray_m: float = 0.004, in_front_m: float = 0.008) -> NDArray[np.bool_]:
+    """Which points of a fitted shape's surface the camera at ``viewpoint_base_m`` would have seen had they been
+    there, but did not: no visible point within ``near_m`` of it, and none within ``ray_m`` of the line of sight
+    to it (``in_front_m`` or more nearer the camera) that would hide it. Such a point is air: the corner a T or an
+    L leaves empty, the hollow of a bowl under its rim's height. A hidden side (behind what was seen) is kept."""
+    from scipy.spatial import cKDTree
+
+    fitted = np.asarray(fitted_m, dtype=float)
+    visible = np.asarray(visible_m, dtype=float)
+    cam = np.asarray(viewpoint_base_m, dtype=float).reshape(3)
+    near = cKDTree(visible).query(fitted, k=1, distance_upper_bound=near_m)[0] <= near_m
+    out = np.zeros(len(fitted), dtype=bool)
+    rel_v = visible - cam
+    for start in range(0, len(fitted), 256):
+        chunk = fitted[start:start + 256] - cam
+        length = np.linalg.norm(chunk, axis=1)
+        u = chunk / np.maximum(length, 1e-9)[:, None]
+        t = u @ rel_v.T  # (B, M): how far along each line of sight each visible point lies
+        perp2 = np.einsum("mj,mj->m", rel_v, rel_v)[None, :] - t**2
+        hides = (perp2 < ray_m**2) & (t > 0.0) & (t < length[:, None] - in_front_m)
+        out[start:start + 256] = ~hides.any(axis=1)
+    return np.asarray(out & ~near, dtype=bool)
+
+
+def extruded_footprint(points_m: NDArray[np.float64], table_z_m: float, cell_m: float = 0.003,
+                       spacing_m: float = 0.005) -> ObjectCloud:
+    """The sides the camera may not see, as the walls of the object's seen footprint: the cells (``cell_m``,
+    seen from above) holding visible points (holes filled), their outer outline walled from the table up to the
+    height seen there, with outward normals across the outline (the gradient of the smoothed footprint, so a
+    wall at any yaw has its true direction, not a staircase's). Where a fitted box or cylinder completes only a
+    convex footprint, this completes a T's stem, an L's leg or a mug's handle side; it assumes the walls go
+    straight down from the outline (an object lying or standing on the table, as the fitted shapes do)."""
+    from scipy.ndimage import binary_closing, binary_fill_holes, gaussian_filter, maximum_filter
+
+    pts = np.asarray(points_m, dtype=float).reshape(-1, 3)
+    lo = pts[:, :2].min(axis=0) - 4 * cell_m
+    ij = np.floor((pts[:, :2] - lo) / cell_m).astype(int)
+    shape = tuple(int(v) for v in ij.max(axis=0) + 5)
+    height = np.full(shape, -np.inf)
+    np.maximum.at(height, (ij[:, 0], ij[:, 1]), pts[:, 2])
+    # holes filled: the outline only (inside a mug's rim the camera may see nothing: that is no wall)
+    occupied = binary_fill_holes(binary_closing(np.isfinite(height), structure=np.ones((3, 3), dtype=bool)))
+    top = maximum_filter(height, size=3, mode="constant", cval=-np.inf)
+    padded = np.pad(occupied, 1)
+    edge = occupied & ~(padded[:-2, 1:-1] & padded[2:, 1:-1] & padded[1:-1, :-2] & padded[1:-1, 2:])
+    smooth = gaussian_filter(occupied.astype(float), sigma=1.5)
+    gi, gj = np.gradient(smooth)
+    ci, cj = np.nonzero(edge & np.isfinite(top))
+    out_dir = -np.stack([gi[ci, cj], gj[ci, cj]], axis=1)
+    norm = np.linalg.norm(out_dir, axis=1)
+    ok = norm > 1e-9
+    ci, cj, out_dir = ci[ok], cj[ok], out_dir[ok] / norm[ok, None]
+    xy = lo + (np.stack([ci, cj], axis=1) + 0.5) * cell_m + 0.5 * cell_m * out_dir
+    walls, normals = [], []
+    for k in range(len(xy)):
+        zs = np.arange(table_z_m + spacing_m / 2, top[ci[k], cj[k]], spacing_m)
+        if len(zs):
+            walls.append(np.column_stack([np.full(len(zs), xy[k, 0]), np.full(len(zs), xy[k, 1]), zs]))
+            normals.append(np.tile([out_dir[k, 0], out_dir[k, 1], 0.0], (len(zs), 1)))
+    if not walls:
+        return ObjectCloud(np.zeros((0, 3)), np.zeros((0, 3)))
+    wall_pts, wall_n = np.vstack(walls), np.vstack(normals)
+    keep = voxel_indices(wall_pts, spacing_m)
+    return ObjectCloud(wall_pts[keep], wall_n[keep])
+
+
+def detection_cloud(det: results.Detection, spacing_m: float = 0.005,
+                    viewpoint_base_m: Sequence[float] | None = None) -> ObjectCloud:
     """The object's surface as perception reported it, in the BASE frame: the surface of the fitted shape (the
     gravity-aligned box, or the upright cylinder of a round footprint; sides and top, never the bottom, which
     the table hides), which stands in for the sides the camera cannot see, together with the visible points
-    when the detection carries them (``points_base_m``, normals estimated by :func:`estimate_normals`, then
-    thinned to one per ``spacing_m`` voxel: a camera's ~1 mm sampling would only slow the search)."""
+    when the detection carries them (``points_base_m``, normals estimated by :func:`estimate_normals`, turned
+    towards ``viewpoint_base_m`` when given, then thinned to one per ``spacing_m`` voxel: a camera's ~1 mm
+    sampling would only slow the search). With a viewpoint, the walls of the seen footprint
+    (:func:`extruded_footprint`) complete what the fitted convex shape cannot (a T's stem), and then every
+    completed point the camera would have seen but did not is dropped (:func:`seen_through`): the fitted shape
+    of a T, an L, a bowl or a mug covers air the fingers would close on, and so does a wall under a bowl's rim."""
     fitted = fitted_surface(det, spacing_m)
     points = det.points_base_m
     if points is None or len(points) < 10:
         return fitted
     pts = np.asarray(points, dtype=float).reshape(-1, 3)
-    normals = estimate_normals(pts)
+    normals = estimate_normals(pts, viewpoint_base_m=viewpoint_base_m)
     keep = voxel_indices(pts, spacing_m)
-    return ObjectCloud(np.vstack([fitted.points_base_m, pts[keep]]),
-                       np.vstack([fitted.normals_base, normals[keep]]))
+    fitted_pts, fitted_nrm = fitted.points_base_m, fitted.normals_base
+    if viewpoint_base_m is not None:
+        walls = extruded_footprint(pts, det.table_z_m, spacing_m=spacing_m)
+        fitted_pts = np.vstack([fitted_pts, walls.points_base_m])
+        fitted_nrm = np.vstack([fitted_nrm, walls.normals_base])
+        air = seen_through(fitted_pts, pts[voxel_indices(pts, 0.003)], viewpoint_base_m)
+        fitted_pts, fitted_nrm = fitted_pts[~air], fitted_nrm[~air]
+    return ObjectCloud(np.vstack([fitted_pts, pts[keep]]), np.vstack([fitted_nrm, normals[keep]]))
 
 
 def box_surface(T_base_box: Mat4, size_m: Sequence[float], spacing_m: float = 0.01) -> NDArray[np.float64]:
