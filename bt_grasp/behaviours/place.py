@@ -67,6 +67,8 @@ _HELD_PORTS = [
     PortSpec("turns", PortDirection.INPUT, bool, True, "when the first orientation is blocked or unreachable, "
              "try the held object's footprint symmetries (half, quarter or any turn) in order"),
     PortSpec("free_yaw", PortDirection.INPUT, bool, False, "the goal allows any yaw: try turns of 30 degrees too"),
+    PortSpec("turn_deg", PortDirection.INPUT, float, 0.0, "turn the object by this much from the pose's yaw (or "
+             "from how it is held, with no yaw) before the first orientation is tried, degrees"),
     PortSpec("placed", PortDirection.INOUT, object, None, "objects this tree set down inside a tray or bin (the "
              "camera's object lists leave them out): obstacles here, and this place is added (not set: not kept)"),
 ]
@@ -94,7 +96,8 @@ def held_offset(grasp: GraspPose, held: Detection) -> Mat4:
 
 
 def place_options(target: Pose, held: Detection, T_tcp_obj: Mat4, height_m: float, gap_m: float,
-                  surface_z_m: float, turns: bool = True, free_yaw: bool = False) -> list[tuple[PlaceYaw, Mat4]]:
+                  surface_z_m: float, turns: bool = True, free_yaw: bool = False,
+                  turn_rad: float = 0.0) -> list[tuple[PlaceYaw, Mat4]]:
     """The orientations to try, in order, each with its release tool pose: the held object's centre over
     (x, y), its bottom ``gap_m`` above the surface, its yaw ``target.yaw_deg`` (no yaw: as it was held) turned
     by one of its footprint's symmetries (``bt_grasp.motion.place_orientation``; any turn with ``free_yaw``),
@@ -102,7 +105,7 @@ def place_options(target: Pose, held: Detection, T_tcp_obj: Mat4, height_m: floa
     the one nearer the grasp's tool yaw (the one orientation Place tried before it tried several)."""
     z = surface_z_m + height_m / 2 + gap_m
     held_yaw = float(held.yaw_rad)
-    requested = held_yaw if target.yaw_deg is None else math.radians(target.yaw_deg)
+    requested = (held_yaw if target.yaw_deg is None else math.radians(target.yaw_deg)) + turn_rad
     if turns:
         kind = footprint_kind(float(held.size_m[0]), float(held.size_m[1]), held.shape == "round")
         turns_rad = footprint_turns_rad(kind, free_yaw)
@@ -192,7 +195,8 @@ class _PlaceBase(RobotLeaf):
         gap = self.input_float("release_gap")
         self._T_tcp_obj, self._gap = T_tcp_obj, gap
         self._options = place_options(pose, held, T_tcp_obj, height, gap, surface,
-                                      turns=_flag(self.input("turns")), free_yaw=_flag(self.input("free_yaw")))
+                                      turns=_flag(self.input("turns")), free_yaw=_flag(self.input("free_yaw")),
+                                      turn_rad=math.radians(self.input_float("turn_deg")))
         self._height = height
         self._target_text = f"{pose.x_m:.3f};{pose.y_m:.3f};{surface:.3f}"
         margin = 0.004
