@@ -13,15 +13,20 @@ from bt_grasp.tree.registry import NodeKind, PortDirection, PortSpec, leaf
 EMPTY_WIDTH_M = 0.004
 #: the joints' closed limit is 0: with nothing between the pads they come this close to it
 CLOSED_ON_NOTHING_M = 0.001
+#: with a planned grasp, a gap at least this wide holds something: the thinnest part the fingers hold (the
+#: household L bracket's 4 mm plate closes them to ~3.9 mm), with room for the pads' give
+HELD_MIN_M = 0.002
 
 
 def empty_below_m(expected_width_m: float | None) -> float:
-    """The measured finger gap under which a grip holds nothing, given the width of the object seen between the
-    pads (the grasp's planned width): ``EMPTY_WIDTH_M``, or half the width seen when that is less (a 4 mm plate
-    held flat closes the pads to ~3.9 mm, not on nothing), never under ``CLOSED_ON_NOTHING_M``."""
+    """The measured finger gap under which a grip holds nothing. Without a planned grasp: ``EMPTY_WIDTH_M``, as
+    always. With one (its width seen ``expected_width_m``): ``HELD_MIN_M``, or half the width seen when that is
+    less, never under ``CLOSED_ON_NOTHING_M``. A grasp planned from a footprint may close on a thinner part of
+    the object than the footprint's width (the L bracket seen 38 mm across, held by its 4 mm plate), so the
+    width seen only lowers the bar; only fingers at their closed limit hold nothing."""
     if expected_width_m is None or not expected_width_m > 0.0:
         return EMPTY_WIDTH_M
-    return max(CLOSED_ON_NOTHING_M, min(EMPTY_WIDTH_M, 0.5 * expected_width_m))
+    return max(CLOSED_ON_NOTHING_M, min(HELD_MIN_M, 0.5 * expected_width_m))
 
 
 def planned_width_m(grasp: object) -> float | None:

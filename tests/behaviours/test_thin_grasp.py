@@ -2,8 +2,8 @@
 
 A 4 mm steel plate (the L bracket's upright) closes the pads to about 4 mm: under the fixed 4 mm bar, Grasp called
 that grip empty (GRASP_EMPTY) though the bracket was between the fingers, and Lift called it slipped. With the
-grasp on the blackboard (PlanGrasp's, its width seen 5.5 mm), a gap of half that width or more is a grip; closing
-on nothing (the joints' 0 limit) is still empty, with or without a grasp.
+grasp on the blackboard (PlanGrasp's, whatever its width seen), a gap of 2 mm (or half a thinner width seen) is a
+grip; closing on nothing (the joints' 0 limit) is still empty, with or without a grasp.
 """
 
 from __future__ import annotations
@@ -77,8 +77,16 @@ def test_closing_on_nothing_is_empty_whatever_was_seen(seen_m: float) -> None:
     assert statuses[-1] == "FAILURE" and values["failure_reason"] == "GRASP_EMPTY"
 
 
-def test_the_empty_bar_is_half_the_width_seen_between_1_and_4_mm() -> None:
-    assert empty_below_m(None) == EMPTY_WIDTH_M
-    assert empty_below_m(0.05) == EMPTY_WIDTH_M  # a block: as before
-    assert empty_below_m(0.0055) == pytest.approx(0.00275)
+def test_a_plate_inside_a_wider_footprint_is_held() -> None:
+    """The L bracket lying so that its footprint is 38 mm across: the pads close on its 4 mm plate (household
+    seed 67: five GRASP_EMPTY in a row at a 4.0 mm gap, the bracket between the fingers)."""
+    statuses, values = _run(FakeRobot(object_width_m=0.0040), _Seen(0.038))
+    assert statuses[-1] == "SUCCESS", values.get("failure_reason")
+
+
+def test_the_empty_bar_with_a_grasp_is_2_mm_or_half_the_width_seen() -> None:
+    assert empty_below_m(None) == EMPTY_WIDTH_M  # no grasp known: as before
+    assert empty_below_m(0.05) == pytest.approx(0.002)
+    assert empty_below_m(0.0055) == pytest.approx(0.002)
+    assert empty_below_m(0.003) == pytest.approx(0.0015)
     assert empty_below_m(0.0005) == pytest.approx(0.001)  # never under the closed limit's noise
