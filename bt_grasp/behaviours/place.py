@@ -50,6 +50,8 @@ if TYPE_CHECKING:
 
 #: the tool points down: tcp z along base -z
 R_DOWN = np.diag([1.0, -1.0, -1.0])
+#: how much higher the pre-place pose is put when the first one collides with something seen beside the target
+HIGHER_APPROACH_M = 0.10
 #: the release pose's arm configurations tried when the nearest one does not work (seeded IK: reproducible)
 RELEASE_IK_SEEDS = 16
 RELEASE_IK_SOLUTIONS = 8
@@ -230,6 +232,12 @@ class _PlaceBase(RobotLeaf):
         planner, options = self.cell.planner, self.cell.planner_options
         failures: list[PathFailure] = []
         plan = planner.plan_to_pose(self._q_start, pre, self._carry_scene, options)
+        from bt_grasp.motion.planner import PlanStatus
+
+        if plan.status is PlanStatus.GOAL_IN_COLLISION:
+            # something tall beside the target (a standing can in the next slot): come down from higher up
+            pre = _raised(T_place, self.input_float("approach") + HIGHER_APPROACH_M)
+            plan = planner.plan_to_pose(self._q_start, pre, self._carry_scene, options)
         if plan.ok:
             path = np.asarray(plan.path, dtype=float)
             descent = planner.straight_line(path[-1], T_place, self._descent_scene)

@@ -88,8 +88,8 @@ def test_clear_household_takes_whatever_is_nearest_the_bin_until_the_table_is_em
     status, _, chosen = _walk(TREE, views, monkeypatch)
     assert status == "SUCCESS"
     # the bin is at (0.30, 0.52): the can is nearest, then the wedge; one slot each: the can and the wedge the
-    # corners 0 and 2, the (elongated) pen the middle of the first row, 1
-    assert chosen == [CAN, WEDGE, PEN, ("slot", 1)]
+    # corners 0 and 2, the (elongated) pen the middle of the second row, 4
+    assert chosen == [CAN, WEDGE, PEN, ("slot", 4)]
 
 
 def test_an_object_still_held_after_a_failed_place_is_placed_not_dropped(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -118,7 +118,7 @@ def test_clear_household_gives_up_after_twelve_rounds(monkeypatch: pytest.Monkey
 
 def test_a_slot_the_place_cannot_reach_is_left_for_the_next(monkeypatch: pytest.MonkeyPatch) -> None:
     # every place fails (PLACE_BLOCKED after 3 attempts): each round moves on to the next slot for a long
-    # object (1, then 4, then 6, which does not exist: FixturePose fails from then on)
+    # object (4, then 1, then 6, which does not exist: FixturePose fails from then on)
     status, _, chosen = _walk(TREE, [(PEN,)] * 20, monkeypatch, place="Failure:PLACE_BLOCKED")
     assert status == "FAILURE" and chosen == [PEN] * 12 + [("slot", 6)]
 
