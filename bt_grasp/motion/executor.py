@@ -1,11 +1,11 @@
 """Executes a sampled joint trajectory on a :class:`~bt_grasp.interfaces.Robot`, one control period per call.
 
-The executor never advances time: a behaviour-tree leaf calls :meth:`TrajectoryExecutor.update` once
-per tick (the caller steps the world between ticks) and returns RUNNING while the executor does. Each
-update reads the injected clock, commands the trajectory's position and velocity at that time, and
-watches the tracking error: above ``max_tracking_error_rad`` for longer than ``tracking_error_grace_s``
-(a stall or a collision) it fails. After the last sample it holds the goal until the arm has settled (within
-``settle_tolerance_rad``, slower than ``settle_velocity_rad_s``; or at rest, its measured joints unchanged for
+The executor never advances time: a behaviour-tree leaf calls :meth:`TrajectoryExecutor.update` once per tick
+(the caller steps the world between ticks) and returns RUNNING while the executor does. Each update reads the
+injected clock, commands the trajectory's position and velocity at that time, and watches the tracking error:
+above ``max_tracking_error_rad`` for longer than ``tracking_error_grace_s`` (a stall or a collision) it fails.
+After the last sample it holds the goal until the arm has settled (within ``settle_tolerance_rad``, slower than
+``settle_velocity_rad_s``; or at rest, its measured joints within ``rest_still_rad`` of where they were for
 ``rest_periods`` updates, within ``rest_tolerance_rad``) or ``settle_timeout_s`` of simulated time passed.
 """
 
@@ -45,12 +45,12 @@ class ExecutorOptions:
     settle_tolerance_rad: float = 1e-3  # joint error that counts as arrived
     settle_velocity_rad_s: float = 0.01  # joint speed that counts as at rest
     settle_timeout_s: float = 2.0  # after the last sample
-    # an arm that has come to rest (its measured joints unchanged, within rest_still_rad, for rest_periods
-    # updates: the physics engine may stop it, reported velocities notwithstanding) within this of the goal has
-    # arrived as near as it will: waiting longer changes nothing
+    # an arm that has come to rest (its measured joints within rest_still_rad of where they were rest_periods
+    # updates before, all along: the physics engine may stop it or keep it jittering in place, reported
+    # velocities notwithstanding) within this of the goal has arrived as near as it will: waiting changes nothing
     rest_tolerance_rad: float = 3e-3
-    rest_still_rad: float = 1e-6
-    rest_periods: int = 10
+    rest_still_rad: float = 5e-4
+    rest_periods: int = 25
 
 
 class TrajectoryExecutor:
@@ -114,7 +114,8 @@ class TrajectoryExecutor:
         speed = float(np.max(np.abs(self.robot.joint_velocities())))
         still = self._last_q is not None and float(np.max(np.abs(q_measured - self._last_q))) < opts.rest_still_rad
         self._still_periods = self._still_periods + 1 if still else 0
-        self._last_q = q_measured
+        if not still:  # a new window starts here: the arm is compared with where it was at the window's start
+            self._last_q = q_measured
         at_rest = self._still_periods >= opts.rest_periods and error < opts.rest_tolerance_rad
         if (error < opts.settle_tolerance_rad and speed < opts.settle_velocity_rad_s) or at_rest:
             self.status = ExecStatus.SUCCEEDED

@@ -3,6 +3,12 @@
 - The pen-like rod (tests/data/scenes/lying_rod.yaml, seed 2, trees/pick.xml): held 15 cm up, the arm came to rest
   1 mrad short of the lift's goal and Lift failed on the settle timeout (TRACKING_ERROR); the executor now takes an
   arm at rest within 3 mrad as arrived (tests/motion/test_executor_at_rest.py has the unit test).
+- The L bracket (scenes/household.yaml, seed 67, trees/pick.xml): seen 38 mm across, held by its 4 mm plate;
+  Grasp called the 4.0 mm gap empty (GRASP_EMPTY, five times in a row with recovery). With the planned grasp
+  known, only fingers at their closed limit hold nothing (tests/behaviours/test_thin_grasp.py).
+- The T tool (scenes/household.yaml, seed 2, trees/pick.xml): 100 mm across its footprint's narrowest side; no
+  grasp was found (NOTHING_TO_GRASP) with recovery, and the footprint's grasp closed on nothing without. It is
+  grasped across its stem or its bar from its cloud (tests/perception/test_household_grasps.py).
 """
 
 from __future__ import annotations
@@ -18,6 +24,7 @@ from bt_grasp.episode.result import EpisodeResult
 pytestmark = pytest.mark.sim
 
 ROOT = Path(__file__).resolve().parents[2]
+HOUSEHOLD = ROOT / "scenes" / "household.yaml"
 
 
 def _run(tmp_path: Path, tree: str, scene: Path, seed: int, color: str = "") -> EpisodeResult:
@@ -37,3 +44,8 @@ def _assert_picked(result: EpisodeResult, name: str) -> None:
 def test_the_rod_lifted_without_a_settle_timeout(tmp_path: Path) -> None:
     result = _run(tmp_path, "pick.xml", ROOT / "tests" / "data" / "scenes" / "lying_rod.yaml", 2, "red")
     _assert_picked(result, "rod")
+
+
+@pytest.mark.parametrize(("seed", "name"), [(67, "l_bracket"), (2, "t_tool")])
+def test_a_household_object_that_failed_is_picked(tmp_path: Path, seed: int, name: str) -> None:
+    _assert_picked(_run(tmp_path, "pick.xml", HOUSEHOLD, seed), name)
