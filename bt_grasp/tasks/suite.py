@@ -100,6 +100,8 @@ def run_task_bench(tasks: Sequence[Task], seeds: int, first_seed: int = 0, root:
                 figures.failures[why] += 1
                 figures.failed_seeds.append(seed)
             if progress is not None:
-                progress(task.name, seed, result.success, why)
+                # the progress line also says what the judge measured where it failed (which object, how)
+                unmet = "; ".join(d for _, met, d in result.judged.conditions if not met)
+                progress(task.name, seed, result.success, f"{why} ({unmet})" if unmet else why)
         out.append(figures)
     return out
