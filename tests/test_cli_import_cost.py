@@ -87,3 +87,17 @@ def test_modules_for_reads_the_first_word_only() -> None:
     assert modules_for(["--help"]) == modules_for([]) == modules_for(["tre"])
     assert modules_for(["--version", "tree"]) == modules_for([])  # an option first: everything
     assert len(modules_for([])) == len(ALL_COMMAND_MODULES)
+
+
+def test_the_resident_clients_modules_load_no_episode(repo_root: Path) -> None:
+    """`run --resident`'s client builds the request and hands it over: the request and the client modules load
+    neither the episode (the simulator's modules, numpy) nor the control package (~0.3-0.6 s of every second
+    run before issue 27's second pass)."""
+    code = ("import json, sys; import bt_grasp.episode.request, bt_grasp.resident.client, bt_grasp.cli.run_cmd; "
+            "print(json.dumps(sorted(sys.modules)))")
+    done = subprocess.run([sys.executable, "-c", code], cwd=repo_root, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    modules = set(json.loads(done.stdout.strip().splitlines()[-1]))
+    assert "bt_grasp.resident.client" in modules
+    assert sorted(modules & {"bt_grasp.episode.episode", "bt_grasp.episode.worlds", "bt_grasp.control", "numpy",
+                             "sapien"}) == []

@@ -22,6 +22,7 @@ if TYPE_CHECKING:  # the episode package (numpy, pydantic, the simulator) is imp
     from bt_grasp.episode import TickCallback
     from bt_grasp.episode.request import BlackboardValue, EpisodeRequest
     from bt_grasp.episode.result import EpisodeResult
+    from bt_grasp.scene.goals import Goal
     from bt_grasp.tree.loader import LoadedTree
     from bt_grasp.tree.runner import FailureEvent
 
@@ -194,10 +195,9 @@ def run(
     ),
 ) -> None:
     """Run a task tree on the simulated cell. Exit code 0 on task success (judged by physics), 1 on failure."""
-    from bt_grasp.control.breakpoints import parse_breakpoints
-    from bt_grasp.episode.episode import Episode
+    # only what every run needs here: a --resident run's client hands the request over and imports neither the
+    # episode (the simulator's modules) nor the control package (issue 27)
     from bt_grasp.episode.request import EpisodeRequest, parse_assignments
-    from bt_grasp.scene.run_goal import goal_from_options
 
     blackboard: dict[str, BlackboardValue] = {"color": color, "lift_height": lift_height}
     blackboard.update(parse_assignments(set_))
@@ -205,7 +205,7 @@ def run(
         tree=tree,
         scene=scene,
         seed=seed,
-        goal=goal_from_options(goal.value, color, lift_height) if goal is not None else None,
+        goal=_goal(goal.value, color, lift_height) if goal is not None else None,
         calibration=calibration,
         log=log,
         max_ticks=max_ticks,
@@ -221,7 +221,11 @@ def run(
     )
     if realtime is not None and realtime <= 0:
         raise InputError("--realtime", f"the factor must be positive, got {realtime}")
-    breakpoints = parse_breakpoints(break_)
+    breakpoints: tuple[Breakpoint, ...] = ()
+    if break_:
+        from bt_grasp.control.breakpoints import parse_breakpoints
+
+        breakpoints = parse_breakpoints(break_)
     if breakpoints and not (interactive or control):
         raise InputError("--break", "breakpoints need --interactive or --control (a front end to continue from them)")
     if interactive and control:
@@ -251,6 +255,8 @@ def run(
         summary = run_foxglove_control(request, breakpoints, allow_remote=allow_remote_control, console=console,
                                        on_tick=() if quiet else (live_progress(console),))
     else:
+        from bt_grasp.episode.episode import Episode
+
         episode = Episode(request)
         if not quiet:
             episode.on_failure.append(failure_line(console))
@@ -328,6 +334,13 @@ def exposure_warning(host: str) -> str:
         "protocol has no authentication. To watch from another machine, keep the default 127.0.0.1 and tunnel "
         "(ssh -L 8765:127.0.0.1:8765 this-host); see docs/security.md."
     )
+
+
+def _goal(kind: str, color: str, lift_height: float) -> Goal:
+    """``--goal``'s goal (the scene module it needs is imported only when the option is given)."""
+    from bt_grasp.scene.run_goal import goal_from_options
+
+    return goal_from_options(kind, color, lift_height)
 
 
 def register(app: typer.Typer) -> None:

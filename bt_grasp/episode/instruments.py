@@ -9,10 +9,10 @@ import time
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-import numpy as np
-from numpy.typing import NDArray
+if TYPE_CHECKING:  # motion loads pinocchio and ompl, numpy ~0.1 s (the resident's client): only types needed here
+    import numpy as np
+    from numpy.typing import NDArray
 
-if TYPE_CHECKING:  # motion loads pinocchio and ompl: only the types are needed to import this
     from bt_grasp.behaviours.services import Planner
     from bt_grasp.geometry import Mat4
     from bt_grasp.motion.cartesian import CartesianResult
