@@ -40,8 +40,9 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
-#: the log is flushed at the first tick boundary after this much wall time: a killed run loses at most this
-LOG_FLUSH_INTERVAL_S = 0.05
+#: the log's chunk is ended (handed to the OS) every this many ticks: a killed run loses at most the ticks since.
+#: Counted in ticks, not wall time, so the same seed gives the same file bytes on any machine (issue 27).
+LOG_FLUSH_EVERY_TICKS = 20
 
 #: called after every tick with the tick's number and the tree (progress bars, live views, logging)
 TickCallback = Callable[[int, "LoadedTree"], None]
@@ -336,7 +337,7 @@ class Episode:
             attachments={**run_attachments(request, self.tree, self.inputs.calibration_path),
                          # the Foxglove layout of this tree (its leaves' rows, by path)
                          LAYOUT_ATTACHMENT: layout_bytes(tree_structure(self.tree.root), request.tree.name)},
-            flush_interval_s=LOG_FLUSH_INTERVAL_S,
+            flush_every_ticks=LOG_FLUSH_EVERY_TICKS,
             robot_model=default_robot_model(),
             leaf_names=[n["path"] for n in node_records(self.tree.root) if n["kind"] in ("Action", "Condition")],
             writer_process=True,  # a file log is written by a child process; the tick loop only hands over

@@ -115,8 +115,9 @@ class RunRecorder:
         depth_encoding: "16UC1" (millimetres) or "32FC1" (metres) for /camera/depth.
         fsync_interval_s: at a ``flush_tick`` at least this long after the last one, also fsync (survives a
             power loss, not only a killed process); None never fsyncs before ``close``.
-        flush_interval_s: 0 ends a chunk at every ``flush_tick``; > 0 only at the first tick boundary after
-            that much wall time (fewer, larger chunks; a killed process loses at most that much).
+        flush_every_ticks: 1 ends a chunk at every ``flush_tick``; N > 1 at every Nth (fewer, larger chunks;
+            a killed process loses at most the last N - 1 ticks). Counted in ticks, never in wall time, so
+            where chunks end, and so the file's bytes, do not depend on the machine's speed.
         handle_signals: while used as a context manager, turn SIGTERM/SIGINT into exceptions that unwind
             through ``__exit__`` (only where those signals still have their default handlers).
         base_frame, tool_frame: frame ids of the arm base and the tool (TCP) on /tf: the robot description's
@@ -147,7 +148,7 @@ class RunRecorder:
         jpeg_quality: int = 90,
         depth_encoding: Literal["16UC1", "32FC1"] = "16UC1",
         fsync_interval_s: float | None = None,
-        flush_interval_s: float = 0.0,
+        flush_every_ticks: int = 1,
         handle_signals: bool = True,
         time_origin_ns: int | None = None,
         base_frame: str = BASE_FRAME,
@@ -168,8 +169,10 @@ class RunRecorder:
         self._jpeg_quality = jpeg_quality
         self._depth_encoding = depth_encoding
         self._fsync_interval_s = fsync_interval_s
-        self._flush_interval_s = float(flush_interval_s)
-        self._last_flush = time.monotonic()
+        if flush_every_ticks < 1:
+            raise ValueError(f"flush_every_ticks must be >= 1, got {flush_every_ticks}")
+        self._flush_every_ticks = int(flush_every_ticks)
+        self._ticks_since_flush = 0
         self._last_fsync = time.monotonic()
         self._handle_signals = handle_signals
         self.base_frame = base_frame
@@ -546,16 +549,15 @@ class RunRecorder:
 
     def flush_tick(self) -> None:
         """At a tick boundary: end the open chunk and hand it to the OS, so a process killed after this
-        loses nothing before it. With ``flush_interval_s`` > 0 this happens only when that much wall time
-        passed since the last flush (a kill then loses at most that much). Also fsyncs when
+        loses nothing before it. With ``flush_every_ticks`` = N > 1 this happens at every Nth call only (a kill
+        then loses at most the N - 1 ticks since). Also fsyncs when
         ``fsync_interval_s`` has passed since the last fsync."""
         if self._closed:
             return
-        if self._flush_interval_s > 0:
-            now = time.monotonic()
-            if now - self._last_flush < self._flush_interval_s:
-                return
-            self._last_flush = now
+        self._ticks_since_flush += 1
+        if self._ticks_since_flush < self._flush_every_ticks:
+            return
+        self._ticks_since_flush = 0
         fsync = False
         if self._fsync_interval_s is not None:
             now = time.monotonic()
