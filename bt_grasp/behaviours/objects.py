@@ -151,8 +151,8 @@ class SelectObject(Leaf):
     "any": every object), then by order (first in the list, nearest to or farthest from ``point`` -- a
     fixture's pose from FixturePose --, largest or smallest footprint). ``class`` names a class of the learned
     detector's model (objects from ``PerceiveAll detector="learned"``); a literal class the tree's model does not
-    have is a load error with the closest name. FAILURE: NO_DETECTION (nothing matches), BAD_INPUT (``objects``
-    is not an object list, or ``class`` is asked of objects no learned detector named)."""
+    have is a load error with the closest name. FAILURE: NO_DETECTION (nothing matches; with a class, also when
+    no object of the list was named by a learned detector), BAD_INPUT (``objects`` is not an object list)."""
 
     def update(self) -> Status:
         objects = object_list(self.ports.get("objects") if self.ports.has("objects") else None)
@@ -162,9 +162,9 @@ class SelectObject(Leaf):
         shape_class = _wanted(str(self.ports.get("shape_class")))
         class_name = _wanted(str(self.ports.get("class")) if self.ports.has("class") else "")
         if class_name and objects and not any(class_of(d) for d in objects):
-            return self.fail(FailureReason.BAD_INPUT.value,
-                             f"class '{class_name}' asked of {len(objects)} object(s) no learned detector named: "
-                             f"perceive them with detector=\"learned\"")
+            return self.fail(FailureReason.NO_DETECTION.value,
+                             f"no {class_name} among {len(objects)} object(s): a learned detector named none of them "
+                             f"(or they were perceived with the geometric detector)")
         lo, hi = float(self.ports.get("min_size")), float(self.ports.get("max_size"))
         found = [d for d in objects if matches(d, color, shape, lo, hi, shape_class, class_name)]
         if not found:

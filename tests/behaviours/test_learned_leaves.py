@@ -108,12 +108,14 @@ def test_a_class_no_object_has_is_no_detection_naming_the_classes_seen(tmp_path:
     assert tree.find("SelectObject").feedback_message == "no mug object among 2 object(s) (classes seen: box, pen)"
 
 
-def test_a_class_asked_of_geometric_objects_is_bad_input(tmp_path: Path) -> None:
+def test_a_class_asked_of_objects_no_learned_detector_named_is_no_detection(tmp_path: Path) -> None:
     body = ('<Sequence><PerceiveAll detector="{detector}" objects="{seen}"/>\n'
             '<SelectObject objects="{seen}" class="pen" object="{object}"/></Sequence>')
     status, tree = run(tree_file(tmp_path, body), {"detector": "geometric"})
-    assert status == "FAILURE" and tree.blackboard_values()["failure_reason"] == "BAD_INPUT"
-    assert "class 'pen' asked of 2 object(s) no learned detector named" in tree.find("SelectObject").feedback_message
+    assert status == "FAILURE" and tree.blackboard_values()["failure_reason"] == "NO_DETECTION"
+    assert tree.find("SelectObject").feedback_message == (
+        "no pen among 2 object(s): a learned detector named none of them (or they were perceived with the geometric "
+        "detector)")
 
 
 def test_the_detector_and_model_from_the_blackboard(tmp_path: Path) -> None:
