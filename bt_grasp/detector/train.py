@@ -7,7 +7,8 @@ Weights trained with Ultralytics fall under its AGPL-3.0 licence; the model card
 Offline and reproducible where Ultralytics allows: the model is built from its YAML (``pretrained=False``: no
 weights are downloaded), ``YOLO_OFFLINE=1``, a config folder of its own inside the output (nothing written to the
 home folder) holding a copy of a local TrueType font as ``Arial.ttf`` (Ultralytics otherwise tries to download
-it), ``workers=0``, ``deterministic=True``, ``seed``, torch on ``threads`` threads.
+it), ``workers=0``, ``deterministic=True``, ``seed``, torch on ``threads`` threads. Validation runs once, after
+the last epoch (so ``best.pt`` is the last epoch's weights).
 """
 
 from __future__ import annotations
@@ -185,7 +186,8 @@ def train_model(request: TrainRequest) -> TrainResult:
     start = time.perf_counter()
     model.train(data=str(data), epochs=request.epochs, imgsz=request.imgsz, batch=request.batch, device="cpu",
                 workers=0, seed=request.seed, deterministic=True, pretrained=False, project=str(out),
-                name=RUN_FOLDER, exist_ok=True, plots=False, amp=False, patience=request.epochs, verbose=True)
+                name=RUN_FOLDER, exist_ok=True, plots=False, amp=False, patience=request.epochs, verbose=True,
+                val=False)  # validated once, after the last epoch: a young model's validation costs a third of an epoch
     seconds = time.perf_counter() - start
     best = run_dir / "weights" / "best.pt"
     if not best.is_file():
