@@ -12,6 +12,7 @@ from typing import Any
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]
+DOCS = (REPO / "docs" / "campaigns.md").read_text()
 
 
 def _resolved(path: Any) -> Path | None:
@@ -21,6 +22,7 @@ def _resolved(path: Any) -> Path | None:
 def test_bench_tasks_and_eval_run_stand_for_the_same_episodes(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     import bt_grasp.episode as episode_package
     from bt_grasp.campaign.spec import load_campaign, write_options_campaign
+    from bt_grasp.defaults import DEFAULT_MAX_TICKS
     from bt_grasp.perception.calibration_file import calibration_for_scene
     from bt_grasp.scene.format import load_scene
     from bt_grasp.tasks import TASKS, run_task_bench
@@ -39,8 +41,12 @@ def test_bench_tasks_and_eval_run_stand_for_the_same_episodes(tmp_path: Path, mo
         requests.clear()
         run_task_bench([task], 3, first_seed=5, root=REPO)
         tree, scene = task.paths(REPO)
-        campaign = load_campaign(write_options_campaign([tree], [scene], 3, 5, None, tmp_path / task.name),
-                                 check_inputs=False)
+        # a task with a longer limit than eval run's default is run with --max-ticks, as docs/campaigns.md says
+        longer = None if task.max_ticks == DEFAULT_MAX_TICKS else task.max_ticks
+        if longer is not None:
+            assert f"`{task.name}` needs" in DOCS and f"--max-ticks {longer}`" in DOCS, task.name
+        campaign = load_campaign(write_options_campaign([tree], [scene], 3, 5, None, tmp_path / task.name,
+                                                        max_ticks=longer), check_inputs=False)
         episodes = campaign.episodes()
         bench = [(_resolved(r.tree), _resolved(r.scene), r.seed, dict(r.blackboard), r.max_ticks, r.goal, r.faults,
                   r.inject) for r in requests]

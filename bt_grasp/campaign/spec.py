@@ -362,7 +362,8 @@ def _line(lines: dict[KeyPath, int], key: KeyPath) -> int | None:
 
 
 def write_options_campaign(
-    trees: list[Path], scenes: list[Path], seeds: int, first_seed: int, name: str | None, out: Path | None
+    trees: list[Path], scenes: list[Path], seeds: int, first_seed: int, name: str | None, out: Path | None,
+    *, max_ticks: int | None = None,
 ) -> Path:
     """The campaign file `eval run --tree T --scene S --seeds N` stands for, written into the output folder
     (``NAME.campaign.yaml``: the run is resumable and its inputs are on record). Paths in it are absolute."""
@@ -380,13 +381,15 @@ def write_options_campaign(
         raise InputError("--name", f"'{name}' may hold only letters, digits, '_', '.' and '-' (it names the results "
                                    "file)")
     folder = Path("out") / name if out is None else out
-    data = {
+    data: dict[str, object] = {
         "name": name,
         "description": "written by `bt-grasp eval run --tree ... --scene ...`",
         "trees": [str(p.resolve()) for p in trees],
         "scenes": [str(p.resolve()) for p in scenes],
         "seeds": {"first": first_seed, "count": seeds},
     }
+    if max_ticks is not None:
+        data["max_ticks"] = max_ticks
     try:
         folder.mkdir(parents=True, exist_ok=True)
         path = folder / f"{name}.campaign.yaml"

@@ -11,6 +11,7 @@ from rich.console import Console
 from rich.markup import escape
 
 from bt_grasp.cli.plugin_option import leaves_option
+from bt_grasp.defaults import DEFAULT_MAX_TICKS
 
 if TYPE_CHECKING:  # the campaign package is imported when a campaign runs, not for --help
     from bt_grasp.campaign.runner import EpisodeError, Progress
@@ -79,6 +80,10 @@ def run(
     ),
     seeds: int = typer.Option(10, "--seeds", min=1, help="Without a campaign file: seeded episodes per tree x scene."),
     first_seed: int = typer.Option(0, "--first-seed", min=0, help="Without a campaign file: the first seed."),
+    max_ticks: int = typer.Option(
+        DEFAULT_MAX_TICKS, "--max-ticks", min=1,
+        help="Without a campaign file: each episode's tick limit (100 a simulated second).",
+    ),
     name: str | None = typer.Option(
         None, "--name", help="Without a campaign file: the campaign's name (default: TREE-SCENE)."
     ),
@@ -117,9 +122,11 @@ def run(
                                          "--tree trees/pick.xml --scene scenes/tabletop.yaml --seeds 50`)")
         from bt_grasp.campaign.spec import write_options_campaign
 
-        campaign_file = write_options_campaign(trees, scenes, seeds, first_seed, name, out)
+        campaign_file = write_options_campaign(trees, scenes, seeds, first_seed, name, out, max_ticks=max_ticks)
     else:
         given = [flag for flag, value in (("--tree", trees), ("--scene", scenes), ("--name", name)) if value]
+        if max_ticks != DEFAULT_MAX_TICKS:
+            given.append("--max-ticks")
         if given:
             raise InputError(given[0], f"does not go with a campaign file; {campaign_file} already names the trees, "
                                        "scenes and seeds")
