@@ -135,9 +135,11 @@ def detection_cloud(det: results.Detection, spacing_m: float = 0.005,
     when the detection carries them (``points_base_m``, normals estimated by :func:`estimate_normals`, turned
     towards ``viewpoint_base_m`` when given, then thinned to one per ``spacing_m`` voxel: a camera's ~1 mm
     sampling would only slow the search). With a viewpoint, the walls of the seen footprint
-    (:func:`extruded_footprint`) complete what the fitted convex shape cannot (a T's stem), and then every
-    completed point the camera would have seen but did not is dropped (:func:`seen_through`): the fitted shape
-    of a T, an L, a bowl or a mug covers air the fingers would close on, and so does a wall under a bowl's rim."""
+    (:func:`extruded_footprint`) complete what the fitted convex shape cannot (a T's stem; only walls farther
+    than ``spacing_m`` from the fitted points kept are added: elsewhere a wall stands up to half a cell outside
+    the fitted shape and would only widen the object), and every completed point the camera would have seen but
+    did not is dropped (:func:`seen_through`): the fitted shape of a T, an L, a bowl or a mug covers air the
+    fingers would close on, and so does a wall under a bowl's rim."""
     fitted = fitted_surface(det, spacing_m)
     points = det.points_base_m
     if points is None or len(points) < 10:
@@ -147,11 +149,23 @@ def detection_cloud(det: results.Detection, spacing_m: float = 0.005,
     keep = voxel_indices(pts, spacing_m)
     fitted_pts, fitted_nrm = fitted.points_base_m, fitted.normals_base
     if viewpoint_base_m is not None:
+        from scipy.spatial import cKDTree
+
+        seen = pts[voxel_indices(pts, 0.003)]
+        real = ~seen_through(fitted_pts, seen, viewpoint_base_m)
+        fitted_pts, fitted_nrm = fitted_pts[real], fitted_nrm[real]
         walls = extruded_footprint(pts, det.table_z_m, spacing_m=spacing_m)
-        fitted_pts = np.vstack([fitted_pts, walls.points_base_m])
-        fitted_nrm = np.vstack([fitted_nrm, walls.normals_base])
-        air = seen_through(fitted_pts, pts[voxel_indices(pts, 0.003)], viewpoint_base_m)
-        fitted_pts, fitted_nrm = fitted_pts[~air], fitted_nrm[~air]
+        wall_pts, wall_nrm = walls.points_base_m, walls.normals_base
+        if len(wall_pts):
+            # a wall only where the fitted shape is not: the outline's walls stand up to half a cell outside the
+            # true surface, so where the fitted shape already is (all round a convex footprint) they would only
+            # widen the object (a standing bottle's antipodal pair ended on them, 4 mm wider and tilted)
+            if len(fitted_pts):
+                near = cKDTree(fitted_pts).query(wall_pts, k=1, distance_upper_bound=spacing_m)[0] <= spacing_m
+                wall_pts, wall_nrm = wall_pts[~near], wall_nrm[~near]
+            real = ~seen_through(wall_pts, seen, viewpoint_base_m)
+            fitted_pts = np.vstack([fitted_pts, wall_pts[real]])
+            fitted_nrm = np.vstack([fitted_nrm, wall_nrm[real]])
     return ObjectCloud(np.vstack([fitted_pts, pts[keep]]), np.vstack([fitted_nrm, normals[keep]]))
 
 
