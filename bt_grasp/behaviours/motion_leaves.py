@@ -138,6 +138,20 @@ def retreat_after_release(T_release: NDArray[np.float64], distance_m: float,
     return [("retreat", back_along_approach(distance_m)), ("rise", straight_up(object_height_m))]
 
 
+def first_that_plans(*paths: PathFn) -> PathFn:
+    """The first of ``paths`` that gives a joint path from the measured configuration; else the last's failure."""
+
+    def compute(q: NDArray[np.float64]) -> NDArray[np.float64] | PathFailure:
+        outcome: NDArray[np.float64] | PathFailure = PathFailure(FailureReason.PLAN_FAILED, "no path to try")
+        for path in paths:
+            outcome = path(q)
+            if not isinstance(outcome, PathFailure):
+                return outcome
+        return outcome
+
+    return compute
+
+
 def cartesian_fn(leaf: RobotLeaf, T_goal_fn: PoseFn, scene: PlanningScene) -> PathFn:
     """A straight tool line from the current pose to ``T_goal_fn(T_now)``."""
 
@@ -368,26 +382,50 @@ def planned_path_fn(plan: GraspPlan, replan: PathFn) -> PathFn:
     None,
     name="Lift",
     ports=[
-        PortSpec("height", PortDirection.INPUT, float, DEFAULT_LIFT_HEIGHT_M, "how far to lift, m"),
+        PortSpec("height", PortDirection.INPUT, float, DEFAULT_LIFT_HEIGHT_M,
+                 "how far to lift, m: the tool, or with target the object's centre"),
         PortSpec("grasp", PortDirection.INPUT, object, "{grasp}",
                  "the grasp holding the object (from PlanGrasp): its width seen says what an empty grip is"),
+        PortSpec("target", PortDirection.INPUT, object, "",
+                 "the object held, as perceived (from Perceive): when given, its centre rises height, the tool "
+                 "further by how far the object can hang below the grip (bt_grasp.behaviours.hang)"),
     ],
     needs_robot=True,
 )
 class Lift(_MovingLeaf):
     """Lift straight up; FAILURE (SLIPPED) when the fingers lose the object on the way: their gap falls under
     :func:`~bt_grasp.behaviours.gripper.empty_below_m` of the grasp's width seen (a thin plate is held at
-    ~4 mm), as Grasp judges it."""
+    ~4 mm), as Grasp judges it.
+
+    Without ``target`` the tool rises ``height``. With it (and a grasp on the blackboard) the object is what
+    rises ``height``: the tool rises further by the most the object's perceived centre can sink by turning about
+    the planned grip (:func:`~bt_grasp.behaviours.hang.hang_allowance_m`: 0 for a grasp through the centre or
+    above it, the lever's length for a centre level with the grip, as a bowl held by its rim). When that higher
+    line is out of reach or blocked, the tool rises ``height`` alone."""
 
     def segments(self) -> list[Segment] | Status:
-        self._empty_below = empty_below_m(planned_width_m(self.input("grasp")))
+        from bt_grasp.behaviours.hang import lift_rise_m
+
+        grasp = self.input("grasp")
+        self._empty_below = empty_below_m(planned_width_m(grasp))
         height = self.input_float("height")
         if not 0.0 < height < 0.6:
             return self.failed(FailureReason.BAD_INPUT, f"lift height {height} m is outside (0, 0.6)")
-        self.feedback_message = f"lifting {height * 100:.0f} cm"
+        target = self.input_detection("target")
+        T_grasp = getattr(grasp, "T_base_tcp_grasp", None)
+        grip = None if T_grasp is None else tuple(float(v) for v in np.asarray(T_grasp, dtype=float)[:3, 3])
+        rise = lift_rise_m(height, grip, None if target is None else target.centroid_base_m)
         from bt_grasp.motion.planning_scene import PlanningScene
 
-        return [Segment("lift", cartesian_fn(self, straight_up(height), PlanningScene.from_scene(self.cell.scene)))]
+        scene = PlanningScene.from_scene(self.cell.scene)
+        if rise <= height:
+            self.feedback_message = f"lifting {height * 100:.0f} cm"
+            return [Segment("lift", cartesian_fn(self, straight_up(height), scene))]
+        self.cell.media.log("INFO", self.name,
+                            f"lifting the object {height * 100:.1f} cm: the tool {rise * 100:.1f} cm (held off its "
+                            f"centre, it may hang up to {(rise - height) * 100:.1f} cm lower from the grip)")
+        return [Segment("lift", first_that_plans(cartesian_fn(self, straight_up(rise), scene),
+                                                 cartesian_fn(self, straight_up(height), scene)))]
 
     def check_during(self) -> Status | None:
         width = self.cell.robot.gripper_width_m()
