@@ -244,6 +244,7 @@ class PlanGrasp(RobotLeaf):
         self._candidates: list[GraspCandidate] | None = None
         self._next = 0
         self._last = PathFailure(FailureReason.PLAN_FAILED, "no candidate")
+        self._extended = False
 
     def update(self) -> Status:
         if self._candidates is None:
@@ -251,7 +252,7 @@ class PlanGrasp(RobotLeaf):
             if early is not None:
                 return early
         assert self._candidates is not None
-        if self._next < len(self._candidates):
+        if self._next < len(self._candidates) or self._extend():
             rank = self._next  # counted after the skipped ones, as the feedback always did
             self._next += 1
             plan = self._try(rank, self._candidates[self._next - 1])
@@ -259,7 +260,7 @@ class PlanGrasp(RobotLeaf):
                 self.ports.set("grasp", plan)
                 self.feedback_message = f"candidate {rank} of {self._total}: {plan.candidate.reason}"
                 return Status.SUCCESS
-            if self._next < len(self._candidates):
+            if self._next < len(self._candidates) or self._extend():
                 self.feedback_message = f"candidate {rank}: {self._last.sentence}"
                 return Status.RUNNING
         # a planner failure other than IK counts as PLAN_FAILED here, as before the typed seams
@@ -291,11 +292,36 @@ class PlanGrasp(RobotLeaf):
             return self.failed(FailureReason.NOTHING_TO_GRASP, f"{result.status.value}: {result.message}")
         self.cell.media.grasps(result.candidates)
         self._total = len(result.candidates)
+        self._ranked = result.candidates
+        self._viewpoint, self._fixtures = viewpoint, fixtures
         skip = self.input_int("skip") if self.input("skip") is not None else 0
+        self._skip = skip
         self._candidates = list(result.candidates[skip:])
         self._scene = planning_scene(self, target, self._objects)
         self._descent_scene = planning_scene(self, target, self._objects, allow_target=True)
         return None
+
+    def _extend(self) -> bool:
+        """Once every ranked candidate failed: add the grasps sampled from the target's cloud that are not
+        near-same as one of them (:func:`~bt_grasp.perception.antipodal.sampled_grasps`; an object ranked by its
+        footprint alone got none), the skip left over applied to them. Whether any was added."""
+        if self._extended:
+            return False
+        self._extended = True
+        from bt_grasp.perception.antipodal import AntipodalSettings, near_same, sampled_grasps
+
+        assert self._candidates is not None
+        settings = AntipodalSettings(pregrasp_offset_m=self.cell.grasp_settings.pregrasp_offset_m)
+        more = sampled_grasps(self._target, self._objects, settings, reachable=self._reachable,
+                              fixtures=self._fixtures, viewpoint_base_m=self._viewpoint)
+        new = [c for c in more if not any(near_same(c, r) for r in self._ranked)]
+        self._total += len(new)  # every candidate ranked, the skipped ones too (as the first ranking counts)
+        new = new[max(0, self._skip - len(self._ranked)):]
+        if not new:
+            return False
+        self.cell.media.grasps(tuple(new))
+        self._candidates.extend(new)
+        return True
 
     def _reachable(self, T_grasp: NDArray[np.float64], T_pregrasp: NDArray[np.float64]) -> bool:
         """Both poses have an IK solution from the arm's configuration (how sampled candidates are kept)."""
@@ -398,10 +424,10 @@ class Lift(_MovingLeaf):
     ~4 mm), as Grasp judges it.
 
     Without ``target`` the tool rises ``height``. With it (and a grasp on the blackboard) the object is what
-    rises ``height``: the tool rises further by the most the object's perceived centre can sink by turning about
-    the planned grip (:func:`~bt_grasp.behaviours.hang.hang_allowance_m`: 0 for a grasp through the centre or
-    above it, the lever's length for a centre level with the grip, as a bowl held by its rim). When that higher
-    line is out of reach or blocked, the tool rises ``height`` alone."""
+    rises ``height``: the tool rises further by how far the object's perceived centre may sink by turning about
+    where the pads hold it (:func:`~bt_grasp.behaviours.hang.lift_rise_m`: 0 for a grasp through the centre or
+    above it, about the lever's length for a centre level with the grip, as a bowl held by its rim). When that
+    higher line is out of reach or blocked, the tool rises ``height`` alone."""
 
     def segments(self) -> list[Segment] | Status:
         from bt_grasp.behaviours.hang import lift_rise_m
@@ -413,8 +439,8 @@ class Lift(_MovingLeaf):
             return self.failed(FailureReason.BAD_INPUT, f"lift height {height} m is outside (0, 0.6)")
         target = self.input_detection("target")
         T_grasp = getattr(grasp, "T_base_tcp_grasp", None)
-        grip = None if T_grasp is None else tuple(float(v) for v in np.asarray(T_grasp, dtype=float)[:3, 3])
-        rise = lift_rise_m(height, grip, None if target is None else target.centroid_base_m)
+        box = None if target is None else (target.centroid_base_m, target.size_m, target.yaw_rad)
+        rise = lift_rise_m(height, None if T_grasp is None else np.asarray(T_grasp, dtype=float), box)
         from bt_grasp.motion.planning_scene import PlanningScene
 
         scene = PlanningScene.from_scene(self.cell.scene)

@@ -1,6 +1,7 @@
-"""How far a held object can hang below its grip (``hang_allowance_m``): what Lift adds for the object to rise
-its height. Numbers worked by hand first: the object turns about the grip point g, its centre c stays |c - g|
-from g, so at worst it hangs straight below g, (c_z - g_z) + |c - g| lower than it started (relative to g)."""
+"""How far a held object may hang below its grip (``bt_grasp.behaviours.hang``): what Lift adds for the object to
+rise its height. Numbers worked by hand first: the object is held at p, the middle of the stretch of the pads'
+length (35 mm behind the tcp to the tips 20 mm ahead) its box fills, on the closing line; turning about p, its
+centre c can end straight below p, i.e. (c_z - p_z) + |c - p| lower than it started relative to the tool."""
 
 from __future__ import annotations
 
@@ -9,7 +10,20 @@ import math
 import numpy as np
 import pytest
 
-from bt_grasp.behaviours.hang import MAX_HANG_M, hang_allowance_m, lift_rise_m
+from bt_grasp.behaviours.hang import (
+    MAX_HANG_M,
+    box_corners_base_m,
+    hang_allowance_m,
+    held_point_base_m,
+    lift_rise_m,
+)
+from bt_grasp.geometry import make_T
+
+DOWN = np.diag([1.0, -1.0, -1.0])  # tcp z (the approach) straight down, tcp y (closing) along base -y
+
+
+def _top_down(x: float, y: float, z: float) -> np.ndarray:
+    return make_T(DOWN, [x, y, z])
 
 
 def test_a_grip_through_the_centre_adds_nothing() -> None:
@@ -17,39 +31,50 @@ def test_a_grip_through_the_centre_adds_nothing() -> None:
 
 
 def test_a_centre_straight_below_the_grip_already_hangs_as_low_as_it_can() -> None:
-    # a standing bottle held near its top: its centre is 6 cm under the grip, it cannot fall further
+    # a standing bottle held near its top: its centre is 6 cm under the grip, it cannot sink further
     assert hang_allowance_m((0.5, 0.0, 0.15), (0.5, 0.0, 0.09)) == pytest.approx(0.0, abs=1e-12)
 
 
-def test_a_centre_level_with_the_grip_can_fall_its_whole_lever() -> None:
+def test_a_centre_level_with_the_grip_can_sink_its_whole_lever() -> None:
     # a pan by its handle, its centre 8 cm along the handle at the grip's height
     assert hang_allowance_m((0.5, 0.0, 0.03), (0.42, 0.0, 0.03)) == pytest.approx(0.08)
 
 
-def test_a_bowl_held_by_its_rim() -> None:
-    # the household bowl: grip 62.8 mm out from its axis, 36.8 mm up; its centre 27.5 mm up on the axis
-    grip, centre = np.array([0.0628, 0.0, 0.0368]), np.array([0.0, 0.0, 0.0275])
-    expected = math.hypot(0.0628, 0.0093) - 0.0093
-    assert hang_allowance_m(grip, centre) == pytest.approx(expected)
-    assert 0.053 < expected < 0.055
-
-
-def test_a_centre_above_the_grip_can_fall_more_than_its_lever() -> None:
+def test_a_centre_above_the_grip_can_sink_more_than_its_lever() -> None:
     # held by its bottom edge, the centre 3 cm up and 4 cm across: it can swing to 5 cm below the grip
     assert hang_allowance_m((0.0, 0.0, 0.0), (0.04, 0.0, 0.03)) == pytest.approx(0.08)
 
 
-def test_the_allowance_is_capped() -> None:
+def test_the_allowance_is_capped_and_needs_points() -> None:
     assert hang_allowance_m((0.0, 0.0, 0.0), (0.3, 0.0, 0.0)) == MAX_HANG_M
+    assert hang_allowance_m((0.0, 0.0, 0.0), (math.nan, 0.0, 0.0)) == 0.0
+    assert hang_allowance_m((0.0, math.inf, 0.0), (0.0, 0.0, 0.0)) == 0.0
 
 
-def test_the_lift_adds_the_allowance_when_the_object_and_its_grasp_are_known() -> None:
-    assert lift_rise_m(0.15, None, None) == 0.15
-    assert lift_rise_m(0.15, (0.0, 0.0, 0.0), None) == 0.15
-    assert lift_rise_m(0.15, None, (0.1, 0.0, 0.0)) == 0.15
-    assert lift_rise_m(0.15, (0.0, 0.0, 0.03), (0.05, 0.0, 0.03)) == pytest.approx(0.20)
+def test_a_block_filling_the_pads_is_held_at_the_tcp() -> None:
+    # a 4 cm high block, the tcp at its middle: it fills the pads from 2 cm above to 2 cm below (the tips)
+    corners = box_corners_base_m((0.5, 0.0, 0.02), (0.05, 0.05, 0.04), 0.3)
+    assert np.allclose(held_point_base_m(_top_down(0.5, 0.0, 0.02), corners), (0.5, 0.0, 0.02))
 
 
-@pytest.mark.parametrize("bad", [(math.nan, 0.0, 0.0), (0.0, math.inf, 0.0)])
-def test_a_centre_that_is_not_a_point_adds_nothing(bad: tuple[float, float, float]) -> None:
-    assert hang_allowance_m((0.0, 0.0, 0.0), bad) == 0.0
+def test_a_low_object_is_held_between_its_top_and_the_finger_tips() -> None:
+    # a pen 12 mm high, the tcp 25 mm up, the tips 5 mm up: held from its top (12 mm) to the tips, at 8.5 mm
+    corners = box_corners_base_m((0.4, 0.1, 0.006), (0.146, 0.012, 0.012), 0.0)
+    assert np.allclose(held_point_base_m(_top_down(0.43, 0.1, 0.025), corners), (0.43, 0.1, 0.0085))
+
+
+def test_a_bowl_held_by_its_rim() -> None:
+    # the household bowl (132 mm across, 55 mm high, centre 27.5 mm up on its axis), the tcp 62.8 mm out and
+    # 36.8 mm up: it fills the pads from its rim (18.2 mm above the tcp) to the tips (20 mm below): held at
+    # 35.9 mm; its centre 62.8 mm across and 8.4 mm lower can sink 63.36 - 8.4 = 54.96 mm
+    box = ((0.0, 0.0, 0.0275), (0.132, 0.132, 0.055), 0.0)
+    held = held_point_base_m(_top_down(0.0628, 0.0, 0.0368), box_corners_base_m(*box))
+    assert np.allclose(held, (0.0628, 0.0, 0.0359))
+    assert hang_allowance_m(held, box[0]) == pytest.approx(math.hypot(0.0628, 0.0084) - 0.0084)
+    assert lift_rise_m(0.15, _top_down(0.0628, 0.0, 0.0368), box) == pytest.approx(0.15 + 0.05496, abs=1e-5)
+
+
+def test_without_a_grasp_or_an_object_the_lift_is_the_height() -> None:
+    box = ((0.0, 0.0, 0.0275), (0.132, 0.132, 0.055), 0.0)
+    assert lift_rise_m(0.15, None, box) == 0.15
+    assert lift_rise_m(0.15, _top_down(0.0628, 0.0, 0.0368), None) == 0.15

@@ -2,8 +2,10 @@
 
 Stand-ins, no simulator (the robot follows joint targets at once; kinematics and Cartesian lines are real). The
 grasp on the blackboard grips at the tool's position; the perceived object's centre is put beside or below it.
-Expected rises worked by hand from ``bt_grasp.behaviours.hang``: a centre 5 cm beside the grip at its height can
-sink 5 cm by turning about the grip, so the tool rises 15 + 5 cm; a centre under the grip cannot sink, so 15 cm.
+The object's box is 4 cm high, centred on its centre: held level with the tool it fills the pads from 2 cm above
+the tcp to the finger tips 2 cm below, so it is held at the tcp. Expected rises worked by hand from
+``bt_grasp.behaviours.hang``: a centre 5 cm beside the grip at its height can sink 5 cm by turning about the grip,
+so the tool rises 15 + 5 cm; a centre straight under the grip cannot sink, so 15 cm.
 """
 
 from __future__ import annotations
@@ -32,7 +34,7 @@ class _Grasp:
 
 def _object_at(centre: np.ndarray) -> Detection:
     return Detection("object", (0, 0, 1, 1), (float(centre[0]), float(centre[1]), float(centre[2])),
-                     (0.05, 0.05, 0.05), 0.0, 100, 1.0)
+                     (0.05, 0.05, 0.04), 0.0, 100, 1.0)
 
 
 def _lift(xml: str, centre_offset_m: tuple[float, float, float] | None) -> tuple[list[str], float]:
@@ -63,8 +65,10 @@ WITH_TARGET = '<Lift height="0.15" target="{target}"/>'
 
 @pytest.mark.parametrize(("offset", "rise"), [
     ((0.05, 0.0, 0.0), 0.20),  # level with the grip, 5 cm aside: it can sink 5 cm
-    ((0.0, 0.03, 0.04), 0.15 + 0.05 + 0.04),  # 3 cm aside, 4 cm above: it can swing to 5 cm below the grip
-    ((0.0, 0.0, -0.04), 0.15),  # straight below the grip: it hangs as low as it can already
+    ((0.0, 0.03, 0.0), 0.18),  # 3 cm aside: 3 cm
+    # 4 cm lower: it fills the pads from 2 cm below the tcp to the tips, held 2 cm below the tcp, its centre 2 cm
+    # under that: straight below where it is held, it cannot sink
+    ((0.0, 0.0, -0.04), 0.15),
     ((0.0, 0.0, 0.0), 0.15),  # gripped through its centre
 ])
 def test_the_tool_rises_the_height_plus_how_far_the_object_can_hang(offset: tuple[float, float, float],
