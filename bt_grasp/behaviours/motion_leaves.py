@@ -430,7 +430,7 @@ class Lift(_MovingLeaf):
     higher line is out of reach or blocked, the tool rises ``height`` alone."""
 
     def segments(self) -> list[Segment] | Status:
-        from bt_grasp.behaviours.hang import lift_rise_m
+        from bt_grasp.behaviours.hang import HeldObject, lift_rise_m
 
         grasp = self.input("grasp")
         self._empty_below = empty_below_m(planned_width_m(grasp))
@@ -439,8 +439,11 @@ class Lift(_MovingLeaf):
             return self.failed(FailureReason.BAD_INPUT, f"lift height {height} m is outside (0, 0.6)")
         target = self.input_detection("target")
         T_grasp = getattr(grasp, "T_base_tcp_grasp", None)
-        box = None if target is None else (target.centroid_base_m, target.size_m, target.yaw_rad)
-        rise = lift_rise_m(height, None if T_grasp is None else np.asarray(T_grasp, dtype=float), box)
+        held = None if target is None else HeldObject(
+            target.centroid_base_m, target.size_m, target.yaw_rad,
+            None if target.points_base_m is None else np.asarray(target.points_base_m, dtype=float),
+            planned_width_m(grasp) or 0.0)
+        rise = lift_rise_m(height, None if T_grasp is None else np.asarray(T_grasp, dtype=float), held)
         from bt_grasp.motion.planning_scene import PlanningScene
 
         scene = PlanningScene.from_scene(self.cell.scene)

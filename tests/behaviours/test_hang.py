@@ -12,6 +12,8 @@ import pytest
 
 from bt_grasp.behaviours.hang import (
     MAX_HANG_M,
+    HeldObject,
+    between_pads_base_m,
     box_corners_base_m,
     hang_allowance_m,
     held_point_base_m,
@@ -71,10 +73,35 @@ def test_a_bowl_held_by_its_rim() -> None:
     held = held_point_base_m(_top_down(0.0628, 0.0, 0.0368), box_corners_base_m(*box))
     assert np.allclose(held, (0.0628, 0.0, 0.0359))
     assert hang_allowance_m(held, box[0]) == pytest.approx(math.hypot(0.0628, 0.0084) - 0.0084)
-    assert lift_rise_m(0.15, _top_down(0.0628, 0.0, 0.0368), box) == pytest.approx(0.15 + 0.05496, abs=1e-5)
+    bowl = HeldObject((0.0, 0.0, 0.0275), (0.132, 0.132, 0.055), 0.0)  # no visible points: its box
+    assert lift_rise_m(0.15, _top_down(0.0628, 0.0, 0.0368), bowl) == pytest.approx(0.15 + 0.05496, abs=1e-5)
+
+
+def test_the_visible_points_between_the_pads_say_where_a_tilted_grasp_holds() -> None:
+    # the tool tilted 15 degrees outwards over a rim (approach down and away from the bowl's axis): along its
+    # approach the wide box's far top corners lie behind the tcp, but the material between the pads runs from
+    # the tcp to 20 mm ahead of it (the wall inside the pads): held 10 mm ahead of the tcp, not behind it
+    tilt = math.radians(15.0)
+    R = np.array([[math.cos(tilt), 0.0, math.sin(tilt)], [0.0, -1.0, 0.0], [math.sin(tilt), 0.0, -math.cos(tilt)]])
+    T = make_T(R, [0.06, 0.0, 0.055])
+    approach = T[:3, 2]
+    wall = np.array([T[:3, 3] + d * approach + y * T[:3, 1] for d in np.linspace(0.0, 0.02, 11)
+                     for y in (-0.004, 0.0, 0.004)])
+    far = np.array([[-0.06, 0.0, 0.055], [0.0, 0.06, 0.055]])  # the rim's other side: not between the pads
+    points = np.vstack([wall, far])
+    assert len(between_pads_base_m(T, points, 0.008)) == len(wall)
+    assert np.allclose(held_point_base_m(T, between_pads_base_m(T, points, 0.008)), T[:3, 3] + 0.01 * approach)
+    box = ((0.0, 0.0, 0.0275), (0.132, 0.132, 0.055), 0.0)
+    from_box = held_point_base_m(T, box_corners_base_m(*box))
+    assert float((from_box - T[:3, 3]) @ approach) < 0.0  # the box puts it behind the tcp
+    seen = HeldObject(*box, points_base_m=points, width_m=0.008)
+    expected = hang_allowance_m(T[:3, 3] + 0.01 * approach, box[0])
+    assert lift_rise_m(0.15, T, seen) == pytest.approx(0.15 + expected)
+    few = HeldObject(*box, points_base_m=wall[:9], width_m=0.008)  # under 10 points between the pads: the box
+    assert lift_rise_m(0.15, T, few) == pytest.approx(0.15 + hang_allowance_m(from_box, box[0]))
 
 
 def test_without_a_grasp_or_an_object_the_lift_is_the_height() -> None:
-    box = ((0.0, 0.0, 0.0275), (0.132, 0.132, 0.055), 0.0)
-    assert lift_rise_m(0.15, None, box) == 0.15
+    bowl = HeldObject((0.0, 0.0, 0.0275), (0.132, 0.132, 0.055), 0.0)
+    assert lift_rise_m(0.15, None, bowl) == 0.15
     assert lift_rise_m(0.15, _top_down(0.0628, 0.0, 0.0368), None) == 0.15
