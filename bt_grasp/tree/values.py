@@ -222,10 +222,11 @@ def cast_to(value: Any, kind: type) -> Any:
         return convert_text(value, kind)
     if kind is str:
         return to_text(value)
-    if not is_number(value):
+    if not is_number(value) or kind not in (bool, int, float):  # an application type takes only its own values
         if isinstance(value, kind):
             return value
-        raise TreeRuntimeError(f"[Any::convert]: no known safe conversion between [{type_name(value)}] and [{kind}]")
+        name = getattr(kind, "__name__", str(kind))
+        raise TreeRuntimeError(f"[Any::convert]: no known safe conversion between [{type_name(value)}] and [{name}]")
     if kind is bool:
         return to_bool(value)
     if kind is int:
