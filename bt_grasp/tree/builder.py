@@ -122,16 +122,16 @@ class TreeBuilder:
         resolved = resolve_node(decl, self.registry, self.document)
         spec, name, ports = resolved.spec, resolved.name, resolved.ports
         path = prefix + name + (f"::{uid}" if name == decl.type_id else "")
-        children = tuple(self._node(c, bb, prefix, instance, stack) for c in decl.children)
         replacement = substitute(self.rules, spec, decl.type_id, name, path)
         if replacement is not None:
             spec, ports = replacement, {}
-        for value in ports.values():
+        for value in ports.values():  # before the children's, as BT.CPP creates a parent before its children
             if value.key is not None:
                 try:
                     bb.declare(value.key, value.port.type)
                 except BlackboardTypeError as exc:
                     raise decl.error(f"{spec.name}: port '{value.port.name}': {exc}") from None
+        children = tuple(self._node(c, bb, prefix, instance, stack) for c in decl.children)
         ctx = self._context(
             decl,
             name=name,

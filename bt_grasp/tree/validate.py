@@ -6,6 +6,7 @@ or runs a node.
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass, field
 
 from bt_grasp.errors import TreeFileError, did_you_mean
@@ -16,6 +17,8 @@ from bt_grasp.tree.node import POST_CONDITIONS, PRE_CONDITIONS, Conditions
 from bt_grasp.tree.ports import PortValue, blackboard_key, convert_text
 from bt_grasp.tree.registry import NodeKind, NodeRegistry, NodeSpec, PortDirection, PortSpec
 from bt_grasp.tree.scripting import parse_script
+
+logger = logging.getLogger(__name__)
 
 CONDITION_ATTRIBUTES = frozenset(PRE_CONDITIONS + POST_CONDITIONS)
 SPECIAL_ATTRIBUTES = frozenset({"name", "_description", "_autoremap", "_uid", "_fullpath"})
@@ -136,15 +139,16 @@ def resolve_subtree(decl: NodeDecl, document: Document, spec: NodeSpec) -> Resol
     if model is not None:
         known = {p.name: p for p in model.ports}
         for key, _ in remaps:
-            if key not in known:
-                raise decl.error(
-                    f"SubTree {subtree_id} has no port '{key}' in its TreeNodesModel{did_you_mean(key, list(known))}"
+            if key not in known:  # BT.CPP remaps it all the same: worth a word, not a refusal
+                logger.warning(
+                    "%s:%d: SubTree %s remaps '%s', which its TreeNodesModel does not list%s",
+                    decl.source, decl.line, subtree_id, key, did_you_mean(key, list(known)),
                 )
         given = {k for k, _ in remaps}
         for port in model.ports:
             if port.name in given or autoremap:
                 continue
-            if port.default is None:
+            if not port.default:  # BT.CPP: an empty default="" is no default
                 raise decl.error(f"SubTree {subtree_id} needs the port '{port.name}' (its TreeNodesModel says so)")
             remaps.append((port.name, port.default))
     name = decl.name if decl.name is not None else subtree_id
