@@ -150,14 +150,19 @@ class PortAccessor:
         except TreeRuntimeError as exc:
             raise TreeRuntimeError(f"{self._owner}: port '{name}' (blackboard entry '{value.key}'): {exc}") from None
 
-    def set(self, name: str, value: Any) -> None:
-        """Write an output (or inout) port's blackboard entry."""
+    def set(self, name: str, value: Any) -> bool:
+        """Write an output (or inout) port's blackboard entry; True when written. An output port the tree does
+        not connect is left alone and False returned, as BT.CPP's ``setOutput`` returns an error value that
+        nodes are free to ignore (Nav2's leaves write ``error_code_id`` whether the tree reads it or not)."""
+        if name not in self._values and name in self._specs and self._specs[name].direction is PortDirection.OUTPUT:
+            return False
         port_value = self._value(name)
         if port_value.port.direction is PortDirection.INPUT:
             raise TreeRuntimeError(f"{self._owner}: port '{name}' is an input port; it cannot be written")
         if port_value.key is None:
             raise TreeRuntimeError(f"{self._owner}: port '{name}' is a literal, not a blackboard key")
         self._blackboard.set(port_value.key, value)
+        return True
 
     def names(self) -> tuple[str, ...]:
         return tuple(self._values)

@@ -108,6 +108,8 @@ def resolve_node(decl: NodeDecl, registry: NodeRegistry, document: Document) -> 
     for port in spec.ports:
         if port.name in ports:
             continue
+        if port.required and port.direction is PortDirection.OUTPUT:
+            continue  # BT.CPP: an output may stay unconnected (writing it then does nothing)
         if port.required:
             raise decl.error(f"{spec.name} needs the port '{port.name}' ({port.description or port.type.__name__})")
         ports[port.name] = PortValue.from_default(port)
