@@ -150,8 +150,16 @@ class TreeBuilder:
             node = spec.factory(ctx)
         except (ScriptSyntaxError, PortValueError) as exc:
             raise decl.error(f"{spec.name}: {exc}") from None
+        except Exception as exc:  # a plugin's node that cannot be built is the plugin's problem, named in one line
+            origin = self.registry.origins.get(spec.name)
+            if origin is None:
+                raise
+            raise decl.error(f"{spec.name} (from {origin}) could not be built: {type(exc).__name__}: {exc}") from None
         if not isinstance(node, BtNode):
-            raise TypeError(f"the factory of {spec.name} returned {type(node).__name__}, not a bt_grasp Leaf/BtNode")
+            problem = f"the factory of {spec.name} returned {type(node).__name__}, not a bt_grasp Leaf/BtNode"
+            if spec.name in self.registry.origins:
+                raise decl.error(problem)
+            raise TypeError(problem)
         return node
 
     def _subtree(

@@ -158,38 +158,41 @@ def resolve_subtree(decl: NodeDecl, document: Document, spec: NodeSpec) -> Resol
 
 
 def check_models(document: Document, registry: NodeRegistry) -> None:
-    """TreeNodesModel entries of registered nodes must agree with the registry."""
+    """TreeNodesModel entries of registered nodes should agree with the registry. BT.CPP reads only the
+    ``<SubTree>`` models and ignores the others, so a disagreement (a stand-in that declares fewer ports than
+    the other project's real node, or another type) is logged as a warning naming the file and line, and the
+    tree loads as BT.CPP loads it."""
     for model in document.models:
         if model.kind == "SubTree":
             continue
         spec = registry.get(model.node_id)
         if spec is None:
             continue  # Groot2 describes nodes this tree may not use; an unknown node in a tree is caught there
-        _check_model(model, spec)
+        for line, problem in _model_problems(model, spec):
+            logger.warning("%s:%d: TreeNodesModel: %s (BT.CPP ignores it)", model.source, line, problem)
 
 
-def _check_model(model: ModelDecl, spec: NodeSpec) -> None:
-    def error(problem: str, line: int) -> TreeFileError:
-        return TreeFileError(model.source, f"TreeNodesModel: {problem}", where=line or model.line or None)
-
+def _model_problems(model: ModelDecl, spec: NodeSpec) -> list[tuple[int, str]]:
+    """Where a node's model and its registration disagree: (line, problem) pairs."""
     if spec.kind.value != model.kind:
-        raise error(f"{spec.name} is registered as {article(spec.kind.value)}, the model says {model.kind}", model.line)
+        return [(model.line, f"{spec.name} is registered as {article(spec.kind.value)}, the model says {model.kind}")]
+    problems = []
     for mport in model.ports:
         port = spec.port(mport.name)
+        line = mport.line or model.line
         if port is None:
             known = ", ".join(p.name for p in spec.ports) or "none"
-            raise error(f"{spec.name} has no port '{mport.name}' (its ports: {known})", mport.line)
+            problems.append((line, f"{spec.name} has no port '{mport.name}' (its ports: {known})"))
+            continue
         if port.direction.value != mport.direction:
-            raise error(
-                f"port '{mport.name}' of {spec.name} is {port.direction.value}, the model says {mport.direction}",
-                mport.line,
-            )
+            says = f"the model says {mport.direction}"
+            problems.append((line, f"port '{mport.name}' of {spec.name} is {port.direction.value}, {says}"))
+            continue
         wanted = _MODEL_TYPES.get((mport.type_name or "").strip())
         if wanted is not None and port.type is not object and wanted is not port.type:
-            raise error(
-                f"port '{mport.name}' of {spec.name} has type {port.type.__name__}, the model says {mport.type_name}",
-                mport.line,
-            )
+            says = f"the model says {mport.type_name}"
+            problems.append((line, f"port '{mport.name}' of {spec.name} has type {port.type.__name__}, {says}"))
+    return problems
 
 
 #: the ports of built-in nodes that hold a script

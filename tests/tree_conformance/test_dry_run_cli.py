@@ -36,8 +36,10 @@ def _expected_blackboard(recorded: dict[str, Any]) -> dict[str, Any]:
 
 
 def _blackboard(printed: dict[str, Any]) -> dict[str, Any]:
-    return {k: (v if not (isinstance(v, str) and v.startswith("<") and " object at " in v) else "<object>")
-            for k, v in printed.items()}
+    def plain(value: Any) -> Any:
+        return "<object>" if isinstance(value, str) and value.startswith("<") and " object at " in value else value
+
+    return {k: plain(v) for k, v in printed.items()}
 
 
 def test_the_user_path_covers_the_foreign_trees() -> None:
