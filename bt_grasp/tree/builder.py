@@ -122,16 +122,16 @@ class TreeBuilder:
         resolved = resolve_node(decl, self.registry, self.document)
         spec, name, ports = resolved.spec, resolved.name, resolved.ports
         path = prefix + name + (f"::{uid}" if name == decl.type_id else "")
-        children = tuple(self._node(c, bb, prefix, instance, stack) for c in decl.children)
         replacement = substitute(self.rules, spec, decl.type_id, name, path)
         if replacement is not None:
             spec, ports = replacement, {}
-        for value in ports.values():
+        for value in ports.values():  # before the children's, as BT.CPP creates a parent before its children
             if value.key is not None:
                 try:
                     bb.declare(value.key, value.port.type)
                 except BlackboardTypeError as exc:
                     raise decl.error(f"{spec.name}: port '{value.port.name}': {exc}") from None
+        children = tuple(self._node(c, bb, prefix, instance, stack) for c in decl.children)
         ctx = self._context(
             decl,
             name=name,
@@ -150,8 +150,16 @@ class TreeBuilder:
             node = spec.factory(ctx)
         except (ScriptSyntaxError, PortValueError) as exc:
             raise decl.error(f"{spec.name}: {exc}") from None
+        except Exception as exc:  # a plugin's node that cannot be built is the plugin's problem, named in one line
+            origin = self.registry.origins.get(spec.name)
+            if origin is None:
+                raise
+            raise decl.error(f"{spec.name} (from {origin}) could not be built: {type(exc).__name__}: {exc}") from None
         if not isinstance(node, BtNode):
-            raise TypeError(f"the factory of {spec.name} returned {type(node).__name__}, not a bt_grasp Leaf/BtNode")
+            problem = f"the factory of {spec.name} returned {type(node).__name__}, not a bt_grasp Leaf/BtNode"
+            if spec.name in self.registry.origins:
+                raise decl.error(problem)
+            raise TypeError(problem)
         return node
 
     def _subtree(
