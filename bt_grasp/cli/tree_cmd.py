@@ -6,7 +6,6 @@ Every problem with a file or argument prints one line on stderr (``bt-grasp: err
 from __future__ import annotations
 
 import json
-import logging
 from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -50,8 +49,11 @@ def _fail(exc: InputError) -> typer.Exit:
     return typer.Exit(exc.exit_code)
 
 
-def _quiet_library_logs() -> None:
-    logging.getLogger("bt_grasp.tree").setLevel(logging.ERROR)
+def _show_tree_warnings() -> None:
+    """The tree package's warnings as one line each (``bt-grasp: warning: ...``), nothing below them."""
+    from bt_grasp.cli.tree_warnings import show_tree_warnings
+
+    show_tree_warnings()
 
 
 @tree_app.command("validate")
@@ -61,7 +63,7 @@ def validate_cmd(
     """Check a tree file completely (nodes, ports, scripts, includes, subtrees) without running it."""
     from bt_grasp.tree.loader import load_tree
 
-    _quiet_library_logs()
+    _show_tree_warnings()
     try:
         tree = load_tree(file, tree_registry(leaves))
         from bt_grasp.behaviours.objects import check_detector_classes
@@ -95,7 +97,7 @@ def show_cmd(
     from bt_grasp.tree import render
     from bt_grasp.tree.loader import load_tree
 
-    _quiet_library_logs()
+    _show_tree_warnings()
     try:
         if fmt in ("png", "svg") and out is None:
             raise InputError("--out", f"--format {fmt} needs --out FILE")
@@ -132,7 +134,7 @@ def convert_cmd(
     are only loaded and checked). An existing OUT is kept unless --force."""
     from bt_grasp.tree.formats.convert import convert_file, format_of
 
-    _quiet_library_logs()
+    _show_tree_warnings()
     try:
         format_of(target)
         if target.exists() and source.exists() and target.resolve() == source.resolve():
@@ -188,7 +190,7 @@ def run_cmd(
     from bt_grasp.tree.node import BtStatus
     from bt_grasp.tree.values import display
 
-    _quiet_library_logs()
+    _show_tree_warnings()
     try:
         if not dry:
             raise InputError("--dry", "only dry runs exist here; `bt-grasp run` runs trees with the robot")

@@ -19,11 +19,12 @@ _FALSE = ("false", "False", "FALSE", "0")
 _TYPE_NAMES = {str: "text", int: "an integer", float: "a number", bool: "true or false", object: "any value"}
 
 
-def convert_text(text: str, port: PortSpec) -> Any:
+def convert_text(text: str, port: PortSpec, where: str = "") -> Any:
     """Convert a literal as written in a tree file to the port's type (BT.CPP ``convertFromString``: numbers
     are read from the start of the text, as ``std::from_chars`` does, with no leading space or ``+``; what
     follows a number is ignored, with a logged warning when it is more than spaces; a bool is ``true``,
-    ``false``, ``1``, ``0`` or their ``True``/``TRUE`` forms exactly)."""
+    ``false``, ``1``, ``0`` or their ``True``/``TRUE`` forms exactly). ``where`` (``file:line``) starts the
+    warning's text."""
     kind = port.type
     value: Any
     if kind is str or kind is object:
@@ -47,7 +48,8 @@ def convert_text(text: str, port: PortSpec) -> Any:
         value, rest = found
         if rest.strip():
             logger.warning(
-                "port '%s': %r is read as %r, as BT.CPP reads it (%r is ignored)", port.name, text, value, rest
+                "%sport '%s': %r is read as %r, as BT.CPP reads it (%r is ignored)",
+                f"{where}: " if where else "", port.name, text, value, rest,
             )
     if port.choices and value not in port.choices:
         raise PortValueError(f"port '{port.name}' must be one of {', '.join(port.choices)}; got {text!r}")
@@ -75,7 +77,7 @@ class PortValue:
     key: str | None = None
 
     @staticmethod
-    def from_text(port: PortSpec, text: str) -> PortValue:
+    def from_text(port: PortSpec, text: str, where: str = "") -> PortValue:
         key = blackboard_key(text, port.name)
         if key is not None:
             if not key:
@@ -85,7 +87,7 @@ class PortValue:
             raise PortValueError(
                 f"output port '{port.name}' needs a blackboard key such as {{{port.name}}}, got {text!r}"
             )
-        return PortValue(port, literal=convert_text(text, port))
+        return PortValue(port, literal=convert_text(text, port, where))
 
     @staticmethod
     def from_default(port: PortSpec) -> PortValue:

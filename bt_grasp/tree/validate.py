@@ -99,7 +99,7 @@ def resolve_node(decl: NodeDecl, registry: NodeRegistry, document: Document) -> 
             hint = did_you_mean(key, known + sorted(CONDITION_ATTRIBUTES | SPECIAL_ATTRIBUTES))
             raise decl.error(f"unknown attribute '{key}' for {spec.name} ({listing}){hint}")
         try:
-            ports[key] = PortValue.from_text(port, value)
+            ports[key] = PortValue.from_text(port, value, f"{decl.source}:{decl.line}")
         except PortValueError as exc:
             raise decl.error(f"{spec.name}: {exc}") from None
         if port.reason and ports[key].key is None and registry.reason(str(ports[key].literal)) is None:
