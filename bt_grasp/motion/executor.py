@@ -93,7 +93,7 @@ class TrajectoryExecutor:
         now_ns = self.clock.now_ns()
         t = (now_ns - self._start_ns) * 1e-9
         opts = self.options
-        q_desired, _, _ = self.trajectory.sample(t)
+        q_desired, qd_desired, _ = self.trajectory.sample(t)
         q_measured = self.robot.joint_positions()
         error = float(np.max(np.abs(q_measured - q_desired)))
         self.max_tracking_error_rad = max(self.max_tracking_error_rad, error)
@@ -106,8 +106,7 @@ class TrajectoryExecutor:
         else:
             self._error_since_ns = None
         if t < self.trajectory.duration_s:
-            q, qd, _ = self.trajectory.sample(t)
-            self.robot.set_joint_targets(q, qd)
+            self.robot.set_joint_targets(q_desired, qd_desired)  # the sample for now, taken above
             return self.status
         goal = self.trajectory.q[-1]
         self.robot.set_joint_targets(goal, np.zeros(6))
