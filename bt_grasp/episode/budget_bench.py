@@ -11,7 +11,7 @@ runs with timers around the seams each stage passes through, installed for that 
 | planning | ``MotionPlanner.plan_to_pose/plan_to_joints/straight_line/checker`` |
 | leaves' own work | every leaf's ``initialise/update/terminate`` (trajectories, IK, grasp logic, executor) |
 | tree (py_trees) | ``LoadedTree.tick``: py_trees' traversal, ports, the blackboard |
-| status bookkeeping | the runner's ``node_records`` and the recorder's node differ |
+| status bookkeeping | the runner's ``tick_records`` and the recorder's node differ |
 | blackboard differ | ``LoadedTree.blackboard_values`` and the recorder's blackboard differ |
 | recording | every ``RunRecorder`` write and the log's extra frames (``LogExtras``) |
 | judge | ``Judge.observe`` after every tick (the benchmark's oracle, not the pipeline) |
@@ -101,7 +101,7 @@ def timed_seams(clock: StageClock) -> Iterator[Callable[[Any], None]]:
         *((MotionPlanner, name, "planning") for name in ("plan_to_pose", "plan_to_joints", "straight_line",
                                                           "checker")),
         (loader.LoadedTree, "tick", "tree (py_trees)"),
-        (runner, "node_records", "status bookkeeping"),
+        (runner, "tick_records", "status bookkeeping"),
         (jsonable.NodeDiffer, "diff", "status bookkeeping"),
         (loader.LoadedTree, "blackboard_values", "blackboard differ"),
         (jsonable.BlackboardDiffer, "diff", "blackboard differ"),
