@@ -65,14 +65,22 @@ _Yaml12Loader.add_implicit_resolver(
 def read_yaml(path: str | Path) -> tuple[Any, dict[KeyPath, int]]:
     """Parse a YAML file safely; returns the data and a map from key paths to line numbers."""
     path = Path(path)
-    data = read_user_file(path, error=ConfigError)
+    raw = read_user_file(path, error=ConfigError)
     try:
-        text = data.decode("utf-8")
+        text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise ConfigError(path, "is not UTF-8 text") from exc
-    try:
-        node = yaml.compose(text, Loader=_Yaml12Loader)
-        data = yaml.load(text, Loader=_Yaml12Loader)
+    lines: dict[KeyPath, int] = {}
+    data: Any = None
+    try:  # parsed once: what yaml.compose and yaml.load would each do, from one node graph
+        loader = _Yaml12Loader(text)
+        try:
+            node = loader.get_single_node()
+            if node is not None:
+                _line_map(node, (), lines)  # before constructing: merge keys (<<) flatten the node in place
+            data = loader.construct_document(node) if node is not None else None
+        finally:
+            loader.dispose()
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         line = mark.line + 1 if mark is not None else None
@@ -82,9 +90,6 @@ def read_yaml(path: str | Path) -> tuple[Any, dict[KeyPath, int]]:
         raise ConfigError(path, f"invalid YAML: {problem}", where=line) from exc
     except yaml.YAMLError as exc:
         raise ConfigError(path, f"invalid YAML: {exc}") from exc
-    lines: dict[KeyPath, int] = {}
-    if node is not None:
-        _line_map(node, (), lines)
     return data, lines
 
 
