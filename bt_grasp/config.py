@@ -14,6 +14,7 @@ from typing import Any, TypeVar
 import yaml
 from pydantic import BaseModel, ConfigDict, ValidationError
 
+from bt_grasp import bounded_yaml
 from bt_grasp.bounded_io import read_user_file
 from bt_grasp.errors import ConfigError, did_you_mean
 
@@ -70,9 +71,13 @@ def read_yaml(path: str | Path) -> tuple[Any, dict[KeyPath, int]]:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise ConfigError(path, "is not UTF-8 text") from exc
-    try:
-        node = yaml.compose(text, Loader=_Yaml12Loader)
-        data = yaml.load(text, Loader=_Yaml12Loader)
+
+    def refused(problem: str, line: int | None) -> ConfigError:
+        return ConfigError(path, f"invalid YAML: {problem}", where=line)
+
+    try:  # bounded: nesting depth, and the values its aliases expand to (bt_grasp.bounded_yaml)
+        node = bounded_yaml.compose(text, _Yaml12Loader, refused)
+        parsed = bounded_yaml.construct(node, _Yaml12Loader) if node is not None else None
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         line = mark.line + 1 if mark is not None else None
@@ -85,7 +90,7 @@ def read_yaml(path: str | Path) -> tuple[Any, dict[KeyPath, int]]:
     lines: dict[KeyPath, int] = {}
     if node is not None:
         _line_map(node, (), lines)
-    return data, lines
+    return parsed, lines
 
 
 def _nearest_line(path: KeyPath, lines: dict[KeyPath, int]) -> int | None:

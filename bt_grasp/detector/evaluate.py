@@ -30,7 +30,6 @@ from pathlib import Path
 
 import cv2
 import numpy as np
-import yaml
 from numpy.typing import NDArray
 
 from bt_grasp.detector.obb import DEFAULT_CONF, batch_probiou
@@ -247,10 +246,12 @@ def dataset_names(folder: Path) -> tuple[str, ...]:
     data = folder / "data.yaml"
     if not data.is_file():
         raise DatasetError(folder, "is not a dataset: it has no data.yaml (make one with `bt-grasp detector dataset`)")
+    from bt_grasp.config import read_yaml
+
     try:
-        doc = yaml.safe_load(data.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
-        raise DatasetError(data, f"cannot be read as YAML ({type(exc).__name__})") from None
+        doc, _ = read_yaml(data)  # bounded: size, nesting, aliases
+    except InputError as exc:
+        raise DatasetError(data, f"cannot be read: {exc.problem}") from None
     raw = doc.get("names") if isinstance(doc, dict) else None
     if isinstance(raw, list) and raw and all(isinstance(n, str) for n in raw):
         return tuple(raw)

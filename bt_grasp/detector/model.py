@@ -50,12 +50,12 @@ def _parse_names(raw: object, source: Path, where: str) -> tuple[str, ...]:
 
 
 def _read_card(path: Path) -> dict[str, Any]:
-    import yaml
+    from bt_grasp.config import read_yaml
 
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
-        raise ModelError(path, f"cannot be read as YAML ({type(exc).__name__})") from None
+        data, _ = read_yaml(path)  # bounded: size, nesting, aliases
+    except InputError as exc:
+        raise ModelError(path, f"cannot be read as a model card: {exc.problem}") from None
     if not isinstance(data, dict):
         raise ModelError(path, "is not a mapping with 'names'")
     return data

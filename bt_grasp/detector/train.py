@@ -95,8 +95,16 @@ def dataset_command(folder: Path) -> str | None:
     manifest = folder / "manifest.yaml"
     if not manifest.is_file():
         return None
-    doc = yaml.safe_load(manifest.read_text(encoding="utf-8"))
+    from bt_grasp.config import read_yaml
+
+    try:
+        doc, _ = read_yaml(manifest)  # bounded: size, nesting, aliases
+    except InputError:
+        return None
+    keys = ("scenes", "images", "seed", "mount", "min_pixels")
     if not isinstance(doc, dict) or doc.get("made_by") != "bt-grasp detector dataset":
+        return None
+    if not all(k in doc for k in keys) or not isinstance(doc["scenes"], list):
         return None
     return (f"bt-grasp detector dataset --scenes {' '.join(str(s) for s in doc['scenes'])} --images {doc['images']} "
             f"--out {folder} --seed {doc['seed']} --mount {doc['mount']} --min-pixels {doc['min_pixels']}")
