@@ -136,6 +136,10 @@ def run(
     if out is None:
         out = Path("out") / campaign.name
     log_dir = out / "logs"
+    from bt_grasp.output_files import check_output_folder
+
+    check_output_folder(out, "--out")
+    check_output_folder(log_dir, "--out")  # kept logs go in <out>/logs: never through a link elsewhere
     if ray is not None:
         from bt_grasp.campaign.ray_engine import RayEngine
 
@@ -190,12 +194,11 @@ def report(
 
 
 def _writable_file(out: Path, kind: str) -> None:
-    """``--out`` names a file to write, not a folder (a folder was a traceback: issue 24)."""
-    from bt_grasp.errors import InputError
+    """``--out`` names a file that can be written (``bt_grasp.output_files``), checked before any work: a folder
+    was a traceback (issue 24); a link, a FIFO or a device are refused too."""
+    from bt_grasp.output_files import check_output_file
 
-    if out.is_dir():
-        raise InputError("--out", f"'{out}' is a folder; give the {kind} file to write, e.g. "
-                                  f"{out / ('report.html' if kind == 'HTML' else 'results.parquet')}")
+    check_output_file(out, "--out", example="report.html" if kind == "HTML" else "results.parquet")
 
 
 def _cannot_write(out: Path, exc: OSError) -> Exception:

@@ -11,7 +11,6 @@ that names the first differing node statuses.
 from __future__ import annotations
 
 import json
-import shutil
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -100,9 +99,9 @@ def resimulate(log_path: Path, keep_log: Path | None = None, leaves: tuple[str, 
     with tempfile.TemporaryDirectory(prefix="bt_grasp_resim_") as tmp:
         report = _resimulate(log_path, Path(tmp), leaves)
         if keep_log is not None:
-            keep_log.parent.mkdir(parents=True, exist_ok=True)
-            shutil.copyfile(report.new_log, keep_log)
-            report.new_log = str(keep_log)
+            from bt_grasp.output_files import copy_output_file
+
+            report.new_log = str(copy_output_file(report.new_log, keep_log, "--resim-log", example="resim.mcap"))
         else:
             report.new_log = ""
     return report

@@ -198,6 +198,7 @@ def run(
     # only what every run needs here: a --resident run's client hands the request over and imports neither the
     # episode (the simulator's modules) nor the control package (issue 27)
     from bt_grasp.episode.request import EpisodeRequest, parse_assignments
+    from bt_grasp.output_files import check_output_file, write_output_file
 
     blackboard: dict[str, BlackboardValue] = {"color": color, "lift_height": lift_height}
     blackboard.update(parse_assignments(set_))
@@ -237,6 +238,8 @@ def run(
         raise InputError("--json", "an interactive run draws on the terminal; drop --json or --interactive")
     if interactive and resident:
         raise InputError("--interactive", "an interactive run cannot be --resident; drop one of the two")
+    if summary_json is not None:  # a path it cannot be written to is said before the run, not after it
+        check_output_file(summary_json, "--summary-json", example="summary.json")
     console = Console(stderr=True)
     if live is not None and not is_loopback(live_host):
         console.print(exposure_warning(live_host), highlight=False, markup=False)
@@ -269,8 +272,7 @@ def run(
                 highlight=False, markup=False, soft_wrap=True))
         summary = episode.run(on_tick=() if quiet else (live_progress(console),))
     if summary_json is not None:  # written first: nothing printed may stand between a run and its record
-        summary_json.parent.mkdir(parents=True, exist_ok=True)
-        summary_json.write_text(json.dumps(summary.to_json(), indent=2) + "\n")
+        write_output_file(summary_json, json.dumps(summary.to_json(), indent=2) + "\n", "--summary-json")
     if as_json:
         typer.echo(json.dumps(summary.to_json()))
     else:

@@ -146,7 +146,8 @@ class ModelCard:
         return "\n".join(lines) + "\n"
 
     def write(self, folder: Path) -> tuple[Path, Path]:
-        md, js = folder / CARD_MD, folder / CARD_JSON
-        md.write_text(self.to_markdown(), encoding="utf-8")
-        js.write_text(json.dumps(self.to_json(), indent=2) + "\n", encoding="utf-8")
+        from bt_grasp.output_files import write_output_file
+
+        md = write_output_file(folder / CARD_MD, self.to_markdown(), "--out")
+        js = write_output_file(folder / CARD_JSON, json.dumps(self.to_json(), indent=2) + "\n", "--out")
         return md, js

@@ -202,7 +202,8 @@ def train_model(request: TrainRequest) -> TrainResult:
         best = run_dir / "weights" / "last.pt"
     exported = Path(str(YOLO(str(best), task="obb").export(format="onnx", imgsz=request.imgsz, opset=ONNX_OPSET,
                                                              simplify=True, dynamic=False, device="cpu")))
-    onnx_path = out / f"{request.name}.onnx"
-    shutil.copyfile(exported, onnx_path)
+    from bt_grasp.output_files import copy_output_file
+
+    onnx_path = copy_output_file(exported, out / f"{request.name}.onnx", "--out", example="model.onnx")
     epochs_run, metrics = _last_row(run_dir / "results.csv")
     return TrainResult(onnx_path, best, seconds, epochs_run, metrics, versions(), names)

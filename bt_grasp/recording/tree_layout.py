@@ -93,14 +93,11 @@ def layout_for_log(run: RunLog) -> dict[str, Any]:
 def write_layout(run: RunLog, target: Path | None = None) -> Path:
     """Write the log's layout to ``target`` (default ``<log>.layout.json`` beside the log); returns the file.
     A place that cannot be written is an ``InputError`` naming it."""
-    from bt_grasp.errors import InputError
+    from bt_grasp.output_files import write_output_file
 
     target = target if target is not None else run.path.with_name(run.path.stem + ".layout.json")
-    try:
-        target.write_text(json.dumps(layout_for_log(run), indent=2) + "\n", encoding="utf-8")
-    except OSError as exc:
-        raise InputError(str(target), f"the Foxglove layout cannot be written there ({exc.strerror})") from None
-    return target
+    return write_output_file(target, json.dumps(layout_for_log(run), indent=2) + "\n", "--layout-out",
+                             example="run.layout.json")
 
 
 def layout_for_tree_file(tree: Path, leaves: Sequence[str] = ()) -> dict[str, Any]:
@@ -121,12 +118,11 @@ def write_live_layout(tree: Path, leaves: Sequence[str] = (), log: Path | None =
     returns the file."""
     import tempfile
 
+    from bt_grasp.output_files import write_output_file
     from bt_grasp.recording.layout import with_control_panels
 
     target = (log.with_name(log.stem + ".layout.json") if log is not None
               else Path(tempfile.mkdtemp(prefix="bt_grasp_layout_")) / f"{Path(tree).stem}.layout.json")
-    target.parent.mkdir(parents=True, exist_ok=True)
     layout = layout_for_tree_file(tree, leaves)
     layout = with_control_panels(layout) if control else layout
-    target.write_text(json.dumps(layout, indent=2) + "\n", encoding="utf-8")
-    return target
+    return write_output_file(target, json.dumps(layout, indent=2) + "\n", "--log")
