@@ -116,6 +116,8 @@ def _tree(msg: dict[str, Any]) -> None:
         _int(node, "uid", where + ".")
         for key in ("path", "type", "name", "kind"):
             _str(node, key, where + ".")
+        if "attributes" in node:  # a node's ports as written: an object (the .btlog export walks it)
+            _need(isinstance(node["attributes"], dict), where + ".attributes", node["attributes"], "an object")
         children = node.get("children", [])
         _need(isinstance(children, list), where + ".children", children, "a list")
         stack.extend((child, f"{where}.children[{i}]", depth + 1) for i, child in enumerate(children))

@@ -157,6 +157,8 @@ BAD_CONTENTS = {
     "tree_without_structure": ("/bt/tree", 0, lambda m: {"tick": None}, "'structure' is missing"),
     "tree_structure_null": ("/bt/tree", 0, lambda m: {**m, "structure": None}, "structure is null"),
     "tree_too_deep": ("/bt/tree", 0, lambda m: {**m, "structure": _deep(150)}, "nested deeper than 100"),
+    "tree_attributes_a_list": ("/bt/tree", 0, lambda m: {**m, "structure": {**m["structure"], "attributes": [1]}},
+                               "'structure.attributes' is a list"),
     "joint_positions_text": ("/robot/joint_state", 4, lambda m: {**m, "position": "x"}, "'position' is a string"),
     "result_success_text": ("/run/result", 0, lambda m: {**m, "success": "yes"}, "'success' is a string"),
     "fault_stamp_text": ("/faults", 0, lambda m: {**m, "stamp_ns": "late"}, "'stamp_ns' is a string"),
