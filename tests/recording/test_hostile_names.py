@@ -36,7 +36,7 @@ def _taint(value: Any, key: str = "", keep: frozenset[str] = STRUCTURAL) -> Any:
     return value
 
 
-def _hostile_log(path: Path, keep: frozenset[str] = STRUCTURAL) -> Path:
+def _hostile_log(path: Path, keep: frozenset[str] = STRUCTURAL, meta: dict[str, str] | None = None) -> Path:
     from mcap.reader import make_reader
     from mcap.writer import Writer
 
@@ -57,10 +57,10 @@ def _hostile_log(path: Path, keep: frozenset[str] = STRUCTURAL) -> Path:
                 data = json.dumps(_taint(json.loads(data), keep=keep)).encode()
             writer.add_message(channels[channel.id], message.log_time, data, message.publish_time)
         for record in reader.iter_metadata():
-            meta = dict(record.metadata)
-            if "scene" in meta:
-                meta["scene"] += HOSTILE
-            writer.add_metadata(record.name, meta)
+            values = dict(record.metadata)
+            if "scene" in values:
+                values["scene"] += HOSTILE
+            writer.add_metadata(record.name, {**values, **(meta or {})})
         writer.finish()
     return path
 
@@ -113,3 +113,14 @@ def test_item4_the_leaf_view_names_the_leaf_as_given(hostile_log: Path, tmp_path
                           text=True, timeout=240, cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert f"history of Grasp{HOSTILE}" in proc.stdout.replace("\n", ""), proc.stdout
+
+
+@pytest.mark.parametrize(("meta", "fragment"), [({"start_unix_ns": "abc"}, "'start_unix_ns' is 'abc'"),
+                                                ({"start_unix_ns": "9" * 400}, "not a time")])
+def test_weak_item_a_btlog_export_with_bad_run_metadata_is_one_sentence(meta: dict[str, str], fragment: str,
+                                                                        tmp_path: Path) -> None:
+    log = _hostile_log(tmp_path / "meta.mcap", meta=meta)
+    proc = subprocess.run([*BT, "replay", str(log), "--export-btlog", "out.btlog"], capture_output=True, text=True,
+                          timeout=240, cwd=tmp_path)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr, proc.stderr[-2000:]
+    assert fragment in proc.stderr and "meta.mcap" in proc.stderr and not (tmp_path / "out.btlog").exists()
