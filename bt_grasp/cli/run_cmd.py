@@ -241,6 +241,10 @@ def run(
     if summary_json is not None:  # a path it cannot be written to is said before the run, not after it
         check_output_file(summary_json, "--summary-json", example="summary.json")
     console = Console(stderr=True)
+    if live is not None:
+        from bt_grasp.cli.live_log import show_live_server_log
+
+        show_live_server_log()  # a viewer's bytes quoted in the SDK's lines are shown, never obeyed
     if live is not None and not is_loopback(live_host):
         console.print(exposure_warning(live_host), highlight=False, markup=False)
     if resident:

@@ -18,6 +18,7 @@ from bt_grasp.cli import ERROR_PREFIX
 from bt_grasp.cli.plugin_option import leaves_option
 from bt_grasp.errors import InputError
 from bt_grasp.output_files import check_output_file, write_output_file
+from bt_grasp.terminal_text import shown
 
 if TYPE_CHECKING:  # the tree package (py_trees) is imported when a command reads a tree, not for --help
     from bt_grasp.tree.registry import NodeRegistry
@@ -48,7 +49,7 @@ def tree_registry(leaves: list[str] | None = None) -> NodeRegistry:
 
 
 def _fail(exc: InputError) -> typer.Exit:
-    typer.echo(f"{ERROR_PREFIX}{exc.message}", err=True)
+    typer.echo(f"{ERROR_PREFIX}{shown(exc.message)}", err=True)  # control characters shown, never obeyed
     return typer.Exit(exc.exit_code)
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import io
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -26,17 +27,18 @@ HOSTILE = "[/]<b>$x^$[link=https://x.invalid]..[/link]"
 STRUCTURAL = frozenset({"status", "kind", "__type__", "encoding", "frame_id", "type"})
 
 
-def _taint(value: Any, key: str = "", keep: frozenset[str] = STRUCTURAL) -> Any:
+def _taint(value: Any, key: str = "", keep: frozenset[str] = STRUCTURAL, suffix: str = HOSTILE) -> Any:
     if isinstance(value, str):
-        return value if key in keep or not value else value + HOSTILE
+        return value if key in keep or not value else value + suffix
     if isinstance(value, list):
-        return [_taint(v, key, keep) for v in value]
+        return [_taint(v, key, keep, suffix) for v in value]
     if isinstance(value, dict):
-        return {(k + HOSTILE if key == "bb" else k): _taint(v, k, keep) for k, v in value.items()}
+        return {(k + suffix if key == "bb" else k): _taint(v, k, keep, suffix) for k, v in value.items()}
     return value
 
 
-def _hostile_log(path: Path, keep: frozenset[str] = STRUCTURAL, meta: dict[str, str] | None = None) -> Path:
+def _hostile_log(path: Path, keep: frozenset[str] = STRUCTURAL, meta: dict[str, str] | None = None,
+                 suffix: str = HOSTILE) -> Path:
     from mcap.reader import make_reader
     from mcap.writer import Writer
 
@@ -54,12 +56,12 @@ def _hostile_log(path: Path, keep: frozenset[str] = STRUCTURAL, meta: dict[str, 
                                                                schemas.get(channel.schema_id, 0))
             data = message.data
             if channel.message_encoding == "json" and channel.topic != "/robot/joint_state":
-                data = json.dumps(_taint(json.loads(data), keep=keep)).encode()
+                data = json.dumps(_taint(json.loads(data), keep=keep, suffix=suffix)).encode()
             writer.add_message(channels[channel.id], message.log_time, data, message.publish_time)
         for record in reader.iter_metadata():
             values = dict(record.metadata)
             if "scene" in values:
-                values["scene"] += HOSTILE
+                values["scene"] += suffix
             writer.add_metadata(record.name, {**values, **(meta or {})})
         writer.finish()
     return path
@@ -124,3 +126,23 @@ def test_weak_item_a_btlog_export_with_bad_run_metadata_is_one_sentence(meta: di
                           timeout=240, cwd=tmp_path)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr, proc.stderr[-2000:]
     assert fragment in proc.stderr and "meta.mcap" in proc.stderr and not (tmp_path / "out.btlog").exists()
+
+
+#: clear the screen, retitle the window (terminated by ST, which Rich keeps), red text, a right-to-left override
+TERMINAL = "\x1b[2J\x1b]0;owned\x1b\\\x1b[31m\u202e"
+
+
+@pytest.mark.parametrize("view", ["summary", "tick", "failures", "leaf"])
+def test_weak_item_terminal_control_sequences_in_a_log_are_shown_not_obeyed(view: str, tmp_path: Path) -> None:
+    """Found by the pre-review attack: Rich escapes markup but passes ESC through, so a log's node name could
+    clear the screen, retitle the window or colour the rest of the output of `replay`."""
+    log = _hostile_log(tmp_path / "esc.mcap", suffix=TERMINAL)
+    from bt_grasp.terminal_text import shown
+
+    leaf = shown("Grasp" + TERMINAL)  # as every view shows it: the name a user can type
+    args = {"summary": [], "tick": ["--tick", "5"], "failures": ["--failures"], "leaf": ["--leaf", leaf]}[view]
+    proc = subprocess.run([*BT, "replay", str(log), *args], capture_output=True, text=True, timeout=240,
+                          cwd=tmp_path, env={**os.environ, "TERM": "xterm-256color", "FORCE_COLOR": "1"})
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "\\x1b[2J" in proc.stdout and "\\u202e" in proc.stdout, proc.stdout[-2000:]
+    assert "\x1b[2J" not in proc.stdout and "\x1b]0;" not in proc.stdout and "\u202e" not in proc.stdout
