@@ -24,7 +24,9 @@ M = TypeVar("M", bound=BaseModel)
 class StrictModel(BaseModel):
     """Base of every configuration model: immutable, unknown keys rejected, no type coercion from str."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True, strict=False, validate_default=True)
+    #: no NaN or infinity anywhere (``.nan`` gravity or ``.inf`` table size passed as numbers: found by the
+    #: pre-review attack)
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=False, validate_default=True, allow_inf_nan=False)
 
 
 KeyPath = tuple[str | int, ...]
