@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 
 from bt_grasp.errors import LogFileError
 from bt_grasp.recording import mcap_io, topics
+from bt_grasp.recording.image_header import MAX_IMAGE_SIDE, image_size
 from bt_grasp.recording.schemas import PROTOBUF_CLASSES
 from bt_grasp.recording.validate import BadMessage, is_int, parse_json
 from bt_grasp.terminal_text import shown
@@ -216,7 +217,13 @@ _DEPTH_TYPES: dict[str, np.dtype[Any]] = {"16UC1": np.dtype("<u2"), "32FC1": np.
 
 def _image(topic: str, msg: Any, stamp: int) -> Image:
     if topic == topics.COLOR:
-        bgr = cv2.imdecode(np.frombuffer(msg.data, np.uint8), cv2.IMREAD_COLOR) if msg.data else None
+        size = image_size(msg.data)
+        if size is None:
+            raise BadMessage(f"its data ({len(msg.data)} bytes) is not a PNG or JPEG image")
+        if not (0 < size[0] <= MAX_IMAGE_SIDE and 0 < size[1] <= MAX_IMAGE_SIDE):
+            raise BadMessage(f"it says it is {size[0]} x {size[1]} pixels, more than a camera's {MAX_IMAGE_SIDE} "
+                             "a side")
+        bgr = cv2.imdecode(np.frombuffer(msg.data, np.uint8), cv2.IMREAD_COLOR)
         if bgr is None:
             raise BadMessage(f"its {msg.format or 'unnamed'} data ({len(msg.data)} bytes) does not decode")
         return Image(topic, stamp, msg.frame_id, "color", msg.format, bgr[:, :, ::-1].copy())

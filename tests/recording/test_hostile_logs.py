@@ -280,8 +280,21 @@ def _image_change(topic: str, edit: Any) -> Any:
     return change
 
 
+def _png_header(width: int, height: int) -> bytes:
+    import struct
+    import zlib
+
+    ihdr = b"IHDR" + struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)
+    return b"\x89PNG\r\n\x1a\n" + struct.pack(">I", 13) + ihdr + struct.pack(">I", zlib.crc32(ihdr))
+
+
 IMAGES = {
-    "colour_not_an_image": ("/camera/color", lambda m: setattr(m, "data", b"\x89PNG not really"), "does not decode"),
+    "colour_not_an_image": ("/camera/color", lambda m: setattr(m, "data", b"\x89PNG not really"),
+                            "is not a PNG or JPEG"),
+    "colour_header_only": ("/camera/color", lambda m: setattr(m, "data", _png_header(10, 10)), "does not decode"),
+    # found by the pre-review attack: a 2.6 MB PNG of zeros saying 30,000 x 30,000 took 5-8 GB and 90 s to decode
+    "colour_decompression_bomb": ("/camera/color", lambda m: setattr(m, "data", _png_header(30_000, 30_000)),
+                                  "30000 x 30000 pixels, more than a camera's 4096 a side"),
     "depth_short": ("/camera/depth", lambda m: setattr(m, "data", m.data[:-7]), "are not"),
     "depth_encoding": ("/camera/depth", lambda m: setattr(m, "encoding", "rgb8"), "'rgb8' is not one of"),
     "depth_no_rows": ("/camera/depth", lambda m: setattr(m, "height", 0), "are not 0 rows"),
@@ -326,3 +339,18 @@ def test_weak_item_damage_only_where_the_index_points_for_images_is_one_sentence
     assert code == 0, lines
     code, lines = _replay(capsys, str(log), "--export-frames", str(tmp_path / "frames"))
     assert code == 2 and len(lines) == 1 and "idx.mcap" in lines[0] and "/camera/color" in lines[0], lines
+
+
+def test_weak_item_image_sizes_are_read_from_headers_only() -> None:
+    import cv2
+    import numpy as np
+
+    from bt_grasp.recording.image_header import image_size
+
+    picture = np.zeros((48, 64, 3), np.uint8)
+    for ext, params in ((".png", []), (".jpg", []), (".jpg", [cv2.IMWRITE_JPEG_PROGRESSIVE, 1])):
+        ok, data = cv2.imencode(ext, picture, params)
+        assert ok and image_size(data.tobytes()) == (64, 48)
+    assert image_size(_png_header(30_000, 20_000)) == (30_000, 20_000)
+    for junk in (b"", b"GIF89a....", b"\xff\xd8\xff", b"\xff\xd8\x00\x00", b"\x89PNG\r\n\x1a\n\x00"):
+        assert image_size(junk) is None
