@@ -22,7 +22,7 @@ from __future__ import annotations
 import os
 import stat
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import BinaryIO
 
@@ -56,10 +56,16 @@ def _nearest_existing(path: Path) -> Path:
     return parent
 
 
-def check_output_file(path: str | Path, flag: str, *, example: str = "out.txt") -> Path:
+def check_output_file(path: str | Path, flag: str, *, example: str = "out.txt",
+                      inputs: Sequence[str | Path | None] = ()) -> Path:
     """``path`` if a file can be written there, else :class:`InputError` naming ``flag`` (see the module's
-    rules); ``example`` is the file name suggested when ``path`` is a folder. Creates nothing."""
+    rules); ``example`` is the file name suggested when ``path`` is a folder; ``inputs``: the files the command
+    reads, which it must not write over (`replay run.mcap --report run.mcap` replaced the log with its report).
+    Creates nothing."""
     path = Path(path)
+    for source in inputs:
+        if source is not None and _same_file(path, Path(source)):
+            raise InputError(flag, f"'{path}' is the input file {source}; write to another file")
     try:
         info: os.stat_result | None = os.lstat(path)
     except (FileNotFoundError, NotADirectoryError):  # the parent is checked below
@@ -79,6 +85,13 @@ def check_output_file(path: str | Path, flag: str, *, example: str = "out.txt") 
         raise InputError(flag, f"cannot write '{path}': '{parent}' is not a folder")
     _probe(parent, flag, path)
     return path
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    try:
+        return os.path.samefile(a, b)
+    except OSError:  # either is missing (or unreadable): not the same existing file
+        return False
 
 
 def check_output_folder(path: str | Path, flag: str) -> Path:

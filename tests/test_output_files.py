@@ -157,3 +157,33 @@ def test_a_dataset_is_never_written_over_another_one(tmp_path: Path) -> None:
         make_dataset([REPO / "scenes/tabletop.yaml"], 1, old, 0)
     assert time.monotonic() - t0 < 30  # refused before anything is rendered
     assert sorted(p.name for p in old.rglob("*")) == ["00007.png", "images"]
+
+
+@pytest.mark.parametrize("command", ["replay_report", "resim_log", "eval_report", "eval_export", "run_log",
+                                     "run_summary", "tree_show"])
+def test_an_output_is_never_written_over_the_commands_own_input(command: str, tmp_path: Path) -> None:
+    """Found by the pre-review attack: `replay run.mcap --report run.mcap` replaced the log with its HTML report."""
+    import shutil
+
+    log = tmp_path / "run.mcap"
+    shutil.copyfile(LOG, log)
+    scene = tmp_path / "scene.yaml"
+    shutil.copyfile(REPO / "scenes/tabletop.yaml", scene)
+    shutil.copyfile(REPO / "scenes/tabletop.calibration.yaml", tmp_path / "tabletop.calibration.yaml")
+    results = tmp_path / "r.jsonl"
+    results.write_text('{"episode": "e"}\n')
+    tree = tmp_path / "pick.xml"
+    shutil.copyfile(REPO / "trees/pick.xml", tree)
+    run = ["run", str(tree), "--scene", str(scene), "--max-ticks", "1"]
+    args, victim = {
+        "replay_report": (["replay", str(log), "--report", str(log)], log),
+        "resim_log": (["replay", str(log), "--resim", "--resim-log", str(log)], log),
+        "eval_report": (["eval", "report", str(results), "--out", str(results)], results),
+        "eval_export": (["eval", "export", str(results), "--out", str(results)], results),
+        "run_log": ([*run, "--log", str(scene)], scene),
+        "run_summary": ([*run, "--summary-json", str(tree)], tree),
+        "tree_show": (["tree", "show", str(tree), "--format", "dot", "--out", str(tree)], tree),
+    }[command]
+    before = victim.read_bytes()
+    _one_sentence(args, "is the input file", tmp_path)
+    assert victim.read_bytes() == before

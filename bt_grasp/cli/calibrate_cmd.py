@@ -42,7 +42,7 @@ def calibrate(
     load_scene(scene)  # a bad scene file fails here with file:line, before the simulator starts
     from bt_grasp.output_files import check_output_file
 
-    check_output_file(out, "--out", example="calibration.yaml")  # and a place it cannot write to
+    check_output_file(out, "--out", example="calibration.yaml", inputs=(scene,))  # and a place it cannot write to
     if as_json:
         result = calibrate_in_sim(scene, mount, seed, poses)
     else:

@@ -59,7 +59,7 @@ def replay_command(
     from bt_grasp.recording.reader import open_log
 
     console = Console(highlight=False)
-    _check_outputs(report, report_dir, btlog, frames_dir, layout_out, resim_log)  # before any work
+    _check_outputs(log, report, report_dir, btlog, frames_dir, layout_out, resim_log)  # before any work
     run = open_log(log)
     if resim:
         _resim(console, log, as_json, resim_log, tuple(leaves))
@@ -171,8 +171,8 @@ def _resim(console: Console, log: Path, as_json: bool, keep: Path | None, leaves
         raise typer.Exit(1)
 
 
-def _check_outputs(report: Path | None, report_dir: Path | None, btlog: Path | None, frames_dir: Path | None,
-                   layout_out: Path | None, resim_log: Path | None) -> None:
+def _check_outputs(log: Path, report: Path | None, report_dir: Path | None, btlog: Path | None,
+                   frames_dir: Path | None, layout_out: Path | None, resim_log: Path | None) -> None:
     """Every place the command will write, checked before the log is read (``bt_grasp.output_files``)."""
     from bt_grasp.output_files import check_output_file, check_output_folder
 
@@ -180,7 +180,7 @@ def _check_outputs(report: Path | None, report_dir: Path | None, btlog: Path | N
              (layout_out, "--layout-out", "run.layout.json"), (resim_log, "--resim-log", "resim.mcap"))
     for path, flag, example in files:
         if path is not None:
-            check_output_file(path, flag, example=example)
+            check_output_file(path, flag, example=example, inputs=(log,))
     for folder, flag in ((report_dir, "--report-dir"), (frames_dir, "--export-frames")):
         if folder is not None:
             check_output_folder(folder, flag)

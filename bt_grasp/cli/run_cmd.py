@@ -239,7 +239,8 @@ def run(
     if interactive and resident:
         raise InputError("--interactive", "an interactive run cannot be --resident; drop one of the two")
     if summary_json is not None:  # a path it cannot be written to is said before the run, not after it
-        check_output_file(summary_json, "--summary-json", example="summary.json")
+        check_output_file(summary_json, "--summary-json", example="summary.json",
+                          inputs=(tree, scene, calibration, faults))
     console = Console(stderr=True)
     if live is not None:
         from bt_grasp.cli.live_log import show_live_server_log

@@ -103,7 +103,7 @@ def show_cmd(
         if fmt in ("png", "svg") and out is None:
             raise InputError("--out", f"--format {fmt} needs --out FILE")
         if out is not None:
-            check_output_file(out, "--out", example=f"tree.{fmt}")
+            check_output_file(out, "--out", example=f"tree.{fmt}", inputs=(file,))
         tree = load_tree(file, tree_registry(leaves))
         if fmt == "text":
             if out is None:

@@ -99,11 +99,11 @@ def load_inputs(request: EpisodeRequest) -> Inputs:
         check_fault_plan(fault_plan, leaves_of(list(tree.nodes())), [o.name for o in scene.objects])
     if request.max_ticks < 1:
         raise InputError("--max-ticks", f"must be at least 1, got {request.max_ticks}")
-    _check_log_path(request.log)
+    _check_log_path(request.log, (request.tree, request.scene, request.calibration, request.faults))
     return Inputs(scene, tree, calibration_path, calibration, goal, fault_plan, clock)
 
 
-def _check_log_path(log_path: Path | None) -> None:
+def _check_log_path(log_path: Path | None, inputs: tuple[Path | None, ...] = ()) -> None:
     """The log must be a file that can be created (``bt_grasp.output_files``): a folder, a device or FIFO, a
     symbolic link, or a place where nothing can be written is bad input before anything runs (each was a
     traceback or a hang, some only after the run)."""
@@ -111,7 +111,7 @@ def _check_log_path(log_path: Path | None) -> None:
         return
     from bt_grasp.output_files import check_output_file
 
-    check_output_file(log_path, "--log", example="run.mcap")
+    check_output_file(log_path, "--log", example="run.mcap", inputs=inputs)  # never over the run's own inputs
 
 
 def _check_goal(goal: Goal, request: EpisodeRequest, scene: Scene) -> None:
