@@ -17,6 +17,7 @@ from bt_grasp.campaign.environment import environment
 from bt_grasp.campaign.episode import EpisodeBackend, EpisodeOutcome
 from bt_grasp.campaign.spec import Episode
 from bt_grasp.numeric_threads import NUMERIC_ENV
+from bt_grasp.output_files import check_output_file, make_output_folder
 from bt_grasp.safe_path import file_component
 
 log = logging.getLogger(__name__)
@@ -102,7 +103,8 @@ class Worker:
         second run's fingerprint must equal the first's, else the row says so)."""
         t0 = time.perf_counter()
         path = log_path(self.log_dir, episode)
-        path.parent.mkdir(parents=True, exist_ok=True)
+        make_output_folder(path.parent, "--out")
+        check_output_file(path, "--out", example="x.mcap")  # a link planted at a kept log's name is not followed
         keep = self.keep_logs is KeepLogs.ALL
         outcome = self.backend.run(episode, path if keep else None)
         if not outcome.success and self.keep_logs is KeepLogs.FAILURES:

@@ -18,6 +18,7 @@ import typer  # noqa: E402
 
 from bt_grasp.cli import ERROR_PREFIX  # noqa: E402
 from bt_grasp.errors import BtGraspError  # noqa: E402
+from bt_grasp.terminal_text import shown  # noqa: E402
 
 INTERRUPTED = 130  # the exit code of a command Ctrl-C ended (128 + SIGINT)
 
@@ -95,8 +96,8 @@ def main(argv: list[str] | None = None) -> int:
         args = fill_optional_values(args)
     try:
         rv = app(args=args, standalone_mode=False, prog_name="bt-grasp")  # also names the completion variable
-    except BtGraspError as exc:
-        typer.echo(f"{ERROR_PREFIX}{exc}", err=True)
+    except BtGraspError as exc:  # its text may quote a file or a peer: control characters are shown, not obeyed
+        typer.echo(f"{ERROR_PREFIX}{shown(str(exc))}", err=True)
         code = exc.exit_code
     except typer.Exit as exc:
         code = exc.exit_code

@@ -5,6 +5,7 @@ Every problem with a file or argument prints one line on stderr (``bt-grasp: err
 
 from __future__ import annotations
 
+import io
 import json
 from enum import StrEnum
 from pathlib import Path
@@ -15,6 +16,8 @@ import typer
 from bt_grasp.cli import ERROR_PREFIX
 from bt_grasp.cli.plugin_option import leaves_option
 from bt_grasp.errors import InputError
+from bt_grasp.output_files import check_output_file, write_output_file
+from bt_grasp.terminal_text import shown
 
 if TYPE_CHECKING:  # the tree package (py_trees) is imported when a command reads a tree, not for --help
     from bt_grasp.tree.registry import NodeRegistry
@@ -45,7 +48,7 @@ def tree_registry(leaves: list[str] | None = None) -> NodeRegistry:
 
 
 def _fail(exc: InputError) -> typer.Exit:
-    typer.echo(f"{ERROR_PREFIX}{exc.message}", err=True)
+    typer.echo(f"{ERROR_PREFIX}{shown(exc.message)}", err=True)  # control characters shown, never obeyed
     return typer.Exit(exc.exit_code)
 
 
@@ -101,23 +104,26 @@ def show_cmd(
     try:
         if fmt in ("png", "svg") and out is None:
             raise InputError("--out", f"--format {fmt} needs --out FILE")
+        if out is not None:
+            check_output_file(out, "--out", example=f"tree.{fmt}", inputs=(file,))
         tree = load_tree(file, tree_registry(leaves))
         if fmt == "text":
             if out is None:
                 Console().print(render.rich_tree(tree.root))
             else:
-                with out.open("w", encoding="utf-8") as handle:
-                    Console(file=handle, width=120, color_system=None).print(render.rich_tree(tree.root))
+                text = io.StringIO()
+                Console(file=text, width=120, color_system=None).print(render.rich_tree(tree.root))
+                write_output_file(out, text.getvalue(), "--out")
             return
         dot_text = render.to_dot(tree.root, tree.main_tree)
         if fmt == "dot":
             if out is None:
                 typer.echo(dot_text, nl=False)
             else:
-                out.write_text(dot_text, encoding="utf-8")
+                write_output_file(out, dot_text, "--out")
             return
         assert out is not None
-        render.render_image(dot_text, fmt, out)
+        write_output_file(out, render.render_image(dot_text, fmt), "--out")
         typer.echo(f"wrote {out}")
     except InputError as exc:
         raise _fail(exc) from None
@@ -139,6 +145,7 @@ def convert_cmd(
         format_of(target)
         if target.exists() and source.exists() and target.resolve() == source.resolve():
             raise InputError(target, "is the input file; write the converted tree to another file")
+        check_output_file(target, "TARGET", example="tree.yaml")  # not a link, a folder or a device
         if target.exists() and not force:
             raise InputError(target, "exists; pass --force to overwrite it")
         if leaves:
@@ -245,9 +252,9 @@ def models_cmd(
         typer.echo(text, nl=False)
         return
     try:
-        out.write_text(text, encoding="utf-8")
-    except OSError as exc:
-        raise _fail(InputError(out, f"cannot write the file: {exc.strerror}")) from None
+        write_output_file(out, text, "--out", example="models.xml")
+    except InputError as exc:
+        raise _fail(exc) from None
     typer.echo(f"wrote {len(specs)} node models to {out}")
 
 

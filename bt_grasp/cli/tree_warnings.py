@@ -3,12 +3,14 @@
 A tree that loads as BehaviorTree.CPP would load it may still hold something a user should hear of (a
 TreeNodesModel that disagrees with the registered node, a literal whose tail is ignored, a SubTree remapping a
 port its model does not list). The library logs these with ``logging``; the tree commands show each once,
-as plain text (no markup is interpreted), on one line."""
+as plain text on one line (no markup is interpreted; control characters are shown as escapes)."""
 
 from __future__ import annotations
 
 import logging
 import sys
+
+from bt_grasp.terminal_text import shown
 
 WARNING_PREFIX = "bt-grasp: warning: "
 
@@ -20,7 +22,8 @@ class _OnceToStderr(logging.Handler):
 
     def emit(self, record: logging.LogRecord) -> None:
         try:
-            text = " ".join(record.getMessage().split())  # one line, whatever the file's text held
+            # one line whatever the file's text held, its control characters shown, never obeyed
+            text = shown(" ".join(record.getMessage().split()), newlines=False)
         except Exception:  # a malformed record must not end the command
             return
         if text in self._said:

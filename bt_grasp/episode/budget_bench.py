@@ -150,12 +150,18 @@ def run_budget_bench(tree: Path, scene: Path, seed: int, calibration: Path | Non
                      now: Callable[[], float] = time.perf_counter) -> dict[str, Any]:
     """One warm-up pick, then the measured one (same seed) with the stage timers; the floor beside it (wall
     time). ``now``: the stages' and the episode's clock (``time.thread_time``: the tick loop thread's CPU)."""
+
+    with tempfile.TemporaryDirectory(prefix="bt_grasp_budget_") as work:  # the measured run's log, removed after
+        return _budget(tree, scene, seed, calibration, Path(work) / "run.mcap" if log else None, now)
+
+
+def _budget(tree: Path, scene: Path, seed: int, calibration: Path | None, log: Path | None,
+            now: Callable[[], float]) -> dict[str, Any]:
     from bt_grasp.episode import Episode, WarmWorlds, pick_request
 
-    work = Path(tempfile.mkdtemp(prefix="bt_grasp_budget_"))
     worlds = WarmWorlds()
     warmup = Episode(pick_request(tree, scene, seed, calibration=calibration), worlds).run()  # not measured
-    request = pick_request(tree, scene, seed, calibration=calibration, log=(work / "run.mcap") if log else None)
+    request = pick_request(tree, scene, seed, calibration=calibration, log=log)
     clock = StageClock(now)
     episode = Episode(request, worlds)
     steps_before = episode.world.physics_steps
@@ -176,7 +182,7 @@ def run_budget_bench(tree: Path, scene: Path, seed: int, calibration: Path | Non
                    for name in ("tree (py_trees)", "status bookkeeping", "blackboard differ", "recording")}
     return {
         "machine": machine_description(),
-        "tree": str(tree), "scene": str(scene), "seed": seed, "log": log,
+        "tree": str(tree), "scene": str(scene), "seed": seed, "log": log is not None,
         "success": result.success, "ticks": ticks,
         # the timers change nothing the run decides: the warm-up's outcome, tick count and final object poses
         "same_as_warmup": (result.success, result.ticks, result.judged)

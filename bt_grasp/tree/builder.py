@@ -74,20 +74,43 @@ def validate_document(document: Document, registry: NodeRegistry) -> str:
     return main
 
 
-def _check_cycles(document: Document, main: str) -> None:
-    def refs(decl: NodeDecl) -> list[NodeDecl]:
-        found = [decl] if decl.type_id == "SubTree" else []
-        for child in decl.children:
-            found.extend(refs(child))
-        return found
+#: nodes the main tree may expand to, every SubTree counted as often as it is used (40 trees each using the next
+#: twice are 2^40 nodes: checking them one by one never finished), and how deep it may nest once expanded
+MAX_EXPANDED_NODES = 100_000
+MAX_EXPANDED_DEPTH = 100  # = the depth a log of the run may hold (bt_grasp.recording.validate.MAX_TREE_DEPTH)
 
-    def visit(tree_id: str, stack: tuple[str, ...]) -> None:
-        for ref in refs(document.trees[tree_id].root):
-            target = ref.subtree_id or ""
-            if target in stack or target == tree_id:
-                chain = " -> ".join((*stack, tree_id, target))
-                raise ref.error(f"cyclic SubTree: {chain}")
-            visit(target, (*stack, tree_id))
+
+def _check_cycles(document: Document, main: str) -> None:
+    """No SubTree uses itself, directly or not, and the expanded tree stays within :data:`MAX_EXPANDED_NODES` nodes
+    and :data:`MAX_EXPANDED_DEPTH` levels: each tree's expanded size and depth is computed once (memoised), so
+    the check is linear in the file, however often its subtrees are reused."""
+    expanded: dict[str, tuple[int, int]] = {}  # tree id -> (nodes, depth) once expanded
+
+    def visit(tree_id: str, stack: tuple[str, ...]) -> tuple[int, int]:
+        if tree_id in expanded:
+            return expanded[tree_id]
+        nodes, deepest = 0, 0
+        todo: list[tuple[NodeDecl, int]] = [(document.trees[tree_id].root, 1)]
+        while todo:
+            decl, depth = todo.pop()
+            nodes += 1
+            if decl.type_id == "SubTree":
+                target = decl.subtree_id or ""
+                if target in stack or target == tree_id:
+                    raise decl.error(f"cyclic SubTree: {' -> '.join((*stack, tree_id, target))}")
+                inner_nodes, inner_depth = visit(target, (*stack, tree_id))
+                nodes, depth = nodes + inner_nodes, depth + inner_depth
+            else:
+                todo.extend((child, depth + 1) for child in decl.children)
+            deepest = max(deepest, depth)
+            if nodes > MAX_EXPANDED_NODES:
+                raise decl.error(f"the tree expands to more than {MAX_EXPANDED_NODES:,} nodes (each SubTree counted "
+                                 "as often as it is used)")
+            if deepest > MAX_EXPANDED_DEPTH:
+                raise decl.error(f"the tree nests deeper than {MAX_EXPANDED_DEPTH} levels once its SubTrees are "
+                                 "expanded")
+        expanded[tree_id] = (nodes, deepest)
+        return nodes, deepest
 
     visit(main, ())
 

@@ -198,7 +198,8 @@ def test_validate_shows_each_warning_once_with_its_place(tmp_path: Path, capsys:
         lines = err.splitlines()
         assert code == 0 and "OK" in out
         assert lines == [
-            f"bt-grasp: warning: {path}:9: TreeNodesModel: Sleep has no port 'duration' (its ports: msec) (BT.CPP ignores it)",
+            f"bt-grasp: warning: {path}:9: TreeNodesModel: Sleep has no port 'duration' (its ports: msec)"
+            " (BT.CPP ignores it)",
             f"bt-grasp: warning: {path}:4: port 'msec': '30ms' is read as 30, as BT.CPP reads it ('ms' is ignored)",
             f"bt-grasp: warning: {path}:5: port 'msec': '30ms' is read as 30, as BT.CPP reads it ('ms' is ignored)",
         ], lines
