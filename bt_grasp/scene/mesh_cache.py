@@ -37,6 +37,8 @@ CACHE_ENV = "BT_GRASP_CACHE_DIR"
 CONVEX_VOLUME_TOL = 0.01
 #: a mesh of more separate pieces than this is decomposed as a whole (a scanned mesh's specks, not a V-HACD file)
 MAX_PIECES = 64
+#: decomposing a mesh of more triangles than this is announced as a warning (it can take minutes)
+LONG_DECOMPOSITION_FACES = 2000
 
 
 @dataclass(frozen=True)
@@ -149,8 +151,14 @@ def _piece_shapes(piece: Any, params: CoacdParams, geometry: MeshGeometry) -> li
 
 
 def _decompose_logged(mesh: Any, params: CoacdParams, geometry: MeshGeometry) -> list[np.ndarray]:
-    log.info("decomposing %s (%d triangles) into convex parts with CoACD: seconds to minutes, once (then cached)",
-             geometry.collision_path.name, len(mesh.faces))
+    """CoACD on one mesh, said first: on a large mesh as a warning (the only output a user sees), as the wait can
+    be minutes (measured: docs/scenes.md, "Objects no one here made")."""
+    sentence = (f"decomposing {geometry.collision_path.name} ({len(mesh.faces)} triangles) into convex parts with "
+                "CoACD: once, then read from the cache")
+    if len(mesh.faces) > LONG_DECOMPOSITION_FACES:
+        log.warning("%s; a large mesh can take minutes", sentence)
+    else:
+        log.info("%s", sentence)
     return decompose(mesh.vertices, mesh.faces, params)
 
 

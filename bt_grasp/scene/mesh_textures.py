@@ -57,8 +57,32 @@ def _obj_textures(path: Path, text: str) -> list[Path]:
         except InputError:
             continue  # a missing material file: the renderer draws the mesh without it
         for _key, rest in _MTL_MAPS.findall(mtl_text):
-            found.append(_local(mtl.parent, rest.split()[-1]))  # options (-bm 1 ...) come before the name
+            found.append(_local(mtl.parent, _map_file(rest)))
     return found
+
+
+def _map_file(rest: str) -> str:
+    """The file name of an MTL map statement's arguments: options (``-bm 1``, ``-o 0 0 0``, ``-clamp on``,
+    ``-imfchan l``) come first; the rest, spaces and all, is the name."""
+    words = rest.split()
+    i = 0
+    while i < len(words) and words[i].startswith("-"):
+        takes_word = words[i] in ("-imfchan", "-type", "-clamp", "-blendu", "-blendv", "-cc")
+        i += 1
+        if takes_word:
+            i += 1
+            continue
+        while i < len(words) and _is_number(words[i]):
+            i += 1
+    return " ".join(words[i:]) or words[-1]
+
+
+def _is_number(word: str) -> bool:
+    try:
+        float(word)
+    except ValueError:
+        return False
+    return True
 
 
 def _gltf_textures(path: Path, text: str) -> list[Path]:
