@@ -52,7 +52,7 @@ def _obj_with_uv_normals(path: Path, pieces: list[tuple[str, trimesh.Trimesh]], 
     for name, mesh in pieces:
         lines.append(f"o {name}")
         lines += [f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in np.round(mesh.vertices, 6)]
-        for face, normal in zip(mesh.faces, mesh.face_normals, strict=True):
+        for normal in mesh.face_normals:
             lines += [f"vt {0.1 * (k + 1):.1f} {0.05 * (k + 1):.2f}" for k in range(3)]
             lines += [f"vn {normal[0]:.4f} {normal[1]:.4f} {normal[2]:.4f}"] * 3
         if mtllib:
