@@ -2,7 +2,12 @@
 wider than the gripper opens on every side, or heavier than two pads' friction holds, can be in a scene (an
 obstacle, a distractor) but never be picked. The scene loader says so once, in one sentence, when the scene
 loads (``bt-grasp scene validate`` prints it); a run on it ends with the tree's own failure reason
-(``NOTHING_TO_GRASP``: no grasp fits, ``SLIPPED``: it is too heavy)."""
+(``NOTHING_TO_GRASP``: no grasp fits, ``SLIPPED``: it is too heavy).
+
+Also said at load: an object whose collision mesh stands well above what is drawn over much of its footprint,
+seen from above (pybullet's mug: the collision file makes the cup a solid cylinder). The camera sees the hollow,
+the fingers meet a solid: grasps planned into it stall (``TRACKING_ERROR``). That is the object set's modelling,
+not something the pipeline can see; the sentence names it."""
 
 from __future__ import annotations
 
@@ -45,3 +50,52 @@ def cannot_pick(name: str, geometry: MeshGeometry, mass_kg: float | None, object
         return (f"object '{name}' weighs {mass_kg:.3g} kg, more than the gripper's {gripper_force_n:.0f} N "
                 f"holds by friction ({limit:.2g} kg): it cannot be lifted (a run on it ends SLIPPED or GRASP_EMPTY)")
     return None
+
+
+#: the drawn and the collision surfaces are compared on a grid of this cell, m
+HEIGHT_CELL_M = 0.002
+#: the collision surface this far above the drawn one counts as solid where the camera sees open space, m
+HIDDEN_SOLID_M = 0.01
+#: the share of the footprint where that is so beyond which the loader says so
+HIDDEN_SOLID_SHARE = 0.25
+
+
+def hidden_solid_share(geometry: MeshGeometry, samples: int = 40000) -> float:
+    """The share of the object's footprint (as modelled, seen from above) where its collision mesh is over
+    :data:`HIDDEN_SOLID_M` above its drawn mesh; 0 when the drawn mesh is the collision mesh."""
+    import trimesh
+
+    if geometry.visual_vertices_m is None or geometry.visual_faces is None:
+        return 0.0
+    vis_v, vis_f = geometry.visual_mesh_m()
+    drawn = trimesh.Trimesh(vertices=vis_v, faces=vis_f, process=False)
+    collision = trimesh.Trimesh(vertices=geometry.vertices_m, faces=geometry.faces, process=False)
+    if drawn.area <= 0 or collision.area <= 0:
+        return 0.0
+    p_drawn = np.asarray(trimesh.sample.sample_surface(drawn, samples, seed=0)[0])
+    p_coll = np.asarray(trimesh.sample.sample_surface(collision, samples, seed=0)[0])
+    lo = np.minimum(p_drawn.min(axis=0), p_coll.min(axis=0))
+    hi = np.maximum(p_drawn.max(axis=0), p_coll.max(axis=0))
+    shape = tuple(int(n) for n in np.ceil((hi[:2] - lo[:2]) / HEIGHT_CELL_M).astype(int) + 1)
+
+    def top(points: np.ndarray) -> np.ndarray:
+        height = np.full(shape, lo[2])
+        ij = np.floor((points[:, :2] - lo[:2]) / HEIGHT_CELL_M).astype(int)
+        np.maximum.at(height, (ij[:, 0], ij[:, 1]), points[:, 2])
+        return height
+
+    coll_top, drawn_top = top(p_coll), top(p_drawn)
+    footprint = int(np.count_nonzero(np.maximum(coll_top, drawn_top) > lo[2] + 1e-6))
+    hidden = int(np.count_nonzero(coll_top - drawn_top > HIDDEN_SOLID_M))
+    return hidden / max(footprint, 1)
+
+
+def collision_hides_open_space(name: str, geometry: MeshGeometry) -> str | None:
+    """A sentence when the collision mesh is solid where much of the drawn object is open (see the module)."""
+    share = hidden_solid_share(geometry)
+    if share <= HIDDEN_SOLID_SHARE:
+        return None
+    return (f"object '{name}': its collision mesh ({geometry.collision_path.name}) stands over "
+            f"{HIDDEN_SOLID_M * 100:.0f} cm above its drawn surface over {share:.0%} of its footprint seen from above: "
+            "a hollow or gap the camera sees is solid to the fingers, and grasps planned into it stall "
+            "(TRACKING_ERROR)")
