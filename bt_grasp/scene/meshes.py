@@ -78,10 +78,11 @@ def _check_size(geometry: MeshGeometry, table: float, source: str | Path, line: 
 def read_mesh_object(path: Path, scale: Vec3, source: str | Path, line: int | None, name: str) -> MeshGeometry:
     """A ``shape: mesh`` object's file, read and checked; errors name the scene file and the object's line."""
     loaded = _load_mesh_file(path, source, line, name, solid=True)
+    _textured, fallback = _how_drawn(loaded, path, name)
     vertices = np.asarray(loaded.mesh.vertices, dtype=float) * np.asarray(scale)
     faces = np.asarray(loaded.mesh.faces, dtype=np.int64)
-    v, f = _arrays_if_untextured(loaded, scale)
-    visual = VisualPart(T_object_part=np.eye(4), path=path.resolve(), scale=scale, rgba=loaded.fallback_rgba,
+    v, f = _arrays_if_untextured(loaded, fallback, scale)
+    visual = VisualPart(T_object_part=np.eye(4), path=path.resolve(), scale=scale, rgba=fallback,
                         vertices_m=v, faces=f)
     return _geometry(vertices, faces, hashlib.sha256(loaded.data).hexdigest(), path, scale, (visual,), None,
                      source, line, name, rgb=loaded.rgb, mass_kg=None, piece_faces=loaded.piece_faces)
@@ -111,7 +112,7 @@ def read_urdf_object(path: Path, scale: Vec3, source: str | Path, line: int | No
         piece_faces += files[part.geometry.path].piece_faces if isinstance(part.geometry, MeshRef) else [len(f)]
         hasher.update(f"{digest} {np.round(part.T_object_part, 9).tolist()}".encode())
     vertices, faces = _join(pieces)
-    visuals, drawn, rgb = _visual_parts(urdf.visuals, scale, lambda ref, ln: load(ref, ln, False))
+    visuals, drawn, rgb = _visual_parts(urdf.visuals, scale, name, lambda ref, ln: load(ref, ln, False))
     collision_path = next((p.geometry.path for p in urdf.collisions if isinstance(p.geometry, MeshRef)), path)
     where = urdf.collisions[0].line
     return _geometry(vertices * np.asarray(scale), faces, hasher.hexdigest(), collision_path, scale, visuals, drawn,
@@ -163,7 +164,7 @@ def _join(pieces: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.n
     return vertices, faces
 
 
-def _visual_parts(parts: tuple[UrdfPart, ...], scale: Vec3,
+def _visual_parts(parts: tuple[UrdfPart, ...], scale: Vec3, name: str,
                   load: Callable[[MeshRef, int | None], _LoadedMesh]
                   ) -> tuple[tuple[VisualPart, ...], tuple[np.ndarray, np.ndarray], Vec3 | None]:
     """What a URDF draws: each part placed and scaled, its colour (a URDF colour paints a file without a
@@ -181,12 +182,12 @@ def _visual_parts(parts: tuple[UrdfPart, ...], scale: Vec3,
         pieces.append((v * S, f))
         if isinstance(g, MeshRef):
             loaded = load(g, part.line)
-            rgba = loaded.fallback_rgba if loaded.fallback_rgba is not None else (
-                None if loaded.textured else part.rgba)
-            if loaded.fallback_rgba is not None and part.rgba is not None:
+            textured, fallback = _how_drawn(loaded, g.path, name)
+            rgba = fallback if fallback is not None else (None if textured else part.rgba)
+            if fallback is not None and part.rgba is not None:
                 rgba = part.rgba
             total = (g.scale[0] * scale[0], g.scale[1] * scale[1], g.scale[2] * scale[2])
-            av, af = _arrays_if_untextured(loaded, total)
+            av, af = _arrays_if_untextured(loaded, rgba if fallback is not None else None, total)
             out.append(VisualPart(T_object_part=T, path=g.path.resolve(), scale=total, rgba=rgba, vertices_m=av,
                                   faces=af))
             colour = rgba[:3] if rgba is not None else loaded.rgb
@@ -200,9 +201,10 @@ def _visual_parts(parts: tuple[UrdfPart, ...], scale: Vec3,
     return tuple(out), _join(pieces), rgb
 
 
-def _arrays_if_untextured(loaded: _LoadedMesh, scale: Vec3) -> tuple[np.ndarray | None, np.ndarray | None]:
+def _arrays_if_untextured(loaded: _LoadedMesh, fallback: tuple[float, float, float, float] | None,
+                          scale: Vec3) -> tuple[np.ndarray | None, np.ndarray | None]:
     """A file whose texture image is missing is drawn from its triangles (the renderer refuses the file)."""
-    if loaded.fallback_rgba is None:
+    if fallback is None:
         return None, None
     return (np.asarray(loaded.mesh.vertices, dtype=float) * np.asarray(scale),
             np.asarray(loaded.mesh.faces, dtype=np.int64))
@@ -210,33 +212,35 @@ def _arrays_if_untextured(loaded: _LoadedMesh, scale: Vec3) -> tuple[np.ndarray 
 
 @dataclass(frozen=True, eq=False)
 class _LoadedMesh:
-    """A mesh file read and checked: its bytes, the mesh, whether it is textured, its material colour, and the
-    colour to draw it in when a texture image it names is missing."""
+    """A mesh file read and checked: its bytes, the mesh, its pieces, its material colour."""
 
     data: bytes
     mesh: Any
     piece_faces: tuple[int, ...]  # the file's separate pieces (OBJ objects, scene nodes): their face counts
-    textured: bool
     rgb: Vec3 | None
-    fallback_rgba: tuple[float, float, float, float] | None
+
+
+def _how_drawn(loaded: _LoadedMesh, path: Path, name: str) -> tuple[bool, tuple[float, float, float, float] | None]:
+    """Whether a drawn file shows its own texture, and the colour to draw it in instead when a texture image it
+    names is missing (said once). Asked only of drawn files: a collision file's materials never matter."""
+    from bt_grasp.scene.mesh_textures import missing_textures, texture_files
+
+    textures = texture_files(path, loaded.data)
+    missing = missing_textures(path, loaded.data)
+    if not missing:
+        return bool(textures), None
+    notice(log, f"object '{name}': {path.name} names texture image {missing[0].name}, which is missing "
+                f"({missing[0].parent}): drawn in its material colour")
+    return False, (*(loaded.rgb or DEFAULT_MESH_RGB), 1.0)
 
 
 def _load_mesh_file(path: Path, source: str | Path, line: int | None, name: str, *, solid: bool,
                     urdf: bool = False) -> _LoadedMesh:
-    from bt_grasp.scene.mesh_textures import missing_textures, texture_files
-
     if urdf and not path.is_file():
         raise ConfigError(source, f"names mesh file '{path}', which does not exist", where=line)
     data = _read(path, source, line, name)
     mesh, piece_faces, rgb = _parse_mesh(data, path, source, line, name, solid=solid)
-    textures = texture_files(path, data)
-    missing = missing_textures(path, data)
-    fallback = None
-    if missing:
-        fallback = (*(rgb or DEFAULT_MESH_RGB), 1.0)
-        notice(log, f"object '{name}': {path.name} names texture image {missing[0].name}, which is missing "
-                    f"({missing[0].parent}): drawn in its material colour")
-    return _LoadedMesh(data, mesh, piece_faces, bool(textures) and not missing, rgb, fallback)
+    return _LoadedMesh(data, mesh, piece_faces, rgb)
 
 
 def _read(path: Path, source: str | Path, line: int | None, name: str) -> bytes:
