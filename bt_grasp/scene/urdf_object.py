@@ -6,7 +6,9 @@ What is accepted (everything else is one sentence naming the URDF's line):
 - one rigid body: links joined by ``fixed`` joints are one body (their ``<origin>`` composes); links with no
   ``<visual>`` or ``<collision>`` are frames only (a ``center_of_mass`` marker) and are left out; a ``floating``
   joint from a link with no geometry is Gazebo's way to say "free body" (``<link name="world"/>``) and is left
-  out too. A ``revolute``, ``prismatic``, ``continuous`` or ``planar`` joint is an articulated object: refused.
+  out too, and so is a geometry-less root fixed to the object (a ``world`` placing it somewhere): the object's
+  frame is then its first link with geometry. A ``revolute``, ``prismatic``, ``continuous`` or ``planar``
+  joint is an articulated object: refused.
 - any number of ``<visual>`` and ``<collision>`` elements, each with its own ``<origin xyz rpy>``; geometry a
   ``<mesh filename scale>`` or a ``<box>``, ``<cylinder>`` or ``<sphere>``. Without ``<collision>`` the visuals
   collide; without ``<visual>`` the collisions are drawn.
@@ -19,8 +21,8 @@ What is accepted (everything else is one sentence naming the URDF's line):
   mass and inertia from the collision shapes at one density. Simulator-specific tags (``<contact>``,
   ``<gazebo>``) are ignored.
 
-The object's frame is the body's root link's frame. Nothing is read but the URDF itself here; the meshes are
-read by :mod:`bt_grasp.scene.meshes`.
+The object's frame is the body's root link's frame (its first link with geometry, below frame-only ones).
+Nothing is read but the URDF itself here; the meshes are read by :mod:`bt_grasp.scene.meshes`.
 """
 
 from __future__ import annotations
@@ -201,7 +203,19 @@ def _body_root(parent_of: dict[str, tuple[str, Any]], has_geometry: dict[str, bo
         a, b = (next(n for n, t in tops.items() if t == r) for r in roots[:2])
         raise ConfigError(path, f"has {len(roots)} separate bodies (links '{a}' and '{b}' are not joined by fixed "
                           "joints); a URDF object must be one rigid body", where=_line(links[b]))
-    return roots[0]
+    root = roots[0]
+    while not has_geometry[root]:  # a frame-only root (a 'world' fixed to the object): the object starts below it
+        children = [c for c, (p, _j) in parent_of.items() if p == root and _holds_geometry(c, parent_of, has_geometry)]
+        if len(children) != 1:
+            break
+        root = children[0]
+    return root
+
+
+def _holds_geometry(name: str, parent_of: dict[str, tuple[str, Any]], has_geometry: dict[str, bool]) -> bool:
+    """Whether ``name`` or a link below it (through fixed joints) has geometry."""
+    return has_geometry[name] or any(p == name and _holds_geometry(c, parent_of, has_geometry)
+                                     for c, (p, _j) in parent_of.items())
 
 
 def _link_frames(body_root: str, parent_of: dict[str, tuple[str, Any]], links: dict[str, Any],

@@ -139,3 +139,11 @@ def test_a_collision_mesh_solid_where_the_drawn_object_is_hollow_is_said_at_load
     assert said[0].startswith("object 'thing': its collision mesh (solid_cup.urdf) stands over 1 cm above its "
                               "drawn surface over 6"), said[0]
     assert "grasps planned into it stall (TRACKING_ERROR)" in said[0]
+
+
+def test_a_world_link_fixed_to_the_object_does_not_move_it(tmp_path: Path) -> None:
+    scene = tmp_path / "placed.yaml"
+    scene.write_text(f"version: 2\nobjects:\n  - {{name: block, shape: urdf, urdf: {MESHES / 'fixed_world.urdf'}, "
+                     "pose: {xy_m: [0.5, 0.0]}}\n")
+    g = load_scene(scene).objects[0].geometry
+    np.testing.assert_allclose(g.bounds_m, ((-0.02, -0.02, -0.02), (0.02, 0.02, 0.02)), atol=1e-6)
