@@ -12,10 +12,8 @@ What is accepted (everything else is one sentence naming the URDF's line):
 - any number of ``<visual>`` and ``<collision>`` elements, each with its own ``<origin xyz rpy>``; geometry a
   ``<mesh filename scale>`` or a ``<box>``, ``<cylinder>`` or ``<sphere>``. Without ``<collision>`` the visuals
   collide; without ``<visual>`` the collisions are drawn.
-- mesh file names relative to the URDF, absolute, ``file://``, or ``package://NAME/PATH``: NAME is found in the
-  scene's ``packages:`` map, else as a folder above the URDF named NAME or holding a ``package.xml`` that names
-  NAME, else as a folder NAME beside one of those folders (a workspace's ``src/``). PATH may not leave NAME's
-  folder.
+- mesh file names relative to the URDF, absolute, ``file://``, or ``package://NAME/PATH``
+  (:mod:`bt_grasp.scene.mesh_paths`).
 - ``<material>`` colours, inline or named at the top of the file; the mass of ``<inertial><mass>`` (summed over
   the body's links). The inertial ``<origin>`` and ``<inertia>`` are not used: the simulator takes the centre of
   mass and inertia from the collision shapes at one density. Simulator-specific tags (``<contact>``,
@@ -27,7 +25,6 @@ Nothing is read but the URDF itself here; the meshes are read by :mod:`bt_grasp.
 
 from __future__ import annotations
 
-import logging
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -36,18 +33,13 @@ from typing import Any, Literal
 
 import numpy as np
 
-from bt_grasp.errors import ConfigError, InputError
+from bt_grasp.errors import ConfigError
 from bt_grasp.geometry import T_from_xyz_rpy
-from bt_grasp.safe_path import check_relative_name
 from bt_grasp.scene.mesh_geometry import Vec3
-
-log = logging.getLogger(__name__)
+from bt_grasp.scene.mesh_paths import MeshResolver
 
 #: joint types that keep the object one rigid body
 RIGID_JOINTS = ("fixed",)
-#: how many folders above the URDF a ``package://`` name is looked for
-PACKAGE_SEARCH_DEPTH = 6
-_PACKAGE_NAME = re.compile(r"<name>\s*([^<\s]+)\s*</name>")
 
 
 @dataclass(frozen=True)
@@ -97,7 +89,7 @@ def read_urdf(data: bytes, path: Path, packages: Mapping[str, Path] | None = Non
     parent_of = _rigid_tree(root, links, has_geometry, path)
     body_root = _body_root(parent_of, has_geometry, links, path)
     T_root_link = _link_frames(body_root, parent_of, links, path)
-    resolver = _MeshResolver(path, packages or {})
+    resolver = MeshResolver(path, packages or {})
     visuals: list[UrdfPart] = []
     collisions: list[UrdfPart] = []
     masses: list[float] = []
@@ -274,7 +266,7 @@ def _named_materials(root: Any, path: Path) -> dict[str, tuple[float, float, flo
     return {el.get("name", ""): _rgba(el, path) for el in root.findall("material")}
 
 
-def _part(element: Any, T_root_link: np.ndarray, path: Path, resolver: _MeshResolver,
+def _part(element: Any, T_root_link: np.ndarray, path: Path, resolver: MeshResolver,
           materials: dict[str, tuple[float, float, float, float] | None]) -> UrdfPart:
     geometry = element.find("geometry")
     shapes = [c for c in (geometry if geometry is not None else []) if isinstance(c.tag, str)]
@@ -290,7 +282,7 @@ def _part(element: Any, T_root_link: np.ndarray, path: Path, resolver: _MeshReso
                     _line(shape))
 
 
-def _geometry(shape: Any, path: Path, resolver: _MeshResolver) -> MeshRef | Primitive:
+def _geometry(shape: Any, path: Path, resolver: MeshResolver) -> MeshRef | Primitive:
     def positive(values: tuple[float, ...]) -> tuple[float, ...]:
         if not all(v > 0 for v in values):
             raise ConfigError(path, f"<{shape.tag}> sizes must be positive", where=_line(shape))
@@ -323,75 +315,3 @@ def _mass(link: Any, path: Path) -> float | None:
         raise ConfigError(path, f"link mass is {mass.get('value')!r}; a mass must be a positive number of kg",
                           where=_line(mass))
     return value
-
-
-# -- mesh file names -------------------------------------------------------------------------------------------
-
-class _MeshResolver:
-    """Mesh file names of one URDF -> paths (see the module's rules for ``package://``)."""
-
-    def __init__(self, urdf: Path, packages: Mapping[str, Path]) -> None:
-        self.urdf = urdf
-        self.packages = packages
-        self._found: dict[str, Path] = {}
-
-    def resolve(self, filename: str, line: int | None) -> Path:
-        if not filename:
-            raise ConfigError(self.urdf, "<mesh> has no filename", where=line)
-        if filename.startswith("package://"):
-            return self._package_file(filename, line)
-        if filename.startswith("file://"):
-            filename = filename.removeprefix("file://")
-        elif "://" in filename:
-            raise ConfigError(self.urdf, f"mesh filename '{filename}' is a URL; give a file (relative to the URDF, "
-                              "absolute, file:// or package://)", where=line)
-        return self.urdf.parent / filename
-
-    def _package_file(self, filename: str, line: int | None) -> Path:
-        name, _, rest = filename.removeprefix("package://").partition("/")
-        try:
-            relative = check_relative_name(rest, source=self.urdf, what=f"mesh '{filename}': its path")
-        except InputError as exc:
-            raise ConfigError(self.urdf, exc.problem, where=line) from None
-        folder = self._package_folder(name)
-        if folder is None:
-            raise ConfigError(self.urdf, f"mesh '{filename}': no package '{name}' found (looked for a folder of that "
-                              "name, or holding a package.xml that names it, above the URDF and beside those "
-                              f"folders); map it to a folder in the scene: 'packages: {{{name}: FOLDER}}'", where=line)
-        return folder / relative
-
-    def _package_folder(self, name: str) -> Path | None:
-        if name in self.packages:
-            return self.packages[name]
-        if name not in self._found:
-            found = _find_package(self.urdf.resolve().parent, name)
-            if found is None:
-                return None
-            log.info("package://%s/ resolved to %s", name, found)
-            self._found[name] = found
-        return self._found[name]
-
-
-def _find_package(start: Path, name: str) -> Path | None:
-    if not name or name in (".", ".."):
-        return None
-    ancestors = [start, *start.parents][:PACKAGE_SEARCH_DEPTH]
-    for folder in ancestors:
-        if folder.name == name or _package_xml_name(folder) == name:
-            return folder
-    for folder in ancestors:
-        beside = folder / name
-        if beside.is_dir():
-            return beside
-    return None
-
-
-def _package_xml_name(folder: Path) -> str | None:
-    manifest = folder / "package.xml"
-    try:
-        if not manifest.is_file() or manifest.stat().st_size > 1 << 20:
-            return None
-        match = _PACKAGE_NAME.search(manifest.read_text(errors="replace"))
-    except OSError:
-        return None
-    return match.group(1) if match else None
