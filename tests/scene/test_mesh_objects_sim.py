@@ -4,6 +4,7 @@ where drawn (their resting height matches their geometry), and the second load p
 from __future__ import annotations
 
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -82,3 +83,18 @@ def test_third_party_style_objects_build_draw_and_rest_on_their_collision_parts(
     assert oracle._body("thing").mass == pytest.approx(mass_kg, rel=0.02)
     frame = world.camera.capture()  # the renderer drew every part (it refuses a file whose texture is missing)
     assert frame is not None and np.isfinite(frame.depth_m).any()
+
+
+@pytest.mark.parametrize("scene", ["scene_vhacd_urdf.yaml", "scene_ros_urdf.yaml"])
+def test_a_third_party_style_object_is_picked_with_no_colour_given(scene: str, tmp_path: Path) -> None:
+    """Issue 28's check in small: an object written as pybullet's YCB set or a ROS package writes it, loaded and
+    picked by the recovery tree with no --color (no colour is named anywhere), judged by physics."""
+    from bt_grasp.episode.episode import Episode
+    from bt_grasp.episode.request import EpisodeRequest
+
+    root = MESHES.parents[2]
+    request = EpisodeRequest(tree=root / "trees" / "pick_with_recovery.xml", scene=MESHES / scene, seed=0,
+                             calibration=root / "scenes" / "tabletop.calibration.yaml",
+                             blackboard={"lift_height": 0.15}, log=tmp_path / "run.mcap")
+    result = Episode(request).run()
+    assert result.success and result.judged.object_name == "thing" and result.judged.in_gripper, result.to_json()

@@ -73,8 +73,9 @@ def test_a_ros_package_urdf_resolves_package_paths_and_joins_its_fixed_links() -
     np.testing.assert_allclose(g.bounds_m, ((-0.02, -0.02, 0.0), (0.04, 0.02, 0.08)), atol=1e-6)
     assert obj.mass_or_default_kg == pytest.approx(0.2)  # both links' masses
     paths = [v.path.name if v.path else v.primitive for v in g.visuals]
-    assert paths == ["toy.dae", "handle.stl"]  # the world link, the empty frame link and <gazebo> add nothing
-    toy, handle = g.visuals
+    assert paths == ["toy.dae", "cylinder", "handle.stl"]  # the world link, the frame link and <gazebo> add nothing
+    toy, knob, handle = g.visuals
+    assert knob.dims_m == pytest.approx((0.01, 0.02)) and knob.rgba == (1.0, 0.5, 0.1, 1.0)
     assert toy.scale == pytest.approx((0.001, 0.001, 0.001)) and toy.path == (MESHES / "ros_style/meshes/toy.dae")
     np.testing.assert_allclose(toy.T_object_part[:3, 3], (0.0, 0.0, 0.03))
     np.testing.assert_allclose(handle.T_object_part[:3, 3], (0.03, 0.0, 0.03))
@@ -98,8 +99,8 @@ def test_the_scene_scale_scales_every_part_and_its_place(tmp_path: Path) -> None
     scene.write_text(text.replace("    pose:", "    scale: 2\n    pose:"))
     g = load_scene(scene).objects[0].geometry
     np.testing.assert_allclose(g.bounds_m, ((-0.04, -0.04, 0.0), (0.08, 0.04, 0.16)), atol=1e-6)
-    toy, handle = g.visuals
-    assert toy.scale == pytest.approx((0.002, 0.002, 0.002))
+    toy, knob, handle = g.visuals
+    assert toy.scale == pytest.approx((0.002, 0.002, 0.002)) and knob.dims_m == pytest.approx((0.02, 0.04))
     np.testing.assert_allclose(handle.T_object_part[:3, 3], (0.06, 0.0, 0.06))
 
 
