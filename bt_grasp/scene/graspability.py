@@ -52,6 +52,8 @@ def cannot_pick(name: str, geometry: MeshGeometry, mass_kg: float | None, object
     return None
 
 
+#: the collision mesh reaching this far beyond the drawn one's bounding box (or the drawn one beyond it), m
+UNSEEN_REACH_M = 0.005
 #: the drawn and the collision surfaces are compared on a grid of this cell, m
 HEIGHT_CELL_M = 0.002
 #: the collision surface this far above the drawn one counts as solid where the camera sees open space, m
@@ -91,11 +93,28 @@ def hidden_solid_share(geometry: MeshGeometry, samples: int = 40000) -> float:
 
 
 def collision_hides_open_space(name: str, geometry: MeshGeometry) -> str | None:
-    """A sentence when the collision mesh is solid where much of the drawn object is open (see the module)."""
+    """A sentence when the collision mesh reaches beyond what is drawn (an unseen part, a collision file in other
+    units) or the drawn mesh beyond it, or when it is solid where much of the drawn object is open (see the
+    module)."""
+    if geometry.visual_vertices_m is None:
+        return None
+    drawn, _faces = geometry.visual_mesh_m()
+    lo, hi = np.asarray(geometry.bounds_m[0]), np.asarray(geometry.bounds_m[1])
+    reach = np.concatenate([drawn.min(axis=0) - lo, hi - drawn.max(axis=0)])  # > 0: the collision reaches further
+    axis = int(np.argmax(np.abs(reach)))
+    if abs(reach[axis]) > UNSEEN_REACH_M:
+        direction = ("-" if axis < 3 else "+") + "xyz"[axis % 3]
+        if reach[axis] > 0:
+            return (f"object '{name}': its collision geometry reaches "
+                    f"{reach[axis] * 1000:.0f} mm beyond what is drawn (along {direction} of its frame): an unseen "
+                    "part the fingers or the palm meet (TRACKING_ERROR, COLLISION)")
+        return (f"object '{name}': what is drawn reaches {-reach[axis] * 1000:.0f} mm beyond its collision "
+                f"geometry (along {direction} of its frame): the camera sees a part the "
+                "fingers close through (GRASP_EMPTY)")
     share = hidden_solid_share(geometry)
     if share <= HIDDEN_SOLID_SHARE:
         return None
-    return (f"object '{name}': its collision mesh ({geometry.collision_path.name}) stands over "
+    return (f"object '{name}': its collision geometry stands over "
             f"{HIDDEN_SOLID_M * 100:.0f} cm above its drawn surface over {share:.0%} of its footprint seen from above: "
             "a hollow or gap the camera sees is solid to the fingers, and grasps planned into it stall "
             "(TRACKING_ERROR)")

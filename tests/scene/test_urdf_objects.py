@@ -134,11 +134,11 @@ def test_a_collision_mesh_solid_where_the_drawn_object_is_hollow_is_said_at_load
         load_scene(MESHES / "scene_solid_cup.yaml")
         for faithful in ("scene_vhacd_urdf.yaml", "scene_ros_urdf.yaml", "scene_urdf.yaml", "scene_cup.yaml"):
             load_scene(MESHES / faithful)
-    said = [r.getMessage() for r in caplog.records if "collision mesh" in r.getMessage()]
+    said = [r.getMessage() for r in caplog.records if "collision geometry" in r.getMessage()]
     assert len(said) == 1, said
     # the cup's 4.8 cm hollow is 64 % of its 6 cm footprint
-    assert said[0].startswith("object 'thing': its collision mesh (solid_cup.urdf) stands over 1 cm above its "
-                              "drawn surface over 6"), said[0]
+    assert said[0].startswith("object 'thing': its collision geometry stands over 1 cm above its drawn surface "
+                              "over 6"), said[0]
     assert "grasps planned into it stall (TRACKING_ERROR)" in said[0]
 
 
@@ -148,3 +148,18 @@ def test_a_world_link_fixed_to_the_object_does_not_move_it(tmp_path: Path) -> No
                      "pose: {xy_m: [0.5, 0.0]}}\n")
     g = load_scene(scene).objects[0].geometry
     np.testing.assert_allclose(g.bounds_m, ((-0.02, -0.02, -0.02), (0.02, 0.02, 0.02)), atol=1e-6)
+
+
+def test_a_collision_part_that_is_not_drawn_is_said_at_load(tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
+    """The ROS-style toy with its knob collision-only: the palm met the unseen knob and every descent stalled
+    (pick_with_recovery.xml, seed 0: 5 x TRACKING_ERROR). Every object of docs/scenes.md's 'Objects no one here
+    made' keeps its collision within 1.7 mm of what it draws."""
+    scene = tmp_path / "knob.yaml"
+    scene.write_text(f"version: 2\nobjects:\n  - {{name: toy, shape: urdf, urdf: "
+                     f"{MESHES / 'ros_style/urdf/toy_unseen_knob.urdf'}, pose: {{xy_m: [0.5, 0.0]}}}}\n")
+    with caplog.at_level(logging.WARNING):
+        load_scene(scene)
+        load_scene(MESHES / "scene_ros_urdf.yaml")
+    said = [r.getMessage() for r in caplog.records]
+    assert said == ["object 'toy': its collision geometry reaches 20 mm beyond what is drawn (along +z of its "
+                    "frame): an unseen part the fingers or the palm meet (TRACKING_ERROR, COLLISION)"]
