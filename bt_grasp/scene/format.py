@@ -202,9 +202,9 @@ def _note_objects_beyond_the_gripper(scene: Scene) -> None:
         if obj.is_mesh:
             why = cannot_pick(obj.name, obj.geometry, obj.mass_or_default_kg, obj.friction,
                               scene.robot.gripper_force_n, scene.robot.finger_friction)
-            for sentence in (why, collision_hides_open_space(obj.name, obj.geometry)):
-                if sentence is not None:
-                    notice(log, sentence)
+            sentence = why or collision_hides_open_space(obj.name, obj.geometry)  # never pickable: said once
+            if sentence is not None:
+                notice(log, sentence)
 
 
 def _package_folders(scene: Scene, path: str | Path, lines: dict[KeyPath, int]) -> dict[str, Path]:
