@@ -195,14 +195,13 @@ def load_scene(path: str | Path) -> Scene:
 
 
 def _note_objects_beyond_the_gripper(scene: Scene) -> None:
-    from bt_grasp.scene.graspability import cannot_pick, collision_hides_open_space
+    from bt_grasp.scene.graspability import object_warning
     from bt_grasp.scene.notices import notice
 
     for obj in scene.objects:
         if obj.is_mesh:
-            why = cannot_pick(obj.name, obj.geometry, obj.mass_or_default_kg, obj.friction,
-                              scene.robot.gripper_force_n, scene.robot.finger_friction)
-            sentence = why or collision_hides_open_space(obj.name, obj.geometry)  # never pickable: said once
+            sentence = object_warning(obj.name, obj.geometry, obj.mass_or_default_kg, obj.friction,
+                                      scene.robot.gripper_force_n, scene.robot.finger_friction)
             if sentence is not None:
                 notice(log, sentence)
 

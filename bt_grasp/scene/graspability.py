@@ -11,6 +11,8 @@ not something the pipeline can see; the sentence names it."""
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 from bt_grasp.robot_description import MAX_OPENING_M
@@ -125,3 +127,12 @@ def collision_hides_open_space(name: str, geometry: MeshGeometry) -> str | None:
 def _direction(index: int) -> str:
     """An index of (min x, min y, min z, max x, max y, max z) as a direction: '-x' ... '+z'."""
     return ("-" if index < 3 else "+") + "xyz"[index % 3]
+
+
+@lru_cache(maxsize=256)
+def object_warning(name: str, geometry: MeshGeometry, mass_kg: float | None, object_friction: float,
+                   gripper_force_n: float, finger_friction: float) -> str | None:
+    """The one sentence loading says about an object, if any: it can never be picked, else its collision is
+    unlike its drawing. Computed once per object and cell (a bench loads its scene every episode)."""
+    return (cannot_pick(name, geometry, mass_kg, object_friction, gripper_force_n, finger_friction)
+            or collision_hides_open_space(name, geometry))
