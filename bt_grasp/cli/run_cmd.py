@@ -148,7 +148,9 @@ def run(
         None, "--goal", help="What the judge checks: pick (held and lifted) or clear; default: the scene's goal, "
         "else pick (the other goals, e.g. stack, are declared in the scene file)."
     ),
-    color: str = typer.Option("red", "--color", help="The pick goal's colour, also {color} for the tree ('' = any)."),
+    color: str | None = typer.Option(
+        None, "--color", help="The pick goal's colour, also {color} for the tree ('' = any). Default: red, or any "
+        "object on a scene with mesh or URDF objects."),
     lift_height: float = typer.Option(
         DEFAULT_LIFT_HEIGHT_M, "--lift-height", help="The pick goal's lift height in metres, also {lift_height}."
     ),
@@ -200,13 +202,15 @@ def run(
     from bt_grasp.episode.request import EpisodeRequest, parse_assignments
     from bt_grasp.output_files import check_output_file, write_output_file
 
-    blackboard: dict[str, BlackboardValue] = {"color": color, "lift_height": lift_height}
+    blackboard: dict[str, BlackboardValue] = {"lift_height": lift_height}
+    if color is not None:  # not given: the scene's default (bt_grasp.scene.run_goal.default_color)
+        blackboard["color"] = color
     blackboard.update(parse_assignments(set_))
     request = EpisodeRequest(
         tree=tree,
         scene=scene,
         seed=seed,
-        goal=_goal(goal.value, color, lift_height) if goal is not None else None,
+        goal=_goal(goal.value, "red" if color is None else color, lift_height) if goal is not None else None,
         calibration=calibration,
         log=log,
         max_ticks=max_ticks,

@@ -121,10 +121,11 @@ def _check_goal(goal: Goal, request: EpisodeRequest, scene: Scene) -> None:
     if problem is not None:
         raise InputError(request.scene if request.goal is None else "--goal", problem)
     if isinstance(goal, PickGoal) and goal.color and goal.object is None:
-        colors = sorted({str(o.color) for o in scene.objects})
+        colors = sorted({str(o.color) for o in scene.objects if o.color is not None})
         if goal.color not in colors:
             raise InputError("--color", f"the pick goal's colour '{goal.color}' is not the colour of any object "
-                                        f"of {request.scene}; colours there: {', '.join(colors) or 'none'}")
+                                        f"of {request.scene} (colours there: {', '.join(colors) or 'none named'}); "
+                                        "give --color '' to pick any object")
 
 
 class Episode:

@@ -21,7 +21,7 @@ import shutil
 import statistics
 import tempfile
 from collections import Counter
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -31,7 +31,6 @@ from bt_grasp.interfaces import Mount
 
 if TYPE_CHECKING:
     from bt_grasp.episode import EpisodeResult
-    from bt_grasp.scene.objects import SceneObject
 
 
 def run_pick_bench(
@@ -53,6 +52,7 @@ def run_pick_bench(
     from bt_grasp.perception.calibration_file import save_calibration
     from bt_grasp.scene.format import load_scene
     from bt_grasp.scene.goals import PickGoal
+    from bt_grasp.scene.run_goal import default_color
 
     if color is None:
         color = default_color(load_scene(scene).objects)
@@ -128,12 +128,6 @@ def class_target(scene: Path, seed: int) -> tuple[str, str, str]:
     drawn = draw_layout(config, stream).objects
     target = drawn[seed % len(drawn)]
     return target.name, object_class(target.shape, target.mesh, scene, target.name), str(target.color)
-
-
-def default_color(objects: Sequence[SceneObject]) -> str:
-    """The colour a pick bench asks for when none is given: 'red' (today's figures) unless the scene declares a
-    mesh or URDF object; then '' (any object: the tree chooses by geometry, whatever the colours drawn)."""
-    return "" if any(o.is_mesh for o in objects) else "red"
 
 
 def _picked(run: EpisodeResult) -> str:

@@ -128,7 +128,8 @@ def synthesize_grasps(
     candidates: list[GraspCandidate] = []
     widest_fit = s.max_opening_m - s.width_margin_m
     n_fit = 0
-    for angle, width, alignment, side in _closing_options(target, s):
+    options = _closing_options(target, s)
+    for angle, width, alignment, side in options:
         if width > widest_fit:
             continue
         n_fit += 1
@@ -152,8 +153,10 @@ def synthesize_grasps(
                       f"{clear_txt}, tcp {z * 1e3:.1f} mm (base z)")
             candidates.append(GraspCandidate(T, pre, float(width), float(score), reason))
     if n_fit == 0:
-        msg = (f"the {target.label} object is {min(target.size_m[:2]) * 1e3:.0f} mm across its narrowest side; "
-               f"the gripper takes at most {widest_fit * 1e3:.0f} mm")
+        across = min(width for _angle, width, _alignment, _side in options)  # a round object: its widest seen
+        where = "seen round, across its widest" if target.shape == "round" else "across its narrowest side"
+        msg = (f"the {target.label} object is {across * 1e3:.1f} mm {where}; the gripper takes at most "
+               f"{widest_fit * 1e3:.1f} mm")
         log.info("grasps: %s", msg)
         return GraspResult(GraspStatus.TOO_WIDE, (), msg)
     if not candidates:

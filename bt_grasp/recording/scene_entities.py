@@ -132,7 +132,9 @@ def object_model(geometry: MeshGeometry) -> bytes:
 
     vertices, faces = geometry.vertices_m, geometry.faces
     candidates: list[tuple[str, Any, Any]] = []
-    if geometry.visual_path != geometry.collision_path:
+    if geometry.visual_vertices_m is not None:
+        candidates.append(("visual", *geometry.visual_mesh_m()))
+    elif geometry.visual_path != geometry.collision_path:
         try:
             data = read_user_file(geometry.visual_path, MAX_MESH_BYTES)
             visual: Any = trimesh.load(io.BytesIO(data), file_type=geometry.visual_path.suffix.lower()[1:],

@@ -8,6 +8,7 @@ robot is bolted, the camera's nominal mount) is here; the objects' drawn poses a
 
 from __future__ import annotations
 
+import logging
 from pathlib import Path
 from typing import Annotated, Literal
 
@@ -23,10 +24,12 @@ from bt_grasp.scene.objects import Choose, SceneObject
 
 __all__ = ["COLOR_NAMES", "SCENE_VERSION", "Scene", "load_scene"]
 
+log = logging.getLogger(__name__)
+
 #: the scene file format this bt_grasp writes and reads (a file without ``version`` is version 1)
 SCENE_VERSION = 2
 #: keys that need ``version: 2``
-_V2_KEYS = ("goal", "fixtures", "calibration", "object_gap_m", "choose")
+_V2_KEYS = ("goal", "fixtures", "calibration", "object_gap_m", "choose", "packages")
 #: a top-down place is planned only this far (horizontally) from the robot base, m
 TOP_DOWN_REACH_M = 0.80
 
@@ -34,6 +37,7 @@ PositiveFloat = Annotated[float, Field(gt=0)]
 NonNegFloat = Annotated[float, Field(ge=0)]
 Vec3 = tuple[float, float, float]
 Range = tuple[float, float]
+PackageName = Annotated[str, Field(pattern=r"^[A-Za-z0-9_.\-]+$")]
 
 #: physics steps one tree tick may take: 5 by default; 1e-9 s steps made one tick 10^7 steps (a run that never
 #: ended, found by the pre-review attack)
@@ -154,6 +158,9 @@ class Scene(StrictModel):
     goal: Goal | None = None
     #: (version 2) the calibration file made by `bt-grasp calibrate` for this scene, relative to this file
     calibration: str | None = None
+    #: (version 2) folders of the packages URDF objects name in ``package://NAME/...`` mesh paths, relative to
+    #: this file (else found beside the URDF: bt_grasp.scene.urdf_object)
+    packages: dict[PackageName, Annotated[str, Field(min_length=1)]] | None = None
 
     @model_validator(mode="after")
     def _unique_names(self) -> Scene:
@@ -197,8 +204,34 @@ def load_scene(path: str | Path) -> Scene:
     if any(o.is_mesh for o in scene.objects):
         from bt_grasp.scene.meshes import attach_geometry  # trimesh is imported only for scenes with meshes
 
-        attach_geometry(scene.objects, max(scene.table.size_m[0], scene.table.size_m[1]), path, lines)
+        attach_geometry(scene.objects, max(scene.table.size_m[0], scene.table.size_m[1]), path, lines,
+                        _package_folders(scene, path, lines))
+        _note_objects_beyond_the_gripper(scene)
     return scene
+
+
+def _note_objects_beyond_the_gripper(scene: Scene) -> None:
+    from bt_grasp.scene.graspability import object_warning
+    from bt_grasp.scene.notices import notice
+
+    for obj in scene.objects:
+        if obj.is_mesh:
+            sentence = object_warning(obj.name, obj.geometry, obj.mass_or_default_kg, obj.friction,
+                                      scene.robot.gripper_force_n, scene.robot.finger_friction)
+            if sentence is not None:
+                notice(log, sentence)
+
+
+def _package_folders(scene: Scene, path: str | Path, lines: dict[KeyPath, int]) -> dict[str, Path]:
+    """The scene's ``packages:``, each a folder relative to the scene file that must exist."""
+    folders: dict[str, Path] = {}
+    for name, folder in (scene.packages or {}).items():
+        resolved = Path(path).parent / folder
+        if not resolved.is_dir():
+            raise ConfigError(path, f"package '{name}' is mapped to '{folder}', which is not a folder",
+                              where=lines.get(("packages", name), lines.get(("packages",))))
+        folders[name] = resolved
+    return folders
 
 
 def _check_version(data: dict[str, object], path: str | Path, lines: dict[KeyPath, int]) -> None:

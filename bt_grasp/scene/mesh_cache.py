@@ -1,5 +1,7 @@
 """Collision shapes for mesh objects: the exact convex hull where the mesh is convex, else a convex
-decomposition (CoACD), cached on disk so the second run pays nothing.
+decomposition (CoACD), cached on disk so the second run pays nothing. A mesh made of several separate pieces
+(an object set's V-HACD collision file, a URDF with several ``<collision>`` elements) is taken piece by piece:
+each convex piece is its own hull, and only a non-convex piece is decomposed.
 
 The cache folder is ``$BT_GRASP_CACHE_DIR/meshes`` when that variable is set, else
 ``$XDG_CACHE_HOME/bt_grasp/meshes`` (``~/.cache/bt_grasp/meshes``). An entry's file name is a hash of the
@@ -19,6 +21,7 @@ import os
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -27,11 +30,15 @@ from bt_grasp.scene.mesh_geometry import MeshGeometry
 
 log = logging.getLogger(__name__)
 
-#: bump when the cached content's meaning changes
-CACHE_FORMAT = 1
+#: bump when the cached content's meaning changes (2: separate pieces are taken one by one)
+CACHE_FORMAT = 2
 CACHE_ENV = "BT_GRASP_CACHE_DIR"
 #: a mesh is convex when its volume is within this fraction of its convex hull's
 CONVEX_VOLUME_TOL = 0.01
+#: a mesh of more separate pieces than this is decomposed as a whole (a scanned mesh's specks, not a V-HACD file)
+MAX_PIECES = 64
+#: decomposing a mesh of more triangles than this is announced as a warning (it can take minutes)
+LONG_DECOMPOSITION_FACES = 2000
 
 
 @dataclass(frozen=True)
@@ -48,6 +55,7 @@ class CoacdParams:
 class ShapeSource(enum.Enum):
     HULL = "convex hull"  # the mesh is convex: its hull is exact
     DECOMPOSITION = "convex decomposition"  # CoACD parts
+    PIECES = "convex pieces"  # separate pieces, each convex (its hull) or decomposed
 
 
 @dataclass(frozen=True, eq=False)
@@ -93,13 +101,65 @@ def collision_shapes(geometry: MeshGeometry, params: CoacdParams = CoacdParams()
 def compute_shapes(geometry: MeshGeometry, params: CoacdParams) -> CollisionShapes:
     import trimesh
 
+    pieces = _pieces(geometry)
+    if 1 < len(pieces) <= MAX_PIECES:
+        parts: list[np.ndarray] = []
+        for piece in pieces:
+            parts += _piece_shapes(piece, params, geometry)
+        volume = float(sum(trimesh.convex.convex_hull(p).volume for p in parts))
+        return CollisionShapes(tuple(parts), ShapeSource.PIECES, False, volume)
     mesh = trimesh.Trimesh(vertices=geometry.vertices_m, faces=geometry.faces, process=True)
     hull = mesh.convex_hull
-    if mesh.is_watertight and abs(hull.volume - mesh.volume) <= CONVEX_VOLUME_TOL * hull.volume:
+    if _is_convex(mesh, hull):
         return CollisionShapes((np.asarray(hull.vertices, dtype=float),), ShapeSource.HULL, False, float(hull.volume))
-    parts = decompose(mesh.vertices, mesh.faces, params)
+    parts = _decompose_logged(mesh, params, geometry)
     volume = float(sum(trimesh.convex.convex_hull(p).volume for p in parts))
     return CollisionShapes(tuple(parts), ShapeSource.DECOMPOSITION, False, volume)
+
+
+def _pieces(geometry: MeshGeometry) -> list[Any]:
+    """The collision mesh's separate pieces: the ones its files give (``piece_faces``), each further split where
+    it falls apart into unconnected bodies; slivers that span no volume are left out."""
+    import trimesh
+
+    counts = geometry.piece_faces or (len(geometry.faces),)
+    pieces = []
+    for faces in np.split(np.asarray(geometry.faces), np.cumsum(counts)[:-1]):
+        piece = trimesh.Trimesh(vertices=geometry.vertices_m, faces=faces, process=True)
+        piece.remove_unreferenced_vertices()
+        pieces += piece.split(only_watertight=False) if piece.body_count > 1 else [piece]
+    return [p for p in pieces if _spans_a_volume(p)]
+
+
+def _is_convex(mesh: Any, hull: Any) -> bool:
+    return bool(mesh.is_watertight and abs(hull.volume - mesh.volume) <= CONVEX_VOLUME_TOL * hull.volume)
+
+
+def _spans_a_volume(piece: Any) -> bool:
+    """A piece worth a collision shape: four or more points not on one plane (a V-HACD file's flat slivers are not)."""
+    v = np.unique(np.asarray(piece.vertices, dtype=float).round(9), axis=0)
+    if len(v) < 4:
+        return False
+    return bool(np.linalg.svd(v - v.mean(axis=0), compute_uv=False)[-1] > 1e-7)
+
+
+def _piece_shapes(piece: Any, params: CoacdParams, geometry: MeshGeometry) -> list[np.ndarray]:
+    hull = piece.convex_hull
+    if _is_convex(piece, hull):
+        return [np.asarray(hull.vertices, dtype=float)]
+    return _decompose_logged(piece, params, geometry)
+
+
+def _decompose_logged(mesh: Any, params: CoacdParams, geometry: MeshGeometry) -> list[np.ndarray]:
+    """CoACD on one mesh, said first: on a large mesh as a warning (the only output a user sees), as the wait can
+    be minutes (measured: docs/scenes.md, "Objects no one here made")."""
+    sentence = (f"decomposing {geometry.collision_path.name} ({len(mesh.faces)} triangles) into convex parts with "
+                "CoACD: once, then read from the cache")
+    if len(mesh.faces) > LONG_DECOMPOSITION_FACES:
+        log.warning("%s; a large mesh can take minutes", sentence)
+    else:
+        log.info("%s", sentence)
+    return decompose(mesh.vertices, mesh.faces, params)
 
 
 def decompose(vertices: np.ndarray, faces: np.ndarray, params: CoacdParams) -> list[np.ndarray]:

@@ -1,10 +1,12 @@
 """Reading and checking a scene's mesh and URDF objects when the scene loads (bad input: one sentence, exit 2).
 
-A ``shape: mesh`` object names an OBJ, STL, PLY, GLB or GLTF file; a ``shape: urdf`` object names a URDF with
-one link and no joints whose ``<visual>``/``<collision>`` geometry are meshes. Paths are relative to the file
-that names them. Each file is read once, under a size limit, and checked: present and readable, a mesh at all,
-not empty, not degenerate (its vertices must span a volume), of a plausible size once scaled (at least 1 mm, at
-most the table's largest side), and a URDF's mass positive. The result is a
+A ``shape: mesh`` object names an OBJ, STL, PLY, GLB, GLTF or DAE file; a ``shape: urdf`` object names a URDF
+describing one rigid body (:mod:`bt_grasp.scene.urdf_object`: mesh or primitive parts, each at its
+``<origin>``). Paths are relative to the file that names them. Each file is read once, under a size limit, and
+checked: present and readable, a mesh at all, not empty, a collision mesh not degenerate (its vertices must span
+a volume), of a plausible size once scaled (at least 1 mm, at most the table's largest side), and a URDF's mass
+positive. A drawn file whose materials name a texture image that is missing is drawn in its material's colour
+(:mod:`bt_grasp.scene.mesh_textures`; the renderer would refuse it). The result is a
 :class:`~bt_grasp.scene.mesh_geometry.MeshGeometry` attached to the object. Nothing is written anywhere.
 """
 
@@ -12,7 +14,9 @@ from __future__ import annotations
 
 import hashlib
 import io
-from collections.abc import Sequence
+import logging
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -21,8 +25,12 @@ import numpy as np
 from bt_grasp.bounded_io import read_user_file
 from bt_grasp.config import KeyPath
 from bt_grasp.errors import ConfigError
-from bt_grasp.scene.mesh_geometry import MeshGeometry, Vec3
-from bt_grasp.scene.objects import MESH_SUFFIXES
+from bt_grasp.scene.mesh_geometry import MeshGeometry, Vec3, VisualPart
+from bt_grasp.scene.notices import notice
+from bt_grasp.scene.objects import DEFAULT_MESH_RGB, MESH_SUFFIXES
+from bt_grasp.scene.urdf_object import MeshRef, Primitive, UrdfPart
+
+log = logging.getLogger(__name__)
 
 if TYPE_CHECKING:
     from bt_grasp.scene.objects import SceneObject
@@ -36,9 +44,10 @@ DEGENERATE_TOL_M = 1e-6
 
 
 def attach_geometry(objects: Sequence[SceneObject], table_size_m: float, source: str | Path,
-                    lines: dict[KeyPath, int]) -> None:
+                    lines: dict[KeyPath, int], packages: Mapping[str, Path] | None = None) -> None:
     """Read every mesh/URDF object's files (relative to ``source``, the scene file) and attach the result;
-    ``table_size_m`` (the table's largest side) bounds an object's size."""
+    ``table_size_m`` (the table's largest side) bounds an object's size; ``packages`` maps ``package://`` names
+    to folders (the scene's ``packages:``)."""
     folder = Path(source).parent
     for i, obj in enumerate(objects):
         if not obj.is_mesh:
@@ -50,7 +59,7 @@ def attach_geometry(objects: Sequence[SceneObject], table_size_m: float, source:
             geometry = read_mesh_object(folder / obj.mesh, obj.scale_xyz, source, line, obj.name)
         else:
             assert obj.urdf is not None
-            geometry = read_urdf_object(folder / obj.urdf, obj.scale_xyz, source, line, obj.name)
+            geometry = read_urdf_object(folder / obj.urdf, obj.scale_xyz, source, line, obj.name, packages)
         _check_size(geometry, table_size_m, source, lines.get(("objects", i, "scale"), line), obj.name)
         obj.with_geometry(geometry)
 
@@ -68,47 +77,170 @@ def _check_size(geometry: MeshGeometry, table: float, source: str | Path, line: 
 
 def read_mesh_object(path: Path, scale: Vec3, source: str | Path, line: int | None, name: str) -> MeshGeometry:
     """A ``shape: mesh`` object's file, read and checked; errors name the scene file and the object's line."""
+    loaded = _load_mesh_file(path, source, line, name, solid=True)
+    _textured, fallback = _how_drawn(loaded, path, name)
+    vertices = np.asarray(loaded.mesh.vertices, dtype=float) * np.asarray(scale)
+    faces = np.asarray(loaded.mesh.faces, dtype=np.int64)
+    v, f = _arrays_if_untextured(loaded, fallback, scale)
+    visual = VisualPart(T_object_part=np.eye(4), path=path.resolve(), scale=scale, rgba=fallback,
+                        vertices_m=v, faces=f)
+    return _geometry(vertices, faces, hashlib.sha256(loaded.data).hexdigest(), path, scale, (visual,), None,
+                     source, line, name, rgb=loaded.rgb, mass_kg=None, piece_faces=loaded.piece_faces)
+
+
+def read_urdf_object(path: Path, scale: Vec3, source: str | Path, line: int | None, name: str,
+                     packages: Mapping[str, Path] | None = None) -> MeshGeometry:
+    """A ``shape: urdf`` object (:mod:`bt_grasp.scene.urdf_object`: one rigid body, mesh or primitive parts);
+    errors in the URDF name the URDF's line, a missing mesh the line that names it."""
+    from bt_grasp.scene.urdf_object import read_urdf
+
+    urdf = read_urdf(_read(path, source, line, name), path, packages)
+    _check_scale_keeps_shapes(urdf.visuals + urdf.collisions, scale, source, line, name)
+    files: dict[Path, _LoadedMesh] = {}
+
+    def load(ref: MeshRef, part_line: int | None, solid: bool) -> _LoadedMesh:
+        if ref.path not in files:
+            files[ref.path] = _load_mesh_file(ref.path, path, part_line, name, solid=solid, urdf=True)
+        return files[ref.path]
+
+    hasher = hashlib.sha256(b"bt_grasp urdf collision 1")
+    pieces = []
+    piece_faces: list[int] = []
+    for part in urdf.collisions:
+        v, f, digest = _part_mesh(part, lambda ref, ln: load(ref, ln, True))
+        pieces.append((v, f))
+        piece_faces += files[part.geometry.path].piece_faces if isinstance(part.geometry, MeshRef) else [len(f)]
+        hasher.update(f"{digest} {np.round(part.T_object_part, 9).tolist()}".encode())
+    vertices, faces = _join(pieces)
+    visuals, drawn, rgb = _visual_parts(urdf.visuals, scale, name, lambda ref, ln: load(ref, ln, False))
+    collision_path = next((p.geometry.path for p in urdf.collisions if isinstance(p.geometry, MeshRef)), path)
+    where = urdf.collisions[0].line
+    return _geometry(vertices * np.asarray(scale), faces, hasher.hexdigest(), collision_path, scale, visuals, drawn,
+                     path, where, name, rgb=rgb, mass_kg=urdf.mass_kg, piece_faces=tuple(piece_faces))
+
+
+def _check_scale_keeps_shapes(parts: tuple[UrdfPart, ...], scale: Vec3, source: str | Path, line: int | None,
+                              name: str) -> None:
+    """A scene ``scale`` that differs per axis cannot stretch a part turned by its ``<origin>`` (nor a sphere)."""
+    if max(scale) - min(scale) <= 1e-12 * max(scale):
+        return
+    for part in parts:
+        R = part.T_object_part[:3, :3]
+        turned = not np.allclose(np.abs(R), np.abs(R).round(), atol=1e-9) or not np.allclose(np.abs(R), np.eye(3))
+        if turned or (isinstance(part.geometry, Primitive) and part.geometry.kind != "box"):
+            raise ConfigError(source, f"object '{name}': a scale that differs per axis cannot stretch its URDF's "
+                              f"part at line {part.line} (turned by its <origin>, or round); give one number",
+                              where=line)
+
+
+def _part_mesh(part: UrdfPart, load: Callable[[MeshRef, int | None], _LoadedMesh]
+               ) -> tuple[np.ndarray, np.ndarray, str]:
+    """A collision part as a triangle mesh in the object's frame (before the scene's scale), and its digest."""
+    import trimesh
+
+    g = part.geometry
+    if isinstance(g, MeshRef):
+        loaded = load(g, part.line)
+        v = np.asarray(loaded.mesh.vertices, dtype=float) * np.asarray(g.scale)
+        f = np.asarray(loaded.mesh.faces, dtype=np.int64)
+        digest = f"mesh {hashlib.sha256(loaded.data).hexdigest()} {list(g.scale)}"
+    else:
+        if g.kind == "box":
+            prim = trimesh.creation.box(extents=g.dims_m)
+        elif g.kind == "cylinder":
+            prim = trimesh.creation.cylinder(radius=g.dims_m[0], height=g.dims_m[1], sections=32)
+        else:
+            prim = trimesh.creation.icosphere(subdivisions=3, radius=g.dims_m[0])
+        v, f = np.asarray(prim.vertices, dtype=float), np.asarray(prim.faces, dtype=np.int64)
+        digest = f"{g.kind} {list(g.dims_m)}"
+    T = part.T_object_part
+    return v @ T[:3, :3].T + T[:3, 3], f, digest
+
+
+def _join(pieces: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
+    offsets = np.cumsum([0] + [len(v) for v, _ in pieces[:-1]])
+    vertices = np.concatenate([v for v, _ in pieces], axis=0)
+    faces = np.concatenate([f + o for (_, f), o in zip(pieces, offsets, strict=True)], axis=0)
+    return vertices, faces
+
+
+def _visual_parts(parts: tuple[UrdfPart, ...], scale: Vec3, name: str,
+                  load: Callable[[MeshRef, int | None], _LoadedMesh]
+                  ) -> tuple[tuple[VisualPart, ...], tuple[np.ndarray, np.ndarray], Vec3 | None]:
+    """What a URDF draws: each part placed and scaled, its colour (a URDF colour paints a file without a
+    texture; a file whose texture is missing is painted in its material's colour), the joined mesh, the
+    object's colour."""
+    S = np.asarray(scale)
+    out: list[VisualPart] = []
+    pieces: list[tuple[np.ndarray, np.ndarray]] = []
+    rgb: Vec3 | None = None
+    for part in parts:
+        T = np.array(part.T_object_part, dtype=float)
+        T[:3, 3] *= S
+        g = part.geometry
+        v, f, _ = _part_mesh(part, load)
+        pieces.append((v * S, f))
+        if isinstance(g, MeshRef):
+            loaded = load(g, part.line)
+            textured, fallback = _how_drawn(loaded, g.path, name)
+            rgba = fallback if fallback is not None else (None if textured else part.rgba)
+            if fallback is not None and part.rgba is not None:
+                rgba = part.rgba
+            total = (g.scale[0] * scale[0], g.scale[1] * scale[1], g.scale[2] * scale[2])
+            av, af = _arrays_if_untextured(loaded, rgba if fallback is not None else None, total)
+            out.append(VisualPart(T_object_part=T, path=g.path.resolve(), scale=total, rgba=rgba, vertices_m=av,
+                                  faces=af))
+            colour = rgba[:3] if rgba is not None else loaded.rgb
+        else:
+            dims = tuple(d * scale[0] for d in g.dims_m) if g.kind != "box" else tuple(
+                d * s for d, s in zip(g.dims_m, scale, strict=True))
+            out.append(VisualPart(T_object_part=T, primitive=g.kind, dims_m=dims, rgba=part.rgba))
+            colour = part.rgba[:3] if part.rgba is not None else None
+        if rgb is None and colour is not None:
+            rgb = (float(colour[0]), float(colour[1]), float(colour[2]))
+    return tuple(out), _join(pieces), rgb
+
+
+def _arrays_if_untextured(loaded: _LoadedMesh, fallback: tuple[float, float, float, float] | None,
+                          scale: Vec3) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """A file whose texture image is missing is drawn from its triangles (the renderer refuses the file)."""
+    if fallback is None:
+        return None, None
+    return (np.asarray(loaded.mesh.vertices, dtype=float) * np.asarray(scale),
+            np.asarray(loaded.mesh.faces, dtype=np.int64))
+
+
+@dataclass(frozen=True, eq=False)
+class _LoadedMesh:
+    """A mesh file read and checked: its bytes, the mesh, its pieces, its material colour."""
+
+    data: bytes
+    mesh: Any
+    piece_faces: tuple[int, ...]  # the file's separate pieces (OBJ objects, scene nodes): their face counts
+    rgb: Vec3 | None
+
+
+def _how_drawn(loaded: _LoadedMesh, path: Path, name: str) -> tuple[bool, tuple[float, float, float, float] | None]:
+    """Whether a drawn file shows its own texture, and the colour to draw it in instead when a texture image it
+    names is missing (said once). Asked only of drawn files: a collision file's materials never matter."""
+    from bt_grasp.scene.mesh_textures import missing_textures, texture_files
+
+    textures = texture_files(path, loaded.data)
+    missing = missing_textures(path, loaded.data)
+    if not missing:
+        return bool(textures), None
+    notice(log, f"object '{name}': {path.name} names texture image {missing[0].name}, which is missing "
+                f"({missing[0].parent}): drawn in its material colour")
+    return False, (*(loaded.rgb or DEFAULT_MESH_RGB), 1.0)
+
+
+def _load_mesh_file(path: Path, source: str | Path, line: int | None, name: str, *, solid: bool,
+                    urdf: bool = False) -> _LoadedMesh:
+    if urdf and not path.is_file():
+        raise ConfigError(source, f"names mesh file '{path}', which does not exist", where=line)
     data = _read(path, source, line, name)
-    mesh = _parse_mesh(data, path, source, line, name)
-    return _geometry(mesh, data, path, path, scale, source, line, name, mass_kg=None)
-
-
-def read_urdf_object(path: Path, scale: Vec3, source: str | Path, line: int | None, name: str) -> MeshGeometry:
-    """A ``shape: urdf`` object: one link, no joints, mesh geometry; errors in the URDF name the URDF's line."""
-    from defusedxml import ElementTree
-    from defusedxml.common import DefusedXmlException
-
-    data = _read(path, source, line, name)
-    text = data.decode("utf-8", errors="replace")
-    try:
-        root = ElementTree.fromstring(data)
-    except (ElementTree.ParseError, DefusedXmlException) as exc:
-        raise ConfigError(path, f"is not a readable URDF ({type(exc).__name__}: {exc})") from None
-    if root.tag != "robot":
-        raise ConfigError(path, f"is not a URDF: its root element is <{root.tag}>, not <robot>", where=1)
-    joints = root.findall("joint")
-    if joints:
-        raise ConfigError(path, f"has {len(joints)} joint(s) ('{joints[0].get('name', '?')}'); a URDF object must be "
-                          "a single rigid link with no joints", where=_line_of(text, "<joint"))
-    links = root.findall("link")
-    if len(links) != 1:
-        raise ConfigError(path, f"has {len(links)} links; a URDF object must be exactly one link", where=1)
-    link = links[0]
-    mass_kg = _urdf_mass(link, path, text)
-    visual = _urdf_mesh(link, "visual", path, text)
-    collision = _urdf_mesh(link, "collision", path, text) or visual
-    if visual is None or collision is None:
-        raise ConfigError(path, "link has no <mesh> geometry in <visual> or <collision>; a URDF object needs one",
-                          where=_line_of(text, "<link"))
-    (visual_path, _), (collision_path, file_scale) = visual, collision
-    total = (scale[0] * file_scale[0], scale[1] * file_scale[1], scale[2] * file_scale[2])
-    mesh_line = _line_of(text, "<collision") if collision is not visual else _line_of(text, "<visual")
-    for p in {visual_path, collision_path}:
-        if not p.is_file():
-            raise ConfigError(path, f"names mesh file '{p.name}', which does not exist next to it", where=mesh_line)
-    data = _read(collision_path, path, mesh_line, name)
-    mesh = _parse_mesh(data, collision_path, path, mesh_line, name)
-    return _geometry(mesh, data, visual_path, collision_path, total, path, mesh_line, name, mass_kg)
+    mesh, piece_faces, rgb = _parse_mesh(data, path, source, line, name, solid=solid)
+    return _LoadedMesh(data, mesh, piece_faces, rgb)
 
 
 def _read(path: Path, source: str | Path, line: int | None, name: str) -> bytes:
@@ -118,7 +250,10 @@ def _read(path: Path, source: str | Path, line: int | None, name: str) -> bytes:
         raise ConfigError(source, f"object '{name}': cannot read '{path}': {exc.problem}", where=line) from None
 
 
-def _parse_mesh(data: bytes, path: Path, source: str | Path, line: int | None, name: str) -> Any:
+def _parse_mesh(data: bytes, path: Path, source: str | Path, line: int | None, name: str, *,
+                solid: bool = True) -> tuple[Any, tuple[int, ...], Vec3 | None]:
+    """The file's triangles as one mesh (its pieces, OBJ objects or scene nodes, joined in order), each piece's
+    face count, and the file's own colour."""
     import trimesh
 
     suffix = path.suffix.lower()
@@ -129,39 +264,53 @@ def _parse_mesh(data: bytes, path: Path, source: str | Path, line: int | None, n
         raise ConfigError(source, f"object '{name}': mesh file '{path}' is empty", where=line)
     try:
         resolver = trimesh.resolvers.FilePathResolver(str(path.parent))
-        loaded = trimesh.load(io.BytesIO(data), file_type=suffix[1:], resolver=resolver, process=False)
-        mesh = loaded.to_geometry() if isinstance(loaded, trimesh.Scene) else loaded
+        options: dict[str, Any] = {"split_objects": True, "group_material": False} if suffix == ".obj" else {}
+        loaded = trimesh.load(io.BytesIO(data), file_type=suffix[1:], resolver=resolver, process=False, **options)
+        geometries = loaded.dump() if isinstance(loaded, trimesh.Scene) else [loaded]
+        pieces = [g for g in geometries if isinstance(g, trimesh.Trimesh) and len(g.faces) and len(g.vertices)]
     except Exception as exc:  # any parser failure of a third-party format reader is bad input here
         raise ConfigError(source, f"object '{name}': mesh file '{path}' cannot be read as a mesh "
                           f"({type(exc).__name__})", where=line) from None
-    if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0 or len(mesh.vertices) == 0:
+    if not pieces:
         raise ConfigError(source, f"object '{name}': mesh file '{path}' holds no triangles (an empty mesh)",
                           where=line)
-    vertices = np.asarray(mesh.vertices, dtype=float)
+    vertices, faces = _join([(np.asarray(p.vertices, dtype=float), np.asarray(p.faces, dtype=np.int64))
+                             for p in pieces])
     if not np.all(np.isfinite(vertices)):
         raise ConfigError(source, f"object '{name}': mesh file '{path}' has vertices that are not finite numbers",
                           where=line)
+    if solid:
+        _check_spans_a_volume(vertices, path, source, line, name)
+    rgb = next((c for c in (_material_rgb(p) for p in pieces) if c is not None), None)
+    mesh = pieces[0] if len(pieces) == 1 else trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
+    return mesh, tuple(len(p.faces) for p in pieces), rgb
+
+
+def _check_spans_a_volume(vertices: np.ndarray, path: Path, source: str | Path, line: int | None, name: str) -> None:
     spread = np.linalg.svd(vertices - vertices.mean(axis=0), compute_uv=False)
     if len(vertices) < 4 or spread[-1] / np.sqrt(len(vertices)) < DEGENERATE_TOL_M:
         raise ConfigError(source, f"object '{name}': mesh file '{path}' is degenerate: its vertices lie on a line "
                           "or a plane and enclose no volume", where=line)
-    return mesh
 
 
-def _geometry(mesh: Any, data: bytes, visual_path: Path, collision_path: Path, scale: Vec3,
-              source: str | Path, line: int | None, name: str, mass_kg: float | None) -> MeshGeometry:
-    vertices = np.asarray(mesh.vertices, dtype=float) * np.asarray(scale)
-    faces = np.asarray(mesh.faces, dtype=np.int64)
-    scaled = type(mesh)(vertices=vertices, faces=faces, process=False)
+def _geometry(vertices: np.ndarray, faces: np.ndarray, sha256: str, collision_path: Path, scale: Vec3,
+              visuals: tuple[VisualPart, ...], drawn: tuple[np.ndarray, np.ndarray] | None, source: str | Path,
+              line: int | None, name: str, rgb: Vec3 | None, mass_kg: float | None,
+              piece_faces: tuple[int, ...] = ()) -> MeshGeometry:
+    import trimesh
+
+    _check_spans_a_volume(vertices, collision_path, source, line, name)
+    scaled = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
     volume = float(scaled.volume) if scaled.is_watertight and scaled.volume > 0 else float(scaled.convex_hull.volume)
     if not volume > 0:
         raise ConfigError(source, f"object '{name}': mesh file '{collision_path}' encloses no volume", where=line)
     lo, hi = vertices.min(axis=0), vertices.max(axis=0)
     return MeshGeometry(
-        visual_path=visual_path.resolve(), collision_path=collision_path.resolve(), scale=scale,
-        vertices_m=vertices, faces=faces, sha256=hashlib.sha256(data).hexdigest(),
+        collision_path=collision_path.resolve(), scale=scale, vertices_m=vertices, faces=faces, sha256=sha256,
         bounds_m=((float(lo[0]), float(lo[1]), float(lo[2])), (float(hi[0]), float(hi[1]), float(hi[2]))),
-        volume_m3=volume, rgb=_material_rgb(mesh), mass_kg=mass_kg,
+        volume_m3=volume, visuals=visuals, visual_vertices_m=None if drawn is None else drawn[0],
+        visual_faces=None if drawn is None else drawn[1], rgb=rgb, mass_kg=mass_kg,
+        piece_faces=piece_faces if len(piece_faces) > 1 else (),
     )
 
 
@@ -179,45 +328,3 @@ def _material_rgb(mesh: Any) -> Vec3 | None:
         return None
     r, g, b = (float(c) / 255.0 for c in np.asarray(rgba)[:3])
     return (r, g, b)
-
-
-def _line_of(text: str, needle: str) -> int | None:
-    at = text.find(needle)
-    return text.count("\n", 0, at) + 1 if at >= 0 else None
-
-
-def _urdf_mass(link: Any, path: Path, text: str) -> float | None:
-    mass = link.find("inertial/mass")
-    if mass is None:
-        return None
-    try:
-        value = float(mass.get("value", "nan"))
-    except ValueError:
-        value = float("nan")
-    if not (np.isfinite(value) and value > 0):
-        raise ConfigError(path, f"link mass is {mass.get('value')!r}; a mass must be a positive number of kg",
-                          where=_line_of(text, "<mass"))
-    return value
-
-
-def _urdf_mesh(link: Any, kind: str, path: Path, text: str) -> tuple[Path, Vec3] | None:
-    element = link.find(f"{kind}/geometry/mesh")
-    if element is None:
-        return None
-    where = _line_of(text, f"<{kind}")
-    origin = link.find(f"{kind}/origin")
-    if origin is not None and any(float(v) != 0.0 for a in ("xyz", "rpy") for v in origin.get(a, "0 0 0").split()):
-        raise ConfigError(path, f"<{kind}> has a non-zero <origin>; put the mesh's own frame where the link's is "
-                          "(bt_grasp reads URDF objects whose meshes sit at the link frame)", where=where)
-    filename = element.get("filename", "")
-    if not filename or "://" in filename.removeprefix("file://"):
-        raise ConfigError(path, f"<{kind}> mesh filename '{filename}' must be a path relative to the URDF "
-                          "(package:// and other URLs are not resolved)", where=where)
-    try:
-        parts = [float(v) for v in element.get("scale", "1 1 1").split()]
-    except ValueError:
-        parts = []
-    if len(parts) != 3 or not all(np.isfinite(p) and p > 0 for p in parts):
-        raise ConfigError(path, f"<{kind}> mesh scale '{element.get('scale')}' must be three positive numbers",
-                          where=where)
-    return (path.parent / filename.removeprefix("file://")), (parts[0], parts[1], parts[2])

@@ -57,8 +57,8 @@ class Choose(StrictModel):
         return (self.count, self.count) if isinstance(self.count, int) else self.count
 
 
-#: the mesh file formats a ``shape: mesh`` object may name (trimesh reads them)
-MESH_SUFFIXES: tuple[str, ...] = (".obj", ".stl", ".ply", ".glb", ".gltf")
+#: the mesh file formats a ``shape: mesh`` object may name (trimesh reads them; COLLADA through pycollada)
+MESH_SUFFIXES: tuple[str, ...] = (".obj", ".stl", ".ply", ".glb", ".gltf", ".dae")
 PRIMITIVE_SHAPES: tuple[str, ...] = ("box", "cylinder", "sphere")
 #: a mesh object's colour when the scene gives none and its file has no material colour
 DEFAULT_MESH_RGB: tuple[float, float, float] = (0.6, 0.6, 0.6)
@@ -71,16 +71,16 @@ RestPoseRule = Literal["modelled", "stable", "any_stable"]
 class SceneObject(StrictModel):
     """One movable object. Primitives (``box``, ``cylinder``, ``sphere``) give ``size_m`` and ``color``;
     a ``mesh`` gives ``mesh: FILE`` (relative to the scene file) and may give ``scale``, a colour (else the
-    file's own material) and ``mass_kg`` or ``density_kg_m3``; a ``urdf`` gives ``urdf: FILE`` (one link, no
-    joints; its collision and visual meshes, and its mass unless the scene gives one). A mesh's or URDF's
+    file's own material) and ``mass_kg`` or ``density_kg_m3``; a ``urdf`` gives ``urdf: FILE`` (one rigid body:
+    its collision and visual parts, and its mass unless the scene gives one). A mesh's or URDF's
     geometry is read and checked when the scene loads (:func:`bt_grasp.scene.meshes.attach_geometry`) and
     is then :attr:`geometry`."""
 
     name: Annotated[str, Field(min_length=1, pattern=r"^[A-Za-z_][A-Za-z0-9_\-]*$")]
     shape: Literal["box", "cylinder", "sphere", "mesh", "urdf"]
     size_m: tuple[PositiveFloat, ...] | None = None  # box: x y z; cylinder: radius height; sphere: radius
-    mesh: Annotated[str, Field(min_length=1)] | None = None  # shape: mesh; OBJ, STL, PLY, GLB or GLTF file
-    urdf: Annotated[str, Field(min_length=1)] | None = None  # shape: urdf; a single-link URDF file
+    mesh: Annotated[str, Field(min_length=1)] | None = None  # shape: mesh; OBJ, STL, PLY, GLB, GLTF or DAE file
+    urdf: Annotated[str, Field(min_length=1)] | None = None  # shape: urdf; a URDF of one rigid body
     scale: PositiveFloat | tuple[PositiveFloat, PositiveFloat, PositiveFloat] = 1.0  # mesh units -> metres
     color: str | tuple[float, float, float] | None = None  # primitives: required; meshes: else the file's
     mass_kg: PositiveFloat | None = None  # default 0.1 kg (a URDF: its <inertial> mass)

@@ -8,14 +8,15 @@ run's blackboard. The tree never sees the goal, and the judge never looks at the
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 from bt_grasp.defaults import DEFAULT_LIFT_HEIGHT_M
 from bt_grasp.errors import InputError
 from bt_grasp.scene.format import Scene
 from bt_grasp.scene.goals import GOAL_KINDS, ClearGoal, Goal, PickGoal
+from bt_grasp.scene.objects import SceneObject
 
-__all__ = ["COMMAND_LINE_KINDS", "goal_for_run", "goal_from_options"]
+__all__ = ["COMMAND_LINE_KINDS", "default_color", "goal_for_run", "goal_from_options"]
 
 #: the kinds a command line can ask for (the others need a scene's names: declare them in the scene)
 COMMAND_LINE_KINDS = ("pick", "clear")
@@ -39,12 +40,19 @@ def goal_from_options(kind: str, color: str = "red", lift_height_m: float = DEFA
     return PickGoal(kind="pick", color=color or None, height_m=_lift_height(lift_height_m, "--lift-height"))
 
 
+def default_color(objects: Sequence[SceneObject]) -> str:
+    """The colour a pick asks for when none is given: 'red' (the first scenes' figures) unless the scene declares
+    a mesh or URDF object; then '' (any object: the tree chooses by geometry, whatever the colours drawn)."""
+    return "" if any(o.is_mesh for o in objects) else "red"
+
+
 def goal_for_run(scene: Scene, blackboard: Mapping[str, object]) -> Goal:
     """The scene's declared goal, else today's default: a pick of the run's ``{color}`` lifted by
-    ``{lift_height}`` (the entries ``--color``/``--lift-height`` put on the blackboard)."""
+    ``{lift_height}`` (the entries ``--color``/``--lift-height`` put on the blackboard; no ``color`` entry:
+    :func:`default_color`)."""
     if scene.goal is not None:
         return scene.goal
-    color = blackboard.get("color", "red")
+    color = blackboard.get("color", default_color(scene.objects))
     height = blackboard.get("lift_height", DEFAULT_LIFT_HEIGHT_M)
     if not isinstance(color, str):
         raise InputError("--set", f"color must be a colour name, got {color!r}")

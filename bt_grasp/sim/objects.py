@@ -16,7 +16,8 @@ import sapien
 from bt_grasp.errors import ConfigError
 from bt_grasp.geometry import Mat4, make_T, rot_z
 from bt_grasp.scene.mesh_cache import collision_shapes
-from bt_grasp.scene.objects import SceneObject
+from bt_grasp.scene.mesh_geometry import VisualPart
+from bt_grasp.scene.objects import DEFAULT_MESH_RGB, SceneObject
 from bt_grasp.sim.poses import to_pose
 
 #: a mesh object starts this far above its support, then settles (a mesh's bottom need not be flat)
@@ -179,8 +180,8 @@ def build_object(scene: sapien.Scene, placed: PlacedObject) -> sapien.Entity:
 
 
 def _build_mesh_object(scene: sapien.Scene, placed: PlacedObject) -> sapien.Entity:
-    """A mesh/URDF object: its visual file drawn (the scene's colour, else the file's own material), convex
-    collision parts, a density that gives ``mass_kg`` (or the scene's ``density_kg_m3``), friction as given."""
+    """A mesh/URDF object: its visual parts drawn (the scene's colour, else each part's own), convex collision
+    parts, a density that gives ``mass_kg`` (or the scene's ``density_kg_m3``), friction as given."""
     obj = placed.spec
     geometry = obj.geometry
     shapes = collision_shapes(geometry)
@@ -193,14 +194,9 @@ def _build_mesh_object(scene: sapien.Scene, placed: PlacedObject) -> sapien.Enti
         shape = sapien.physx.PhysxCollisionShapeConvexMesh(np.asarray(part, dtype=np.float32), unit, material)
         shape.set_density(density)
         body.attach(shape)
-    render_material = None
-    if obj.color is not None:
-        render_material = sapien.render.RenderMaterial(base_color=[*obj.rgb, 1.0], roughness=0.7, metallic=0.0)
-    visual = sapien.render.RenderShapeTriangleMesh(
-        str(geometry.visual_path), np.asarray(geometry.scale, dtype=np.float32), render_material
-    )
     render = sapien.render.RenderBodyComponent()
-    render.attach(visual)
+    for visual in geometry.visuals:
+        render.attach(_visual_shape(obj, visual))
     entity = sapien.Entity()
     entity.name = obj.name
     entity.add_component(body)
@@ -208,6 +204,48 @@ def _build_mesh_object(scene: sapien.Scene, placed: PlacedObject) -> sapien.Enti
     entity.set_pose(to_pose(placed.T_world_object))
     scene.add_entity(entity)
     return entity
+
+
+def _visual_shape(obj: SceneObject, visual: VisualPart) -> sapien.render.RenderShape:
+    """One drawn part: in the scene's colour when it gives one, else the part's (a URDF colour, or the colour of a
+    file whose texture is missing), else the file's own materials (a primitive: grey)."""
+    rgba = (*obj.rgb, 1.0) if obj.color is not None else visual.rgba
+    if rgba is None and visual.primitive is not None:
+        rgba = (*DEFAULT_MESH_RGB, 1.0)
+    material = None if rgba is None else sapien.render.RenderMaterial(base_color=list(rgba), roughness=0.7,
+                                                                       metallic=0.0)
+    local = to_pose(visual.T_object_part)
+    shape: sapien.render.RenderShape
+    if visual.primitive == "box":
+        shape = sapien.render.RenderShapeBox(np.asarray(visual.dims_m, dtype=np.float32) / 2, material)
+    elif visual.primitive == "cylinder":
+        shape = sapien.render.RenderShapeCylinder(visual.dims_m[0], visual.dims_m[1] / 2, material)
+        local = local * _CYLINDER_UPRIGHT
+    elif visual.primitive == "sphere":
+        shape = sapien.render.RenderShapeSphere(visual.dims_m[0], material)
+    elif visual.vertices_m is not None and visual.faces is not None:
+        shape = _array_mesh_shape(visual.vertices_m, visual.faces, material)
+    else:
+        assert visual.path is not None
+        try:
+            shape = sapien.render.RenderShapeTriangleMesh(str(visual.path), np.asarray(visual.scale, np.float32),
+                                                          material)
+        except RuntimeError as exc:  # a file the renderer cannot draw (read and checked by trimesh at load)
+            raise ConfigError(visual.path, f"object '{obj.name}': the renderer cannot draw this file ({exc})") from None
+    shape.set_local_pose(local)
+    return shape
+
+
+def _array_mesh_shape(vertices_m: np.ndarray, faces: np.ndarray,
+                      material: sapien.render.RenderMaterial | None) -> sapien.render.RenderShapeTriangleMesh:
+    """A drawn mesh from its triangles (smooth vertex normals, no texture coordinates)."""
+    import trimesh
+
+    mesh = trimesh.Trimesh(vertices=vertices_m, faces=faces, process=False)
+    return sapien.render.RenderShapeTriangleMesh(
+        np.asarray(vertices_m, dtype=np.float32), np.asarray(faces, dtype=np.uint32),
+        np.asarray(mesh.vertex_normals, dtype=np.float32), np.zeros((len(vertices_m), 2), dtype=np.float32),
+        material or sapien.render.RenderMaterial(base_color=[*DEFAULT_MESH_RGB, 1.0], roughness=0.7, metallic=0.0))
 
 
 def _volume_m3(obj: SceneObject) -> float:

@@ -5,8 +5,9 @@ from __future__ import annotations
 from pathlib import Path
 from types import SimpleNamespace
 
-from bt_grasp.episode.pick_bench import _per_object, default_color
+from bt_grasp.episode.pick_bench import _per_object
 from bt_grasp.scene.format import load_scene
+from bt_grasp.scene.run_goal import default_color
 
 REPO = Path(__file__).resolve().parents[2]
 

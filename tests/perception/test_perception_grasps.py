@@ -55,7 +55,15 @@ def test_grasp_depth_rule(height: float, expected_tcp_z: float) -> None:
 def test_too_wide_object() -> None:
     result = synthesize_grasps(det((0.5, 0.0), (0.12, 0.09, 0.05)))
     assert result.status is GraspStatus.TOO_WIDE
-    assert "90 mm" in result.message and not result.candidates
+    assert "90.0 mm across its narrowest side" in result.message and not result.candidates
+
+
+def test_a_round_object_too_wide_is_named_by_the_width_it_is_judged_by() -> None:
+    """A can seen round, 75.4 x 73 mm: judged by its widest seen extent, which the message names (it said 73 mm,
+    under the 75 mm it was refused for: the chips can of docs/scenes.md, 'Objects no one here made')."""
+    result = synthesize_grasps(det((0.5, 0.0), (0.0754, 0.073, 0.24), shape="round"))
+    assert result.status is GraspStatus.TOO_WIDE
+    assert "75.4 mm seen round, across its widest; the gripper takes at most 75.0 mm" in result.message
 
 
 def test_only_the_narrow_side_fits() -> None:

@@ -13,3 +13,11 @@ def _private_mesh_cache(tmp_path_factory: pytest.TempPathFactory, monkeypatch: p
     root = tmp_path_factory.mktemp("cache")
     monkeypatch.setenv("BT_GRASP_CACHE_DIR", str(root))
     return root
+
+
+@pytest.fixture(autouse=True)
+def _fresh_notices() -> None:
+    """Each test hears the scene loader's once-per-process notices afresh."""
+    from bt_grasp.scene.notices import forget_notices
+
+    forget_notices()

@@ -25,9 +25,20 @@ BAD: dict[str, tuple[str, int, str]] = {
     "bad_tiny.yaml": ("bad_tiny.yaml", 6, "smaller than a millimetre"),
     "bad_mass.yaml": ("bad_mass.yaml", 6, "objects[0].mass_kg: Input should be greater than 0"),
     "bad_density.yaml": ("bad_density.yaml", 6, "objects[0].density_kg_m3: Input should be greater than 0"),
-    "bad_joint.yaml": ("jointed.urdf", 9, "has 1 joint(s) ('hinge'); a URDF object must be a single rigid link"),
+    "bad_joint.yaml": ("jointed.urdf", 9, "joint 'hinge' is revolute: a URDF object must be one rigid body (fixed "
+                                          "joints only; articulated objects are not supported)"),
+    "bad_two_bodies.yaml": ("two_bodies.urdf", 4, "has 2 separate bodies (links 'a' and 'b' are not joined by fixed"),
+    "bad_capsule.yaml": ("capsule.urdf", 5, "<capsule> geometry is not supported (mesh, box, cylinder or sphere)"),
+    "bad_package.yaml": ("ros_style/urdf/toy_renamed.urdf", 15, "mesh 'package://someone_elses_pkg/meshes/toy.dae': "
+                         "no package 'someone_elses_pkg' found"),
+    "bad_package_escape.yaml": ("ros_style/urdf/bad_escape.urdf", 15, "its path '../../box.stl' has a '..' part"),
+    "bad_url.yaml": ("ros_style/urdf/bad_url.urdf", 15, "mesh filename 'http://example.invalid/toy.dae' is a URL"),
+    "bad_packages_folder.yaml": ("bad_packages_folder.yaml", 2, "package 'someone_elses_pkg' is mapped to "
+                                 "'no_such_folder', which is not a folder"),
+    "bad_stretch_turned.yaml": ("bad_stretch_turned.yaml", 5, "a scale that differs per axis cannot stretch its "
+                                "URDF's part at line 18"),
     "bad_urdf_mass.yaml": ("zero_mass.urdf", 4, "link mass is '0'; a mass must be a positive number"),
-    "bad_suffix.yaml": ("bad_suffix.yaml", 3, "is not one of .obj, .stl, .ply, .glb, .gltf"),
+    "bad_suffix.yaml": ("bad_suffix.yaml", 3, "is not one of .obj, .stl, .ply, .glb, .gltf, .dae"),
     "bad_size_on_mesh.yaml": ("bad_size_on_mesh.yaml", 3, "size comes from its file and 'scale', not size_m"),
     "bad_no_file.yaml": ("bad_no_file.yaml", 3, "a mesh object needs 'mesh: FILE'"),
 }

@@ -1,0 +1,317 @@
+"""Reading a URDF that describes one movable object, the way object sets ship them (YCB-style, pybullet's,
+Gazebo's, ROS packages'), into typed parts: what to draw and what collides, each placed in the object's frame.
+
+What is accepted (everything else is one sentence naming the URDF's line):
+
+- one rigid body: links joined by ``fixed`` joints are one body (their ``<origin>`` composes); links with no
+  ``<visual>`` or ``<collision>`` are frames only (a ``center_of_mass`` marker) and are left out; a ``floating``
+  joint from a link with no geometry is Gazebo's way to say "free body" (``<link name="world"/>``) and is left
+  out too, and so is a geometry-less root fixed to the object (a ``world`` placing it somewhere): the object's
+  frame is then its first link with geometry. A ``revolute``, ``prismatic``, ``continuous`` or ``planar``
+  joint is an articulated object: refused.
+- any number of ``<visual>`` and ``<collision>`` elements, each with its own ``<origin xyz rpy>``; geometry a
+  ``<mesh filename scale>`` or a ``<box>``, ``<cylinder>`` or ``<sphere>``. Without ``<collision>`` the visuals
+  collide; without ``<visual>`` the collisions are drawn.
+- mesh file names relative to the URDF, absolute, ``file://``, or ``package://NAME/PATH``
+  (:mod:`bt_grasp.scene.mesh_paths`).
+- ``<material>`` colours, inline or named at the top of the file; the mass of ``<inertial><mass>`` (summed over
+  the body's links). The inertial ``<origin>`` and ``<inertia>`` are not used: the simulator takes the centre of
+  mass and inertia from the collision shapes at one density. Simulator-specific tags (``<contact>``,
+  ``<gazebo>``) are ignored.
+
+The object's frame is the body's root link's frame (its first link with geometry, below frame-only ones).
+Nothing is read but the URDF itself here; the meshes are read by :mod:`bt_grasp.scene.meshes`.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from bt_grasp.errors import ConfigError
+from bt_grasp.geometry import T_from_xyz_rpy
+from bt_grasp.scene.mesh_geometry import Vec3
+from bt_grasp.scene.mesh_paths import MeshResolver
+
+#: joint types that keep the object one rigid body
+RIGID_JOINTS = ("fixed",)
+
+
+@dataclass(frozen=True)
+class MeshRef:
+    """A mesh file and the URDF's ``scale`` for it (file units -> metres, before the scene's ``scale``)."""
+
+    path: Path
+    scale: Vec3
+
+
+@dataclass(frozen=True)
+class Primitive:
+    """A URDF box (``dims_m``: x, y, z sizes), cylinder (radius, length along z) or sphere (radius)."""
+
+    kind: Literal["box", "cylinder", "sphere"]
+    dims_m: tuple[float, ...]
+
+
+@dataclass(frozen=True, eq=False)
+class UrdfPart:
+    """One ``<visual>`` or ``<collision>``: its geometry, placed in the object's frame, and its colour."""
+
+    geometry: MeshRef | Primitive
+    T_object_part: np.ndarray  # 4x4, the part's frame in the object's (root link's) frame
+    rgba: tuple[float, float, float, float] | None
+    line: int | None
+
+
+@dataclass(frozen=True, eq=False)
+class UrdfObject:
+    visuals: tuple[UrdfPart, ...]
+    collisions: tuple[UrdfPart, ...]
+    mass_kg: float | None  # the body's links' <inertial><mass>, summed; None when no link gives one
+
+
+def read_urdf(data: bytes, path: Path, packages: Mapping[str, Path] | None = None) -> UrdfObject:
+    """The object a URDF describes (see the module's rules); :class:`ConfigError` naming ``path`` and a line."""
+    root = _parse(data, path)
+    if root.tag != "robot":
+        raise ConfigError(path, f"is not a URDF: its root element is <{root.tag}>, not <robot>", where=_line(root))
+    materials = _named_materials(root, path)
+    links = _links(root, path)
+    has_geometry = {name: _has_geometry(el) for name, el in links.items()}
+    if not any(has_geometry.values()):
+        raise ConfigError(path, "has no <visual> or <collision> in any link; a URDF object needs geometry",
+                          where=_line(root))
+    parent_of = _rigid_tree(root, links, has_geometry, path)
+    body_root = _body_root(parent_of, has_geometry, links, path)
+    T_root_link = _link_frames(body_root, parent_of, links, path)
+    resolver = MeshResolver(path, packages or {})
+    visuals: list[UrdfPart] = []
+    collisions: list[UrdfPart] = []
+    masses: list[float] = []
+    for name, T in T_root_link.items():
+        link = links[name]
+        visuals += [_part(el, T, path, resolver, materials) for el in link.findall("visual")]
+        collisions += [_part(el, T, path, resolver, materials) for el in link.findall("collision")]
+        mass = _mass(link, path)
+        if mass is not None:
+            masses.append(mass)
+    if not collisions:
+        collisions = visuals
+    if not visuals:
+        visuals = collisions
+    return UrdfObject(tuple(visuals), tuple(collisions), sum(masses) if masses else None)
+
+
+# -- XML -----------------------------------------------------------------------------------------------------
+
+def _parse(data: bytes, path: Path) -> Any:
+    import defusedxml
+    from defusedxml.ElementTree import DefusedXMLParser, ParseError
+
+    class _LineRecordingParser(DefusedXMLParser):  # type: ignore[misc]
+        def _start(self, tag: str, attr_list: Any) -> Any:
+            element = super()._start(tag, attr_list)
+            element.sourceline = self.parser.CurrentLineNumber
+            return element
+
+    parser = _LineRecordingParser(forbid_dtd=True, forbid_entities=True, forbid_external=True)
+    try:
+        parser.feed(data)
+        return parser.close()
+    except ParseError as exc:
+        line = exc.position[0] if getattr(exc, "position", None) else None
+        message = re.sub(r": line \d+, column \d+$", "", str(exc))
+        raise ConfigError(path, f"is not a readable URDF (malformed XML: {message})", where=line) from None
+    except (defusedxml.DTDForbidden, defusedxml.EntitiesForbidden, defusedxml.ExternalReferenceForbidden,
+            defusedxml.NotSupportedError):
+        raise ConfigError(path, "is not a readable URDF: DTDs, entities and external references are not allowed",
+                          where=parser.parser.CurrentLineNumber) from None
+
+
+def _line(element: Any) -> int | None:
+    return getattr(element, "sourceline", None)
+
+
+def _has_geometry(link: Any) -> bool:
+    return link.find("visual") is not None or link.find("collision") is not None
+
+
+def _links(root: Any, path: Path) -> dict[str, Any]:
+    links: dict[str, Any] = {}
+    for el in root.findall("link"):
+        name = el.get("name", "")
+        if not name:
+            raise ConfigError(path, "has a <link> without a name", where=_line(el))
+        if name in links:
+            raise ConfigError(path, f"has two links named '{name}'", where=_line(el))
+        links[name] = el
+    return links
+
+
+def _rigid_tree(root: Any, links: dict[str, Any], has_geometry: dict[str, bool],
+                path: Path) -> dict[str, tuple[str, Any]]:
+    """child link -> (parent link, joint) for the fixed joints; other joints are refused or left out."""
+    parent_of: dict[str, tuple[str, Any]] = {}
+    for joint in root.findall("joint"):
+        name, kind = joint.get("name", "?"), joint.get("type", "")
+        parent = (joint.find("parent").get("link", "") if joint.find("parent") is not None else "")
+        child = (joint.find("child").get("link", "") if joint.find("child") is not None else "")
+        for end in (parent, child):
+            if end not in links:
+                raise ConfigError(path, f"joint '{name}' names link '{end}', which the file does not have",
+                                  where=_line(joint))
+        if kind == "floating" and not has_geometry[parent]:
+            continue  # Gazebo's <link name="world"/> + floating joint: the child is a free body
+        if kind not in RIGID_JOINTS:
+            raise ConfigError(path, f"joint '{name}' is {kind or 'of no type'}: a URDF object must be one rigid body "
+                              "(fixed joints only; articulated objects are not supported)", where=_line(joint))
+        if child in parent_of:
+            raise ConfigError(path, f"link '{child}' is the child of two joints", where=_line(joint))
+        parent_of[child] = (parent, joint)
+    return parent_of
+
+
+def _top(name: str, parent_of: dict[str, tuple[str, Any]], path: Path) -> str:
+    seen = {name}
+    while name in parent_of:
+        name = parent_of[name][0]
+        if name in seen:
+            raise ConfigError(path, f"its fixed joints form a loop through link '{name}'")
+        seen.add(name)
+    return name
+
+
+def _body_root(parent_of: dict[str, tuple[str, Any]], has_geometry: dict[str, bool], links: dict[str, Any],
+               path: Path) -> str:
+    """The root link of the fixed-joint tree holding every link with geometry."""
+    tops = {name: _top(name, parent_of, path) for name, geo in has_geometry.items() if geo}
+    roots = sorted(set(tops.values()))
+    if len(roots) > 1:
+        a, b = (next(n for n, t in tops.items() if t == r) for r in roots[:2])
+        raise ConfigError(path, f"has {len(roots)} separate bodies (links '{a}' and '{b}' are not joined by fixed "
+                          "joints); a URDF object must be one rigid body", where=_line(links[b]))
+    root = roots[0]
+    while not has_geometry[root]:  # a frame-only root (a 'world' fixed to the object): the object starts below it
+        children = [c for c, (p, _j) in parent_of.items() if p == root and _holds_geometry(c, parent_of, has_geometry)]
+        if len(children) != 1:
+            break
+        root = children[0]
+    return root
+
+
+def _holds_geometry(name: str, parent_of: dict[str, tuple[str, Any]], has_geometry: dict[str, bool]) -> bool:
+    """Whether ``name`` or a link below it (through fixed joints) has geometry."""
+    return has_geometry[name] or any(p == name and _holds_geometry(c, parent_of, has_geometry)
+                                     for c, (p, _j) in parent_of.items())
+
+
+def _link_frames(body_root: str, parent_of: dict[str, tuple[str, Any]], links: dict[str, Any],
+                 path: Path) -> dict[str, np.ndarray]:
+    """Every link of the body (in file order) -> its frame in the root link's frame."""
+    frames: dict[str, np.ndarray] = {body_root: np.eye(4)}
+
+    def frame(name: str) -> np.ndarray | None:
+        if name in frames:
+            return frames[name]
+        if name not in parent_of:
+            return None  # another tree (a geometry-less frame not joined to the body)
+        parent, joint = parent_of[name]
+        T_parent = frame(parent)
+        if T_parent is None:
+            return None
+        frames[name] = T_parent @ _origin(joint, path)
+        return frames[name]
+
+    return {name: T for name in links if (T := frame(name)) is not None}
+
+
+# -- parts -----------------------------------------------------------------------------------------------------
+
+def _numbers(text: str | None, count: int, what: str, path: Path, element: Any, default: str) -> tuple[float, ...]:
+    try:
+        values = tuple(float(v) for v in (text if text is not None else default).replace(",", " ").split())
+    except ValueError:
+        values = ()
+    if len(values) != count or not all(np.isfinite(v) for v in values):
+        raise ConfigError(path, f"<{element.tag}> {what} '{text}' must be {count} numbers", where=_line(element))
+    return values
+
+
+def _origin(element: Any, path: Path) -> np.ndarray:
+    origin = element.find("origin")
+    if origin is None:
+        return np.eye(4)
+    xyz = _numbers(origin.get("xyz"), 3, "xyz", path, origin, "0 0 0")
+    rpy = _numbers(origin.get("rpy"), 3, "rpy", path, origin, "0 0 0")
+    return T_from_xyz_rpy(list(xyz), list(rpy))
+
+
+def _rgba(material: Any, path: Path) -> tuple[float, float, float, float] | None:
+    color = material.find("color")
+    if color is None:
+        return None
+    values = _numbers(color.get("rgba"), 4, "rgba", path, color, "")
+    if not all(0.0 <= v <= 1.0 for v in values):
+        raise ConfigError(path, f"<color> rgba '{color.get('rgba')}' must be four numbers from 0 to 1",
+                          where=_line(color))
+    return (values[0], values[1], values[2], values[3])
+
+
+def _named_materials(root: Any, path: Path) -> dict[str, tuple[float, float, float, float] | None]:
+    return {el.get("name", ""): _rgba(el, path) for el in root.findall("material")}
+
+
+def _part(element: Any, T_root_link: np.ndarray, path: Path, resolver: MeshResolver,
+          materials: dict[str, tuple[float, float, float, float] | None]) -> UrdfPart:
+    geometry = element.find("geometry")
+    shapes = [c for c in (geometry if geometry is not None else []) if isinstance(c.tag, str)]
+    if len(shapes) != 1:
+        raise ConfigError(path, f"<{element.tag}> needs a <geometry> with one mesh, box, cylinder or sphere",
+                          where=_line(element))
+    shape = shapes[0]
+    rgba = None
+    material = element.find("material")
+    if material is not None:
+        rgba = _rgba(material, path) or materials.get(material.get("name", ""))
+    return UrdfPart(_geometry(shape, path, resolver), T_root_link @ _origin(element, path), rgba,
+                    _line(shape))
+
+
+def _geometry(shape: Any, path: Path, resolver: MeshResolver) -> MeshRef | Primitive:
+    def positive(values: tuple[float, ...]) -> tuple[float, ...]:
+        if not all(v > 0 for v in values):
+            raise ConfigError(path, f"<{shape.tag}> sizes must be positive", where=_line(shape))
+        return values
+
+    if shape.tag == "mesh":
+        scale = positive(_numbers(shape.get("scale"), 3, "scale", path, shape, "1 1 1"))
+        return MeshRef(resolver.resolve(shape.get("filename", ""), _line(shape)), (scale[0], scale[1], scale[2]))
+    if shape.tag == "box":
+        return Primitive("box", positive(_numbers(shape.get("size"), 3, "size", path, shape, "")))
+    if shape.tag == "cylinder":
+        radius = positive(_numbers(shape.get("radius"), 1, "radius", path, shape, ""))
+        length = positive(_numbers(shape.get("length"), 1, "length", path, shape, ""))
+        return Primitive("cylinder", radius + length)
+    if shape.tag == "sphere":
+        return Primitive("sphere", positive(_numbers(shape.get("radius"), 1, "radius", path, shape, "")))
+    raise ConfigError(path, f"<{shape.tag}> geometry is not supported (mesh, box, cylinder or sphere)",
+                      where=_line(shape))
+
+
+def _mass(link: Any, path: Path) -> float | None:
+    mass = link.find("inertial/mass")
+    if mass is None:
+        return None
+    try:
+        value = float(mass.get("value", "nan"))
+    except ValueError:
+        value = float("nan")
+    if not (np.isfinite(value) and value > 0):
+        raise ConfigError(path, f"link mass is {mass.get('value')!r}; a mass must be a positive number of kg",
+                          where=_line(mass))
+    return value
