@@ -24,7 +24,7 @@ from py_trees.common import Status
 
 from bt_grasp.behaviours.base import RobotLeaf
 from bt_grasp.behaviours.grasp_plan import MOVED_RAD, GraspPose
-from bt_grasp.behaviours.gripper import EMPTY_WIDTH_M
+from bt_grasp.behaviours.gripper import EMPTY_WIDTH_M, GRASP_FORCE_N
 from bt_grasp.behaviours.motion_job import MotionJob, PathFailure, PathFn, Segment
 from bt_grasp.behaviours.motion_leaves import (
     _MovingLeaf,
@@ -57,6 +57,20 @@ RELEASE_IK_SEEDS = 16
 RELEASE_IK_SOLUTIONS = 8
 #: how long opening the fingers may take (simulated time)
 OPEN_TIMEOUT_S = 1.5
+#: a held object at least this many times as tall as its footprint is wide stands and may tip (a can, a bottle)
+STANDING_RATIO = 1.5
+#: a standing object is let down onto the surface before the fingers open: from the release pose (``release_gap``
+#: above it) the tool goes on down by the gap and this much more; contact stops the object and it slides up
+#: between the pads (or the arm stalls), so it stands on the surface when the pads let go. Released 3 mm above a
+#: bin's floor, a side-grasped can dropped, landed on its rim a fraction of a degree off upright with the pads'
+#: sideways push, and wobbled on its rim for good (1.8-2.2 deg, never still for 1 s: PhysX keeps a tall convex
+#: body rocking on its rim once set going; dropped straight from 3 mm it settles).
+TOUCH_DOWN_PRESS_M = 0.002
+#: then the grip of a standing object is eased from the grasp's force down to this one over ``EASE_S`` of simulated
+#: time, one step a tick, before the fingers open: opened from the full force, the squeezed pads spring apart one
+#: after the other and push the object sideways (the can left at 70 mm/s)
+EASE_FORCE_N = 4.0
+EASE_S = 0.3
 
 _HELD_PORTS = [
     PortSpec("grasp", PortDirection.INPUT, object, "{grasp}", "the grasp holding the object (from PlanGrasp)"),
@@ -200,6 +214,7 @@ class _PlaceBase(RobotLeaf):
                                       turns=_flag(self.input("turns")), free_yaw=_flag(self.input("free_yaw")),
                                       turn_rad=math.radians(self.input_float("turn_deg")))
         self._height = height
+        self._standing = height >= STANDING_RATIO * min(float(held.size_m[0]), float(held.size_m[1]))
         self._target_text = f"{pose.x_m:.3f};{pose.y_m:.3f};{surface:.3f}"
         margin = 0.004
         held_box = detection_box(held, "held", margin_m=margin)
@@ -298,7 +313,12 @@ class _PlaceBase(RobotLeaf):
             plan_to_pose_fn(self, _raised(T_place, self.input_float("approach")), self._carry_scene)))
         descend = _planned_or(descent_path, self._blocked_if_collision(
             cartesian_fn(self, lambda _T: T_place, self._descent_scene)))
-        self.job = MotionJob(self.cell, [Segment("carry", carry), Segment("descend", descend)])
+        segments = [Segment("carry", carry), Segment("descend", descend)]
+        if self._standing:
+            down = self._gap + TOUCH_DOWN_PRESS_M
+            segments.append(Segment("touch down", cartesian_fn(self, lambda _T: _raised(T_place, -down),
+                                                               self._retreat_scene)))
+        self.job = MotionJob(self.cell, segments)
         self.phase = "move"
         turned = f", turned {math.degrees(option.turn_rad):.0f} deg" if option.turn_rad else ""
         self.feedback_message = f"placing at {self._target_text}{turned}"
@@ -346,13 +366,23 @@ class _PlaceBase(RobotLeaf):
                 self.job.cancel()
                 above = self._tcp_z() - float(self._T_place[2, 3])
                 touched = self.job.current == "descend" and outcome.reason is FailureReason.TRACKING_ERROR
-                if touched and above <= self.input_float("contact_window"):
+                if self.job.current == "touch down":
+                    # stalled on the surface, or no straight line down from the release pose: open there
+                    self.feedback_message = f"touch down ended {above * 1e3:+.0f} mm from the release pose"
+                elif touched and above <= self.input_float("contact_window"):
                     self.feedback_message = f"touched down {above * 1e3:.0f} mm above the target"
                 elif touched:
                     return self.failed(FailureReason.PLACE_BLOCKED,
                                        f"the descent met something {above * 100:.1f} cm above the target")
                 else:
                     return self.failed(outcome.reason, outcome.sentence)
+            self._t_open = self.now_s()
+            self.phase = "ease"
+        if self.phase == "ease":
+            eased = min(1.0, (self.now_s() - self._t_open) / EASE_S) if self._standing else 1.0
+            if eased < 1.0:
+                self.cell.robot.close_gripper(force_n=GRASP_FORCE_N + (EASE_FORCE_N - GRASP_FORCE_N) * eased)
+                return Status.RUNNING
             self.cell.robot.open_gripper()
             self._t_open = self.now_s()
             self.phase = "open"
