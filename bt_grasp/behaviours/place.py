@@ -209,13 +209,14 @@ class _PlaceBase(RobotLeaf):
         T_tcp_obj = held_offset(grasp, held)
         height = float(held.size_m[2])
         gap = self.input_float("release_gap")
-        self._T_tcp_obj, self._gap = T_tcp_obj, gap
-        self._options = place_options(pose, held, T_tcp_obj, height, gap, surface,
-                                      turns=_flag(self.input("turns")), free_yaw=_flag(self.input("free_yaw")),
-                                      turn_rad=math.radians(self.input_float("turn_deg")))
+        self._T_tcp_obj, self._gap, self._surface = T_tcp_obj, gap, surface
+        options = self.orientations(pose, held, T_tcp_obj, surface)
+        if isinstance(options, str):
+            return self.failed(FailureReason.PLACE_BLOCKED, options)
+        self._options = options
         self._height = height
         self._standing = height >= STANDING_RATIO * min(float(held.size_m[0]), float(held.size_m[1]))
-        self._target_text = f"{pose.x_m:.3f};{pose.y_m:.3f};{surface:.3f}"
+        self._target_text = self._where(options[0][1])
         margin = 0.004
         held_box = detection_box(held, "held", margin_m=margin)
         held_shape = type(held_box).at("held", held_box.size_m, T_tcp_obj)
@@ -232,6 +233,19 @@ class _PlaceBase(RobotLeaf):
         self._q_start = self.cell.robot.joint_positions()
         self.feedback_message = f"placing at {self._target_text}"
         return None
+
+    def orientations(self, pose: Pose, held: Detection, T_tcp_obj: Mat4, surface_z_m: float
+                     ) -> list[tuple[PlaceYaw, Mat4]] | str:
+        """The place orientations to try in order, each with its release tool pose (or why there is none):
+        Place's and PlaceOn's, at ``pose``, turned by the held object's footprint symmetries."""
+        return place_options(pose, held, T_tcp_obj, float(held.size_m[2]), self._gap, surface_z_m,
+                             turns=_flag(self.input("turns")), free_yaw=_flag(self.input("free_yaw")),
+                             turn_rad=math.radians(self.input_float("turn_deg")))
+
+    def _where(self, T_place: Mat4) -> str:
+        """Where an option sets the object down: its centre's x;y and the surface's z (base frame)."""
+        xyz = (T_place @ self._T_tcp_obj)[:3, 3]
+        return f"{xyz[0]:.3f};{xyz[1]:.3f};{self._surface:.3f}"
 
     def _try_option(self, option: PlaceYaw, T_place: Mat4) -> tuple[NDArray[np.float64], ...] | PathFailure:
         """The carry path to the pre-place pose and the straight descent to the release pose, both checked in
@@ -283,9 +297,22 @@ class _PlaceBase(RobotLeaf):
                 return np.asarray(carry.path, dtype=float), line[::-1].copy()
         return failures[0]
 
+    def _touched_down(self, q_release: NDArray[np.float64], T_place: Mat4) -> NDArray[np.float64]:
+        """Where the arm lets go: a standing object's touch-down goes on down from the release pose (as far as
+        a straight line clear of the fixtures goes; where it stops, the arm stays at the release pose)."""
+        if not self._standing:
+            return q_release
+        line = self.cell.planner.straight_line(q_release, _raised(T_place, -self._touch_down_m()),
+                                               self._retreat_scene)
+        return np.asarray(line.path, dtype=float)[-1] if line.ok else q_release
+
+    def _touch_down_m(self) -> float:
+        return self._gap + TOUCH_DOWN_PRESS_M
+
     def _way_out(self, q_release: NDArray[np.float64], T_place: Mat4, turn: str) -> PathFailure | None:
-        """Why the open gripper cannot leave the released object from ``q_release`` (None: it can)."""
-        q = q_release
+        """Why the open gripper cannot leave the released object from ``q_release`` (None: it can); for a
+        standing object, from where its touch-down ends."""
+        q = self._touched_down(q_release, T_place)
         for name, fn in retreat_after_release(T_place, self.input_float("retreat"), self._height):
             line = self.cell.planner.straight_line(q, fn(self.cell.kinematics.fk(q)), self._retreat_scene)
             if not line.ok:
@@ -299,6 +326,7 @@ class _PlaceBase(RobotLeaf):
         with the first that works; FAILURE when none does."""
         option, T_place = self._options[self._next]
         self._next += 1
+        self._target_text = self._where(T_place)
         tried = self._try_option(option, T_place)
         if isinstance(tried, PathFailure):
             self._rejected.append((option, tried))
@@ -315,7 +343,7 @@ class _PlaceBase(RobotLeaf):
             cartesian_fn(self, lambda _T: T_place, self._descent_scene)))
         segments = [Segment("carry", carry), Segment("descend", descend)]
         if self._standing:
-            down = self._gap + TOUCH_DOWN_PRESS_M
+            down = self._touch_down_m()
             segments.append(Segment("touch down", cartesian_fn(self, lambda _T: _raised(T_place, -down),
                                                                self._retreat_scene)))
         self.job = MotionJob(self.cell, segments)

@@ -1,0 +1,254 @@
+"""Free placement in a tray or bin: where on its floor a held object can be set down, clear of the walls and of
+what was set down there before (issue 28: five household objects into one bin, in whatever order they come).
+
+Everything here is in the container's frame: origin at the middle of its floor's top, x along its first inner
+side, z up. An object at rest is an upright prism (its footprint rectangle, from the floor to its height); the
+open gripper at the release is a few boxes (palm, finger pads) fixed to the object by the grasp. A spot is a
+position and a yaw where
+
+- the object's footprint, grown by ``margin_m`` on every side, lies inside the walls and clear of every object
+  set down before, each grown the same way: what perception does not see of an object (the part within its
+  height threshold of the table: a wedge's thin end, a banana's tips, a can's body under its narrower lid) is
+  up to ~8 mm beyond its footprint;
+- every box of the open gripper is ``clearance_m`` clear of the walls and of those objects wherever it comes
+  lower than their tops: it comes down vertically, so whatever stands under it on its way down is in the way,
+  and after a side grasp it backs off sideways (``HeldShape.back_off_m``) before it rises, sweeping the floor
+  between. Nothing of the gripper may come below the walls' top outside them either (it would pass a wall).
+
+Spots are ranked by how much of the object's grown footprint lies against a wall or an object already set down
+(the touching-perimeter rule of two-dimensional bin packing: objects packed against each other and the walls
+leave the rest of the floor in one piece for the next), then by how far they are from ``far_from_xy`` (the
+robot's base: the container is filled from its far side, so the arm does not reach over what it set down),
+then by position. A rectangle lies along or across the container (its sides parallel to the walls: the
+packing wastes no floor in slivers) and is tried half a turn round too (the gripper is then elsewhere); a
+round footprint every 30 degrees. The order depends on the arguments alone.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from bt_grasp.geometry import Mat4, make_T, rot_z
+
+#: the step of the grid of positions tried besides those against a wall or an object, m
+GRID_STEP_M = 0.01
+#: the turns tried for a round footprint, degrees apart
+ROUND_STEP_DEG = 30.0
+#: walls are modelled this thick, outward: no part of the gripper below their top outside the container
+_WALL_DEPTH_M = 0.5
+_EPS = 1e-9
+
+
+@dataclass(frozen=True)
+class Floor:
+    """The free floor inside the walls: half its sides, and the walls' height above it."""
+
+    half_x_m: float
+    half_y_m: float
+    wall_height_m: float
+
+
+@dataclass(frozen=True)
+class Resting:
+    """Something set down on the floor before, as it was put there (its perceived footprint and height)."""
+
+    centre_xy_m: tuple[float, float]
+    yaw_rad: float
+    size_xy_m: tuple[float, float]  # length, width
+    height_m: float
+
+
+@dataclass(frozen=True)
+class ToolPart:
+    """A box of the open gripper at the release, fixed to the held object: its full size and its pose in the
+    object's resting frame (origin at the middle of its footprint on the floor, x along its length, z up)."""
+
+    size_m: tuple[float, float, float]
+    T_object_part: Mat4
+
+
+@dataclass(frozen=True)
+class HeldShape:
+    """The held object as perceived (footprint, height, round or not) and the gripper around it."""
+
+    length_m: float
+    width_m: float
+    height_m: float
+    round_footprint: bool
+    parts: tuple[ToolPart, ...] = ()
+    #: how the open gripper leaves the object before it rises, in the object's resting frame (0: straight up)
+    back_off_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class Spot:
+    """Where the held object's footprint centre goes and its yaw (container frame), and how much of its grown
+    footprint touches a wall or an object set down before (m of perimeter)."""
+
+    x_m: float
+    y_m: float
+    yaw_rad: float
+    contact_m: float
+
+
+@dataclass(frozen=True)
+class _Block:
+    """An axis-aligned obstacle rectangle [x0, x1] x [y0, y1] standing from the floor up to ``top_m``."""
+
+    x0: float
+    x1: float
+    y0: float
+    y1: float
+    top_m: float
+
+
+def _block(rest: Resting, grow: float) -> _Block:
+    """The box round a resting object's turned footprint, grown, up to its top."""
+    c, s = abs(math.cos(rest.yaw_rad)), abs(math.sin(rest.yaw_rad))
+    (x, y), (length, width) = rest.centre_xy_m, rest.size_xy_m
+    hx = (c * length + s * width) / 2 + grow
+    hy = (s * length + c * width) / 2 + grow
+    return _Block(x - hx, x + hx, y - hy, y + hy, rest.height_m)
+
+
+def obstacles(floor: Floor, resting: Sequence[Resting], margin_m: float) -> list[_Block]:
+    """The walls (thick, outward) and what rests on the floor (its box round its turned footprint, grown)."""
+    hx, hy, h, d = floor.half_x_m, floor.half_y_m, floor.wall_height_m, _WALL_DEPTH_M
+    walls = [_Block(-hx - d, -hx, -hy - d, hy + d, h), _Block(hx, hx + d, -hy - d, hy + d, h),
+             _Block(-hx - d, hx + d, -hy - d, -hy, h), _Block(-hx - d, hx + d, hy, hy + d, h)]
+    return walls + [_block(r, margin_m) for r in resting]
+
+
+def _overlaps(poly: NDArray[np.float64], block: _Block) -> bool:
+    """Whether a convex polygon (k, 2) and a rectangle overlap with positive area (touching does not count)."""
+    if (poly[:, 0].max() <= block.x0 + _EPS or poly[:, 0].min() >= block.x1 - _EPS
+            or poly[:, 1].max() <= block.y0 + _EPS or poly[:, 1].min() >= block.y1 - _EPS):
+        return False
+    rect = np.array([[block.x0, block.y0], [block.x1, block.y0], [block.x1, block.y1], [block.x0, block.y1]])
+    edges = np.roll(poly, -1, axis=0) - poly
+    for nx, ny in np.stack([-edges[:, 1], edges[:, 0]], axis=1):
+        a, b = poly @ (nx, ny), rect @ (nx, ny)
+        if a.max() <= b.min() + _EPS or b.max() <= a.min() + _EPS:
+            return False
+    return True
+
+
+def _shadow(part: ToolPart, T_container_object: Mat4, grow: float, back_off: NDArray[np.float64]
+            ) -> tuple[NDArray[np.float64], float]:
+    """The outline seen from above of the part's sweep from the release to where it backs off to (the hull of
+    its corners at both ends, grown: the volume a box sweeps along a straight line), and its lowest point."""
+    half = np.asarray(part.size_m) / 2 + grow
+    corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * half
+    T = np.asarray(T_container_object) @ np.asarray(part.T_object_part)
+    pts = corners @ T[:3, :3].T + T[:3, 3]
+    if np.any(back_off):
+        pts = np.vstack([pts, pts + np.asarray(T_container_object)[:3, :3] @ back_off])
+    return _hull(pts[:, :2]), float(pts[:, 2].min())
+
+
+def _hull(points: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Counter-clockwise convex hull (Andrew's monotone chain)."""
+    pts = sorted({(round(float(x), 12), round(float(y), 12)) for x, y in points})
+    if len(pts) < 3:
+        return np.array(pts, dtype=float)
+
+    def half(seq: list[tuple[float, float]]) -> list[tuple[float, float]]:
+        out: list[tuple[float, float]] = []
+        for p in seq:
+            while len(out) >= 2 and ((out[-1][0] - out[-2][0]) * (p[1] - out[-2][1])
+                                     - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0])) <= 0:
+                out.pop()
+            out.append(p)
+        return out
+
+    lower, upper = half(pts), half(pts[::-1])
+    return np.array(lower[:-1] + upper[:-1], dtype=float)
+
+
+def _contact(x0: float, x1: float, y0: float, y1: float, blocks: Sequence[_Block]) -> float:
+    """How much of the rectangle's perimeter lies against the blocks' sides (walls included)."""
+    total = 0.0
+    for b in blocks:
+        along_y = max(0.0, min(y1, b.y1) - max(y0, b.y0))
+        along_x = max(0.0, min(x1, b.x1) - max(x0, b.x0))
+        if abs(x0 - b.x1) < 1e-7 or abs(x1 - b.x0) < 1e-7:
+            total += along_y
+        if abs(y0 - b.y1) < 1e-7 or abs(y1 - b.y0) < 1e-7:
+            total += along_x
+    return total
+
+
+def _positions(lo: float, hi: float, half: float, edges: Sequence[tuple[float, float]], step: float) -> list[float]:
+    """Centre coordinates along one axis: against each wall and each object's sides, and a grid between."""
+    if hi - lo < 2 * half - _EPS:
+        return []
+    out = {lo + half, hi - half}
+    for e0, e1 in edges:
+        out.update((e1 + half, e0 - half))
+    n = math.floor((hi - lo - 2 * half) / step + _EPS)
+    out.update(lo + half + k * step for k in range(n + 1))
+    return sorted(c for c in out if lo + half - _EPS <= c <= hi - half + _EPS)
+
+
+def _turns(held: HeldShape) -> list[tuple[float, tuple[float, ...]]]:
+    """(the footprint's direction, the yaws tried with it): along and across, each also half a turn round; a
+    round footprint in one direction, every 30 degrees."""
+    if held.round_footprint:
+        n = round(360.0 / ROUND_STEP_DEG)
+        return [(0.0, tuple(math.radians(ROUND_STEP_DEG * k) for k in range(n)))]
+    return [(0.0, (0.0, math.pi)), (math.pi / 2, (math.pi / 2, -math.pi / 2))]
+
+
+def free_spots(floor: Floor, resting: Sequence[Resting], held: HeldShape, *, margin_m: float = 0.01,
+               clearance_m: float = 0.005, far_from_xy: tuple[float, float] = (0.0, 0.0), limit: int = 0,
+               step_m: float = GRID_STEP_M) -> list[Spot]:
+    """The spots where the held object can be set down, best first (see the module's docstring); at most
+    ``limit`` of them (0: all)."""
+    blocks = obstacles(floor, resting, margin_m)
+    placed = blocks[4:]
+    hx, hy = floor.half_x_m, floor.half_y_m
+    size = (held.length_m, held.width_m) if not held.round_footprint else (max(held.length_m, held.width_m),) * 2
+    ranked: list[tuple[tuple[float, float, float, float, float], float, float, tuple[float, ...]]] = []
+    for k, (direction, yaws) in enumerate(_turns(held)):
+        across = abs(math.sin(direction)) > 0.5
+        a = (size[1] if across else size[0]) / 2 + margin_m
+        b = (size[0] if across else size[1]) / 2 + margin_m
+        xs = _positions(-hx, hx, a, [(p.x0, p.x1) for p in placed], step_m)
+        ys = _positions(-hy, hy, b, [(p.y0, p.y1) for p in placed], step_m)
+        for x in xs:
+            for y in ys:
+                x0, x1, y0, y1 = x - a, x + a, y - b, y + b
+                if any(x0 < p.x1 - _EPS and x1 > p.x0 + _EPS and y0 < p.y1 - _EPS and y1 > p.y0 + _EPS
+                       for p in placed):
+                    continue
+                contact = _contact(x0, x1, y0, y1, blocks)
+                far = math.hypot(x - far_from_xy[0], y - far_from_xy[1])
+                key = (-round(contact, 6), -round(far, 6), round(x, 6), round(y, 6), float(k))
+                ranked.append((key, x, y, yaws))
+    ranked.sort(key=lambda item: item[0])
+    out: list[Spot] = []
+    for key, x, y, yaws in ranked:
+        for yaw in yaws:
+            if _gripper_clear(held, x, y, yaw, blocks, clearance_m):
+                out.append(Spot(x, y, yaw, -key[0]))
+                if limit and len(out) >= limit:
+                    return out
+    return out
+
+
+def _gripper_clear(held: HeldShape, x: float, y: float, yaw: float, blocks: Sequence[_Block],
+                   clearance_m: float) -> bool:
+    """Whether every part of the open gripper, with the object at (x, y, yaw), stays clear on its way down."""
+    T = make_T(rot_z(yaw), [x, y, 0.0])
+    back_off = np.asarray(held.back_off_m, dtype=float)
+    for part in held.parts:
+        outline, lowest = _shadow(part, T, clearance_m, back_off)
+        for block in blocks:
+            if lowest < block.top_m + clearance_m and _overlaps(outline, block):
+                return False
+    return True
