@@ -45,6 +45,7 @@ from bt_grasp.tree.registry import PortDirection, PortSpec, leaf
 
 if TYPE_CHECKING:
     from bt_grasp.behaviours.cell import Cell
+    from bt_grasp.motion.planning_scene import Shape
     from bt_grasp.perception.results import Detection
     from bt_grasp.scene.format import Scene
 
@@ -218,8 +219,7 @@ class _PlaceBase(RobotLeaf):
         self._standing = height >= STANDING_RATIO * min(float(held.size_m[0]), float(held.size_m[1]))
         self._target_text = self._where(options[0][1])
         margin = 0.004
-        held_box = detection_box(held, "held", margin_m=margin)
-        held_shape = type(held_box).at("held", held_box.size_m, T_tcp_obj)
+        held_shape = self.held_model(held, T_tcp_obj, margin)
         seen = object_list(self.input("objects")) or ()
         remembered = [d for d in self._placed_before() if not any(same_object(d, o) for o in seen)]
         others = [d for d in (*seen, *remembered) if not same_object(d, held)]
@@ -241,6 +241,11 @@ class _PlaceBase(RobotLeaf):
         return place_options(pose, held, T_tcp_obj, float(held.size_m[2]), self._gap, surface_z_m,
                              turns=_flag(self.input("turns")), free_yaw=_flag(self.input("free_yaw")),
                              turn_rad=math.radians(self.input_float("turn_deg")))
+
+    def held_model(self, held: Detection, T_tcp_obj: Mat4, margin_m: float) -> Shape:
+        """The held object as the planner carries it (tool frame): its perceived box, grown by ``margin_m``."""
+        box = detection_box(held, "held", margin_m=margin_m)
+        return type(box).at("held", box.size_m, T_tcp_obj)
 
     def _where(self, T_place: Mat4) -> str:
         """Where an option sets the object down: its centre's x;y and the surface's z (base frame)."""

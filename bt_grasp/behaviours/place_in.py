@@ -26,6 +26,7 @@ from bt_grasp.tree.registry import PortDirection, PortSpec, leaf
 
 if TYPE_CHECKING:
     from bt_grasp.motion.free_area import HeldShape, Resting
+    from bt_grasp.motion.planning_scene import Shape
     from bt_grasp.perception.results import Detection
     from bt_grasp.scene.format import Scene
 
@@ -125,6 +126,16 @@ class PlaceIn(_PlaceBase):
             T_place = make_T(rot_z(yaw), [T_obj[0, 3], T_obj[1, 3], z]) @ T_obj_tcp
             out.append((PlaceYaw(yaw, spot.yaw_rad, wrap_rad(yaw - float(held.yaw_rad))), T_place))
         return out
+
+    def held_model(self, held: Detection, T_tcp_obj: Mat4, margin_m: float) -> Shape:
+        """A round object (a standing can) as a cylinder: PlaceIn turns it any way, and its box turned 30 degrees
+        stands 12 mm beyond its round footprint at the corners (the can's descent met the wall it was clear of)."""
+        if held.shape != "round":
+            return super().held_model(held, T_tcp_obj, margin_m)
+        from bt_grasp.motion.planning_scene import Cylinder
+
+        radius = max(float(held.size_m[0]), float(held.size_m[1])) / 2 + margin_m / 2
+        return Cylinder.at("held", radius, float(held.size_m[2]) + margin_m, T_tcp_obj)
 
     @staticmethod
     def _resting(placed: Detection, T_base_box: Mat4) -> Resting:

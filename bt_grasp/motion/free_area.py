@@ -15,13 +15,16 @@ position and a yaw where
   and after a side grasp it backs off sideways (``HeldShape.back_off_m``) before it rises, sweeping the floor
   between. Nothing of the gripper may come below the walls' top outside them either (it would pass a wall).
 
-Spots are ranked by how much of the object's grown footprint lies against a wall or an object already set down
-(the touching-perimeter rule of two-dimensional bin packing: objects packed against each other and the walls
-leave the rest of the floor in one piece for the next), then by how far they are from ``far_from_xy`` (the
-robot's base: the container is filled from its far side, so the arm does not reach over what it set down),
-then by position. A rectangle lies along or across the container (its sides parallel to the walls: the
-packing wastes no floor in slivers) and is tried half a turn round too (the gripper is then elsewhere); a
-round footprint every 30 degrees. The order depends on the arguments alone.
+Spots are ranked by how much of the release's envelope (the box round the grown footprint and the gripper's
+parts that come lower than the walls' top: the open pads, a side grasp's palm and wrist) lies against a wall or
+an object already set down: the touching-perimeter rule of two-dimensional bin packing, on what the release
+takes of the floor (objects packed against each other and the walls leave the rest of the floor in one piece
+for the next; measured on the footprint alone, the pads kept every object off its neighbours by more than
+they need and scattered five objects over the middle of the bin). Then by how far they are from
+``far_from_xy`` (the robot's base: the container is filled from its far side, so the arm does not reach over
+what it set down), then by position. A rectangle lies along or across the container (its sides parallel to
+the walls: no floor is wasted in slivers), each also half a turn round (the gripper is then elsewhere); a
+round footprint is tried every 30 degrees. The order depends on the arguments alone.
 """
 
 from __future__ import annotations
@@ -170,38 +173,53 @@ def _hull(points: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.array(lower[:-1] + upper[:-1], dtype=float)
 
 
-def _contact(x0: float, x1: float, y0: float, y1: float, blocks: Sequence[_Block]) -> float:
-    """How much of the rectangle's perimeter lies against the blocks' sides (walls included)."""
-    total = 0.0
+def _contact(x0: NDArray[np.float64], x1: NDArray[np.float64], y0: NDArray[np.float64], y1: NDArray[np.float64],
+             blocks: Sequence[_Block]) -> NDArray[np.float64]:
+    """How much of each rectangle's perimeter lies against the blocks' sides (walls included)."""
+    total = np.zeros_like(x0)
     for b in blocks:
-        along_y = max(0.0, min(y1, b.y1) - max(y0, b.y0))
-        along_x = max(0.0, min(x1, b.x1) - max(x0, b.x0))
-        if abs(x0 - b.x1) < 1e-7 or abs(x1 - b.x0) < 1e-7:
-            total += along_y
-        if abs(y0 - b.y1) < 1e-7 or abs(y1 - b.y0) < 1e-7:
-            total += along_x
+        along_y = np.clip(np.minimum(y1, b.y1) - np.maximum(y0, b.y0), 0.0, None)
+        along_x = np.clip(np.minimum(x1, b.x1) - np.maximum(x0, b.x0), 0.0, None)
+        total += along_y * ((np.abs(x0 - b.x1) < 1e-7) | (np.abs(x1 - b.x0) < 1e-7))
+        total += along_x * ((np.abs(y0 - b.y1) < 1e-7) | (np.abs(y1 - b.y0) < 1e-7))
     return total
 
 
-def _positions(lo: float, hi: float, half: float, edges: Sequence[tuple[float, float]], step: float) -> list[float]:
-    """Centre coordinates along one axis: against each wall and each object's sides, and a grid between."""
+def _yaws(held: HeldShape) -> tuple[float, ...]:
+    """The yaws tried: a rectangle along the container and across it, each also half a turn round; a round
+    footprint every 30 degrees."""
+    if held.round_footprint:
+        return tuple(math.radians(ROUND_STEP_DEG * k) for k in range(round(360.0 / ROUND_STEP_DEG)))
+    return (0.0, math.pi, math.pi / 2, -math.pi / 2)
+
+
+def _envelope(held: HeldShape, yaw: float, half: tuple[float, float], clearance_m: float, low_m: float
+              ) -> tuple[float, float, float, float]:
+    """The box round the grown footprint and the gripper's parts that come lower than ``low_m`` (the walls'
+    top: the pads, a side grasp's palm), relative to the footprint's centre: what the release takes of the
+    floor."""
+    x0, x1, y0, y1 = -half[0], half[0], -half[1], half[1]
+    T = make_T(rot_z(yaw), [0.0, 0.0, 0.0])
+    for part in held.parts:
+        outline, lowest = _shadow(part, T, clearance_m, np.asarray(held.back_off_m, dtype=float))
+        if lowest < low_m:
+            x0, x1 = min(x0, float(outline[:, 0].min())), max(x1, float(outline[:, 0].max()))
+            y0, y1 = min(y0, float(outline[:, 1].min())), max(y1, float(outline[:, 1].max()))
+    return x0, x1, y0, y1
+
+
+def _axis(lo: float, hi: float, half: float, env: tuple[float, float], edges: Sequence[tuple[float, float]],
+          step: float) -> NDArray[np.float64]:
+    """Centre coordinates along one axis where the footprint fits between the walls: the footprint or the
+    release's envelope (``env``: its low and high offsets) against a wall or an object's side, and a grid."""
     if hi - lo < 2 * half - _EPS:
-        return []
-    out = {lo + half, hi - half}
+        return np.zeros(0)
+    out = {lo + half, hi - half, lo - env[0], hi - env[1]}
     for e0, e1 in edges:
-        out.update((e1 + half, e0 - half))
+        out.update((e1 + half, e0 - half, e1 - env[0], e0 - env[1]))
     n = math.floor((hi - lo - 2 * half) / step + _EPS)
     out.update(lo + half + k * step for k in range(n + 1))
-    return sorted(c for c in out if lo + half - _EPS <= c <= hi - half + _EPS)
-
-
-def _turns(held: HeldShape) -> list[tuple[float, tuple[float, ...]]]:
-    """(the footprint's direction, the yaws tried with it): along and across, each also half a turn round; a
-    round footprint in one direction, every 30 degrees."""
-    if held.round_footprint:
-        n = round(360.0 / ROUND_STEP_DEG)
-        return [(0.0, tuple(math.radians(ROUND_STEP_DEG * k) for k in range(n)))]
-    return [(0.0, (0.0, math.pi)), (math.pi / 2, (math.pi / 2, -math.pi / 2))]
+    return np.array(sorted(c for c in out if lo + half - _EPS <= c <= hi - half + _EPS))
 
 
 def free_spots(floor: Floor, resting: Sequence[Resting], held: HeldShape, *, margin_m: float = 0.01,
@@ -213,31 +231,34 @@ def free_spots(floor: Floor, resting: Sequence[Resting], held: HeldShape, *, mar
     placed = blocks[4:]
     hx, hy = floor.half_x_m, floor.half_y_m
     size = (held.length_m, held.width_m) if not held.round_footprint else (max(held.length_m, held.width_m),) * 2
-    ranked: list[tuple[tuple[float, float, float, float, float], float, float, tuple[float, ...]]] = []
-    for k, (direction, yaws) in enumerate(_turns(held)):
-        across = abs(math.sin(direction)) > 0.5
+    keys, rows = [], []
+    for k, yaw in enumerate(_yaws(held)):
+        across = abs(math.sin(yaw)) > 0.5 and not held.round_footprint
         a = (size[1] if across else size[0]) / 2 + margin_m
         b = (size[0] if across else size[1]) / 2 + margin_m
-        xs = _positions(-hx, hx, a, [(p.x0, p.x1) for p in placed], step_m)
-        ys = _positions(-hy, hy, b, [(p.y0, p.y1) for p in placed], step_m)
-        for x in xs:
-            for y in ys:
-                x0, x1, y0, y1 = x - a, x + a, y - b, y + b
-                if any(x0 < p.x1 - _EPS and x1 > p.x0 + _EPS and y0 < p.y1 - _EPS and y1 > p.y0 + _EPS
-                       for p in placed):
-                    continue
-                contact = _contact(x0, x1, y0, y1, blocks)
-                far = math.hypot(x - far_from_xy[0], y - far_from_xy[1])
-                key = (-round(contact, 6), -round(far, 6), round(x, 6), round(y, 6), float(k))
-                ranked.append((key, x, y, yaws))
-    ranked.sort(key=lambda item: item[0])
+        ex0, ex1, ey0, ey1 = _envelope(held, yaw, (a, b), clearance_m, floor.wall_height_m)
+        xs = _axis(-hx, hx, a, (ex0, ex1), [(p.x0, p.x1) for p in placed], step_m)
+        ys = _axis(-hy, hy, b, (ey0, ey1), [(p.y0, p.y1) for p in placed], step_m)
+        X, Y = (v.ravel() for v in np.meshgrid(xs, ys, indexing="ij"))
+        free = np.ones(X.shape, dtype=bool)
+        for p in placed:
+            free &= ~((X - a < p.x1 - _EPS) & (X + a > p.x0 + _EPS) & (Y - b < p.y1 - _EPS) & (Y + b > p.y0 + _EPS))
+        X, Y = X[free], Y[free]
+        contact = _contact(X + ex0, X + ex1, Y + ey0, Y + ey1, blocks)
+        far = np.hypot(X - far_from_xy[0], Y - far_from_xy[1])
+        keys.append(np.stack([-np.round(contact, 6), -np.round(far, 6), np.round(X, 6), np.round(Y, 6),
+                              np.full(X.shape, float(k))]))
+        rows.append(np.stack([X, Y, np.full(X.shape, yaw), contact]))
+    if not keys:
+        return []
+    key, row = np.concatenate(keys, axis=1), np.concatenate(rows, axis=1)
     out: list[Spot] = []
-    for key, x, y, yaws in ranked:
-        for yaw in yaws:
-            if _gripper_clear(held, x, y, yaw, blocks, clearance_m):
-                out.append(Spot(x, y, yaw, -key[0]))
-                if limit and len(out) >= limit:
-                    return out
+    for i in np.lexsort(key[::-1]):
+        x, y, yaw, touching = (float(v) for v in row[:, i])
+        if _gripper_clear(held, x, y, yaw, blocks, clearance_m):
+            out.append(Spot(x, y, yaw, touching))
+            if limit and len(out) >= limit:
+                break
     return out
 
 
@@ -249,6 +270,6 @@ def _gripper_clear(held: HeldShape, x: float, y: float, yaw: float, blocks: Sequ
     for part in held.parts:
         outline, lowest = _shadow(part, T, clearance_m, back_off)
         for block in blocks:
-            if lowest < block.top_m + clearance_m and _overlaps(outline, block):
+            if lowest < block.top_m and _overlaps(outline, block):
                 return False
     return True

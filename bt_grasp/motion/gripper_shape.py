@@ -1,9 +1,11 @@
-"""The open gripper's boxes (palm and finger pads) in the tool frame, from the robot's own collision model.
+"""The open gripper's boxes (palm, finger pads, and the wrist's last link they are bolted to) in the tool frame,
+from the robot's own collision model.
 
 A placement that has not chosen an arm configuration yet (``bt_grasp.motion.free_area``) still knows where the
 gripper will be relative to the held object (the grasp fixes it): these boxes, placed by the release's tool
-pose, are what of the gripper comes down to the surface. The arm above them is checked later, with the whole
-robot, by the planner.
+pose, are what of the robot comes down to the surface with it (the last wrist link as the box round its mesh).
+The rest of the arm, whose pose depends on the configuration, is checked later, with the whole robot, by the
+planner.
 """
 
 from __future__ import annotations
@@ -16,7 +18,11 @@ import pinocchio as pin
 
 from bt_grasp.geometry import Mat4, inv
 from bt_grasp.motion.collision import robot_collision_model
-from bt_grasp.robot_description import GRIPPER_LINKS, MAX_OPENING_M
+from bt_grasp.robot_description import ARM_JOINTS, GRIPPER_LINKS, MAX_OPENING_M
+
+#: the links rigidly attached to the tool: where they are follows from the tool pose alone (the gripper and the
+#: arm's last link, which the last joint turns with the tool)
+TOOL_LINKS = (*GRIPPER_LINKS, ARM_JOINTS[-1].removesuffix("_joint") + "_link")
 
 
 @dataclass(frozen=True)
@@ -41,9 +47,18 @@ def gripper_boxes(opening_m: float = MAX_OPENING_M) -> tuple[ToolBox, ...]:
     T_tcp_base = inv(kin.fk(q))
     out = []
     for i, obj in enumerate(model.geom_model.geometryObjects):
-        half = getattr(obj.geometry, "halfSide", None)
-        if model.geom_link[i] not in GRIPPER_LINKS or half is None:
+        if model.geom_link[i] not in TOOL_LINKS:
             continue
-        size = tuple(float(2 * h) for h in half)
-        out.append(ToolBox(model.geom_link[i], size, T_tcp_base @ geom_data.oMg[i].homogeneous))  # type: ignore[arg-type]
+        geometry = obj.geometry
+        half = getattr(geometry, "halfSide", None)
+        T_tcp_geom = T_tcp_base @ geom_data.oMg[i].homogeneous
+        if half is not None:  # a box
+            size, centre = 2 * np.asarray(half, dtype=float), np.zeros(3)
+        else:  # a mesh: the box round it
+            geometry.computeLocalAABB()
+            lo, hi = np.asarray(geometry.aabb_local.min_), np.asarray(geometry.aabb_local.max_)
+            size, centre = hi - lo, (hi + lo) / 2
+        T = T_tcp_geom.copy()
+        T[:3, 3] = T_tcp_geom[:3, :3] @ centre + T_tcp_geom[:3, 3]
+        out.append(ToolBox(model.geom_link[i], (float(size[0]), float(size[1]), float(size[2])), T))
     return tuple(out)
