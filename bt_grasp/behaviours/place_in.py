@@ -36,6 +36,9 @@ MAX_SPOTS = 24
 #: see what lies within its height threshold (8 mm) of the table, measured up to ~8 mm beyond the footprint (the
 #: wedge's thin end 7 mm, each banana tip ~7 mm, the can's body 4.5 mm round its lid)
 DEFAULT_MARGIN_M = 0.01
+#: and from the walls by this much unless the tree says otherwise: the unseen part and a few mm of shift in the
+#: fingers (seed 9: a pen seen 130 mm long for its 146 mm, set down 1 cm from a wall, lay with a tip on it, 17 deg)
+DEFAULT_WALL_MARGIN_M = 0.02
 #: the open gripper stays this far from walls and objects on its way down
 GRIPPER_CLEARANCE_M = 0.005
 
@@ -59,6 +62,8 @@ def _fixture_problem(scene: Scene, name: str) -> str | None:
         PortSpec("fixture", PortDirection.INPUT, str, description="the tray or bin to set the object down in"),
         PortSpec("margin", PortDirection.INPUT, float, DEFAULT_MARGIN_M, "each object's footprint grown by this "
                  "on every side (what perception does not see of it), m"),
+        PortSpec("wall_margin", PortDirection.INPUT, float, DEFAULT_WALL_MARGIN_M, "the held object's footprint "
+                 "this far from the walls at least, m"),
         *[p for p in _HELD_PORTS if p.name not in _SKIP],
         PortSpec("placed", PortDirection.INOUT, object, "{placed}", "the objects this tree set down in trays or "
                  "bins (the camera's object lists leave them out): where the floor is taken; this one is added"),
@@ -110,7 +115,8 @@ class PlaceIn(_PlaceBase):
         shape = self._held_shape(held, T_tcp_obj)
         base_in_box = inv(T_base_box)[:2, 3]
         margin = self.input_float("margin")
-        spots = free_spots(floor, resting, shape, margin_m=margin, clearance_m=GRIPPER_CLEARANCE_M,
+        spots = free_spots(floor, resting, shape, margin_m=margin, wall_margin_m=self.input_float("wall_margin"),
+                           clearance_m=GRIPPER_CLEARANCE_M,
                            far_from_xy=(float(base_in_box[0]), float(base_in_box[1])), limit=MAX_SPOTS)
         if not spots:
             length, width = (float(v) * 1e3 for v in held.size_m[:2])

@@ -6,10 +6,11 @@ side, z up. An object at rest is an upright prism (its footprint rectangle, from
 open gripper at the release is a few boxes (palm, finger pads) fixed to the object by the grasp. A spot is a
 position and a yaw where
 
-- the object's footprint, grown by ``margin_m`` on every side, lies inside the walls and clear of every object
-  set down before, each grown the same way: what perception does not see of an object (the part within its
-  height threshold of the table: a wedge's thin end, a banana's tips, a can's body under its narrower lid) is
-  up to ~8 mm beyond its footprint;
+- the object's footprint, grown by ``margin_m`` on every side, lies clear of every object set down before,
+  each grown the same way, and ``wall_margin_m`` inside the walls: what perception does not see of an object
+  (the part within its height threshold of the table: a wedge's thin end, a banana's tips, a can's body under
+  its narrower lid) is up to ~8 mm beyond its footprint, and an object set down a few mm off where it was
+  meant to go (it shifted in the fingers) leans on a neighbour harmlessly but tilts with an end on a wall;
 - every box of the open gripper is ``clearance_m`` clear of the walls and of those objects wherever it comes
   lower than their tops: it comes down vertically, so whatever stands under it on its way down is in the way,
   and after a side grasp it backs off sideways (``HeldShape.back_off_m``) before it rises, sweeping the floor
@@ -223,13 +224,16 @@ def _axis(lo: float, hi: float, half: float, env: tuple[float, float], edges: Se
 
 
 def free_spots(floor: Floor, resting: Sequence[Resting], held: HeldShape, *, margin_m: float = 0.01,
-               clearance_m: float = 0.005, far_from_xy: tuple[float, float] = (0.0, 0.0), limit: int = 0,
-               step_m: float = GRID_STEP_M) -> list[Spot]:
+               wall_margin_m: float = 0.0, clearance_m: float = 0.005, far_from_xy: tuple[float, float] = (0.0, 0.0),
+               limit: int = 0, step_m: float = GRID_STEP_M) -> list[Spot]:
     """The spots where the held object can be set down, best first (see the module's docstring); at most
-    ``limit`` of them (0: all)."""
+    ``limit`` of them (0: all). The footprint keeps ``wall_margin_m`` from the walls when that is more than
+    ``margin_m`` (the gripper's parts keep only their clearance)."""
     blocks = obstacles(floor, resting, margin_m)
+    inset = max(0.0, wall_margin_m - margin_m)
+    hx, hy = floor.half_x_m - inset, floor.half_y_m - inset
+    fitting = obstacles(Floor(hx, hy, floor.wall_height_m), resting, margin_m)  # what the footprint packs against
     placed = blocks[4:]
-    hx, hy = floor.half_x_m, floor.half_y_m
     size = (held.length_m, held.width_m) if not held.round_footprint else (max(held.length_m, held.width_m),) * 2
     keys, rows = [], []
     for k, yaw in enumerate(_yaws(held)):
@@ -244,7 +248,7 @@ def free_spots(floor: Floor, resting: Sequence[Resting], held: HeldShape, *, mar
         for p in placed:
             free &= ~((X - a < p.x1 - _EPS) & (X + a > p.x0 + _EPS) & (Y - b < p.y1 - _EPS) & (Y + b > p.y0 + _EPS))
         X, Y = X[free], Y[free]
-        contact = _contact(X + ex0, X + ex1, Y + ey0, Y + ey1, blocks)
+        contact = _contact(X + ex0, X + ex1, Y + ey0, Y + ey1, fitting)
         far = np.hypot(X - far_from_xy[0], Y - far_from_xy[1])
         keys.append(np.stack([-np.round(contact, 6), -np.round(far, 6), np.round(X, 6), np.round(Y, 6),
                               np.full(X.shape, float(k))]))

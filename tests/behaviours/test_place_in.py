@@ -14,7 +14,7 @@ from test_place_leaves import GRASP, HELD, KIN, ContactRobot
 
 from bt_grasp.behaviours import robot_registry
 from bt_grasp.behaviours.cell import make_cell
-from bt_grasp.behaviours.place_in import DEFAULT_MARGIN_M
+from bt_grasp.behaviours.place_in import DEFAULT_MARGIN_M, DEFAULT_WALL_MARGIN_M
 from bt_grasp.clock import ManualClock
 from bt_grasp.motion.executor import ExecutorOptions
 from bt_grasp.motion.planner import PlannerOptions, default_planner
@@ -80,7 +80,7 @@ def test_place_in_sets_the_object_down_inside_the_bin_and_remembers_it() -> None
     assert statuses[-1] == "SUCCESS", tree.find("PlaceIn").feedback_message
     assert robot.target == MAX_OPENING_M
     placed = tree.root_blackboard.get("placed")
-    assert len(placed) == 1 and _inside_bin(placed[0], DEFAULT_MARGIN_M)
+    assert len(placed) == 1 and _inside_bin(placed[0], DEFAULT_WALL_MARGIN_M)
     assert placed[0].centroid_base_m[2] == pytest.approx(BIN.surface_z_m + 0.025, abs=1e-3)
 
 

@@ -127,3 +127,21 @@ def test_a_side_grasp_backing_off_into_a_wall_is_not_a_spot() -> None:
         assert abs(back_x) <= 0.18 + 1e-6 and abs(back_y) <= 0.12 + 1e-6
     still = HeldShape(0.057, 0.057, 0.121, True, (palm,))
     assert len(free_spots(FLOOR, [], still, margin_m=M)) > len(spots)  # without the back-off, more would do
+
+
+def test_the_footprint_keeps_its_wall_margin_from_the_walls_and_its_margin_from_the_objects() -> None:
+    box = HeldShape(0.065, 0.045, 0.03, False)
+    first = Resting((0.10, 0.0), 0.0, (0.10, 0.05), 0.03)
+    spots = free_spots(FLOOR, [first], box, margin_m=M, wall_margin_m=0.02, far_from_xy=BASE)
+    assert spots
+    for spot in spots:
+        x0, x1, y0, y1 = _rect(spot, 0.065, 0.045, grow=0.02)  # 2 cm round it: inside the walls
+        assert x0 >= -0.18 - 1e-9 and x1 <= 0.18 + 1e-9 and y0 >= -0.12 - 1e-9 and y1 <= 0.12 + 1e-9
+    # beside the object it may pack at the margin (1 cm each: 2 cm apart), not at the wall margin
+    def touches_first(spot: Spot) -> bool:
+        a0, a1, b0, b1 = _rect(spot, 0.065, 0.045)
+        beside_x = (abs(a1 - 0.04) < 1e-6 or abs(a0 - 0.16) < 1e-6) and b0 < 0.035 and b1 > -0.035
+        beside_y = (abs(b1 + 0.035) < 1e-6 or abs(b0 - 0.035) < 1e-6) and a0 < 0.16 and a1 > 0.04
+        return beside_x or beside_y
+
+    assert any(touches_first(spot) for spot in spots)
