@@ -184,6 +184,7 @@ class _PlaceBase(RobotLeaf):
         self._early: Status | None = None
         self._t_open = 0.0
         self._T_place: Mat4 | None = None
+        self._rise_first = False  # the way out the last successful check found (a side grasp's)
         self._options: list[tuple[PlaceYaw, Mat4]] = []
         self._next = 0
         self._rejected: list[tuple[PlaceYaw, PathFailure]] = []
@@ -316,15 +317,28 @@ class _PlaceBase(RobotLeaf):
 
     def _way_out(self, q_release: NDArray[np.float64], T_place: Mat4, turn: str) -> PathFailure | None:
         """Why the open gripper cannot leave the released object from ``q_release`` (None: it can); for a
-        standing object, from where its touch-down ends."""
-        q = self._touched_down(q_release, T_place)
-        for name, fn in retreat_after_release(T_place, self.input_float("retreat"), self._height):
-            line = self.cell.planner.straight_line(q, fn(self.cell.kinematics.fk(q)), self._retreat_scene)
-            if not line.ok:
-                sentence = f"{turn}: the {name} after the release fails ({line.status.value}): {line.message}"
-                return PathFailure(_blocked(cartesian_reason(line.status)), sentence)
-            q = np.asarray(line.path, dtype=float)[-1]
-        return None
+        standing object, from where its touch-down ends. A side grasp backs off then rises; when that is
+        blocked (the wrist, low behind a standing object, backing into a bin's wall), it rises first: the way
+        that works is the one the retreat takes (``_rise_first``)."""
+        q0 = self._touched_down(q_release, T_place)
+        first: PathFailure | None = None
+        for rise_first in (False, True):
+            q, failure = q0, None
+            steps = retreat_after_release(T_place, self.input_float("retreat"), self._height, rise_first)
+            for name, fn in steps:
+                line = self.cell.planner.straight_line(q, fn(self.cell.kinematics.fk(q)), self._retreat_scene)
+                if not line.ok:
+                    sentence = f"{turn}: the {name} after the release fails ({line.status.value}): {line.message}"
+                    failure = PathFailure(_blocked(cartesian_reason(line.status)), sentence)
+                    break
+                q = np.asarray(line.path, dtype=float)[-1]
+            if failure is None:
+                self._rise_first = rise_first
+                return None
+            first = first or failure
+            if len(steps) == 1:  # straight up: there is no other order
+                break
+        return first
 
     def _choose(self) -> Status:
         """Try the next orientation (one per tick: a plan and a straight line, tens of ms); start the motion
@@ -428,7 +442,7 @@ class _PlaceBase(RobotLeaf):
                 return Status.RUNNING
             scene = self._retreat_scene
             # straight up; after a side grasp back along the approach, then up past the object's top
-            steps = retreat_after_release(self._T_place, self.input_float("retreat"), self._height)
+            steps = retreat_after_release(self._T_place, self.input_float("retreat"), self._height, self._rise_first)
             self.job = MotionJob(self.cell, [Segment(name, cartesian_fn(self, fn, scene)) for name, fn in steps])
             self.phase = "retreat"
         outcome = self.job.update()

@@ -163,8 +163,4 @@ class PlaceIn(_PlaceBase):
         T_rest_tcp = make_T(np.eye(3), [0.0, 0.0, height / 2]) @ inv(T_tcp_obj)
         boxes = gripper_boxes(float(self.cell.kinematics.opening_m))
         parts = tuple(ToolPart(b.size_m, T_rest_tcp @ b.T_tcp_box) for b in boxes)
-        approach = T_rest_tcp[:3, 2]  # the tool's z: the way the grasp came in
-        pointing_down = float(-approach[2]) > math.cos(math.radians(1.0))
-        back = np.zeros(3) if pointing_down else -approach * self.input_float("retreat")
-        back_off = (float(back[0]), float(back[1]), float(back[2]))
-        return HeldShape(length, width, height, held.shape == "round", parts, back_off)
+        return HeldShape(length, width, height, held.shape == "round", parts)

@@ -12,9 +12,9 @@ position and a yaw where
   its narrower lid) is up to ~8 mm beyond its footprint, and an object set down a few mm off where it was
   meant to go (it shifted in the fingers) leans on a neighbour harmlessly but tilts with an end on a wall;
 - every box of the open gripper is ``clearance_m`` clear of the walls and of those objects wherever it comes
-  lower than their tops: it comes down vertically, so whatever stands under it on its way down is in the way,
-  and after a side grasp it backs off sideways (``HeldShape.back_off_m``) before it rises, sweeping the floor
-  between. Nothing of the gripper may come below the walls' top outside them either (it would pass a wall).
+  lower than their tops: it comes down vertically, so whatever stands under it on its way down is in the way
+  (and it leaves upwards: after a side grasp Place rises first where backing off low is blocked). Nothing of
+  the gripper may come below the walls' top outside them either (it would pass a wall).
 
 Spots are ranked by how much of the release's envelope (the box round the grown footprint and the gripper's
 parts that come lower than the walls' top: the open pads, a side grasp's palm and wrist) lies against a wall or
@@ -85,8 +85,6 @@ class HeldShape:
     height_m: float
     round_footprint: bool
     parts: tuple[ToolPart, ...] = ()
-    #: how the open gripper leaves the object before it rises, in the object's resting frame (0: straight up)
-    back_off_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
 
 @dataclass(frozen=True)
@@ -142,16 +140,12 @@ def _overlaps(poly: NDArray[np.float64], block: _Block) -> bool:
     return True
 
 
-def _shadow(part: ToolPart, T_container_object: Mat4, grow: float, back_off: NDArray[np.float64]
-            ) -> tuple[NDArray[np.float64], float]:
-    """The outline seen from above of the part's sweep from the release to where it backs off to (the hull of
-    its corners at both ends, grown: the volume a box sweeps along a straight line), and its lowest point."""
+def _shadow(part: ToolPart, T_container_object: Mat4, grow: float) -> tuple[NDArray[np.float64], float]:
+    """The part's outline seen from above (the hull of its corners, grown) and its lowest point."""
     half = np.asarray(part.size_m) / 2 + grow
     corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * half
     T = np.asarray(T_container_object) @ np.asarray(part.T_object_part)
     pts = corners @ T[:3, :3].T + T[:3, 3]
-    if np.any(back_off):
-        pts = np.vstack([pts, pts + np.asarray(T_container_object)[:3, :3] @ back_off])
     return _hull(pts[:, :2]), float(pts[:, 2].min())
 
 
@@ -202,7 +196,7 @@ def _envelope(held: HeldShape, yaw: float, half: tuple[float, float], clearance_
     x0, x1, y0, y1 = -half[0], half[0], -half[1], half[1]
     T = make_T(rot_z(yaw), [0.0, 0.0, 0.0])
     for part in held.parts:
-        outline, lowest = _shadow(part, T, clearance_m, np.asarray(held.back_off_m, dtype=float))
+        outline, lowest = _shadow(part, T, clearance_m)
         if lowest < low_m:
             x0, x1 = min(x0, float(outline[:, 0].min())), max(x1, float(outline[:, 0].max()))
             y0, y1 = min(y0, float(outline[:, 1].min())), max(y1, float(outline[:, 1].max()))
@@ -270,9 +264,8 @@ def _gripper_clear(held: HeldShape, x: float, y: float, yaw: float, blocks: Sequ
                    clearance_m: float) -> bool:
     """Whether every part of the open gripper, with the object at (x, y, yaw), stays clear on its way down."""
     T = make_T(rot_z(yaw), [x, y, 0.0])
-    back_off = np.asarray(held.back_off_m, dtype=float)
     for part in held.parts:
-        outline, lowest = _shadow(part, T, clearance_m, back_off)
+        outline, lowest = _shadow(part, T, clearance_m)
         for block in blocks:
             if lowest < block.top_m and _overlaps(outline, block):
                 return False

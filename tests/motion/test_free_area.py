@@ -114,21 +114,6 @@ def test_five_household_objects_fit_one_after_the_other() -> None:
         resting.append(Resting((s.x_m, s.y_m), s.yaw_rad, (length, width), height))
 
 
-def test_a_side_grasp_backing_off_into_a_wall_is_not_a_spot() -> None:
-    # a standing can held from the side: the palm stands 60 mm behind it at mid height (above the walls' top
-    # only partly), and after the release the gripper backs off 80 mm along its approach before rising
-    palm = ToolPart((0.04, 0.13, 0.05), make_T(np.eye(3), [-0.09, 0.0, 0.06]))
-    can = HeldShape(0.057, 0.057, 0.121, True, (palm,), back_off_m=(-0.08, 0.0, 0.0))
-    spots = free_spots(FLOOR, [], can, margin_m=M)
-    assert spots
-    for spot in spots:  # the palm's back-off stays inside the walls: the palm backs off away from the can
-        back_x = spot.x_m + math.cos(spot.yaw_rad) * (-0.09 - 0.08 - 0.02)
-        back_y = spot.y_m + math.sin(spot.yaw_rad) * (-0.09 - 0.08 - 0.02)
-        assert abs(back_x) <= 0.18 + 1e-6 and abs(back_y) <= 0.12 + 1e-6
-    still = HeldShape(0.057, 0.057, 0.121, True, (palm,))
-    assert len(free_spots(FLOOR, [], still, margin_m=M)) > len(spots)  # without the back-off, more would do
-
-
 def test_the_footprint_keeps_its_wall_margin_from_the_walls_and_its_margin_from_the_objects() -> None:
     box = HeldShape(0.065, 0.045, 0.03, False)
     first = Resting((0.10, 0.0), 0.0, (0.10, 0.05), 0.03)
