@@ -233,11 +233,17 @@ def test_a_standing_object_stopped_by_the_surface_is_still_let_go() -> None:
     assert [kind for kind, _, _ in robot.commands][-1] == "open"
 
 
-def test_a_lying_object_is_let_go_at_the_release_pose_at_once() -> None:
-    # a box as tall as it is wide does not tip: no touch-down, no easing (the place every other task makes)
+def test_a_lying_object_is_let_go_at_the_release_pose_after_the_grip_is_eased() -> None:
+    # a box as tall as it is wide does not tip: no touch-down (the lowest tool height is the release pose's), but
+    # its grip is eased too, one step a tick, before the fingers open there
+    from bt_grasp.behaviours.place import EASE_S
+
     robot = GripLog()
     lowest: list[float] = []
     statuses, _ = run('<Place pose="0.35;0.2"/>', robot, HOLDING, lambda t, r: lowest.append(tcp_z(r)))
     assert statuses[-1] == "SUCCESS"
     assert min(lowest) == pytest.approx(0.038, abs=1e-3)
-    assert [kind for kind, _, _ in robot.commands] == ["open"]
+    kinds = [kind for kind, _, _ in robot.commands]
+    assert kinds[-1] == "open" and kinds.count("open") == 1
+    assert kinds.count("close") == pytest.approx(EASE_S / 0.01, abs=1.5)
+    assert all(z == pytest.approx(0.038, abs=1e-3) for _, _, z in robot.commands)
