@@ -11,6 +11,8 @@ from bt_grasp.tree.registry import NodeKind, PortDirection, PortSpec, leaf
 
 #: the fingers count as closed on nothing below this width (when the width of what they close on is not known)
 EMPTY_WIDTH_M = 0.004
+#: Grasp's grip force per finger unless the tree sets one, N
+GRASP_FORCE_N = 40.0
 #: the joints' closed limit is 0: with nothing between the pads they come this close to it
 CLOSED_ON_NOTHING_M = 0.001
 #: with a planned grasp, a gap at least this wide holds something: the thinnest part the fingers hold (the
@@ -82,7 +84,7 @@ class OpenGripper(_GripperMove):
     None,
     name="Grasp",
     ports=[
-        PortSpec("force", PortDirection.INPUT, float, 40.0, "grip force per finger, N"),
+        PortSpec("force", PortDirection.INPUT, float, GRASP_FORCE_N, "grip force per finger, N"),
         PortSpec("width", PortDirection.OUTPUT, object, "{grasp_width_m}", "measured width once closed, m"),
         PortSpec("grasp", PortDirection.INPUT, object, "{grasp}",
                  "the grasp being closed (from PlanGrasp): its width seen says what an empty grip is"),

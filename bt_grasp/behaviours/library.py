@@ -13,6 +13,7 @@ from bt_grasp.behaviours import (
     objects,
     perceive,
     place,
+    place_in,
     viewing,
 )
 from bt_grasp.behaviours.reasons import FailureReason as R
@@ -46,6 +47,7 @@ ROBOT_LEAVES = (
     objects.FixturePose,
     place.Place,
     place.PlaceOn,
+    place_in.PlaceIn,
     place.MoveTo,
     viewing.LookAt,
     follow.FollowTarget,
@@ -77,6 +79,7 @@ DECLARED_REASONS: dict[str, tuple[R, ...]] = {
     "FixturePose": (R.BAD_INPUT,),
     "Place": (R.BAD_INPUT, R.NOT_HOLDING, R.PLACE_BLOCKED, R.DROPPED, R.TIMEOUT, *_MOTION),
     "PlaceOn": (R.BAD_INPUT, R.NOT_HOLDING, R.PLACE_BLOCKED, R.DROPPED, R.TIMEOUT, *_MOTION),
+    "PlaceIn": (R.BAD_INPUT, R.NOT_HOLDING, R.PLACE_BLOCKED, R.DROPPED, R.TIMEOUT, *_MOTION),
     "FollowTarget": (R.BAD_INPUT, R.TARGET_LOST, R.IK_UNREACHABLE),
     "SelectObject": (R.BAD_INPUT, R.NO_DETECTION),
     "ObjectPose": (R.BAD_INPUT,),

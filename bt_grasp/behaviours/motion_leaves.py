@@ -127,14 +127,18 @@ def back_along_approach(distance_m: float) -> PoseFn:
 
 
 def retreat_after_release(T_release: NDArray[np.float64], distance_m: float,
-                          object_height_m: float) -> list[tuple[str, PoseFn]]:
+                          object_height_m: float, rise_first: bool = False) -> list[tuple[str, PoseFn]]:
     """How the open gripper leaves a released object, as named tool-pose steps: straight up ``distance_m`` when
     the tool points down (within 1 degree: every top-down grasp); else (a side grasp) back along the approach
     by ``distance_m``, then up by the object's height, so the arm's next motion starts above it (straight up
-    at once would drag the pads along a standing object and leave them around its top)."""
+    at once would drag the pads along a standing object and leave them around its top). With ``rise_first``
+    (where backing off low would take the wrist into a bin's wall) up by the object's height first, the open
+    pads passing up beside it, then back."""
     pointing_down = float(-np.asarray(T_release, dtype=float)[2, 2]) > np.cos(np.deg2rad(1.0))
     if pointing_down:
         return [("retreat", straight_up(distance_m))]
+    if rise_first:
+        return [("rise", straight_up(object_height_m)), ("retreat", back_along_approach(distance_m))]
     return [("retreat", back_along_approach(distance_m)), ("rise", straight_up(object_height_m))]
 
 

@@ -24,7 +24,7 @@ from py_trees.common import Status
 
 from bt_grasp.behaviours.base import RobotLeaf
 from bt_grasp.behaviours.grasp_plan import MOVED_RAD, GraspPose
-from bt_grasp.behaviours.gripper import EMPTY_WIDTH_M
+from bt_grasp.behaviours.gripper import EMPTY_WIDTH_M, GRASP_FORCE_N
 from bt_grasp.behaviours.motion_job import MotionJob, PathFailure, PathFn, Segment
 from bt_grasp.behaviours.motion_leaves import (
     _MovingLeaf,
@@ -45,6 +45,7 @@ from bt_grasp.tree.registry import PortDirection, PortSpec, leaf
 
 if TYPE_CHECKING:
     from bt_grasp.behaviours.cell import Cell
+    from bt_grasp.motion.planning_scene import Shape
     from bt_grasp.perception.results import Detection
     from bt_grasp.scene.format import Scene
 
@@ -57,6 +58,21 @@ RELEASE_IK_SEEDS = 16
 RELEASE_IK_SOLUTIONS = 8
 #: how long opening the fingers may take (simulated time)
 OPEN_TIMEOUT_S = 1.5
+#: a held object at least this many times as tall as its footprint is wide stands and may tip (a can, a bottle)
+STANDING_RATIO = 1.5
+#: a standing object is let down onto the surface before the fingers open: from the release pose (``release_gap``
+#: above it) the tool goes on down by the gap and this much more; contact stops the object and it slides up
+#: between the pads (or the arm stalls), so it stands on the surface when the pads let go. Released 3 mm above a
+#: bin's floor, a side-grasped can dropped, landed on its rim a fraction of a degree off upright with the pads'
+#: sideways push, and wobbled on its rim for good (1.8-2.2 deg, never still for 1 s: PhysX keeps a tall convex
+#: body rocking on its rim once set going; dropped straight from 3 mm it settles).
+TOUCH_DOWN_PRESS_M = 0.002
+#: then (any object) the grip is eased from the grasp's force down to this one over ``EASE_S`` of simulated time,
+#: one step a tick, before the fingers open: opened from the full force, the squeezed pads spring apart one
+#: after the other and push the object sideways (the can left at 70 mm/s; the hexagonal pen, pinched 14 mm
+#: across, was dragged 12 mm by one pad and rolled over two of its faces, 120 deg)
+EASE_FORCE_N = 4.0
+EASE_S = 0.3
 
 _HELD_PORTS = [
     PortSpec("grasp", PortDirection.INPUT, object, "{grasp}", "the grasp holding the object (from PlanGrasp)"),
@@ -169,6 +185,7 @@ class _PlaceBase(RobotLeaf):
         self._early: Status | None = None
         self._t_open = 0.0
         self._T_place: Mat4 | None = None
+        self._rise_first = False  # the way out the last successful check found (a side grasp's)
         self._options: list[tuple[PlaceYaw, Mat4]] = []
         self._next = 0
         self._rejected: list[tuple[PlaceYaw, PathFailure]] = []
@@ -195,15 +212,16 @@ class _PlaceBase(RobotLeaf):
         T_tcp_obj = held_offset(grasp, held)
         height = float(held.size_m[2])
         gap = self.input_float("release_gap")
-        self._T_tcp_obj, self._gap = T_tcp_obj, gap
-        self._options = place_options(pose, held, T_tcp_obj, height, gap, surface,
-                                      turns=_flag(self.input("turns")), free_yaw=_flag(self.input("free_yaw")),
-                                      turn_rad=math.radians(self.input_float("turn_deg")))
+        self._T_tcp_obj, self._gap, self._surface = T_tcp_obj, gap, surface
+        options = self.orientations(pose, held, T_tcp_obj, surface)
+        if isinstance(options, str):
+            return self.failed(FailureReason.PLACE_BLOCKED, options)
+        self._options = options
         self._height = height
-        self._target_text = f"{pose.x_m:.3f};{pose.y_m:.3f};{surface:.3f}"
+        self._standing = height >= STANDING_RATIO * min(float(held.size_m[0]), float(held.size_m[1]))
+        self._target_text = self._where(options[0][1])
         margin = 0.004
-        held_box = detection_box(held, "held", margin_m=margin)
-        held_shape = type(held_box).at("held", held_box.size_m, T_tcp_obj)
+        held_shape = self.held_model(held, T_tcp_obj, margin)
         seen = object_list(self.input("objects")) or ()
         remembered = [d for d in self._placed_before() if not any(same_object(d, o) for o in seen)]
         others = [d for d in (*seen, *remembered) if not same_object(d, held)]
@@ -217,6 +235,24 @@ class _PlaceBase(RobotLeaf):
         self._q_start = self.cell.robot.joint_positions()
         self.feedback_message = f"placing at {self._target_text}"
         return None
+
+    def orientations(self, pose: Pose, held: Detection, T_tcp_obj: Mat4, surface_z_m: float
+                     ) -> list[tuple[PlaceYaw, Mat4]] | str:
+        """The place orientations to try in order, each with its release tool pose (or why there is none):
+        Place's and PlaceOn's, at ``pose``, turned by the held object's footprint symmetries."""
+        return place_options(pose, held, T_tcp_obj, float(held.size_m[2]), self._gap, surface_z_m,
+                             turns=_flag(self.input("turns")), free_yaw=_flag(self.input("free_yaw")),
+                             turn_rad=math.radians(self.input_float("turn_deg")))
+
+    def held_model(self, held: Detection, T_tcp_obj: Mat4, margin_m: float) -> Shape:
+        """The held object as the planner carries it (tool frame): its perceived box, grown by ``margin_m``."""
+        box = detection_box(held, "held", margin_m=margin_m)
+        return type(box).at("held", box.size_m, T_tcp_obj)
+
+    def _where(self, T_place: Mat4) -> str:
+        """Where an option sets the object down: its centre's x;y and the surface's z (base frame)."""
+        xyz = (T_place @ self._T_tcp_obj)[:3, 3]
+        return f"{xyz[0]:.3f};{xyz[1]:.3f};{self._surface:.3f}"
 
     def _try_option(self, option: PlaceYaw, T_place: Mat4) -> tuple[NDArray[np.float64], ...] | PathFailure:
         """The carry path to the pre-place pose and the straight descent to the release pose, both checked in
@@ -268,22 +304,49 @@ class _PlaceBase(RobotLeaf):
                 return np.asarray(carry.path, dtype=float), line[::-1].copy()
         return failures[0]
 
+    def _touched_down(self, q_release: NDArray[np.float64], T_place: Mat4) -> NDArray[np.float64]:
+        """Where the arm lets go: a standing object's touch-down goes on down from the release pose (as far as
+        a straight line clear of the fixtures goes; where it stops, the arm stays at the release pose)."""
+        if not self._standing:
+            return q_release
+        line = self.cell.planner.straight_line(q_release, _raised(T_place, -self._touch_down_m()),
+                                               self._retreat_scene)
+        return np.asarray(line.path, dtype=float)[-1] if line.ok else q_release
+
+    def _touch_down_m(self) -> float:
+        return self._gap + TOUCH_DOWN_PRESS_M
+
     def _way_out(self, q_release: NDArray[np.float64], T_place: Mat4, turn: str) -> PathFailure | None:
-        """Why the open gripper cannot leave the released object from ``q_release`` (None: it can)."""
-        q = q_release
-        for name, fn in retreat_after_release(T_place, self.input_float("retreat"), self._height):
-            line = self.cell.planner.straight_line(q, fn(self.cell.kinematics.fk(q)), self._retreat_scene)
-            if not line.ok:
-                sentence = f"{turn}: the {name} after the release fails ({line.status.value}): {line.message}"
-                return PathFailure(_blocked(cartesian_reason(line.status)), sentence)
-            q = np.asarray(line.path, dtype=float)[-1]
-        return None
+        """Why the open gripper cannot leave the released object from ``q_release`` (None: it can); for a
+        standing object, from where its touch-down ends. A side grasp backs off then rises; when that is
+        blocked (the wrist, low behind a standing object, backing into a bin's wall), it rises first: the way
+        that works is the one the retreat takes (``_rise_first``)."""
+        q0 = self._touched_down(q_release, T_place)
+        first: PathFailure | None = None
+        for rise_first in (False, True):
+            q, failure = q0, None
+            steps = retreat_after_release(T_place, self.input_float("retreat"), self._height, rise_first)
+            for name, fn in steps:
+                line = self.cell.planner.straight_line(q, fn(self.cell.kinematics.fk(q)), self._retreat_scene)
+                if not line.ok:
+                    sentence = f"{turn}: the {name} after the release fails ({line.status.value}): {line.message}"
+                    failure = PathFailure(_blocked(cartesian_reason(line.status)), sentence)
+                    break
+                q = np.asarray(line.path, dtype=float)[-1]
+            if failure is None:
+                self._rise_first = rise_first
+                return None
+            first = first or failure
+            if len(steps) == 1:  # straight up: there is no other order
+                break
+        return first
 
     def _choose(self) -> Status:
         """Try the next orientation (one per tick: a plan and a straight line, tens of ms); start the motion
         with the first that works; FAILURE when none does."""
         option, T_place = self._options[self._next]
         self._next += 1
+        self._target_text = self._where(T_place)
         tried = self._try_option(option, T_place)
         if isinstance(tried, PathFailure):
             self._rejected.append((option, tried))
@@ -298,7 +361,12 @@ class _PlaceBase(RobotLeaf):
             plan_to_pose_fn(self, _raised(T_place, self.input_float("approach")), self._carry_scene)))
         descend = _planned_or(descent_path, self._blocked_if_collision(
             cartesian_fn(self, lambda _T: T_place, self._descent_scene)))
-        self.job = MotionJob(self.cell, [Segment("carry", carry), Segment("descend", descend)])
+        segments = [Segment("carry", carry), Segment("descend", descend)]
+        if self._standing:
+            down = self._touch_down_m()
+            segments.append(Segment("touch down", cartesian_fn(self, lambda _T: _raised(T_place, -down),
+                                                               self._retreat_scene)))
+        self.job = MotionJob(self.cell, segments)
         self.phase = "move"
         turned = f", turned {math.degrees(option.turn_rad):.0f} deg" if option.turn_rad else ""
         self.feedback_message = f"placing at {self._target_text}{turned}"
@@ -346,13 +414,23 @@ class _PlaceBase(RobotLeaf):
                 self.job.cancel()
                 above = self._tcp_z() - float(self._T_place[2, 3])
                 touched = self.job.current == "descend" and outcome.reason is FailureReason.TRACKING_ERROR
-                if touched and above <= self.input_float("contact_window"):
+                if self.job.current == "touch down":
+                    # stalled on the surface, or no straight line down from the release pose: open there
+                    self.feedback_message = f"touch down ended {above * 1e3:+.0f} mm from the release pose"
+                elif touched and above <= self.input_float("contact_window"):
                     self.feedback_message = f"touched down {above * 1e3:.0f} mm above the target"
                 elif touched:
                     return self.failed(FailureReason.PLACE_BLOCKED,
                                        f"the descent met something {above * 100:.1f} cm above the target")
                 else:
                     return self.failed(outcome.reason, outcome.sentence)
+            self._t_open = self.now_s()
+            self.phase = "ease"
+        if self.phase == "ease":
+            eased = min(1.0, (self.now_s() - self._t_open) / EASE_S)
+            if eased < 1.0:
+                self.cell.robot.close_gripper(force_n=GRASP_FORCE_N + (EASE_FORCE_N - GRASP_FORCE_N) * eased)
+                return Status.RUNNING
             self.cell.robot.open_gripper()
             self._t_open = self.now_s()
             self.phase = "open"
@@ -365,7 +443,7 @@ class _PlaceBase(RobotLeaf):
                 return Status.RUNNING
             scene = self._retreat_scene
             # straight up; after a side grasp back along the approach, then up past the object's top
-            steps = retreat_after_release(self._T_place, self.input_float("retreat"), self._height)
+            steps = retreat_after_release(self._T_place, self.input_float("retreat"), self._height, self._rise_first)
             self.job = MotionJob(self.cell, [Segment(name, cartesian_fn(self, fn, scene)) for name, fn in steps])
             self.phase = "retreat"
         outcome = self.job.update()

@@ -179,3 +179,71 @@ def test_move_to_reaches_the_pose_and_defaults_to_15_cm_above_the_table() -> Non
 def test_move_to_out_of_reach_fails_ik_unreachable() -> None:
     statuses, tree = run('<MoveTo pose="2.0;0.0"/>', ContactRobot(), {})
     assert statuses[-1] == "FAILURE" and tree.blackboard_values()["failure_reason"] == "IK_UNREACHABLE"
+
+
+class GripLog(ContactRobot):
+    """A ContactRobot that keeps every gripper command (force, or 'open') with the tool height at the time."""
+
+    def __init__(self, floor_z: float = -1.0) -> None:
+        super().__init__(floor_z)
+        self.commands: list[tuple[str, float | None, float]] = []
+
+    def close_gripper(self, force_n: float | None = None) -> None:
+        self.commands.append(("close", force_n, tcp_z(self)))
+        super().close_gripper(force_n)
+
+    def open_gripper(self) -> None:
+        self.commands.append(("open", None, tcp_z(self)))
+        super().open_gripper()
+
+
+#: a can standing 12 cm tall on a 5 cm footprint, grasped 1 cm above its centre
+CAN = Detection("red", (0, 0, 1, 1), (0.5, 0.0, 0.06), (0.05, 0.05, 0.12), 0.0, 100, 1.0)
+CAN_GRASP = GraspCandidate(make_T(R_DOWN, [0.5, 0.0, 0.07]), make_T(R_DOWN, [0.5, 0.0, 0.17]), 0.05, 1.0, "test")
+
+
+def test_a_standing_object_is_let_down_onto_the_surface_and_the_grip_eased_before_the_fingers_open() -> None:
+    # carry, descend to the release pose (3 mm above), go on down by the gap and 2 mm more (contact would stop
+    # it: here nothing does), ease the grip from 40 N to 4 N one step a tick over 0.3 s, open, retreat: SUCCESS
+    from bt_grasp.behaviours.place import EASE_FORCE_N, EASE_S, TOUCH_DOWN_PRESS_M
+
+    robot = GripLog()
+    lowest: list[float] = []
+    statuses, tree = run('<Place pose="0.35;0.2"/>', robot, {"grasp": CAN_GRASP, "target": CAN, "objects": ()},
+                         lambda t, r: lowest.append(tcp_z(r)))
+    assert statuses[-1] == "SUCCESS", tree.find("Place").feedback_message
+    release_z = 0.06 + 0.003 + 0.01  # surface 0 + half the can + release gap + grasp offset
+    assert min(lowest) == pytest.approx(release_z - 0.003 - TOUCH_DOWN_PRESS_M, abs=1e-3)
+    forces = [f for kind, f, _ in robot.commands if kind == "close"]
+    assert len(forces) == pytest.approx(EASE_S / 0.01, abs=1.5)  # one a tick
+    assert forces == sorted(forces, reverse=True) and forces[0] <= 40.0 and forces[-1] >= EASE_FORCE_N
+    assert forces[-1] < 6.0
+    kinds = [kind for kind, _, _ in robot.commands]
+    assert kinds[-1] == "open" and kinds.count("open") == 1
+    # the grip was eased and the fingers opened with the can down on the surface, not above it
+    assert all(z == pytest.approx(min(lowest), abs=1e-3) for _, _, z in robot.commands)
+
+
+def test_a_standing_object_stopped_by_the_surface_is_still_let_go() -> None:
+    # the surface is 1 mm under the release pose: the touch-down stalls there (a tracking error), and that is
+    # where the can is let go
+    robot = GripLog(floor_z=0.06 + 0.003 + 0.01 - 0.001)
+    statuses, tree = run('<Place pose="0.35;0.2"/>', robot, {"grasp": CAN_GRASP, "target": CAN, "objects": ()})
+    assert statuses[-1] == "SUCCESS", tree.find("Place").feedback_message
+    assert [kind for kind, _, _ in robot.commands][-1] == "open"
+
+
+def test_a_lying_object_is_let_go_at_the_release_pose_after_the_grip_is_eased() -> None:
+    # a box as tall as it is wide does not tip: no touch-down (the lowest tool height is the release pose's), but
+    # its grip is eased too, one step a tick, before the fingers open there
+    from bt_grasp.behaviours.place import EASE_S
+
+    robot = GripLog()
+    lowest: list[float] = []
+    statuses, _ = run('<Place pose="0.35;0.2"/>', robot, HOLDING, lambda t, r: lowest.append(tcp_z(r)))
+    assert statuses[-1] == "SUCCESS"
+    assert min(lowest) == pytest.approx(0.038, abs=1e-3)
+    kinds = [kind for kind, _, _ in robot.commands]
+    assert kinds[-1] == "open" and kinds.count("open") == 1
+    assert kinds.count("close") == pytest.approx(EASE_S / 0.01, abs=1.5)
+    assert all(z == pytest.approx(0.038, abs=1e-3) for _, _, z in robot.commands)
