@@ -1,14 +1,44 @@
 """One bounded reader for every file a user gives bt_grasp (trees, scenes, calibration, fault plans, campaign
-files, results): a regular file no larger than its kind's limit, read with at most ``limit + 1`` bytes, so
-``--faults /dev/zero``, a FIFO or a multi-gigabyte file is one sentence, not an exhausted machine."""
+files, results, meshes): a regular file no larger than its kind's limit, read with at most ``limit + 1`` bytes, so
+``--faults /dev/zero``, a FIFO or a multi-gigabyte file is one sentence, not an exhausted machine.
+
+Within :func:`confined_to` (``replay --resim`` runs a log's own files), every file read here must lie inside one
+folder, symbolic links resolved: a tree, scene or calibration taken from a log cannot make bt_grasp read the
+user's other files (a scene naming ``/home/me/part.obj`` would carry its shape into the new log)."""
 
 from __future__ import annotations
 
 import os
 import stat
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from pathlib import Path
 
 from .errors import InputError
+
+_confined: ContextVar[tuple[Path, str] | None] = ContextVar("bt_grasp_confined", default=None)
+
+
+@contextmanager
+def confined_to(root: Path, why: str) -> Iterator[None]:
+    """Within the block, :func:`read_user_file` reads only files inside ``root``; ``why`` ends the refusal
+    sentence ("a log's inputs may name only the files it carries")."""
+    token = _confined.set((Path(os.path.realpath(root)), why))
+    try:
+        yield
+    finally:
+        _confined.reset(token)
+
+
+def _check_confined(path: Path, error: type[InputError]) -> None:
+    confined = _confined.get()
+    if confined is None:
+        return
+    root, why = confined
+    real = Path(os.path.realpath(path))
+    if real != root and root not in real.parents:
+        raise error(path, f"lies outside {root}; {why}")
 
 #: text files a user writes by hand: trees, scenes, calibrations, fault plans, campaign files
 MAX_TEXT_BYTES = 16 << 20
@@ -20,6 +50,7 @@ def read_user_file(path: str | Path, limit: int = MAX_TEXT_BYTES, *, error: type
     """The bytes of ``path``, or ``error(path, one sentence)``: missing, a folder, not a regular file (a device
     such as /dev/zero, a FIFO, a socket), unreadable, or larger than ``limit``."""
     path = Path(path)
+    _check_confined(path, error)
     try:
         fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
     except FileNotFoundError:

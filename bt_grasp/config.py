@@ -14,6 +14,7 @@ from typing import Any, TypeVar
 import yaml
 from pydantic import BaseModel, ConfigDict, ValidationError
 
+from bt_grasp import bounded_yaml
 from bt_grasp.bounded_io import read_user_file
 from bt_grasp.errors import ConfigError, did_you_mean
 
@@ -23,7 +24,9 @@ M = TypeVar("M", bound=BaseModel)
 class StrictModel(BaseModel):
     """Base of every configuration model: immutable, unknown keys rejected, no type coercion from str."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True, strict=False, validate_default=True)
+    #: no NaN or infinity anywhere (``.nan`` gravity or ``.inf`` table size passed as numbers: found by the
+    #: pre-review attack)
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=False, validate_default=True, allow_inf_nan=False)
 
 
 KeyPath = tuple[str | int, ...]
@@ -65,14 +68,21 @@ _Yaml12Loader.add_implicit_resolver(
 def read_yaml(path: str | Path) -> tuple[Any, dict[KeyPath, int]]:
     """Parse a YAML file safely; returns the data and a map from key paths to line numbers."""
     path = Path(path)
-    data = read_user_file(path, error=ConfigError)
+    raw = read_user_file(path, error=ConfigError)
     try:
-        text = data.decode("utf-8")
+        text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise ConfigError(path, "is not UTF-8 text") from exc
-    try:
-        node = yaml.compose(text, Loader=_Yaml12Loader)
-        data = yaml.load(text, Loader=_Yaml12Loader)
+    lines: dict[KeyPath, int] = {}
+
+    def refused(problem: str, line: int | None) -> ConfigError:
+        return ConfigError(path, f"invalid YAML: {problem}", where=line)
+
+    try:  # parsed once, bounded: nesting depth and the values its aliases expand to (bt_grasp.bounded_yaml)
+        node = bounded_yaml.compose(text, _Yaml12Loader, refused)
+        if node is not None:
+            _line_map(node, (), lines)  # before constructing: merge keys (<<) flatten the node in place
+        data = bounded_yaml.construct(node, _Yaml12Loader) if node is not None else None
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         line = mark.line + 1 if mark is not None else None
@@ -82,9 +92,6 @@ def read_yaml(path: str | Path) -> tuple[Any, dict[KeyPath, int]]:
         raise ConfigError(path, f"invalid YAML: {problem}", where=line) from exc
     except yaml.YAMLError as exc:
         raise ConfigError(path, f"invalid YAML: {exc}") from exc
-    lines: dict[KeyPath, int] = {}
-    if node is not None:
-        _line_map(node, (), lines)
     return data, lines
 
 

@@ -28,7 +28,7 @@ FORBIDDEN = {
 }
 LEAF_MODULES = (
     "errors", "clock", "geometry", "interfaces", "config", "robot_description", "colors", "safe_path", "defaults",
-    "bounded_io",
+    "bounded_io", "bounded_yaml", "output_files", "terminal_text", "image_header",
 )
 #: leaf packages: every module in them imports only leaf modules and modules of the same package
 LEAF_PACKAGES = ("scene",)

@@ -51,4 +51,4 @@ def test_item4_campaign_progress_lines_print_markup_in_names_as_text(name: str) 
 
 def test_item4_summary_json_is_written_before_anything_is_printed() -> None:
     source = (Path(__file__).resolve().parents[1] / "bt_grasp/cli/run_cmd.py").read_text()
-    assert source.index("summary_json.write_text") < source.index("print_summary(Console(), summary)")
+    assert source.index("write_output_file(summary_json") < source.index("print_summary(Console(), summary)")

@@ -26,6 +26,11 @@ EXPECTED: dict[str, tuple[int | None, str]] = {
     "unknown_color.yaml": (5, "unknown colour 'chartreuse'"),
     "duplicate_names.yaml": (None, "repeated: a"),
     "inverted_range.yaml": (7, "low <= high"),
+    # found by the pre-review attack: a run of these never ended (10^4 to 10^7 physics steps a tick), or NaN and
+    # infinity passed as numbers into the simulator
+    "slow_physics.yaml": (1, "one tick would take 10000 physics steps (at most 100)"),
+    "nan_gravity.yaml": (2, "physics.gravity_m_s2[0]: Input should be a finite number"),
+    "inf_table.yaml": (2, "table.size_m[0]: Input should be a finite number"),
     "top_level_list.yaml": (1, "expected a mapping"),
     "empty.yaml": (None, "the file is empty"),
     "big_timestep.yaml": (2, "physics.timestep_s"),

@@ -42,9 +42,9 @@ CASE_TIMEOUT_S = 30
 MAGIC = b"\x89MCAP0\r\n"
 
 LOG_KINDS = ("truncate", "flip", "ff_window", "zero", "insert", "splice", "duplicate_record", "reorder_chunks",
-             "huge_length", "wrong_schema", "wrong_encoding", "rechunk")
+             "huge_length", "wrong_schema", "wrong_encoding", "rechunk", "hostile_strings")
 RESULTS_KINDS = ("type", "drop", "cut", "binary", "huge", "deep", "markup", "not_object", "nan", "encoding")
-LOG_VIEWS = ("summary", "json", "failures", "tick", "export_frames", "report", "topic")
+LOG_VIEWS = ("summary", "json", "failures", "tick", "export_frames", "report", "topic", "leaf", "btlog", "foxglove")
 
 GOOD_ROW: dict[str, Any] = {
     "campaign": "fuzz", "episode": "e0", "tree": "trees/pick.xml", "scene": "tabletop", "seed": 0,
@@ -196,6 +196,28 @@ TARGETED: tuple[tuple[str, str, Any], ...] = (
 )
 
 
+#: strings a hostile writer puts in names, reasons and values: Rich markup, HTML, mathtext, path steps, control
+#: and bidirectional characters, XML-illegal characters, a very long one
+HOSTILE_STRINGS: tuple[str, ...] = ("[/]", "[link=https://x.invalid]x[/link]", "<script>alert(1)</script>", "$x^$",
+                                    "$\\frac{", "../../x", "/etc/passwd", "a\nb\rc", "\x00\x01\x1b[31m", "\u202e",
+                                    "\ufffe", "%s%n{0}", "x" * 100_000, "", " ", "\\", '"\'<>&')
+
+
+def _taint(value: Any, rng: random.Random, keep: float) -> Any:
+    """Every string in ``value`` (keys of objects too, now and then) with a hostile string added or put in its
+    place; ``keep``: the chance a string stays as it was (structure such as statuses is then mostly kept)."""
+    if isinstance(value, str):
+        if rng.random() < keep:
+            return value
+        hostile = rng.choice(HOSTILE_STRINGS)
+        return hostile if rng.random() < 0.3 else value + hostile
+    if isinstance(value, list):
+        return [_taint(v, rng, keep) for v in value]
+    if isinstance(value, dict):
+        return {(_taint(k, rng, keep) if rng.random() < 0.1 else k): _taint(v, rng, keep) for k, v in value.items()}
+    return value
+
+
 def _mutate_contents(corpus: Corpus, kind: str, rng: random.Random) -> bytes:
     from mcap.writer import CompressionType, Writer
 
@@ -234,6 +256,14 @@ def _mutate_contents(corpus: Corpus, kind: str, rng: random.Random) -> bytes:
             values[rng.choice(["log_format", "time_origin_ns", "seed", "tree_file"])] = rng.choice(
                 ["", "x", "3", "-1", "1e400", "\u202e", "9" * 400])
             metadata[0] = (name, values)
+    elif kind == "hostile_strings":  # well-formed messages whose strings are hostile: names, reasons, values
+        keep = rng.choice([0.0, 0.5, 0.9])
+        for i in json_at:
+            if rng.random() < 0.7:
+                messages[i] = (*messages[i][:3], dumps(_taint(json.loads(messages[i][3]), rng, keep)))
+        name, values = metadata[0]
+        metadata[0] = (name, {k: (_taint(v, rng, keep) if k not in ("log_format", "time_origin_ns") else v)
+                              for k, v in values.items()})
     else:  # rechunk: messages duplicated, re-ordered, written in chunks of another size
         for _ in range(rng.randint(1, 6)):
             i = rng.randrange(len(messages))
@@ -262,7 +292,7 @@ def mutate_log(corpus: Corpus, rng: random.Random, kind: str | None = None) -> t
     kind = kind or rng.choice(LOG_KINDS)
     if kind in ("duplicate_record", "reorder_chunks", "huge_length"):
         return kind, _records_mutation(corpus.raw, kind, rng)
-    if kind in ("wrong_schema", "wrong_encoding", "rechunk"):
+    if kind in ("wrong_schema", "wrong_encoding", "rechunk", "hostile_strings"):
         return kind, _mutate_contents(corpus, kind, rng)
     return kind, _bytes_mutation(corpus.raw, kind, rng)
 
@@ -425,7 +455,10 @@ def make_case(i: int, seed: int, folder: Path, corpus: Corpus) -> Case:
                  "tick": ["--tick", str(rng.randint(0, 8))],
                  "export_frames": ["--export-frames", str(folder / "frames")],
                  "report": ["--report", str(folder / "report.html")],
-                 "topic": ["--topic", rng.choice(["/bt/tick", "/camera/depth", "/tf", "/robot/joint_state"])]}[view]
+                 "topic": ["--topic", rng.choice(["/bt/tick", "/camera/depth", "/tf", "/robot/joint_state"])],
+                 "leaf": ["--leaf", rng.choice(["Grasp", "Detect", "Pick", *HOSTILE_STRINGS[:8]])],
+                 "btlog": ["--export-btlog", str(folder / "run.btlog")],
+                 "foxglove": ["--foxglove", "--layout-out", str(folder / "layout.json")]}[view]
         return Case(f"log {i}", f"log:{kind}", view, path, ["replay", str(path), *extra])
     kind, data = mutate_results(rng, kind)
     path = folder / f"case{i}.jsonl"

@@ -63,7 +63,8 @@ class MotionJob:
             return None
         status = self.executor.update()
         self._executed_t.append(self.cell.clock.now_ns() * 1e-9)
-        self._executed_q.append(self.cell.robot.joint_positions())
+        measured = getattr(self.executor, "q_measured", None)  # read by this update (nothing moved since)
+        self._executed_q.append(measured if measured is not None else self.cell.robot.joint_positions())
         if status is ExecStatus.RUNNING:
             return None
         self.cell.media.trajectory(self.current, np.asarray(self._executed_t), np.asarray(self._executed_q), "executed")

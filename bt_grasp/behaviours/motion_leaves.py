@@ -138,6 +138,20 @@ def retreat_after_release(T_release: NDArray[np.float64], distance_m: float,
     return [("retreat", back_along_approach(distance_m)), ("rise", straight_up(object_height_m))]
 
 
+def first_that_plans(*paths: PathFn) -> PathFn:
+    """The first of ``paths`` that gives a joint path from the measured configuration; else the last's failure."""
+
+    def compute(q: NDArray[np.float64]) -> NDArray[np.float64] | PathFailure:
+        outcome: NDArray[np.float64] | PathFailure = PathFailure(FailureReason.PLAN_FAILED, "no path to try")
+        for path in paths:
+            outcome = path(q)
+            if not isinstance(outcome, PathFailure):
+                return outcome
+        return outcome
+
+    return compute
+
+
 def cartesian_fn(leaf: RobotLeaf, T_goal_fn: PoseFn, scene: PlanningScene) -> PathFn:
     """A straight tool line from the current pose to ``T_goal_fn(T_now)``."""
 
@@ -230,6 +244,7 @@ class PlanGrasp(RobotLeaf):
         self._candidates: list[GraspCandidate] | None = None
         self._next = 0
         self._last = PathFailure(FailureReason.PLAN_FAILED, "no candidate")
+        self._extended = False
 
     def update(self) -> Status:
         if self._candidates is None:
@@ -237,7 +252,7 @@ class PlanGrasp(RobotLeaf):
             if early is not None:
                 return early
         assert self._candidates is not None
-        if self._next < len(self._candidates):
+        if self._next < len(self._candidates) or self._extend():
             rank = self._next  # counted after the skipped ones, as the feedback always did
             self._next += 1
             plan = self._try(rank, self._candidates[self._next - 1])
@@ -245,7 +260,7 @@ class PlanGrasp(RobotLeaf):
                 self.ports.set("grasp", plan)
                 self.feedback_message = f"candidate {rank} of {self._total}: {plan.candidate.reason}"
                 return Status.SUCCESS
-            if self._next < len(self._candidates):
+            if self._next < len(self._candidates) or self._extend():
                 self.feedback_message = f"candidate {rank}: {self._last.sentence}"
                 return Status.RUNNING
         # a planner failure other than IK counts as PLAN_FAILED here, as before the typed seams
@@ -277,11 +292,36 @@ class PlanGrasp(RobotLeaf):
             return self.failed(FailureReason.NOTHING_TO_GRASP, f"{result.status.value}: {result.message}")
         self.cell.media.grasps(result.candidates)
         self._total = len(result.candidates)
+        self._ranked = result.candidates
+        self._viewpoint, self._fixtures = viewpoint, fixtures
         skip = self.input_int("skip") if self.input("skip") is not None else 0
+        self._skip = skip
         self._candidates = list(result.candidates[skip:])
         self._scene = planning_scene(self, target, self._objects)
         self._descent_scene = planning_scene(self, target, self._objects, allow_target=True)
         return None
+
+    def _extend(self) -> bool:
+        """Once every ranked candidate failed: add the grasps sampled from the target's cloud that are not
+        near-same as one of them (:func:`~bt_grasp.perception.antipodal.sampled_grasps`; an object ranked by its
+        footprint alone got none), the skip left over applied to them. Whether any was added."""
+        if self._extended:
+            return False
+        self._extended = True
+        from bt_grasp.perception.antipodal import AntipodalSettings, near_same, sampled_grasps
+
+        assert self._candidates is not None
+        settings = AntipodalSettings(pregrasp_offset_m=self.cell.grasp_settings.pregrasp_offset_m)
+        more = sampled_grasps(self._target, self._objects, settings, reachable=self._reachable,
+                              fixtures=self._fixtures, viewpoint_base_m=self._viewpoint)
+        new = [c for c in more if not any(near_same(c, r) for r in self._ranked)]
+        self._total += len(new)  # every candidate ranked, the skipped ones too (as the first ranking counts)
+        new = new[max(0, self._skip - len(self._ranked)):]
+        if not new:
+            return False
+        self.cell.media.grasps(tuple(new))
+        self._candidates.extend(new)
+        return True
 
     def _reachable(self, T_grasp: NDArray[np.float64], T_pregrasp: NDArray[np.float64]) -> bool:
         """Both poses have an IK solution from the arm's configuration (how sampled candidates are kept)."""
@@ -368,26 +408,53 @@ def planned_path_fn(plan: GraspPlan, replan: PathFn) -> PathFn:
     None,
     name="Lift",
     ports=[
-        PortSpec("height", PortDirection.INPUT, float, DEFAULT_LIFT_HEIGHT_M, "how far to lift, m"),
+        PortSpec("height", PortDirection.INPUT, float, DEFAULT_LIFT_HEIGHT_M,
+                 "how far to lift, m: the tool, or with target the object's centre"),
         PortSpec("grasp", PortDirection.INPUT, object, "{grasp}",
                  "the grasp holding the object (from PlanGrasp): its width seen says what an empty grip is"),
+        PortSpec("target", PortDirection.INPUT, object, "",
+                 "the object held, as perceived (from Perceive): when given, its centre rises height, the tool "
+                 "further by how far the object can hang below the grip (bt_grasp.behaviours.hang)"),
     ],
     needs_robot=True,
 )
 class Lift(_MovingLeaf):
     """Lift straight up; FAILURE (SLIPPED) when the fingers lose the object on the way: their gap falls under
     :func:`~bt_grasp.behaviours.gripper.empty_below_m` of the grasp's width seen (a thin plate is held at
-    ~4 mm), as Grasp judges it."""
+    ~4 mm), as Grasp judges it.
+
+    Without ``target`` the tool rises ``height``. With it (and a grasp on the blackboard) the object is what
+    rises ``height``: the tool rises further by how far the object's perceived centre may sink by turning about
+    where the pads hold it (:func:`~bt_grasp.behaviours.hang.lift_rise_m`: 0 for a grasp through the centre or
+    above it, about the lever's length for a centre level with the grip, as a bowl held by its rim). When that
+    higher line is out of reach or blocked, the tool rises ``height`` alone."""
 
     def segments(self) -> list[Segment] | Status:
-        self._empty_below = empty_below_m(planned_width_m(self.input("grasp")))
+        from bt_grasp.behaviours.hang import HeldObject, lift_rise_m
+
+        grasp = self.input("grasp")
+        self._empty_below = empty_below_m(planned_width_m(grasp))
         height = self.input_float("height")
         if not 0.0 < height < 0.6:
             return self.failed(FailureReason.BAD_INPUT, f"lift height {height} m is outside (0, 0.6)")
-        self.feedback_message = f"lifting {height * 100:.0f} cm"
+        target = self.input_detection("target")
+        T_grasp = getattr(grasp, "T_base_tcp_grasp", None)
+        held = None if target is None else HeldObject(
+            target.centroid_base_m, target.size_m, target.yaw_rad,
+            None if target.points_base_m is None else np.asarray(target.points_base_m, dtype=float),
+            planned_width_m(grasp) or 0.0)
+        rise = lift_rise_m(height, None if T_grasp is None else np.asarray(T_grasp, dtype=float), held)
         from bt_grasp.motion.planning_scene import PlanningScene
 
-        return [Segment("lift", cartesian_fn(self, straight_up(height), PlanningScene.from_scene(self.cell.scene)))]
+        scene = PlanningScene.from_scene(self.cell.scene)
+        if rise <= height:
+            self.feedback_message = f"lifting {height * 100:.0f} cm"
+            return [Segment("lift", cartesian_fn(self, straight_up(height), scene))]
+        self.cell.media.log("INFO", self.name,
+                            f"lifting the object {height * 100:.1f} cm: the tool {rise * 100:.1f} cm (held off its "
+                            f"centre, it may hang up to {(rise - height) * 100:.1f} cm lower from the grip)")
+        return [Segment("lift", first_that_plans(cartesian_fn(self, straight_up(rise), scene),
+                                                 cartesian_fn(self, straight_up(height), scene)))]
 
     def check_during(self) -> Status | None:
         width = self.cell.robot.gripper_width_m()

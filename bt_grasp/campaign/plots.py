@@ -15,6 +15,13 @@ from bt_grasp.campaign.stats import Rate, success_rates, tree_label
 
 GROUPS = ("tree", "scene", "fault_plan")
 COLORS = ("#2b6cb0", "#dd6b20", "#38a169", "#805ad5", "#d53f8c", "#319795", "#718096")
+#: a figure draws at most this many trees one by one (the others together, in grey) and this many groups, the
+#: ones with most episodes (the tables list them all): a results file naming 20,000 trees took over ten minutes
+#: and 4.8 GB to draw (found by the pre-review attack); and at most this many bars of a retry-count histogram
+MAX_TREES_DRAWN = len(COLORS)
+MAX_GROUPS_DRAWN = 40
+MAX_RETRY_BARS = 40
+OTHER_COLOR = "#a0aec0"
 
 
 def _figure(width: float, height: float) -> Any:
@@ -36,8 +43,31 @@ def _png(fig: Any) -> bytes:
     return buf.getvalue()
 
 
-def _trees(rows: Sequence[dict[str, Any]]) -> list[str]:
-    return sorted({tree_label(r) for r in rows})
+class _Trees:
+    """The trees a figure draws one by one (those with most episodes, at most :data:`MAX_TREES_DRAWN`, the last
+    place being "N other trees" when there are more) and which of them a row is drawn as."""
+
+    def __init__(self, rows: Sequence[dict[str, Any]]) -> None:
+        counts = Counter(tree_label(r) for r in rows)
+        if len(counts) <= MAX_TREES_DRAWN:
+            self.kept = sorted(counts)
+            self.other: str | None = None
+        else:
+            self.kept = sorted(t for t, _ in counts.most_common(MAX_TREES_DRAWN - 1))
+            self.other = f"{len(counts) - len(self.kept)} other trees"
+        self._kept = set(self.kept)
+        self.labels = [*self.kept, *([self.other] if self.other is not None else [])]
+
+    def of(self, row: dict[str, Any]) -> str:
+        label = tree_label(row)
+        return label if label in self._kept or self.other is None else self.other
+
+    def color(self, label: str) -> str:
+        return COLORS[self.kept.index(label) % len(COLORS)] if label in self._kept else OTHER_COLOR
+
+
+def _trees(rows: Sequence[dict[str, Any]]) -> _Trees:
+    return _Trees(rows)
 
 
 def _integer_axis(axis: Any) -> None:
@@ -47,11 +77,10 @@ def _integer_axis(axis: Any) -> None:
     axis.set_major_locator(MaxNLocator(integer=True))
 
 
-def _tree_legend(ax: Any, trees: Sequence[str], **kwargs: Any) -> None:
+def _tree_legend(ax: Any, trees: _Trees, **kwargs: Any) -> None:
     from matplotlib.patches import Patch
 
-    ax.legend(handles=[Patch(facecolor=COLORS[i % len(COLORS)], label=t) for i, t in enumerate(trees)],
-              fontsize=8, **kwargs)
+    ax.legend(handles=[Patch(facecolor=trees.color(t), label=t) for t in trees.labels], fontsize=8, **kwargs)
 
 
 def warm_up_rows(rows: Sequence[dict[str, Any]]) -> set[int]:
@@ -67,13 +96,17 @@ def warm_up_rows(rows: Sequence[dict[str, Any]]) -> set[int]:
 
 def success_by_group(rows: Sequence[dict[str, Any]], title: str) -> bytes:
     rates = success_rates(rows, GROUPS)
+    if len(rates) > MAX_GROUPS_DRAWN:
+        most = set(sorted(range(len(rates)), key=lambda i: -rates[i].n)[:MAX_GROUPS_DRAWN])
+        title += f" (the {MAX_GROUPS_DRAWN} of {len(rates)} groups with most episodes; the table lists all)"
+        rates = [r for i, r in enumerate(rates) if i in most]
     fig = _figure(9, 0.9 + 0.38 * len(rates))
     ax = fig.add_subplot()
     trees = _trees(rows)
     ys = list(range(len(rates)))[::-1]
     for y, r in zip(ys, rates, strict=True):
         lo, hi = r.interval
-        color = COLORS[trees.index(r.group[0]) % len(COLORS)]
+        color = trees.color(r.group[0])
         ax.barh(y, r.rate, color=color, alpha=0.8, label=r.group[0])
         ax.errorbar(r.rate, y, xerr=[[r.rate - lo], [hi - r.rate]], fmt="none", ecolor="black", capsize=3)
         ax.text(1.01, y, f"{r.successes}/{r.n}", va="center", fontsize=8)
@@ -95,10 +128,10 @@ def failure_reasons(rows: Sequence[dict[str, Any]]) -> bytes:
     ax = fig.add_subplot()
     left = [0] * len(labels)
     ys = list(range(len(labels)))[::-1]
-    for i, tree in enumerate(trees):
-        counts = Counter(_failure_key(r) for r in failed if tree_label(r) == tree)
+    for tree in trees.labels:
+        counts = Counter(_failure_key(r) for r in failed if trees.of(r) == tree)
         widths = [counts.get(k, 0) for k in labels]
-        ax.barh(ys, widths, left=left, color=COLORS[i % len(COLORS)], label=tree)
+        ax.barh(ys, widths, left=left, color=trees.color(tree), label=tree)
         left = [a + b for a, b in zip(left, widths, strict=True)]
     ax.set_yticks(ys, labels, fontsize=8)
     ax.set_xlabel("failed episodes")
@@ -125,8 +158,8 @@ def time_distributions(rows: Sequence[dict[str, Any]]) -> bytes:
         (axes[1], "episode_wall_s", wall_label, steady),
     ):
         trees = _trees(rows)
-        data = [[float(r[column]) for r in chosen if tree_label(r) == t] for t in trees]
-        ax.boxplot(data, orientation="horizontal", tick_labels=trees)
+        data = [[float(r[column]) for r in chosen if trees.of(r) == t] for t in trees.labels]
+        ax.boxplot(data, orientation="horizontal", tick_labels=trees.labels)
         ax.set_xlabel(label)
         ax.grid(axis="x", alpha=0.3)
     fig.suptitle("time distributions")
@@ -138,18 +171,19 @@ def retries(rows: Sequence[dict[str, Any]]) -> bytes:
     axes = fig.subplots(1, 2)
     trees = _trees(rows)
     top = max([int(r["retries_total"]) for r in rows] + [1])
-    xs = list(range(top + 1))
-    width = 0.8 / max(1, len(trees))
-    for i, tree in enumerate(trees):
-        counts = Counter(int(r["retries_total"]) for r in rows if tree_label(r) == tree)
+    step = -(-(top + 1) // MAX_RETRY_BARS)  # counts per bar: 1 unless an episode retried more than 39 times
+    xs = list(range(0, top + 1, step))
+    width = 0.8 * step / max(1, len(trees.labels))
+    for i, tree in enumerate(trees.labels):
+        counts = Counter(int(r["retries_total"]) // step * step for r in rows if trees.of(r) == tree)
         axes[0].bar(
-            [x + (i - (len(trees) - 1) / 2) * width for x in xs],  # around the whole number x
+            [x + (i - (len(trees.labels) - 1) / 2) * width for x in xs],  # around the whole number x
             [counts.get(x, 0) for x in xs],
             width,
             label=tree,
-            color=COLORS[i % len(COLORS)],
+            color=trees.color(tree),
         )
-    axes[0].set_xlabel("retries in the episode")
+    axes[0].set_xlabel("retries in the episode" + (f" (bars of {step})" if step > 1 else ""))
     axes[0].set_ylabel("episodes")
     _integer_axis(axes[0].xaxis)
     _integer_axis(axes[0].yaxis)
@@ -159,13 +193,13 @@ def retries(rows: Sequence[dict[str, Any]]) -> bytes:
         by_leaf.update(r["retries"])
     leaves = [k for k, _ in by_leaf.most_common(10)] or ["none"]
     left = [0] * len(leaves)
-    for i, tree in enumerate(trees):  # stacked by tree, in the trees' colours (the legend on the left)
+    for tree in trees.labels:  # stacked by tree, in the trees' colours (the legend on the left)
         per_tree: Counter[str] = Counter()
         for r in rows:
-            if tree_label(r) == tree:
+            if trees.of(r) == tree:
                 per_tree.update(r["retries"])
         widths = [per_tree.get(k, 0) for k in leaves[::-1]]
-        axes[1].barh(leaves[::-1], widths, left=left, color=COLORS[i % len(COLORS)], label=tree)
+        axes[1].barh(leaves[::-1], widths, left=left, color=trees.color(tree), label=tree)
         left = [a + b for a, b in zip(left, widths, strict=True)]
     _integer_axis(axes[1].xaxis)
     axes[1].set_xlabel("retries, all episodes")
@@ -175,8 +209,15 @@ def retries(rows: Sequence[dict[str, Any]]) -> bytes:
 
 
 def comparison(a: Sequence[Rate], b: Sequence[Rate], names: tuple[str, str]) -> bytes:
-    groups = sorted({r.group for r in a} | {r.group for r in b})
     by_a, by_b = {r.group: r for r in a}, {r.group: r for r in b}
+    groups = sorted(by_a.keys() | by_b.keys())
+    title = f"{names[0]} vs {names[1]}"
+    if len(groups) > MAX_GROUPS_DRAWN:
+        def episodes(g: tuple[str, ...]) -> int:
+            return sum(rates[g].n for rates in (by_a, by_b) if g in rates)
+
+        title += f" (the {MAX_GROUPS_DRAWN} of {len(groups)} groups with most episodes; the tables list all)"
+        groups = sorted(sorted(groups, key=lambda g: -episodes(g))[:MAX_GROUPS_DRAWN])
     fig = _figure(9, 1.0 + 0.55 * len(groups))
     ax = fig.add_subplot()
     for offset, rates, name, color in ((0.2, by_a, names[0], COLORS[0]), (-0.2, by_b, names[1], COLORS[1])):
@@ -194,7 +235,7 @@ def comparison(a: Sequence[Rate], b: Sequence[Rate], names: tuple[str, str]) -> 
     ax.set_yticks(range(len(groups)), [" / ".join(g) for g in reversed(groups)], fontsize=8)
     ax.set_xlim(0, 1.05)
     ax.set_xlabel("success rate (bars: 95% Wilson interval)")
-    ax.set_title(f"{names[0]} vs {names[1]}")
+    ax.set_title(title)
     ax.legend(fontsize=8, loc="lower right")
     ax.grid(axis="x", alpha=0.3)
     return _png(fig)

@@ -18,6 +18,7 @@ from bt_grasp.campaign import plots
 from bt_grasp.campaign.results import read_report_rows
 from bt_grasp.campaign.stats import Rate, success_rates, tree_label
 from bt_grasp.errors import InputError
+from bt_grasp.output_files import make_output_folder, write_output_file
 
 MAX_FAILURE_ROWS = 200
 
@@ -188,13 +189,8 @@ def build_report(results: Path, out: Path, compare: Path | None = None) -> list[
             f"{_paired(rows, other, names)}"
         )
     out = Path(out)
-    fig_dir = out.with_name(out.stem + "_figures")
-    fig_dir.mkdir(parents=True, exist_ok=True)
-    written = []
-    for fig in figures:
-        path = fig_dir / f"{fig.name}.png"
-        path.write_bytes(fig.png)
-        written.append(path)
+    fig_dir = make_output_folder(out.with_name(out.stem + "_figures"), "--out")
+    written = [write_output_file(fig_dir / f"{fig.name}.png", fig.png, "--out") for fig in figures]
     images = {
         f.name: f'<img alt="{html.escape(f.title)}" src="data:image/png;base64,{base64.b64encode(f.png).decode()}">'
         for f in figures
@@ -217,6 +213,5 @@ Success is judged by physics (the simulator's ground truth, read only by the jud
 <h2>Environments</h2>{_environments(rows)}
 </body></html>
 """
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(page, encoding="utf-8")
+    write_output_file(out, page, "--out", example="report.html")
     return [out, *written]

@@ -17,6 +17,7 @@ from typing import Any
 
 from bt_grasp.bounded_io import MAX_RESULTS_BYTES, read_user_file
 from bt_grasp.errors import InputError
+from bt_grasp.output_files import open_output_stream, write_output_file
 
 SUFFIX = ".jsonl"
 
@@ -33,10 +34,12 @@ def read_rows(path: Path, *, repair: bool = False) -> list[dict[str, Any]]:
     data = read_user_file(path, MAX_RESULTS_BYTES)
     end = data.rfind(b"\n") + 1
     if end < len(data) and repair:
-        with open(path, "r+b") as f:
-            f.truncate(end)
-            f.flush()
-            os.fsync(f.fileno())
+        fd = os.open(path, os.O_RDWR | os.O_NOFOLLOW | os.O_CLOEXEC)  # the file itself, never a link's target
+        try:
+            os.ftruncate(fd, end)
+            os.fsync(fd)
+        finally:
+            os.close(fd)
     return [row for _, row in _numbered_rows(path, data[:end])]
 
 
@@ -152,8 +155,7 @@ class ResultsWriter:
 
     def __init__(self, path: Path) -> None:
         self.path = Path(path)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        self._fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+        self._fd = open_output_stream(self.path, "--out", append=True)  # never through a link, never a FIFO
 
     def append(self, row: dict[str, Any]) -> None:
         line = (json.dumps(row, sort_keys=False, default=str) + "\n").encode()
@@ -188,6 +190,6 @@ def export_parquet(rows: Iterable[dict[str, Any]], out: Path) -> Path:
     for row in flat:
         for key, values in columns.items():
             values.append(row.get(key))
-    out.parent.mkdir(parents=True, exist_ok=True)
-    pq.write_table(pa.table(columns), out)
-    return out
+    buffer = pa.BufferOutputStream()
+    pq.write_table(pa.table(columns), buffer)
+    return write_output_file(out, buffer.getvalue().to_pybytes(), "--out", example="results.parquet")

@@ -17,6 +17,7 @@ from bt_grasp.campaign.out_lock import campaign_lock
 from bt_grasp.campaign.results import ResultsWriter, read_rows, results_path
 from bt_grasp.campaign.spec import Campaign, Episode
 from bt_grasp.errors import BtGraspError, InputError
+from bt_grasp.output_files import check_output_file
 
 log = logging.getLogger(__name__)
 
@@ -107,7 +108,7 @@ def _run_locked(
     engine_factory: Callable[[], Engine],
     on_progress: Callable[[Progress, dict[str, Any] | EpisodeError | None], None] | None,
 ) -> Progress:
-    path = results_path(out_dir, campaign.name)
+    path = check_output_file(results_path(out_dir, campaign.name), "--out")  # not a link, device or folder
     rows = read_rows(path, repair=True) if path.exists() else []
     todo = pending(campaign, rows, path)
     progress = Progress(total=len(campaign.episodes()), already=len(rows))

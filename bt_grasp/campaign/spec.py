@@ -25,11 +25,22 @@ from bt_grasp.scene.goals import Goal
 
 NO_FAULTS = "none"
 MAX_EPISODES = 1_000_000
+#: seeds are 64-bit signed integers everywhere a result is written (results rows, Parquet)
+MAX_SEED = 2**63 - 1
+#: a campaign's name names its results file inside --out (and out/NAME by default): one plain file-name part,
+#: never hidden and never ``.`` or ``..`` (a name ``..`` put the results beside out/, not in it)
+NAME_PATTERN = r"^[A-Za-z0-9_-][A-Za-z0-9_.-]{0,99}$"
 
 
 class SeedRange(StrictModel):
-    first: int = Field(0, ge=0)  # the first seed
-    count: int = Field(..., ge=1)  # how many consecutive seeds
+    first: int = Field(0, ge=0, le=MAX_SEED)  # the first seed
+    count: int = Field(..., ge=1, le=MAX_EPISODES)  # how many consecutive seeds
+
+    @model_validator(mode="after")
+    def _last_fits(self) -> SeedRange:
+        if self.first + self.count - 1 > MAX_SEED:
+            raise ValueError(f"the last seed {self.first + self.count - 1} is over {MAX_SEED} (2**63 - 1)")
+        return self
 
 
 class SceneEntry(StrictModel):
@@ -52,7 +63,7 @@ class FaultPlanEntry(StrictModel):
 
 
 class CampaignFile(StrictModel):
-    name: str = Field(..., min_length=1, pattern=r"^[A-Za-z0-9_.-]+$")  # names the results file
+    name: str = Field(..., min_length=1)  # names the results file (NAME_PATTERN)
     description: str = ""
     trees: tuple[str, ...] = Field(..., min_length=1)  # tree files (XML or YAML)
     scenes: tuple[str | SceneEntry, ...] = Field(..., min_length=1)
@@ -62,6 +73,16 @@ class CampaignFile(StrictModel):
     calibration: str | None = None  # default calibration for every scene
     max_ticks: int = Field(12000, ge=1)  # per episode (100 Hz ticks of simulated time)
 
+    @field_validator("name")
+    @classmethod
+    def _name(cls, value: str) -> str:
+        import re
+
+        if not re.fullmatch(NAME_PATTERN, value):
+            raise ValueError("a campaign's name names its results file: letters, digits, '_', '.' and '-', not "
+                             "starting with '.', at most 100 characters")
+        return value
+
     @field_validator("seeds")
     @classmethod
     def _seeds(cls, value: SeedRange | tuple[int, ...]) -> SeedRange | tuple[int, ...]:
@@ -70,8 +91,8 @@ class CampaignFile(StrictModel):
                 raise ValueError("the seed list is empty")
             if len(set(value)) != len(value):
                 raise ValueError("the seed list repeats a seed")
-            if min(value) < 0:
-                raise ValueError("seeds must be >= 0")
+            if min(value) < 0 or max(value) > MAX_SEED:
+                raise ValueError(f"seeds must be from 0 to {MAX_SEED} (2**63 - 1)")
         return value
 
 
@@ -190,7 +211,9 @@ class Campaign:
 
 
 def _digest(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
+    from bt_grasp.bounded_io import read_user_file
+
+    return hashlib.sha256(read_user_file(path, error=ConfigError)).hexdigest()  # bounded: no device, no giant
 
 
 def load_campaign(path: str | Path, *, check_inputs: bool = True, leaves: tuple[str, ...] = ()) -> Campaign:
@@ -241,6 +264,10 @@ def load_campaign(path: str | Path, *, check_inputs: bool = True, leaves: tuple[
     _unique(path, lines, "scenes", [s.name for s in scenes])
     _unique(path, lines, "fault_plans", [p.name for p in plans])
     _unique(path, lines, "trees", list(parsed.trees))
+    seed_count = parsed.seeds.count if isinstance(parsed.seeds, SeedRange) else len(parsed.seeds)
+    total = len(parsed.trees) * len(scenes) * len(plans) * len(parsed.blackboard) * seed_count
+    if total > MAX_EPISODES:  # counted before any list of them is made
+        raise ConfigError(path, f"{total} episodes is more than the limit of {MAX_EPISODES}; split the campaign", 1)
     seeds = (
         tuple(range(parsed.seeds.first, parsed.seeds.first + parsed.seeds.count))
         if isinstance(parsed.seeds, SeedRange)
@@ -260,9 +287,6 @@ def load_campaign(path: str | Path, *, check_inputs: bool = True, leaves: tuple[
         digests=digests,
         leaves=tuple(leaves),
     )
-    total = len(parsed.trees) * len(scenes) * len(plans) * len(parsed.blackboard) * len(seeds)
-    if total > MAX_EPISODES:
-        raise ConfigError(path, f"{total} episodes is more than the limit of {MAX_EPISODES}; split the campaign", 1)
     if check_inputs:
         _check_inputs(campaign, lines)
     return campaign
@@ -377,9 +401,9 @@ def write_options_campaign(
                 raise InputError(flag, f"no such file '{path}'")
     if name is None:
         name = "-".join(dict.fromkeys(p.stem for p in [*trees, *scenes]))
-    if not re.fullmatch(r"[A-Za-z0-9_.-]+", name):
-        raise InputError("--name", f"'{name}' may hold only letters, digits, '_', '.' and '-' (it names the results "
-                                   "file)")
+    if not re.fullmatch(NAME_PATTERN, name):
+        raise InputError("--name", f"'{name[:120]}' may hold only letters, digits, '_', '.' and '-', not start with "
+                                   "'.', and have at most 100 characters (it names the results file)")
     folder = Path("out") / name if out is None else out
     data: dict[str, object] = {
         "name": name,
@@ -390,10 +414,6 @@ def write_options_campaign(
     }
     if max_ticks is not None:
         data["max_ticks"] = max_ticks
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        path = folder / f"{name}.campaign.yaml"
-        path.write_text(yaml.safe_dump(data, sort_keys=False))
-    except OSError as exc:
-        raise InputError(folder, f"cannot write the campaign file there: {exc.strerror or exc}") from None
-    return path
+    from bt_grasp.output_files import write_output_file
+
+    return write_output_file(folder / f"{name}.campaign.yaml", yaml.safe_dump(data, sort_keys=False), "--out")

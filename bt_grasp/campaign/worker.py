@@ -16,6 +16,8 @@ from typing import Any
 from bt_grasp.campaign.environment import environment
 from bt_grasp.campaign.episode import EpisodeBackend, EpisodeOutcome
 from bt_grasp.campaign.spec import Episode
+from bt_grasp.numeric_threads import NUMERIC_ENV
+from bt_grasp.output_files import check_output_file, make_output_folder
 from bt_grasp.safe_path import file_component
 
 log = logging.getLogger(__name__)
@@ -28,7 +30,8 @@ PLACE_COLUMNS = ("wall_time_s", "setup_wall_s", "episode_wall_s", "mcap", "envir
 #: after each small linear-algebra call: ~0.2 s of CPU per pick episode that does nothing (same wall time, same
 #: fingerprint without it) but takes a core from the other workers. One thread each: 2 workers on 2 cores went
 #: from 69.9 to 82.5 episodes/min, 1 worker from 45.7 to 50.8 (`bt-grasp bench eval --seeds 50`, idle).
-WORKER_ENV: dict[str, str] = {"OPENBLAS_NUM_THREADS": "1"}
+#: The command line sets the same in its own process (``bt_grasp.numeric_threads``).
+WORKER_ENV: dict[str, str] = dict(NUMERIC_ENV)
 
 
 class KeepLogs(enum.StrEnum):
@@ -100,7 +103,8 @@ class Worker:
         second run's fingerprint must equal the first's, else the row says so)."""
         t0 = time.perf_counter()
         path = log_path(self.log_dir, episode)
-        path.parent.mkdir(parents=True, exist_ok=True)
+        make_output_folder(path.parent, "--out")
+        check_output_file(path, "--out", example="x.mcap")  # a link planted at a kept log's name is not followed
         keep = self.keep_logs is KeepLogs.ALL
         outcome = self.backend.run(episode, path if keep else None)
         if not outcome.success and self.keep_logs is KeepLogs.FAILURES:

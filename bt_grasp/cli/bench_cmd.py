@@ -146,7 +146,7 @@ def tasks(
     err = Console(stderr=True)
 
     def progress(name: str, seed: int, ok: bool, why: str) -> None:  # stderr: stdout stays one JSON object
-        err.print(f"{name} seed {seed}: {'success' if ok else 'FAILURE ' + why}", highlight=False)
+        err.print(f"{name} seed {seed}: {'success' if ok else 'FAILURE ' + why}", highlight=False, markup=False)
 
     figures = run_task_bench(chosen, seeds, first_seed, progress=progress)
     rows = [f.summary() for f in figures]

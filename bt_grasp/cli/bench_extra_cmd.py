@@ -10,6 +10,7 @@ from typing import Any
 import typer
 from rich.console import Console
 from rich.table import Table
+from rich.text import Text
 
 from bt_grasp.cli.bench_cmd import EPISODE_BENCHMARKS, MICRO_BENCHMARKS, bench_app
 from bt_grasp.detector.kinds import DetectorKind
@@ -71,7 +72,8 @@ def pick(
     for tree, r in report["trees"].items():
         for name, o in r["per_object"].items():
             reasons = ", ".join(f"{k} x{v}" for k, v in o["failure_reasons"].items()) or "-"
-            console.print(f"{tree}: {name} {o['successes']}/{o['runs']} (failures: {reasons})", highlight=False)
+            console.print(f"{tree}: {name} {o['successes']}/{o['runs']} (failures: {reasons})", highlight=False,
+                          markup=False)
 
 
 @bench_app.command("sim", rich_help_panel=MICRO_BENCHMARKS)
@@ -137,8 +139,8 @@ def budget(
         typer.echo(json.dumps(report))
         return
     total = report["episode_wall_s"]
-    table = Table(title=f"one warm pick: {tree} on {scene}, seed {seed}, log {'on' if log else 'off'} "
-                        f"({report['ticks']} ticks, {report['sim_time_s']} s simulated; {report['machine']})")
+    table = Table(title=Text(f"one warm pick: {tree} on {scene}, seed {seed}, log {'on' if log else 'off'} "
+                             f"({report['ticks']} ticks, {report['sim_time_s']} s simulated; {report['machine']})"))
     for col in ("group", "stage", "wall s", "share", "calls"):
         table.add_column(col)
     for row in report["stages"]:

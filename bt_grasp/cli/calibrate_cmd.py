@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import typer
+from rich.markup import escape
 
 from bt_grasp.interfaces import Mount
 
@@ -39,6 +40,9 @@ def calibrate(
     if mount not in MOUNTS:
         raise InputError("--mount", f"expected eye-to-hand or eye-in-hand, got '{mount}'")
     load_scene(scene)  # a bad scene file fails here with file:line, before the simulator starts
+    from bt_grasp.output_files import check_output_file
+
+    check_output_file(out, "--out", example="calibration.yaml", inputs=(scene,))  # and a place it cannot write to
     if as_json:
         result = calibrate_in_sim(scene, mount, seed, poses)
     else:
@@ -93,7 +97,8 @@ def calibrate(
     console.print(table)
     console.print("* simulator ground truth (judge only): the error against the true camera pose, which the "
                   "calibration never reads.")
-    console.print(f"wrote {out} (method {run.solution.method}, {len(run.views)} samples) in {result.elapsed_s:.1f} s")
+    console.print(f"wrote {escape(str(out))} (method {run.solution.method}, {len(run.views)} samples) in "
+                  f"{result.elapsed_s:.1f} s")
 
 
 class SimBenchBackend:

@@ -7,8 +7,10 @@ from pathlib import Path
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 
 from bt_grasp.interfaces import Mount
+from bt_grasp.output_files import make_output_folder, write_output_file
 
 
 def demo(
@@ -27,7 +29,7 @@ def demo(
 
     console = Console()
     load_scene(scene)
-    out.mkdir(parents=True, exist_ok=True)
+    make_output_folder(out, "--out")
     console.rule("1/3  what the camera sees")
     render(scene, seed, out / "render", None)
     console.rule("2/3  hand-eye calibration (eye-to-hand, ChArUco board on the gripper)")
@@ -40,13 +42,13 @@ def demo(
         f"/ {chosen.residual_deg:.4f} deg; error against the simulator's true camera pose (judge only): "
         f"{true_mm:.3f} mm / {true_deg:.4f} deg -> {calibration_path}"
     )
-    console.rule(f"3/3  {tree}")
+    console.rule(f"3/3  {escape(str(tree))}")
     request = pick_request(tree, scene, seed, calibration=calibration_path, log=out / "pick.mcap",
                            argv=("bt-grasp", "demo", "--seed", str(seed)))
     summary = run_episode(request, on_tick=(live_progress(Console(stderr=True)),))
     print_summary(console, summary)
-    (out / "summary.json").write_text(json.dumps(summary.to_json(), indent=2) + "\n")
-    console.print(f"summary: {out / 'summary.json'}")
+    write_output_file(out / "summary.json", json.dumps(summary.to_json(), indent=2) + "\n", "--out")
+    console.print(f"summary: {escape(str(out / 'summary.json'))}")
     raise typer.Exit(0 if summary.success else 1)
 
 

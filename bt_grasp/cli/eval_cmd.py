@@ -136,6 +136,10 @@ def run(
     if out is None:
         out = Path("out") / campaign.name
     log_dir = out / "logs"
+    from bt_grasp.output_files import check_output_folder
+
+    check_output_folder(out, "--out")
+    check_output_folder(log_dir, "--out")  # kept logs go in <out>/logs: never through a link elsewhere
     if ray is not None:
         from bt_grasp.campaign.ray_engine import RayEngine
 
@@ -165,7 +169,7 @@ def export(
     """Export a results file to Parquet."""
     from bt_grasp.campaign.results import export_parquet, read_rows
 
-    _writable_file(out, "Parquet")
+    _writable_file(out, "Parquet", results)
     try:
         typer.echo(str(export_parquet(read_rows(results), out)))
     except OSError as exc:
@@ -181,7 +185,7 @@ def report(
     """A self-contained HTML report (no network needed) with success rates, failures, times, retries."""
     from bt_grasp.campaign.report import build_report
 
-    _writable_file(out, "HTML")
+    _writable_file(out, "HTML", results, compare)
     try:
         written = build_report(results, out, compare)
     except OSError as exc:
@@ -189,13 +193,12 @@ def report(
     typer.echo(f"{written[0]}  (figures: {written[1].parent})")
 
 
-def _writable_file(out: Path, kind: str) -> None:
-    """``--out`` names a file to write, not a folder (a folder was a traceback: issue 24)."""
-    from bt_grasp.errors import InputError
+def _writable_file(out: Path, kind: str, *inputs: Path | None) -> None:
+    """``--out`` names a file that can be written (``bt_grasp.output_files``), checked before any work: a folder
+    was a traceback (issue 24); a link, a FIFO, a device or the results file itself are refused too."""
+    from bt_grasp.output_files import check_output_file
 
-    if out.is_dir():
-        raise InputError("--out", f"'{out}' is a folder; give the {kind} file to write, e.g. "
-                                  f"{out / ('report.html' if kind == 'HTML' else 'results.parquet')}")
+    check_output_file(out, "--out", example="report.html" if kind == "HTML" else "results.parquet", inputs=inputs)
 
 
 def _cannot_write(out: Path, exc: OSError) -> Exception:

@@ -28,9 +28,11 @@ def remote_control_warning(host: str) -> str:
 
 
 def run_foxglove_control(request: EpisodeRequest, breakpoints: tuple[Breakpoint, ...], *, allow_remote: bool,
-                         console: Console, on_tick: tuple[TickCallback, ...] = ()) -> EpisodeResult:
+                         console: Console, on_tick: tuple[TickCallback, ...] = (),
+                         layout_folder: Path | None = None) -> EpisodeResult:
     """Run an episode whose live server takes commands from its viewers (and, after a restart from them, the
-    next one: same port, logs run-2.mcap, ...); returns the last episode's result."""
+    next one: same port, logs run-2.mcap, ...); returns the last episode's result. ``layout_folder``: where the
+    layout goes when the run has no log (the caller removes it)."""
     from bt_grasp.control import Controller, SeedPolicy, check_breakpoints, parse_breakpoint
     from bt_grasp.control.foxglove import FoxgloveControl, is_loopback
     from bt_grasp.episode.episode import Episode
@@ -48,7 +50,7 @@ def run_foxglove_control(request: EpisodeRequest, breakpoints: tuple[Breakpoint,
         episode = first if number == 0 else Episode(replace(request, seed=seed, log=_numbered(request.log, number)))
         controller = Controller(breakpoints, start_paused=True)
         control = FoxgloveControl(controller, host=request.live_host, allow_remote=allow_remote)
-        episode.on_live.append(_server(episode, control, console))
+        episode.on_live.append(_server(episode, control, console, layout_folder))
         result = episode.run(on_tick=on_tick, controller=controller)
         if controller.restart is None:
             return result
@@ -64,11 +66,12 @@ def _numbered(log: Path | None, number: int) -> Path | None:
     return None if log is None or number == 0 else log.with_name(f"{log.stem}-{number + 1}{log.suffix}")
 
 
-def _server(episode: Episode, control: FoxgloveControl, console: Console) -> Callable[[str], None]:
+def _server(episode: Episode, control: FoxgloveControl, console: Console,
+            layout_folder: Path | None) -> Callable[[str], None]:
     from bt_grasp.recording.tree_layout import write_live_layout
 
     request = episode.request  # the control layout of the tree that runs: its leaves' rows, by path
-    layout = write_live_layout(request.tree, request.leaves, request.log, control=True)
+    layout = write_live_layout(request.tree, request.leaves, request.log, control=True, folder=layout_folder)
 
     def serve(url: str) -> None:
         assert episode.live is not None

@@ -116,7 +116,7 @@ def parse_prompt(key: str, text: str) -> Command:
 
 
 def _params(text: str) -> dict[str, Any]:
-    import yaml
+    from bt_grasp.bounded_yaml import load_value
 
     params: dict[str, Any] = {}
     for item in (i.strip() for i in text.replace(",", " ").split()):
@@ -124,8 +124,8 @@ def _params(text: str) -> dict[str, Any]:
         if not sep or not name:
             raise ValueError(f"expected KEY=VALUE, got '{item}'")
         try:
-            params[name] = yaml.safe_load(value)
-        except yaml.YAMLError:
+            params[name] = load_value(value)
+        except ValueError:
             params[name] = value
     return params
 

@@ -10,10 +10,15 @@ from __future__ import annotations
 import os
 import sys
 
-import typer
+from bt_grasp.numeric_threads import use_one_blas_thread
 
-from bt_grasp.cli import ERROR_PREFIX
-from bt_grasp.errors import BtGraspError
+use_one_blas_thread()  # before anything imports numpy (this process and the ones it starts)
+
+import typer  # noqa: E402
+
+from bt_grasp.cli import ERROR_PREFIX  # noqa: E402
+from bt_grasp.errors import BtGraspError  # noqa: E402
+from bt_grasp.terminal_text import shown  # noqa: E402
 
 INTERRUPTED = 130  # the exit code of a command Ctrl-C ended (128 + SIGINT)
 
@@ -91,8 +96,8 @@ def main(argv: list[str] | None = None) -> int:
         args = fill_optional_values(args)
     try:
         rv = app(args=args, standalone_mode=False, prog_name="bt-grasp")  # also names the completion variable
-    except BtGraspError as exc:
-        typer.echo(f"{ERROR_PREFIX}{exc}", err=True)
+    except BtGraspError as exc:  # its text may quote a file or a peer: control characters are shown, not obeyed
+        typer.echo(f"{ERROR_PREFIX}{shown(str(exc))}", err=True)
         code = exc.exit_code
     except typer.Exit as exc:
         code = exc.exit_code

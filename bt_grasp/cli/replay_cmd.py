@@ -59,6 +59,7 @@ def replay_command(
     from bt_grasp.recording.reader import open_log
 
     console = Console(highlight=False)
+    _check_outputs(log, report, report_dir, btlog, frames_dir, layout_out, resim_log)  # before any work
     run = open_log(log)
     if resim:
         _resim(console, log, as_json, resim_log, tuple(leaves))
@@ -70,8 +71,8 @@ def replay_command(
 
         html_path = report if report is not None else report_dir / "report.html"  # type: ignore[operator]
         made = build_report(run, html_path, report_dir)
-        console.print(f"wrote the run report {made.html_path}"
-                      + (f" and {len(made.pngs)} figures to {report_dir}" if made.pngs else ""))
+        console.print(f"wrote the run report {escape(str(made.html_path))}"
+                      + (f" and {len(made.pngs)} figures to {escape(str(report_dir))}" if made.pngs else ""))
     other_views = tick is not None or failures or leaf or topic or as_json or frames_dir or btlog
     if (foxglove or report is not None or report_dir is not None) and not other_views:
         return
@@ -113,9 +114,9 @@ def replay_command(
             console.print(interventions_table(run.interventions))
     _print_views(console, run.path.name, views, leaf, max_rows, run)
     if "frames" in exports:
-        console.print(f"wrote {len(exports['frames'])} frames to {frames_dir}")
+        console.print(f"wrote {len(exports['frames'])} frames to {escape(str(frames_dir))}")
     if "btlog" in exports:
-        console.print(f"wrote {exports['btlog']['transitions']} transitions to {btlog}")
+        console.print(f"wrote {exports['btlog']['transitions']} transitions to {escape(str(btlog))}")
 
 
 def _print_foxglove(console: Console, run: RunLog, target: Path | None) -> None:
@@ -124,8 +125,8 @@ def _print_foxglove(console: Console, run: RunLog, target: Path | None) -> None:
     origin = run.time_origin_ns
     layout = write_layout(run, target)  # the layout of this log's tree (attached to the log since format 3)
     console.print(
-        f"Open {run.path} in Foxglove (desktop or app.foxglove.dev: Open local file, or drag the file in).\n"
-        f"Then load the layout made for this run's tree: Layouts > Import from file > {layout}\n"
+        f"Open {escape(str(run.path))} in Foxglove (desktop or app.foxglove.dev: Open local file, or drag the file "
+        f"in).\nThen load the layout made for this run's tree: Layouts > Import from file > {escape(str(layout))}\n"
         "It shows the arm, point cloud, detections and grasps in 3D, the camera with detections drawn, each "
         "leaf's status over time (State Transitions: one row per leaf of this tree, named by its path), joint "
         "and gripper plots and the log.\n"
@@ -151,7 +152,7 @@ def _resim(console: Console, log: Path, as_json: bool, keep: Path | None, leaves
         console.print(
             f"[green]reproduced[/]: {report.ticks_new} ticks, the same fingerprint (every node's status and "
             f"reason, blackboard, joints, gripper at every tick; final object poses) {report.digest_new[:16]} "
-            f"(success {report.success_new})" + (f"; new log {report.new_log}" if report.new_log else "")
+            f"(success {report.success_new})" + (f"; new log {escape(report.new_log)}" if report.new_log else "")
             + (f"; {report.interventions} interventions applied again at their ticks" if report.interventions
                else "")
         )
@@ -161,13 +162,28 @@ def _resim(console: Console, log: Path, as_json: bool, keep: Path | None, leaves
             console.print(f"[red]diverged[/] at tick {d.tick} ({d.kind}); recorded {report.ticks_recorded} "
                           f"ticks, new {report.ticks_new}")
             for diff in d.differences[:20]:
-                console.print(f"  {diff}")
+                console.print(f"  {escape(str(diff))}")
         if report.fingerprint_difference is not None:
-            console.print(f"[red]fingerprints differ[/]: {report.fingerprint_difference.describe()}")
+            console.print(f"[red]fingerprints differ[/]: {escape(report.fingerprint_difference.describe())}")
         if report.intervention_difference is not None:
             console.print(f"[red]interventions differ[/]: {escape(report.intervention_difference)}")
     if not report.reproduced:
         raise typer.Exit(1)
+
+
+def _check_outputs(log: Path, report: Path | None, report_dir: Path | None, btlog: Path | None,
+                   frames_dir: Path | None, layout_out: Path | None, resim_log: Path | None) -> None:
+    """Every place the command will write, checked before the log is read (``bt_grasp.output_files``)."""
+    from bt_grasp.output_files import check_output_file, check_output_folder
+
+    files = ((report, "--report", "report.html"), (btlog, "--export-btlog", "run.btlog"),
+             (layout_out, "--layout-out", "run.layout.json"), (resim_log, "--resim-log", "resim.mcap"))
+    for path, flag, example in files:
+        if path is not None:
+            check_output_file(path, flag, example=example, inputs=(log,))
+    for folder, flag in ((report_dir, "--report-dir"), (frames_dir, "--export-frames")):
+        if folder is not None:
+            check_output_folder(folder, flag)
 
 
 def _asdict(obj: Any) -> dict[str, Any]:

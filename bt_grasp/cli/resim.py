@@ -11,7 +11,6 @@ that names the first differing node statuses.
 from __future__ import annotations
 
 import json
-import shutil
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -97,12 +96,16 @@ def resimulate(log_path: Path, keep_log: Path | None = None, leaves: tuple[str, 
     """Re-run a recorded log in a temporary folder that is removed afterwards, whatever happens; the new run's
     log is kept only at ``keep_log`` when given. ``leaves``: the ``--leaves`` plugins the run used (a log never
     names code to load by itself: the user passes them again)."""
-    with tempfile.TemporaryDirectory(prefix="bt_grasp_resim_") as tmp:
+    from bt_grasp.bounded_io import confined_to
+
+    with tempfile.TemporaryDirectory(prefix="bt_grasp_resim_") as tmp, \
+            confined_to(Path(tmp), "a log's tree, scene, calibration and fault plan may name only the files the log "
+                                   "carries, so this run cannot be re-simulated"):
         report = _resimulate(log_path, Path(tmp), leaves)
         if keep_log is not None:
-            keep_log.parent.mkdir(parents=True, exist_ok=True)
-            shutil.copyfile(report.new_log, keep_log)
-            report.new_log = str(keep_log)
+            from bt_grasp.output_files import copy_output_file
+
+            report.new_log = str(copy_output_file(report.new_log, keep_log, "--resim-log", example="resim.mcap"))
         else:
             report.new_log = ""
     return report
@@ -131,10 +134,9 @@ def _resimulate(log_path: Path, workdir: Path, leaves: tuple[str, ...] = ()) -> 
     calibration = _attachment(run, "calibration", workdir, log_path)
     faults = _attachment(run, "faults", workdir, log_path)
     inject = tuple(i for i in meta.get("inject", "").split(";") if i)
-    try:
-        blackboard = json.loads(meta.get("blackboard", "{}"))
-    except json.JSONDecodeError:
-        blackboard = {}
+    blackboard = _recorded_blackboard(log_path, meta)
+    seed = _recorded_int(log_path, meta, "seed", "0", 0, MAX_SEED)
+    max_ticks = _recorded_int(log_path, meta, "max_ticks", "12000", 1, MAX_RESIM_TICKS)
     goal = recorded_goal(log_path, meta)
     recorded_leaves = [v for v in meta.get("leaves", "").split(";") if v]
     if recorded_leaves and not leaves:
@@ -145,11 +147,11 @@ def _resimulate(log_path: Path, workdir: Path, leaves: tuple[str, ...] = ()) -> 
     request = EpisodeRequest(
         tree=tree,
         scene=scene,
-        seed=int(meta["seed"]),
+        seed=seed,
         goal=goal,
         calibration=calibration,
         log=new_log,
-        max_ticks=int(meta.get("max_ticks", "12000")),
+        max_ticks=max_ticks,
         faults=faults,
         inject=inject,
         blackboard=blackboard,
@@ -176,6 +178,31 @@ def _resimulate(log_path: Path, workdir: Path, leaves: tuple[str, ...] = ()) -> 
     return ResimReport(len(run.ticks), len(new_run.ticks), divergence, recorded_success, summary.success,
                        str(new_log), difference, recorded_print.digest, new_print.digest,
                        len(recorded_interventions), _first_intervention_difference(recorded_interventions, applied))
+
+
+#: a recorded seed is a 64-bit integer; a re-simulation runs at most this many ticks (28 simulated hours)
+MAX_SEED = 2**63 - 1
+MAX_RESIM_TICKS = 10_000_000
+
+
+def _recorded_int(log_path: Path, meta: dict[str, str], key: str, default: str, low: int, high: int) -> int:
+    """An integer of the log's run metadata, from ``low`` to ``high``; anything else is one sentence (exit 2)."""
+    text = meta.get(key, default) or default
+    if not (text.isascii() and text.isdigit() and len(text) < 20 and low <= int(text) <= high):
+        raise LogFileError(log_path, f"its run metadata '{key}' is {text[:40]!r}, not an integer from {low} to {high}")
+    return int(text)
+
+
+def _recorded_blackboard(log_path: Path, meta: dict[str, str]) -> dict[str, Any]:
+    """The blackboard entries the run started with: a JSON object of scalars (as ``--set`` gives them)."""
+    try:
+        value = json.loads(meta.get("blackboard", "{}") or "{}")
+    except (ValueError, RecursionError):
+        value = None
+    if not isinstance(value, dict) or not all(isinstance(v, str | int | float | bool) for v in value.values()):
+        raise LogFileError(log_path, "its run metadata 'blackboard' is not a JSON object of text, numbers and "
+                                     "booleans")
+    return value
 
 
 def _interventions(log_path: Path, recorded: list[dict[str, Any]]) -> list[Any]:

@@ -198,6 +198,7 @@ def run(
     # only what every run needs here: a --resident run's client hands the request over and imports neither the
     # episode (the simulator's modules) nor the control package (issue 27)
     from bt_grasp.episode.request import EpisodeRequest, parse_assignments
+    from bt_grasp.output_files import check_output_file, write_output_file
 
     blackboard: dict[str, BlackboardValue] = {"color": color, "lift_height": lift_height}
     blackboard.update(parse_assignments(set_))
@@ -237,7 +238,14 @@ def run(
         raise InputError("--json", "an interactive run draws on the terminal; drop --json or --interactive")
     if interactive and resident:
         raise InputError("--interactive", "an interactive run cannot be --resident; drop one of the two")
+    if summary_json is not None:  # a path it cannot be written to is said before the run, not after it
+        check_output_file(summary_json, "--summary-json", example="summary.json",
+                          inputs=(tree, scene, calibration, faults))
     console = Console(stderr=True)
+    if live is not None:
+        from bt_grasp.cli.live_log import show_live_server_log
+
+        show_live_server_log()  # a viewer's bytes quoted in the SDK's lines are shown, never obeyed
     if live is not None and not is_loopback(live_host):
         console.print(exposure_warning(live_host), highlight=False, markup=False)
     if resident:
@@ -249,33 +257,48 @@ def run(
         console.print(f"(ran in the resident process {pid})", highlight=False)
     elif interactive:
         summary = _run_interactive(request, breakpoints)
-    elif control:
-        from bt_grasp.cli.foxglove_control import run_foxglove_control
-
-        summary = run_foxglove_control(request, breakpoints, allow_remote=allow_remote_control, console=console,
-                                       on_tick=() if quiet else (live_progress(console),))
     else:
-        from bt_grasp.episode.episode import Episode
+        from bt_grasp.recording.tree_layout import live_layout_folder
 
-        episode = Episode(request)
-        if not quiet:
-            episode.on_failure.append(failure_line(console))
-        if live is not None:  # the layout of this tree (its leaves' rows), beside the log or in a temporary folder
-            from bt_grasp.recording.tree_layout import write_live_layout
-
-            layout = write_live_layout(request.tree, request.leaves, request.log)
-            episode.on_live.append(lambda url: console.print(
-                f"live: in Foxglove, Open connection > Foxglove WebSocket > {url} (layout: {layout})",
-                highlight=False, markup=False, soft_wrap=True))
-        summary = episode.run(on_tick=() if quiet else (live_progress(console),))
+        layouts = live_layout_folder(live is not None, request.log)  # removed when the run ends
+        try:
+            summary = _run_served(request, breakpoints, console, quiet=quiet, control=control,
+                                  allow_remote=allow_remote_control,
+                                  layout_folder=Path(layouts.name) if layouts is not None else None)
+        finally:
+            if layouts is not None:
+                layouts.cleanup()
     if summary_json is not None:  # written first: nothing printed may stand between a run and its record
-        summary_json.parent.mkdir(parents=True, exist_ok=True)
-        summary_json.write_text(json.dumps(summary.to_json(), indent=2) + "\n")
+        write_output_file(summary_json, json.dumps(summary.to_json(), indent=2) + "\n", "--summary-json")
     if as_json:
         typer.echo(json.dumps(summary.to_json()))
     else:
         print_summary(Console(), summary)
     raise typer.Exit(0 if summary.success else 1)
+
+
+def _run_served(request: EpisodeRequest, breakpoints: tuple[Breakpoint, ...], console: Console, *, quiet: bool,
+                control: bool, allow_remote: bool, layout_folder: Path | None) -> EpisodeResult:
+    """A run in this process, served live (with ``--control``, driven from the viewer) when asked."""
+    on_tick = () if quiet else (live_progress(console),)
+    if control:
+        from bt_grasp.cli.foxglove_control import run_foxglove_control
+
+        return run_foxglove_control(request, breakpoints, allow_remote=allow_remote, console=console,
+                                    on_tick=on_tick, layout_folder=layout_folder)
+    from bt_grasp.episode.episode import Episode
+
+    episode = Episode(request)
+    if not quiet:
+        episode.on_failure.append(failure_line(console))
+    if request.live_port is not None:  # the layout of this tree (its leaves' rows), beside the log or in the folder
+        from bt_grasp.recording.tree_layout import write_live_layout
+
+        layout = write_live_layout(request.tree, request.leaves, request.log, folder=layout_folder)
+        episode.on_live.append(lambda url: console.print(
+            f"live: in Foxglove, Open connection > Foxglove WebSocket > {url} (layout: {layout})",
+            highlight=False, markup=False, soft_wrap=True))
+    return episode.run(on_tick=on_tick)
 
 
 def _run_interactive(request: EpisodeRequest, breakpoints: tuple[Breakpoint, ...]) -> EpisodeResult:

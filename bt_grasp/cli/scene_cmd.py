@@ -9,6 +9,7 @@ from pathlib import Path
 import typer
 
 from bt_grasp.interfaces import Mount
+from bt_grasp.output_files import make_output_folder, write_output_file
 
 scene_app = typer.Typer(help="Inspect scene files.", no_args_is_help=True)
 
@@ -46,15 +47,16 @@ def render(
     frame = world.camera.capture()
     capture_s = time.perf_counter() - t1
     assert frame is not None
-    out.mkdir(parents=True, exist_ok=True)
-    cv2.imwrite(str(out / "color.png"), cv2.cvtColor(frame.color, cv2.COLOR_RGB2BGR))
+    make_output_folder(out, "--out")
+    color_bgr = cv2.cvtColor(frame.color, cv2.COLOR_RGB2BGR)
+    write_output_file(out / "color.png", cv2.imencode(".png", color_bgr)[1].tobytes(), "--out")
     depth = frame.depth_m
     valid = depth > 0
     lo, hi = (float(np.percentile(depth[valid], 1)), float(np.percentile(depth[valid], 99))) if valid.any() else (0, 1)
     scaled = np.clip((depth - lo) / max(hi - lo, 1e-6), 0, 1)
     colored = cv2.applyColorMap((255 - scaled * 255).astype(np.uint8), cv2.COLORMAP_TURBO)
     colored[~valid] = 0
-    cv2.imwrite(str(out / "depth.png"), colored)
+    write_output_file(out / "depth.png", cv2.imencode(".png", colored)[1].tobytes(), "--out")
     cam = config.camera
     info = {
         "scene": str(scene),
@@ -67,7 +69,7 @@ def render(
         "mount_config": (cam.eye_to_hand if frame.mount == Mount.EYE_TO_HAND else cam.eye_in_hand).model_dump(),
         "stamp_ns": frame.stamp_ns,
     }
-    (out / "camera.json").write_text(json.dumps(info, indent=2) + "\n")
+    write_output_file(out / "camera.json", json.dumps(info, indent=2) + "\n", "--out")
     typer.echo(f"wrote {out / 'color.png'}, {out / 'depth.png'}, {out / 'camera.json'}")
     typer.echo(f"scene built in {build_s:.2f} s, capture {capture_s:.2f} s (first capture compiles shaders)")
 

@@ -5,8 +5,8 @@ Every problem with a file or argument prints one line on stderr (``bt-grasp: err
 
 from __future__ import annotations
 
+import io
 import json
-import logging
 from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -16,6 +16,8 @@ import typer
 from bt_grasp.cli import ERROR_PREFIX
 from bt_grasp.cli.plugin_option import leaves_option
 from bt_grasp.errors import InputError
+from bt_grasp.output_files import check_output_file, write_output_file
+from bt_grasp.terminal_text import shown
 
 if TYPE_CHECKING:  # the tree package (py_trees) is imported when a command reads a tree, not for --help
     from bt_grasp.tree.registry import NodeRegistry
@@ -46,12 +48,15 @@ def tree_registry(leaves: list[str] | None = None) -> NodeRegistry:
 
 
 def _fail(exc: InputError) -> typer.Exit:
-    typer.echo(f"{ERROR_PREFIX}{exc.message}", err=True)
+    typer.echo(f"{ERROR_PREFIX}{shown(exc.message)}", err=True)  # control characters shown, never obeyed
     return typer.Exit(exc.exit_code)
 
 
-def _quiet_library_logs() -> None:
-    logging.getLogger("bt_grasp.tree").setLevel(logging.ERROR)
+def _show_tree_warnings() -> None:
+    """The tree package's warnings as one line each (``bt-grasp: warning: ...``), nothing below them."""
+    from bt_grasp.cli.tree_warnings import show_tree_warnings
+
+    show_tree_warnings()
 
 
 @tree_app.command("validate")
@@ -61,7 +66,7 @@ def validate_cmd(
     """Check a tree file completely (nodes, ports, scripts, includes, subtrees) without running it."""
     from bt_grasp.tree.loader import load_tree
 
-    _quiet_library_logs()
+    _show_tree_warnings()
     try:
         tree = load_tree(file, tree_registry(leaves))
         from bt_grasp.behaviours.objects import check_detector_classes
@@ -95,27 +100,30 @@ def show_cmd(
     from bt_grasp.tree import render
     from bt_grasp.tree.loader import load_tree
 
-    _quiet_library_logs()
+    _show_tree_warnings()
     try:
         if fmt in ("png", "svg") and out is None:
             raise InputError("--out", f"--format {fmt} needs --out FILE")
+        if out is not None:
+            check_output_file(out, "--out", example=f"tree.{fmt}", inputs=(file,))
         tree = load_tree(file, tree_registry(leaves))
         if fmt == "text":
             if out is None:
                 Console().print(render.rich_tree(tree.root))
             else:
-                with out.open("w", encoding="utf-8") as handle:
-                    Console(file=handle, width=120, color_system=None).print(render.rich_tree(tree.root))
+                text = io.StringIO()
+                Console(file=text, width=120, color_system=None).print(render.rich_tree(tree.root))
+                write_output_file(out, text.getvalue(), "--out")
             return
         dot_text = render.to_dot(tree.root, tree.main_tree)
         if fmt == "dot":
             if out is None:
                 typer.echo(dot_text, nl=False)
             else:
-                out.write_text(dot_text, encoding="utf-8")
+                write_output_file(out, dot_text, "--out")
             return
         assert out is not None
-        render.render_image(dot_text, fmt, out)
+        write_output_file(out, render.render_image(dot_text, fmt), "--out")
         typer.echo(f"wrote {out}")
     except InputError as exc:
         raise _fail(exc) from None
@@ -132,11 +140,12 @@ def convert_cmd(
     are only loaded and checked). An existing OUT is kept unless --force."""
     from bt_grasp.tree.formats.convert import convert_file, format_of
 
-    _quiet_library_logs()
+    _show_tree_warnings()
     try:
         format_of(target)
         if target.exists() and source.exists() and target.resolve() == source.resolve():
             raise InputError(target, "is the input file; write the converted tree to another file")
+        check_output_file(target, "TARGET", example="tree.yaml")  # not a link, a folder or a device
         if target.exists() and not force:
             raise InputError(target, "exists; pass --force to overwrite it")
         if leaves:
@@ -188,7 +197,7 @@ def run_cmd(
     from bt_grasp.tree.node import BtStatus
     from bt_grasp.tree.values import display
 
-    _quiet_library_logs()
+    _show_tree_warnings()
     try:
         if not dry:
             raise InputError("--dry", "only dry runs exist here; `bt-grasp run` runs trees with the robot")
@@ -243,9 +252,9 @@ def models_cmd(
         typer.echo(text, nl=False)
         return
     try:
-        out.write_text(text, encoding="utf-8")
-    except OSError as exc:
-        raise _fail(InputError(out, f"cannot write the file: {exc.strerror}")) from None
+        write_output_file(out, text, "--out", example="models.xml")
+    except InputError as exc:
+        raise _fail(exc) from None
     typer.echo(f"wrote {len(specs)} node models to {out}")
 
 

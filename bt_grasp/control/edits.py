@@ -71,13 +71,9 @@ def set_entry(tree: LoadedTree, key: str, value: BlackboardScalar) -> Any:
         if not typed and spec.type is not object:
             stored, typed = fitted, True
     if not typed and isinstance(value, str) and not ports:
-        import yaml  # as ``--set`` reads a value: a YAML scalar, else the text
+        from bt_grasp.bounded_yaml import scalar_or_text  # as ``--set`` reads a value: a YAML scalar, else the text
 
-        try:
-            parsed = yaml.safe_load(value) if value else ""
-        except yaml.YAMLError:
-            parsed = value
-        stored = parsed if isinstance(parsed, str | int | float | bool) else value
+        stored = scalar_or_text(value)
     entry = blackboard.entry(key)
     before = (entry.value, entry.declared, entry.sequence_id) if entry is not None else None
     try:

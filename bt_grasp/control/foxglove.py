@@ -219,6 +219,9 @@ class FoxgloveControl:
         except (UnicodeDecodeError, json.JSONDecodeError) as exc:
             return Answer(problems=(f"a message on {COMMAND_TOPIC} is a JSON command, and this one is not JSON "
                                     f"({exc})",))
+        except (ValueError, RecursionError) as exc:  # an integer of 5,000 digits; nesting past Python's stack
+            return Answer(problems=(f"a message on {COMMAND_TOPIC} is a JSON command, and this one cannot be read "
+                                    f"({type(exc).__name__})",))
         except CommandError as exc:
             return Answer(problems=(f"a message on {COMMAND_TOPIC}: {exc}",))
         self._controller.send(command, Source.FOXGLOVE)

@@ -6,6 +6,7 @@ the machine, the versions and the licences."""
 from __future__ import annotations
 
 import hashlib
+import html
 import json
 import os
 import platform
@@ -100,16 +101,16 @@ class ModelCard:
                  f"{self.imgsz}) and run by bt_grasp through onnxruntime with its own decoder "
                  "(`bt_grasp.detector.model.ObbModel`).", "",
                  f"- file: `{self.model_file}`, SHA-256 `{self.sha256}`",
-                 f"- classes (index order): {', '.join(self.classes)}",
+                 f"- classes (index order): {', '.join(_md(c) for c in self.classes)}",
                  f"- input: `[1, 3, {self.imgsz}, {self.imgsz}]` RGB in [0, 1], letterboxed with grey 114; output "
                  f"`[1, {4 + len(self.classes) + 1}, anchors]` (cx, cy, w, h in input pixels, sigmoid class "
                  "scores, angle in radians), no NMS inside",
                  "", "## How it was made", "", "```sh"]
         for d in self.datasets:
-            lines.append(str(d.get("command") or f"# {d['folder']}: made by hand (no manifest)"))
-        lines += [self.train_command, *([self.eval_command] if self.eval_command else []), "```", ""]
+            lines.append(_code(str(d.get("command") or f"# {d['folder']}: made by hand (no manifest)")))
+        lines += [_code(self.train_command), *([_code(self.eval_command)] if self.eval_command else []), "```", ""]
         for d in self.datasets:
-            lines.append(f"- {d['role']}: `{d['folder']}`, {d['images']} pictures")
+            lines.append(f"- {_md(str(d['role']))}: {_md(str(d['folder']))}, {d['images']} pictures")
         lines += [f"- {self.epochs} epochs, seed {self.seed}, training time {self.training_seconds / 60:.1f} min "
                   f"on {self.machine.get('cores')} cores ({self.machine.get('cpu')}, no GPU; load average at the "
                   f"end {self.machine.get('load_average_1_5_15_min_at_end')}: the machine was shared)",
@@ -131,13 +132,14 @@ class ModelCard:
                       "| --- | ---: | ---: | ---: | ---: | ---: |"]
             for c in r.per_class:
                 ang = "" if c.median_angle_error_deg is None else f"{c.median_angle_error_deg:.1f}° ({c.elongated})"
-                lines.append(f"| {c.name} | {c.labels} | {c.predictions} | {c.ap50:.3f} | {c.ap50_95:.3f} | {ang} |")
+                lines.append(f"| {_md(c.name)} | {c.labels} | {c.predictions} | {c.ap50:.3f} | {c.ap50_95:.3f} "
+                             f"| {ang} |")
             names = [*r.names, "background"]
             lines += ["", "Confusion (rows: true class, columns: predicted; score > 0.25, IoU >= 0.5):", "",
-                      "| true \\ predicted | " + " | ".join(names) + " |",
+                      "| true \\ predicted | " + " | ".join(_md(n) for n in names) + " |",
                       "| --- |" + " ---: |" * len(names)]
             for name, row in zip(names, r.confusion, strict=True):
-                lines.append(f"| {name} | " + " | ".join(str(v) for v in row) + " |")
+                lines.append(f"| {_md(name)} | " + " | ".join(str(v) for v in row) + " |")
         if self.ultralytics_metrics:
             own = ", ".join(f"{k.removeprefix('metrics/')} {v:.3f}" for k, v in self.ultralytics_metrics.items())
             lines += ["", f"Ultralytics' own validation at the last epoch (PyTorch weights, its data loader): {own}"]
@@ -146,7 +148,23 @@ class ModelCard:
         return "\n".join(lines) + "\n"
 
     def write(self, folder: Path) -> tuple[Path, Path]:
-        md, js = folder / CARD_MD, folder / CARD_JSON
-        md.write_text(self.to_markdown(), encoding="utf-8")
-        js.write_text(json.dumps(self.to_json(), indent=2) + "\n", encoding="utf-8")
+        from bt_grasp.output_files import write_output_file
+
+        md = write_output_file(folder / CARD_MD, self.to_markdown(), "--out")
+        js = write_output_file(folder / CARD_JSON, json.dumps(self.to_json(), indent=2) + "\n", "--out")
         return md, js
+
+
+def _md(text: str) -> str:
+    """A class name or folder from a dataset as plain Markdown text: no HTML, no table break, no code span, one
+    line (a dataset's data.yaml names are whoever made it, not ours)."""
+    return html.escape(" ".join(text.split())).replace("|", "\\|").replace("`", "\\`").replace("[", "\\[")
+
+
+#: a shell line may not close the card's code block
+FENCE = "`" * 3
+
+
+def _code(line: str) -> str:
+    """One line of the card's shell block: it cannot close the block or start another line."""
+    return " ".join(line.split()).replace(FENCE, "'" * 3)

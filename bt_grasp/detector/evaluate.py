@@ -30,7 +30,6 @@ from pathlib import Path
 
 import cv2
 import numpy as np
-import yaml
 from numpy.typing import NDArray
 
 from bt_grasp.detector.obb import DEFAULT_CONF, batch_probiou
@@ -247,10 +246,12 @@ def dataset_names(folder: Path) -> tuple[str, ...]:
     data = folder / "data.yaml"
     if not data.is_file():
         raise DatasetError(folder, "is not a dataset: it has no data.yaml (make one with `bt-grasp detector dataset`)")
+    from bt_grasp.config import read_yaml
+
     try:
-        doc = yaml.safe_load(data.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
-        raise DatasetError(data, f"cannot be read as YAML ({type(exc).__name__})") from None
+        doc, _ = read_yaml(data)  # bounded: size, nesting, aliases
+    except InputError as exc:
+        raise DatasetError(data, f"cannot be read: {exc.problem}") from None
     raw = doc.get("names") if isinstance(doc, dict) else None
     if isinstance(raw, list) and raw and all(isinstance(n, str) for n in raw):
         return tuple(raw)
@@ -268,12 +269,43 @@ def dataset_images(folder: Path) -> list[Path]:
     return images
 
 
+#: a dataset picture's largest side: bigger ones are refused before they are decoded
+MAX_DATASET_IMAGE_SIDE = 8192
+#: and its largest file
+MAX_DATASET_IMAGE_BYTES = 64 << 20
+
+
+def read_image(path: Path) -> NDArray[np.uint8]:
+    """One dataset picture (BGR), read bounded: a regular file of at most 64 MB whose header (PNG, JPEG) says at
+    most 8192 pixels a side, so a FIFO, a link to /dev/zero or a small file saying 50,000 x 50,000 is one
+    sentence, not a hang or an exhausted machine (found by the pre-review attack)."""
+    from bt_grasp.bounded_io import read_user_file
+    from bt_grasp.image_header import image_size
+
+    data = read_user_file(path, MAX_DATASET_IMAGE_BYTES, error=DatasetError)
+    size = image_size(data)
+    if size is not None and max(size) > MAX_DATASET_IMAGE_SIDE:
+        raise DatasetError(path, f"says it is {size[0]} x {size[1]} pixels, more than {MAX_DATASET_IMAGE_SIDE} a side")
+    if size is None and path.suffix.lower() != ".bmp":  # a BMP is not compressed: its file bounds its pixels
+        raise DatasetError(path, "is not a PNG or JPEG image")
+    bgr = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
+    if bgr is None:
+        raise DatasetError(path, "cannot be read as an image")
+    return np.asarray(bgr, dtype=np.uint8)
+
+
 def read_labels(label_file: Path, width_px: int, height_px: int, nc: int) -> Boxes:
     """One image's label file as boxes in pixels; a malformed line is a one-sentence error naming it."""
     if not label_file.is_file():
         raise DatasetError(label_file, "no such label file (every image needs one; empty for no object)")
     xywhr, classes = [], []
-    for number, line in enumerate(label_file.read_text(encoding="utf-8").splitlines(), start=1):
+    from bt_grasp.bounded_io import read_user_file
+
+    try:
+        text = read_user_file(label_file, error=DatasetError).decode("utf-8")  # bounded: no FIFO, no giant file
+    except UnicodeDecodeError:
+        raise DatasetError(label_file, "is not UTF-8 text") from None
+    for number, line in enumerate(text.splitlines(), start=1):
         parts = line.split()
         if not parts:
             continue
@@ -309,9 +341,7 @@ def evaluate_model(model_path: Path, dataset: Path, *, imgsz: int | None = None)
     check_same_classes(model.names, model_path, names, dataset)
     truths, preds = [], []
     for image in images:
-        bgr = cv2.imread(str(image), cv2.IMREAD_COLOR)
-        if bgr is None:
-            raise DatasetError(image, "cannot be read as an image")
+        bgr = read_image(image)
         rgb = np.ascontiguousarray(cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB), dtype=np.uint8)
         truths.append(read_labels(dataset / "labels" / f"{image.stem}.txt", rgb.shape[1], rgb.shape[0], len(names)))
         found = model.detect(rgb, conf=EVAL_CONF, iou=EVAL_IOU_NMS)

@@ -23,6 +23,9 @@ from bt_grasp.errors import InputError, did_you_mean
 
 #: onnxruntime threads for one model: 1 is steadier than 2 on a busy 2-core machine (PLATFORM-NOTES)
 DEFAULT_THREADS = 1
+#: the largest input side a model may declare: YOLO exports are 320-1536 px; a model declaring 100,000 px took a
+#: 120 GB input tensor at its first picture
+MAX_INPUT_SIDE = 4096
 
 
 class ModelError(InputError):
@@ -50,19 +53,22 @@ def _parse_names(raw: object, source: Path, where: str) -> tuple[str, ...]:
 
 
 def _read_card(path: Path) -> dict[str, Any]:
-    import yaml
+    from bt_grasp.config import read_yaml
 
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
-        raise ModelError(path, f"cannot be read as YAML ({type(exc).__name__})") from None
+        data, _ = read_yaml(path)  # bounded: size, nesting, aliases
+    except InputError as exc:
+        raise ModelError(path, f"cannot be read as a model card: {exc.problem}") from None
     if not isinstance(data, dict):
         raise ModelError(path, "is not a mapping with 'names'")
     return data
 
 
 def _imgsz(raw: object, source: Path, where: str) -> tuple[int, int]:
-    value = ast.literal_eval(raw) if isinstance(raw, str) else raw
+    try:
+        value = ast.literal_eval(raw) if isinstance(raw, str) else raw
+    except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError):
+        value = None
     if isinstance(value, int) and value > 0:
         return (value, value)
     if isinstance(value, list | tuple) and len(value) == 2 and all(isinstance(v, int) and v > 0 for v in value):
@@ -161,7 +167,7 @@ class ObbModel:
 def _literal(raw: str, path: Path) -> object:
     try:
         return ast.literal_eval(raw)
-    except (ValueError, SyntaxError):
+    except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError):
         raise ModelError(path, "its metadata 'names' is not a list or mapping of class names") from None
 
 
@@ -177,11 +183,13 @@ def _model_input_hw(shape: Sequence[object], metadata: dict[str, str], card: dic
     if fixed is not None and declared is not None and fixed != declared:
         raise ModelError(path, f"says its input is {declared[0]}x{declared[1]} but its graph takes "
                                f"{fixed[0]}x{fixed[1]}")
-    if fixed is not None:
-        return fixed
-    if declared is not None:
-        return declared
-    raise ModelError(path, "has a dynamic input size and no 'imgsz' in its metadata or card")
+    size = fixed if fixed is not None else declared
+    if size is None:
+        raise ModelError(path, "has a dynamic input size and no 'imgsz' in its metadata or card")
+    if max(size) > MAX_INPUT_SIDE:
+        raise ModelError(path, f"takes {size[0]}x{size[1]} images, more than {MAX_INPUT_SIDE} pixels a side "
+                               "(YOLO-OBB exports take 320 to 1536)")
+    return size
 
 
 def _check_output(outputs: Sequence[Any], nc: int, path: Path) -> int | None:

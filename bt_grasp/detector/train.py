@@ -101,8 +101,16 @@ def dataset_command(folder: Path) -> str | None:
     manifest = folder / "manifest.yaml"
     if not manifest.is_file():
         return None
-    doc = yaml.safe_load(manifest.read_text(encoding="utf-8"))
+    from bt_grasp.config import read_yaml
+
+    try:
+        doc, _ = read_yaml(manifest)  # bounded: size, nesting, aliases
+    except InputError:
+        return None
+    keys = ("scenes", "images", "seed", "mount", "min_pixels")
     if not isinstance(doc, dict) or doc.get("made_by") != "bt-grasp detector dataset":
+        return None
+    if not all(k in doc for k in keys) or not isinstance(doc["scenes"], list):
         return None
     return (f"bt-grasp detector dataset --scenes {' '.join(str(s) for s in doc['scenes'])} --images {doc['images']} "
             f"--out {folder} --seed {doc['seed']} --mount {doc['mount']} --min-pixels {doc['min_pixels']}")
@@ -201,7 +209,8 @@ def train_model(request: TrainRequest) -> TrainResult:
         best = run_dir / "weights" / "last.pt"
     exported = Path(str(YOLO(str(best), task="obb").export(format="onnx", imgsz=request.imgsz, opset=ONNX_OPSET,
                                                              simplify=True, dynamic=False, device="cpu")))
-    onnx_path = out / f"{request.name}.onnx"
-    shutil.copyfile(exported, onnx_path)
+    from bt_grasp.output_files import copy_output_file
+
+    onnx_path = copy_output_file(exported, out / f"{request.name}.onnx", "--out", example="model.onnx")
     epochs_run, metrics = _last_row(run_dir / "results.csv")
     return TrainResult(onnx_path, best, seconds, epochs_run, metrics, versions(), names)

@@ -11,7 +11,7 @@ runs with timers around the seams each stage passes through, installed for that 
 | planning | ``MotionPlanner.plan_to_pose/plan_to_joints/straight_line/checker`` |
 | leaves' own work | every leaf's ``initialise/update/terminate`` (trajectories, IK, grasp logic, executor) |
 | tree (py_trees) | ``LoadedTree.tick``: py_trees' traversal, ports, the blackboard |
-| status bookkeeping | the runner's ``node_records`` and the recorder's node differ |
+| status bookkeeping | the runner's ``tick_records`` and the recorder's node differ |
 | blackboard differ | ``LoadedTree.blackboard_values`` and the recorder's blackboard differ |
 | recording | every ``RunRecorder`` write and the log's extra frames (``LogExtras``) |
 | judge | ``Judge.observe`` after every tick (the benchmark's oracle, not the pipeline) |
@@ -52,23 +52,26 @@ STAGES: tuple[tuple[str, str], ...] = (
 
 @dataclass
 class StageClock:
-    """Exclusive wall time per stage, from wrapped callables (one thread)."""
+    """Exclusive time per stage, from wrapped callables (one thread). ``now``: the clock read, wall time by
+    default; ``time.thread_time`` counts the tick loop thread's CPU time instead, which a loaded machine
+    disturbs far less (``tools/warm_pick_cpu.py``)."""
 
+    now: Callable[[], float] = time.perf_counter
     totals: dict[str, float] = field(default_factory=lambda: {name: 0.0 for name, _ in STAGES})
     calls: dict[str, int] = field(default_factory=lambda: {name: 0 for name, _ in STAGES})
     _stack: list[list[Any]] = field(default_factory=list)  # [stage, start, time spent in inner stages]
 
     def wrap(self, stage: str, fn: Callable[..., Any]) -> Callable[..., Any]:
-        stack, totals, calls = self._stack, self.totals, self.calls
+        stack, totals, calls, now = self._stack, self.totals, self.calls, self.now
 
         @functools.wraps(fn)
         def timed(*args: Any, **kwargs: Any) -> Any:
-            stack.append([stage, time.perf_counter(), 0.0])
+            stack.append([stage, now(), 0.0])
             try:
                 return fn(*args, **kwargs)
             finally:
                 _, start, inner = stack.pop()
-                spent = time.perf_counter() - start
+                spent = now() - start
                 totals[stage] += spent - inner
                 calls[stage] += 1
                 if stack:
@@ -101,7 +104,7 @@ def timed_seams(clock: StageClock) -> Iterator[Callable[[Any], None]]:
         *((MotionPlanner, name, "planning") for name in ("plan_to_pose", "plan_to_joints", "straight_line",
                                                           "checker")),
         (loader.LoadedTree, "tick", "tree (py_trees)"),
-        (runner, "node_records", "status bookkeeping"),
+        (runner, "tick_records", "status bookkeeping"),
         (jsonable.NodeDiffer, "diff", "status bookkeeping"),
         (loader.LoadedTree, "blackboard_values", "blackboard differ"),
         (jsonable.BlackboardDiffer, "diff", "blackboard differ"),
@@ -143,22 +146,30 @@ def _floor(scene: Path, physics_steps: int, dt_s: float) -> dict[str, float]:
             "physics_steps_per_s": float(sim["physics_steps_per_s"])}  # type: ignore[arg-type]
 
 
-def run_budget_bench(tree: Path, scene: Path, seed: int, calibration: Path | None, log: bool) -> dict[str, Any]:
-    """One warm-up pick, then the measured one (same seed) with the stage timers; the floor beside it."""
+def run_budget_bench(tree: Path, scene: Path, seed: int, calibration: Path | None, log: bool,
+                     now: Callable[[], float] = time.perf_counter) -> dict[str, Any]:
+    """One warm-up pick, then the measured one (same seed) with the stage timers; the floor beside it (wall
+    time). ``now``: the stages' and the episode's clock (``time.thread_time``: the tick loop thread's CPU)."""
+
+    with tempfile.TemporaryDirectory(prefix="bt_grasp_budget_") as work:  # the measured run's log, removed after
+        return _budget(tree, scene, seed, calibration, Path(work) / "run.mcap" if log else None, now)
+
+
+def _budget(tree: Path, scene: Path, seed: int, calibration: Path | None, log: Path | None,
+            now: Callable[[], float]) -> dict[str, Any]:
     from bt_grasp.episode import Episode, WarmWorlds, pick_request
 
-    work = Path(tempfile.mkdtemp(prefix="bt_grasp_budget_"))
     worlds = WarmWorlds()
     warmup = Episode(pick_request(tree, scene, seed, calibration=calibration), worlds).run()  # not measured
-    request = pick_request(tree, scene, seed, calibration=calibration, log=(work / "run.mcap") if log else None)
-    clock = StageClock()
+    request = pick_request(tree, scene, seed, calibration=calibration, log=log)
+    clock = StageClock(now)
     episode = Episode(request, worlds)
     steps_before = episode.world.physics_steps
     with timed_seams(clock) as time_leaves:
         time_leaves(episode.tree)
-        start = time.perf_counter()
+        start = now()
         result = episode.run()
-        total_s = time.perf_counter() - start
+        total_s = now() - start
     steps = episode.world.physics_steps - steps_before
     floor = _floor(scene, steps, episode.world.dt_s)
     stages = [{"stage": name, "group": group, "s": round(clock.totals[name], 4), "calls": clock.calls[name],
@@ -171,7 +182,7 @@ def run_budget_bench(tree: Path, scene: Path, seed: int, calibration: Path | Non
                    for name in ("tree (py_trees)", "status bookkeeping", "blackboard differ", "recording")}
     return {
         "machine": machine_description(),
-        "tree": str(tree), "scene": str(scene), "seed": seed, "log": log,
+        "tree": str(tree), "scene": str(scene), "seed": seed, "log": log is not None,
         "success": result.success, "ticks": ticks,
         # the timers change nothing the run decides: the warm-up's outcome, tick count and final object poses
         "same_as_warmup": (result.success, result.ticks, result.judged)

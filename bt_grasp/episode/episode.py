@@ -8,6 +8,8 @@ evaluation workers and notebooks call it; it never prints (callbacks see every t
 from __future__ import annotations
 
 import logging
+import re
+import sys
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -97,22 +99,19 @@ def load_inputs(request: EpisodeRequest) -> Inputs:
         check_fault_plan(fault_plan, leaves_of(list(tree.nodes())), [o.name for o in scene.objects])
     if request.max_ticks < 1:
         raise InputError("--max-ticks", f"must be at least 1, got {request.max_ticks}")
-    _check_log_path(request.log)
+    _check_log_path(request.log, (request.tree, request.scene, request.calibration, request.faults))
     return Inputs(scene, tree, calibration_path, calibration, goal, fault_plan, clock)
 
 
-def _check_log_path(log_path: Path | None) -> None:
-    """The log must be a file that can be created: a folder, or a path under something that is not a folder,
-    is bad input before anything runs (it was an IsADirectoryError traceback after the run)."""
+def _check_log_path(log_path: Path | None, inputs: tuple[Path | None, ...] = ()) -> None:
+    """The log must be a file that can be created (``bt_grasp.output_files``): a folder, a device or FIFO, a
+    symbolic link, or a place where nothing can be written is bad input before anything runs (each was a
+    traceback or a hang, some only after the run)."""
     if log_path is None:
         return
-    if log_path.is_dir():
-        raise InputError("--log", f"{log_path} is a folder; give a file name such as {log_path / 'run.mcap'}")
-    parent = log_path.parent
-    while not parent.exists() and parent != parent.parent:
-        parent = parent.parent
-    if not parent.is_dir():
-        raise InputError("--log", f"{log_path}: {parent} is not a folder")
+    from bt_grasp.output_files import check_output_file
+
+    check_output_file(log_path, "--log", example="run.mcap", inputs=inputs)  # never over the run's own inputs
 
 
 def _check_goal(goal: Goal, request: EpisodeRequest, scene: Scene) -> None:
@@ -294,7 +293,7 @@ class Episode:
             if injector is not None:
                 injector.close()  # a reused world starts the next episode as built
             if recorder is not None:
-                recorder.close()
+                _close_log(recorder, request.log)
             if self.live is not None:
                 self.live.close()
         return result
@@ -353,6 +352,23 @@ class Episode:
         recorder.write_tree_structure(self.world.now_ns(), tree_structure(self.tree.root))
         self.cell.media = RecorderSink(recorder, self.world.now_ns)
         return recorder
+
+
+def _close_log(recorder: RunRecorder, path: Path | None) -> None:
+    """Finish the log; a write that fails now (a full disk, the file's folder gone) is one sentence naming the
+    file, not the writer's traceback."""
+    from bt_grasp.recording.writer_process import WriterProcessError
+
+    in_flight = sys.exc_info()[1]  # called from a ``finally``: an exception already on its way wins
+    try:
+        recorder.close()
+    except (OSError, WriterProcessError) as exc:
+        if in_flight is not None:
+            log.warning("the log %s was not finished: %s", path, exc)
+            return
+        why = str(exc).split(": ")[-1] if isinstance(exc, WriterProcessError) else (exc.strerror or str(exc))
+        why = re.sub(r"^\[Errno \d+\] ", "", why).lower()
+        raise InputError("--log", f"cannot finish writing '{path}': {why}") from None
 
 
 def goal_entries(goal: Goal) -> dict[str, BlackboardValue]:

@@ -133,9 +133,12 @@ class LogExtras:
                 continue
             self.recorder.write_color_image(frame.stamp_ns, color, CAMERA_FRAME)
             self.recorder.write_camera_calibration(frame.stamp_ns, CAMERA_FRAME, self.world.camera.intrinsics)
-            took_ms = 1e3 * (time.perf_counter() - frame.started)
-            message = f"{frame.why} frame (noise-free, for the log), read back after {took_ms:.0f} ms"
+            # the log says how many ticks later (the same on every machine: the file's bytes must not depend on its
+            # speed); how long in wall time goes to Python's log only
+            ticks_later = self._tick - (frame.due - READBACK_TICKS)
+            message = f"{frame.why} frame (noise-free, for the log), read back {ticks_later} ticks later"
             self.recorder.write_log(frame.stamp_ns, "DEBUG", "log_camera", message)
+            log.debug("%s frame read back after %.0f ms", frame.why, 1e3 * (time.perf_counter() - frame.started))
 
     def write_truth(self) -> None:
         """Where the simulator has every object now (the judge's view, for debugging perception offline)."""

@@ -17,6 +17,7 @@ same seeds.
 
 from __future__ import annotations
 
+import shutil
 import statistics
 import tempfile
 from collections import Counter
@@ -56,56 +57,59 @@ def run_pick_bench(
     if color is None:
         color = default_color(load_scene(scene).objects)
 
-    work = Path(tempfile.mkdtemp(prefix="bt_grasp_bench_"))
-    if calibration is None:
-        calibration = save_calibration(
-            calibrate_in_sim(scene, Mount.EYE_TO_HAND, first_seed).run.calibration, work / "calibration.yaml"
-        )
-    report: dict[str, Any] = {
-        "machine": machine_description(), "scene": str(scene), "calibration": str(calibration),
-        "color": color or "any (the most graspable object Perceive sees)", "trees": {}
-    }
-    targets = ({seed: class_target(scene, seed) for seed in range(first_seed, first_seed + seeds)}
-               if detector == "learned" else None)
-    if targets is not None:
-        report["detector"] = "learned"
-        report["color"] = "per seed: the target's colour"
-        report["targets"] = {seed: f"{t[0]} (class {t[1]}, {t[2]})" for seed, t in targets.items()}
-    worlds: WorldSource = WarmWorlds() if warm else FreshWorlds()
-    report["worlds"] = ("warm (a renderer kept warm; each episode's world built afresh)" if warm
-                        else "fresh (a new world per episode)")
-    for tree in trees:
-        runs: list[EpisodeResult] = []
-        for seed in range(first_seed, first_seed + seeds):
-            log = (log_dir / f"{tree.stem}_seed{seed}.mcap") if log_dir is not None else None
-            request = pick_request(tree, scene, seed, calibration=calibration, log=log)
-            if targets is not None:
-                name, class_name, target_color = targets[seed]
-                request = replace(request, goal=PickGoal(kind="pick", object=name), blackboard={
-                    **request.blackboard, "class": class_name, "color": target_color, "detector": detector})
-            elif color != "red":
-                request = replace(request, goal=PickGoal(kind="pick", color=color or None),
-                                  blackboard={**request.blackboard, "color": color})
-            runs.append(run_episode(request, worlds=worlds))
-            if progress is not None:
-                progress(f"{tree.name} seed {seed}: {_outcome(runs[-1])}")
-        ok = [r for r in runs if r.success]
-        report["trees"][str(tree)] = {
-            "runs": len(runs),
-            "successes": len(ok),
-            "success_rate": len(ok) / len(runs),
-            "failures": {r.seed: f"{r.reason} ({r.failed_leaf})" for r in runs if not r.success},
-            "per_object": _per_object(runs),
-            "sim_time_s_median": round(statistics.median(r.sim_time_s for r in runs), 3),
-            "wall_time_s_median": round(statistics.median(r.wall_time_s for r in runs), 3),
-            "ticks_median": statistics.median(r.ticks for r in runs),
-            "retries_total": sum(sum(r.retries.values()) for r in runs),
-            "plan_calls_per_pick_mean": round(statistics.mean(r.planning.calls for r in runs), 2),
-            "plan_pose_calls_per_pick_mean": round(statistics.mean(r.planning.pose_calls for r in runs), 2),
-            "plan_wall_s_per_pick_median": round(statistics.median(r.planning.wall_s for r in runs), 4),
-            "plan_wall_s_per_pick_mean": round(statistics.mean(r.planning.wall_s for r in runs), 4),
+    work = Path(tempfile.mkdtemp(prefix="bt_grasp_bench_"))  # its calibration; removed at the end
+    try:
+        if calibration is None:
+            calibration = save_calibration(
+                calibrate_in_sim(scene, Mount.EYE_TO_HAND, first_seed).run.calibration, work / "calibration.yaml"
+            )
+        report: dict[str, Any] = {
+            "machine": machine_description(), "scene": str(scene), "calibration": str(calibration),
+            "color": color or "any (the most graspable object Perceive sees)", "trees": {}
         }
-    return report
+        targets = ({seed: class_target(scene, seed) for seed in range(first_seed, first_seed + seeds)}
+                   if detector == "learned" else None)
+        if targets is not None:
+            report["detector"] = "learned"
+            report["color"] = "per seed: the target's colour"
+            report["targets"] = {seed: f"{t[0]} (class {t[1]}, {t[2]})" for seed, t in targets.items()}
+        worlds: WorldSource = WarmWorlds() if warm else FreshWorlds()
+        report["worlds"] = ("warm (a renderer kept warm; each episode's world built afresh)" if warm
+                            else "fresh (a new world per episode)")
+        for tree in trees:
+            runs: list[EpisodeResult] = []
+            for seed in range(first_seed, first_seed + seeds):
+                log = (log_dir / f"{tree.stem}_seed{seed}.mcap") if log_dir is not None else None
+                request = pick_request(tree, scene, seed, calibration=calibration, log=log)
+                if targets is not None:
+                    name, class_name, target_color = targets[seed]
+                    request = replace(request, goal=PickGoal(kind="pick", object=name), blackboard={
+                        **request.blackboard, "class": class_name, "color": target_color, "detector": detector})
+                elif color != "red":
+                    request = replace(request, goal=PickGoal(kind="pick", color=color or None),
+                                      blackboard={**request.blackboard, "color": color})
+                runs.append(run_episode(request, worlds=worlds))
+                if progress is not None:
+                    progress(f"{tree.name} seed {seed}: {_outcome(runs[-1])}")
+            ok = [r for r in runs if r.success]
+            report["trees"][str(tree)] = {
+                "runs": len(runs),
+                "successes": len(ok),
+                "success_rate": len(ok) / len(runs),
+                "failures": {r.seed: f"{r.reason} ({r.failed_leaf})" for r in runs if not r.success},
+                "per_object": _per_object(runs),
+                "sim_time_s_median": round(statistics.median(r.sim_time_s for r in runs), 3),
+                "wall_time_s_median": round(statistics.median(r.wall_time_s for r in runs), 3),
+                "ticks_median": statistics.median(r.ticks for r in runs),
+                "retries_total": sum(sum(r.retries.values()) for r in runs),
+                "plan_calls_per_pick_mean": round(statistics.mean(r.planning.calls for r in runs), 2),
+                "plan_pose_calls_per_pick_mean": round(statistics.mean(r.planning.pose_calls for r in runs), 2),
+                "plan_wall_s_per_pick_median": round(statistics.median(r.planning.wall_s for r in runs), 4),
+                "plan_wall_s_per_pick_mean": round(statistics.mean(r.planning.wall_s for r in runs), 4),
+            }
+        return report
+    finally:
+        shutil.rmtree(work, ignore_errors=True)  # it was left behind in the temporary folder
 
 
 def class_target(scene: Path, seed: int) -> tuple[str, str, str]:

@@ -53,15 +53,14 @@ class EpisodeRequest:
 
 def parse_assignments(items: Sequence[str], source: str = "--set") -> dict[str, BlackboardValue]:
     """KEY=VALUE pairs; values are parsed as YAML scalars (numbers, true/false) or kept as text."""
-    import yaml
+    from bt_grasp.bounded_yaml import scalar_or_text
 
     out: dict[str, BlackboardValue] = {}
     for item in items:
         key, sep, value = item.partition("=")
         if not sep or not key:
             raise InputError(source, f"expected KEY=VALUE, got '{item}'")
-        parsed = yaml.safe_load(value) if value else ""
-        out[key] = parsed if isinstance(parsed, str | int | float | bool) else value
+        out[key] = scalar_or_text(value)
     return out
 
 

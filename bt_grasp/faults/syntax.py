@@ -16,8 +16,7 @@ from __future__ import annotations
 import re
 from typing import Any
 
-import yaml
-
+from bt_grasp.bounded_yaml import scalar_or_text
 from bt_grasp.errors import InputError
 
 #: short names accepted on the command line
@@ -77,11 +76,7 @@ def _pairs(text: str, tail: str) -> dict[str, Any]:
             raise _bad(text, f"'{item}' is not KEY=VALUE")
         if key in out:
             raise _bad(text, f"'{key}' is given twice")
-        try:
-            parsed = yaml.safe_load(value) if value.strip() else None
-        except yaml.YAMLError:
-            parsed = value
-        out[key] = parsed if isinstance(parsed, str | int | float | bool) or parsed is None else value
+        out[key] = scalar_or_text(value, keep_null=True)
     return out
 
 

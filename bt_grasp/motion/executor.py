@@ -69,6 +69,9 @@ class TrajectoryExecutor:
         self._error_since_ns: int | None = None
         self._last_q: NDArray[np.float64] | None = None  # after the last sample: to tell when the arm is at rest
         self._still_periods = 0
+        #: the joints measured by the last update (None before the first): a caller logging the executed
+        #: motion reads them here instead of asking the robot again
+        self.q_measured: NDArray[np.float64] | None = None
 
     @property
     def elapsed_s(self) -> float:
@@ -87,14 +90,15 @@ class TrajectoryExecutor:
 
     def update(self) -> ExecStatus:
         """Check the last period's tracking, then command the sample for the current time."""
+        self.q_measured = None
         if self.status is not ExecStatus.RUNNING:
             return self.status
         assert self._start_ns is not None
         now_ns = self.clock.now_ns()
         t = (now_ns - self._start_ns) * 1e-9
         opts = self.options
-        q_desired, _, _ = self.trajectory.sample(t)
-        q_measured = self.robot.joint_positions()
+        q_desired, qd_desired, _ = self.trajectory.sample(t)
+        q_measured = self.q_measured = self.robot.joint_positions()
         error = float(np.max(np.abs(q_measured - q_desired)))
         self.max_tracking_error_rad = max(self.max_tracking_error_rad, error)
         if error > opts.max_tracking_error_rad:
@@ -106,8 +110,7 @@ class TrajectoryExecutor:
         else:
             self._error_since_ns = None
         if t < self.trajectory.duration_s:
-            q, qd, _ = self.trajectory.sample(t)
-            self.robot.set_joint_targets(q, qd)
+            self.robot.set_joint_targets(q_desired, qd_desired)  # the sample for now, taken above
             return self.status
         goal = self.trajectory.q[-1]
         self.robot.set_joint_targets(goal, np.zeros(6))

@@ -19,6 +19,8 @@ segments join with equal velocity and zero acceleration.
 
 from __future__ import annotations
 
+import bisect
+import functools
 import logging
 import math
 import time
@@ -82,23 +84,40 @@ class Trajectory:
     limits: MotionLimits = field(default_factory=MotionLimits)
     waypoints: Vec = field(default_factory=lambda: np.zeros((0, 6)))
     compute_time_s: float = 0.0  # wall time ruckig took for all segments
-    max_path_deviation_rad: float = 0.0  # largest distance of a sample from the waypoint polyline
+    blended: bool = False  # interior waypoints passed moving (``time_parametrize(blend=True)``)
+
+    @functools.cached_property
+    def max_path_deviation_rad(self) -> float:
+        """Largest distance of a sample from the waypoint polyline (0 unless blended). Computed when first
+        asked: no run reads it, and it cost a pick ~10 ms of Python loops over every sample."""
+        return _deviation(self.q, self.waypoints) if self.blended and len(self.waypoints) > 1 else 0.0
 
     @property
     def duration_s(self) -> float:
         return float(self.times_s[-1]) if len(self.times_s) else 0.0
 
+    @functools.cached_property
+    def _times(self) -> list[float]:
+        return self.times_s.tolist()
+
+    @functools.cached_property
+    def _stacked(self) -> Vec:
+        """q, qd and qdd side by side (N, 18): one interpolation per sample instead of three."""
+        return np.hstack([self.q, self.qd, self.qdd])
+
     def sample(self, t_s: float) -> tuple[Vec, Vec, Vec]:
         """(q, qd, qdd) at time ``t_s``, linearly interpolated between samples, held after the end."""
-        t = min(max(float(t_s), 0.0), self.duration_s)
-        k = int(np.searchsorted(self.times_s, t, side="right")) - 1
-        k = min(max(k, 0), len(self.times_s) - 1)
-        if k == len(self.times_s) - 1:
+        times = self._times
+        t = min(max(float(t_s), 0.0), times[-1] if times else 0.0)
+        k = bisect.bisect_right(times, t) - 1  # numpy's searchsorted(side="right") on the sorted times
+        k = min(max(k, 0), len(times) - 1)
+        if k == len(times) - 1:
             return self.q[k].copy(), self.qd[k].copy(), self.qdd[k].copy()
         dt = self.times_s[k + 1] - self.times_s[k]
         w = (t - self.times_s[k]) / dt if dt > 0 else 0.0
-        lerp = lambda a: a[k] + w * (a[k + 1] - a[k])  # noqa: E731
-        return lerp(self.q), lerp(self.qd), lerp(self.qdd)
+        a = self._stacked  # the same elementwise arithmetic as interpolating q, qd and qdd one by one
+        out = a[k] + w * (a[k + 1] - a[k])
+        return out[:6], out[6:12], out[12:]
 
 
 #: waypoints where the path turns by more than this are passed at rest
@@ -215,6 +234,5 @@ def time_parametrize(path: NDArray[np.float64], limits: MotionLimits | None = No
         pos, vel, acc = segments[k].at_time(float(t - starts[k]))
         q[n], qd[n], qdd[n] = pos, vel, acc
     q[-1], qd[-1], qdd[-1] = path[-1], 0.0, 0.0  # exactly at rest on the goal
-    deviation = _deviation(q, path) if blend and len(path) > 1 else 0.0
     log.debug("trajectory: %d waypoints, %.3f s, ruckig %.2f ms", len(path), total, compute_time * 1e3)
-    return Trajectory(times, q, qd, qdd, limits, path.copy(), compute_time, deviation)
+    return Trajectory(times, q, qd, qdd, limits, path.copy(), compute_time, blended=blend)

@@ -159,14 +159,14 @@ def make_calibration(
 
 
 def save_calibration(calibration: CalibrationFile, path: str | Path) -> Path:
-    """Write the file (parents created); returns its path."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    """Write the file whole (parents created; ``bt_grasp.output_files``); returns its path."""
+    from bt_grasp.output_files import write_output_file
+
     data = calibration.model_dump(mode="json")
     header = (f"# bt_grasp hand-eye calibration ({calibration.mount}): maps camera_color_optical_frame "
               f"points into {calibration.parent_frame}\n")
-    path.write_text(header + yaml.safe_dump(data, sort_keys=False, default_flow_style=None), encoding="utf-8")
-    return path
+    text = header + yaml.safe_dump(data, sort_keys=False, default_flow_style=None)
+    return write_output_file(path, text, "--out", example="calibration.yaml")
 
 
 def load_calibration(path: str | Path, mount: str | None = None) -> CalibrationFile:

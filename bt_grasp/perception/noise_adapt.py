@@ -40,7 +40,13 @@ _SECOND_DIFF_GAIN = float(np.sqrt(6.0))
 
 def estimate_noise_coefficient(depth_m: NDArray[np.float32], valid: NDArray[np.bool_]) -> float:
     """k in sigma(z) = k z^2, from the second differences of depth along rows and columns (robust)."""
-    d = depth_m.astype(np.float64)
+    rows, cols = np.flatnonzero(valid.any(axis=1)), np.flatnonzero(valid.any(axis=0))
+    if rows.size == 0:
+        return 0.0
+    # only the rectangle holding the valid pixels has samples (three valid pixels in a row or column); the
+    # median does not depend on their order
+    box = np.s_[int(rows[0]):int(rows[-1]) + 1, int(cols[0]):int(cols[-1]) + 1]
+    d, valid = depth_m[box].astype(np.float64), valid[box]
     samples = []
     for axis in (0, 1):
         a = np.moveaxis(d, axis, 0)
@@ -52,7 +58,7 @@ def estimate_noise_coefficient(depth_m: NDArray[np.float32], valid: NDArray[np.b
     s = np.concatenate(samples)
     if s.size < 100:
         return 0.0
-    return float(_MAD_TO_SIGMA * np.median(s) / _SECOND_DIFF_GAIN)
+    return float(_MAD_TO_SIGMA * np.median(s, overwrite_input=True) / _SECOND_DIFF_GAIN)  # s is ours to reorder
 
 
 def filter_radius_for(sigma_m: float, settings: NoiseSettings) -> int:
@@ -85,17 +91,23 @@ def _denoise_window(depth_m: NDArray[np.float32], valid: NDArray[np.bool_], radi
     d = np.where(valid, depth_m, np.float32(0.0)).astype(np.float32)
     # a robust centre per pixel: the median of the 5x5 window over valid readings (invalid ones are 0, so
     # replace them by the pixel's own value first to keep them from pulling the median down)
-    centre = cv2.medianBlur(np.where(valid, d, np.float32(np.median(d[valid]) if valid.any() else 0.0)), 5)
+    fill = np.float32(np.median(d[valid], overwrite_input=True) if valid.any() else 0.0)
+    centre = cv2.medianBlur(np.where(valid, d, fill), 5)
     gate = np.float32(gate_sigmas * k_per_m) * centre * centre
     total = np.zeros_like(d)
     count = np.zeros_like(d)
     h, w = d.shape
     padded = np.pad(d, radius_px, mode="constant")
+    # the same sums as `total += where(use, shifted, 0)`, in buffers reused in place (adding 0.0 to a total
+    # that is never -0.0 leaves it as it was, so skipping the unused pixels changes no bit)
+    spread = np.empty_like(d)
+    use = np.empty(d.shape, dtype=bool)
     for dv in range(-radius_px, radius_px + 1):
         for du in range(-radius_px, radius_px + 1):
             shifted = padded[radius_px + dv:radius_px + dv + h, radius_px + du:radius_px + du + w]
-            use = (shifted > 0) & (np.abs(shifted - centre) <= gate)
-            total += np.where(use, shifted, np.float32(0.0))
+            np.abs(np.subtract(shifted, centre, out=spread), out=spread)
+            np.logical_and(shifted > 0, np.less_equal(spread, gate, out=use), out=use)
+            np.add(total, shifted, out=total, where=use)
             count += use
     out = np.where(valid & (count > 0), total / np.maximum(count, 1), np.float32(0.0))
     return out.astype(np.float32)
@@ -104,7 +116,7 @@ def _denoise_window(depth_m: NDArray[np.float32], valid: NDArray[np.bool_], radi
 def measure(depth_m: NDArray[np.float32], valid: NDArray[np.bool_], settings: NoiseSettings) -> NoiseEstimate:
     """Estimate the frame's noise and choose the denoising that brings it to the tuned level."""
     k = estimate_noise_coefficient(depth_m, valid)
-    z = float(np.median(depth_m[valid])) if valid.any() else 0.0
+    z = float(np.median(depth_m[valid], overwrite_input=True)) if valid.any() else 0.0  # a copy: ours to reorder
     sigma = k * z * z
     radius = filter_radius_for(sigma, settings) if settings.adapt else 0
     n = (2 * radius + 1) ** 2

@@ -73,9 +73,20 @@ def _ransac_plane(points: NDArray[np.float64], distance_m: float, iterations: in
     normals = normals[keep] / norms[keep, None]
     offsets = -np.einsum("ij,ij->i", normals, p0[keep])
     counts = np.zeros(len(normals), dtype=np.int64)
+    # |points . n + offset| < distance for 32 planes at a time, in two buffers reused in place: the same
+    # operations on the same values as fresh temporaries, without page-faulting ~8 MB of new memory per step
+    # (3x faster on ~30k points). Each view is C-contiguous, so the product goes through BLAS as before.
+    dist_buf = np.empty(len(points) * 32)
+    near_buf = np.empty(len(points) * 32, dtype=bool)
     for start in range(0, len(normals), 32):
-        stop = start + 32
-        counts[start:stop] = (np.abs(points @ normals[start:stop].T + offsets[start:stop]) < distance_m).sum(axis=0)
+        stop = min(start + 32, len(normals))
+        dist = dist_buf[:len(points) * (stop - start)].reshape(len(points), stop - start)
+        near = near_buf[:dist.size].reshape(dist.shape)
+        np.matmul(points, normals[start:stop].T, out=dist)
+        np.add(dist, offsets[start:stop], out=dist)
+        np.abs(dist, out=dist)
+        np.less(dist, distance_m, out=near)
+        counts[start:stop] = np.count_nonzero(near, axis=0)
     best = int(np.argmax(counts))  # the first of equals: deterministic
     inliers = np.nonzero(np.abs(points @ normals[best] + offsets[best]) < distance_m)[0]
     return normals[best], float(offsets[best]), inliers

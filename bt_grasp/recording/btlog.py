@@ -15,6 +15,7 @@ Transition times are simulated time since the first recorded tick.
 
 from __future__ import annotations
 
+import re
 import struct
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
@@ -24,6 +25,7 @@ from typing import Any
 import defusedxml.ElementTree as SafeET
 
 from bt_grasp.errors import InputError, LogFileError
+from bt_grasp.output_files import write_output_file
 from bt_grasp.recording.reader import RunLog
 from bt_grasp.recording.replay import status_changes
 from bt_grasp.tree.registry import NodeKind
@@ -53,14 +55,36 @@ class BtLog:
     nodes: dict[int, dict[str, str]]  # uid -> {"tag", "name", "fullpath"}
 
 
+#: a node type or attribute name becomes an XML tag or attribute name: it must be one
+_XML_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_.-]{0,200}$")
+#: characters XML 1.0 cannot hold at all, even escaped
+_NOT_XML = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ufffe\uffff]")
+
+
+class NotExportable(ValueError):
+    """A recorded structure holds a name XML cannot carry (a log written by something else than bt_grasp)."""
+
+
+def _text(value: object) -> str:
+    return _NOT_XML.sub("\ufffd", str(value))
+
+
+def _name(value: object, what: str) -> str:
+    text = str(value)
+    if not _XML_NAME.match(text):
+        raise NotExportable(f"its tree holds a {what} {text[:60]!r}, which is not an XML name")
+    return text
+
+
 def _attr(value: Any) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
-    return str(value)
+    return _text(value)
 
 
 def tree_xml(structure: dict[str, Any], main_tree_id: str = "MainTree") -> str:
     """The BT.CPP 4 XML of a recorded structure, every node with ``_uid`` and ``_fullpath``."""
+    main_tree_id = _text(main_tree_id)
     root = ET.Element("root", {"BTCPP_format": "4", "main_tree_to_execute": main_tree_id})
     models: dict[str, tuple[str, list[str]]] = {}
     pending: list[tuple[str, str, dict[str, Any]]] = [(main_tree_id, "", structure)]
@@ -81,20 +105,21 @@ def _add_node(
     parent: ET.Element, node: dict[str, Any], models: dict[str, tuple[str, list[str]]],
     pending: list[tuple[str, str, dict[str, Any]]],
 ) -> None:
-    attributes = {k: v for k, v in (node.get("attributes") or {}).items() if k not in ("name", "ID")}
+    given = (node.get("attributes") or {}).items()
+    attributes = {_name(k, "port name"): v for k, v in given if k not in ("name", "ID")}
     kind = str(node.get("kind", ""))
-    uid, path = int(node["uid"]), str(node.get("path", ""))
+    uid, path = int(node["uid"]), _text(node.get("path", ""))
     if not 0 <= uid <= 0xFFFF:
         raise InputError("--export-btlog", f"node uid {uid} does not fit the .btlog format's 16 bits")
     if kind == NodeKind.SUBTREE.value:
-        subtree_id = str((node.get("attributes") or {}).get("ID") or node.get("name") or "SubTree")
+        subtree_id = _text((node.get("attributes") or {}).get("ID") or node.get("name") or "SubTree")
         attrs = {"ID": subtree_id, "_uid": str(uid), "_fullpath": path}
         ET.SubElement(parent, "SubTree", {**attrs, **{k: _attr(v) for k, v in attributes.items()}})
         for child in node.get("children", []):
             pending.append((subtree_id, path, child))
         return
-    type_name = str(node.get("type", "")) or "Action"
-    attrs = {"name": str(node.get("name", "")), "_uid": str(uid), "_fullpath": path}
+    type_name = _name(node.get("type", "") or "Action", "node type")
+    attrs = {"name": _text(node.get("name", "")), "_uid": str(uid), "_fullpath": path}
     elem = ET.SubElement(parent, type_name, {**attrs, **{k: _attr(v) for k, v in attributes.items()}})
     if kind in _LEAF_TAGS:
         ports = sorted(k for k in attributes if not k.startswith("_"))
@@ -124,9 +149,20 @@ def write_btlog(run: RunLog, path: str | Path) -> BtLog:
         raise InputError("--export-btlog", f"{target} must end in .btlog (Groot2 opens only that)")
     if not run.structures:
         raise InputError("--export-btlog", f"{run.path.name} holds no tree structure to export")
-    xml = tree_xml(run.structures[-1].root, run.metadata.get("main_tree", "MainTree"))
-    start_us = int(run.metadata.get("start_unix_ns", "0") or 0) // 1000
+    try:
+        xml = tree_xml(run.structures[-1].root, run.metadata.get("main_tree", "MainTree"))
+    except NotExportable as exc:
+        raise LogFileError(run.path, f"cannot be exported as .btlog: {exc}") from None
+    nodes = _xml_nodes(xml, run.path)  # checked before anything is written
+    start = run.metadata.get("start_unix_ns", "0") or "0"
+    if not (start.isascii() and start.isdigit() and len(start) < 20):
+        raise LogFileError(run.path, f"its run metadata 'start_unix_ns' is {start[:40]!r}, not a time in nanoseconds")
+    start_us = int(start) // 1000
     moves = transitions(run)
+    unknown = next((t for t in moves if t.status not in STATUS_CODES), None)
+    if unknown is not None:
+        raise LogFileError(run.path, f"node {unknown.uid} has the status {unknown.status[:40]!r}, which a .btlog "
+                                     "cannot hold")
     body = bytearray(MAGIC)
     body += struct.pack("<B", PROTOCOL)
     xml_bytes = xml.encode("utf-8")
@@ -134,8 +170,8 @@ def write_btlog(run: RunLog, path: str | Path) -> BtLog:
     body += struct.pack("<q", start_us)
     for t in moves:
         body += t.timestamp_us.to_bytes(6, "little") + struct.pack("<HB", t.uid, STATUS_CODES[t.status])
-    target.write_bytes(bytes(body))
-    return BtLog(PROTOCOL, xml, start_us, tuple(moves), _xml_nodes(xml, target))
+    write_output_file(target, bytes(body), "--export-btlog", example="run.btlog")
+    return BtLog(PROTOCOL, xml, start_us, tuple(moves), nodes)
 
 
 def _xml_nodes(xml: str, path: Path) -> dict[int, dict[str, str]]:

@@ -9,6 +9,7 @@ import cv2
 import numpy as np
 
 from bt_grasp.errors import InputError
+from bt_grasp.output_files import make_output_folder, write_output_file
 from bt_grasp.recording.reader import RunLog
 
 log = logging.getLogger(__name__)
@@ -27,10 +28,7 @@ def _tick_of(stamps: list[tuple[int, int]], stamp_ns: int) -> int:
 def export_frames(run: RunLog, folder: str | Path) -> list[Path]:
     """Write every recorded colour image as ``color_<n>_tick<tick>.png`` and every depth image as
     ``depth_<n>_tick<tick>.png`` (uint16, millimetres, 0 = invalid) into ``folder``; returns the files."""
-    out = Path(folder)
-    if out.exists() and not out.is_dir():
-        raise InputError("--export-frames", f"{out} exists and is not a folder")
-    out.mkdir(parents=True, exist_ok=True)
+    out = make_output_folder(folder, "--export-frames")
     stamps = [(t.stamp_ns, t.tick) for t in run.ticks]
     written: list[Path] = []
     counters = {"color": 0, "depth": 0}
@@ -45,8 +43,9 @@ def export_frames(run: RunLog, folder: str | Path) -> list[Path]:
         else:
             mm = np.nan_to_num(image.pixels.astype(np.float64) * 1000.0, nan=0.0, posinf=0.0, neginf=0.0)
             pixels = np.clip(np.rint(mm), 0, 65535).astype(np.uint16)
-        if not cv2.imwrite(str(target), pixels):
-            raise InputError("--export-frames", f"could not write {target}")
-        written.append(target)
+        ok, png = cv2.imencode(".png", pixels)
+        if not ok:
+            raise InputError("--export-frames", f"could not encode {target.name} as PNG")
+        written.append(write_output_file(target, png.tobytes(), "--export-frames"))
     log.debug("exported %d frames to %s", len(written), out)
     return written

@@ -20,9 +20,11 @@ from google.protobuf.json_format import MessageToDict
 from numpy.typing import NDArray
 
 from bt_grasp.errors import LogFileError
+from bt_grasp.image_header import MAX_IMAGE_SIDE, image_size
 from bt_grasp.recording import mcap_io, topics
 from bt_grasp.recording.schemas import PROTOBUF_CLASSES
 from bt_grasp.recording.validate import BadMessage, is_int, parse_json
+from bt_grasp.terminal_text import shown
 from bt_grasp.tree.registry import NodeKind
 
 log = logging.getLogger(__name__)
@@ -215,7 +217,13 @@ _DEPTH_TYPES: dict[str, np.dtype[Any]] = {"16UC1": np.dtype("<u2"), "32FC1": np.
 
 def _image(topic: str, msg: Any, stamp: int) -> Image:
     if topic == topics.COLOR:
-        bgr = cv2.imdecode(np.frombuffer(msg.data, np.uint8), cv2.IMREAD_COLOR) if msg.data else None
+        size = image_size(msg.data)
+        if size is None:
+            raise BadMessage(f"its data ({len(msg.data)} bytes) is not a PNG or JPEG image")
+        if not (0 < size[0] <= MAX_IMAGE_SIDE and 0 < size[1] <= MAX_IMAGE_SIDE):
+            raise BadMessage(f"it says it is {size[0]} x {size[1]} pixels, more than a camera's {MAX_IMAGE_SIDE} "
+                             "a side")
+        bgr = cv2.imdecode(np.frombuffer(msg.data, np.uint8), cv2.IMREAD_COLOR)
         if bgr is None:
             raise BadMessage(f"its {msg.format or 'unnamed'} data ({len(msg.data)} bytes) does not decode")
         return Image(topic, stamp, msg.frame_id, "color", msg.format, bgr[:, :, ::-1].copy())
@@ -299,12 +307,12 @@ def open_log(path: str | Path) -> RunLog:
     problem = _not_bt_grasp(p, scan, p.stat().st_size)
     if problem is not None:
         raise problem
-    metadata = scan.metadata.get(topics.RUN_METADATA_NAME, {})
+    metadata = {shown(k): shown(v) for k, v in scan.metadata.get(topics.RUN_METADATA_NAME, {}).items()}
     fmt = metadata.get("log_format", "1")
     if fmt not in topics.READABLE_LOG_FORMATS:
         readable = " and ".join(topics.READABLE_LOG_FORMATS)
-        shown = fmt if fmt.isascii() and fmt.isprintable() and len(fmt) <= 20 else repr(fmt[:20])
-        raise LogFileError(p, f"was written in bt_grasp log format {shown}; this bt_grasp reads formats {readable}")
+        printed = fmt if fmt.isascii() and fmt.isprintable() and len(fmt) <= 20 else repr(fmt[:20])
+        raise LogFileError(p, f"was written in bt_grasp log format {printed}; this bt_grasp reads formats {readable}")
     origin = _time_origin(p, metadata)  # format 1: simulated time from 0
     by_topic: dict[str, list[tuple[mcap_io.RawMessage, Any]]] = {}
     robot_raw: dict[int, mcap_io.RawMessage] = {}
@@ -326,8 +334,8 @@ def open_log(path: str | Path) -> RunLog:
     def stamped(topic: str) -> list[dict[str, Any]]:
         return [{"stamp_ns": raw.log_time_ns - origin, **msg} for raw, msg in by_topic.get(topic, [])]
 
-    logs = [{"stamp_ns": raw.log_time_ns - origin, "level": _level_name(msg), "name": msg.name,
-             "message": msg.message} for raw, msg in by_topic.get(topics.LOG, []) if not isinstance(msg, dict)]
+    logs = [{"stamp_ns": raw.log_time_ns - origin, "level": _level_name(msg), "name": shown(msg.name),
+             "message": shown(msg.message)} for raw, msg in by_topic.get(topics.LOG, []) if not isinstance(msg, dict)]
     results = by_topic.get(topics.RESULT, [])
     structures = [TreeSnapshot(raw.log_time_ns - origin, msg.get("tick"), msg["structure"])
                   for raw, msg in by_topic.get(topics.TREE, [])]
@@ -342,7 +350,7 @@ def open_log(path: str | Path) -> RunLog:
         logs=logs,
         trajectories=[_trajectory(t) for t in stamped(topics.TRAJECTORY)],
         result=results[-1][1] if results else None,
-        topics=dict(sorted(scan.topic_counts.items())),
+        topics=dict(sorted((shown(topic), n) for topic, n in scan.topic_counts.items())),
         truncated=not scan.complete,
         indexed=scan.indexed,
         library=scan.library,

@@ -225,7 +225,7 @@ def failures_table(reports: Sequence[FailureReport]) -> RenderableType:
 
 
 def leaf_table(name: str, history: Sequence[dict[str, Any]], max_rows: int) -> RenderableType:
-    table = Table(title=f"history of {name}", title_justify="left", box=None, pad_edge=False)
+    table = Table(title=Text(f"history of {name}"), title_justify="left", box=None, pad_edge=False)
     for column in ("tick", "sim time", "status", "ticked", "feedback", "reason"):
         table.add_column(column)
     for row in history[:max_rows]:

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from bt_grasp.output_files import make_output_folder, write_output_file
 from bt_grasp.recording import replay, report_figures, topics
 from bt_grasp.recording.reader import RunLog
 from bt_grasp.recording.schemas import as_matrix
@@ -363,12 +364,9 @@ def build_report(run: RunLog, html_path: Path, png_dir: Path | None = None) -> R
         parts.append("<p>No camera frame in this log.</p>")
     page = ("<!doctype html><html><head><meta charset=\"utf-8\"><title>bt_grasp run report</title>"
             f"<style>{_CSS}</style></head><body>" + "\n".join(parts) + "</body></html>\n")
-    report.html_path.parent.mkdir(parents=True, exist_ok=True)
-    report.html_path.write_text(page, encoding="utf-8")
+    write_output_file(report.html_path, page, "--report", example="report.html")
     if png_dir is not None:
-        png_dir.mkdir(parents=True, exist_ok=True)
+        make_output_folder(png_dir, "--report-dir")
         for name, png in report.figures.items():
-            path = png_dir / f"{name}.png"
-            path.write_bytes(png)
-            report.pngs.append(path)
+            report.pngs.append(write_output_file(png_dir / f"{name}.png", png, "--report-dir"))
     return report

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import copy
 import json
+import tempfile
 from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -93,14 +94,11 @@ def layout_for_log(run: RunLog) -> dict[str, Any]:
 def write_layout(run: RunLog, target: Path | None = None) -> Path:
     """Write the log's layout to ``target`` (default ``<log>.layout.json`` beside the log); returns the file.
     A place that cannot be written is an ``InputError`` naming it."""
-    from bt_grasp.errors import InputError
+    from bt_grasp.output_files import write_output_file
 
     target = target if target is not None else run.path.with_name(run.path.stem + ".layout.json")
-    try:
-        target.write_text(json.dumps(layout_for_log(run), indent=2) + "\n", encoding="utf-8")
-    except OSError as exc:
-        raise InputError(str(target), f"the Foxglove layout cannot be written there ({exc.strerror})") from None
-    return target
+    return write_output_file(target, json.dumps(layout_for_log(run), indent=2) + "\n", "--layout-out",
+                             example="run.layout.json")
 
 
 def layout_for_tree_file(tree: Path, leaves: Sequence[str] = ()) -> dict[str, Any]:
@@ -115,18 +113,23 @@ def layout_for_tree_file(tree: Path, leaves: Sequence[str] = ()) -> dict[str, An
 
 
 def write_live_layout(tree: Path, leaves: Sequence[str] = (), log: Path | None = None,
-                      control: bool = False) -> Path:
+                      control: bool = False, folder: Path | None = None) -> Path:
     """Write the layout of ``tree`` for a live view (``control``: with the control panels of ``--control``)
-    beside the run's log (``<log>.layout.json``) when it has one, else in a new private temporary folder;
-    returns the file."""
-    import tempfile
-
+    beside the run's log (``<log>.layout.json``) when it has one, else in ``folder`` (a private temporary folder
+    the caller removes when the run ends: :func:`live_layout_folder`); returns the file."""
+    from bt_grasp.output_files import write_output_file
     from bt_grasp.recording.layout import with_control_panels
 
+    if log is None and folder is None:
+        raise ValueError("a live layout without a log needs the folder it goes in")
     target = (log.with_name(log.stem + ".layout.json") if log is not None
-              else Path(tempfile.mkdtemp(prefix="bt_grasp_layout_")) / f"{Path(tree).stem}.layout.json")
-    target.parent.mkdir(parents=True, exist_ok=True)
+              else Path(folder) / f"{Path(tree).stem}.layout.json")  # type: ignore[arg-type]
     layout = layout_for_tree_file(tree, leaves)
     layout = with_control_panels(layout) if control else layout
-    target.write_text(json.dumps(layout, indent=2) + "\n", encoding="utf-8")
-    return target
+    return write_output_file(target, json.dumps(layout, indent=2) + "\n", "--log")
+
+
+def live_layout_folder(live: bool, log: Path | None) -> tempfile.TemporaryDirectory[str] | None:
+    """The private temporary folder a live run without a log keeps its layout in, for the run's length (the
+    caller cleans it up: found by the pre-review attack, every such run left a folder behind); None otherwise."""
+    return tempfile.TemporaryDirectory(prefix="bt_grasp_layout_") if live and log is None else None

@@ -14,6 +14,7 @@ from collections.abc import Callable
 from typing import Any
 
 from bt_grasp.recording import topics
+from bt_grasp.terminal_text import may_hold_controls, shown_deep
 
 #: deeper than any real tree (the views walk trees recursively in places: a hostile depth would crash them)
 MAX_TREE_DEPTH = 100
@@ -116,6 +117,8 @@ def _tree(msg: dict[str, Any]) -> None:
         _int(node, "uid", where + ".")
         for key in ("path", "type", "name", "kind"):
             _str(node, key, where + ".")
+        if "attributes" in node:  # a node's ports as written: an object (the .btlog export walks it)
+            _need(isinstance(node["attributes"], dict), where + ".attributes", node["attributes"], "an object")
         children = node.get("children", [])
         _need(isinstance(children, list), where + ".children", children, "a list")
         stack.extend((child, f"{where}.children[{i}]", depth + 1) for i, child in enumerate(children))
@@ -201,6 +204,11 @@ def parse_json(topic: str, data: bytes) -> Any:
         raise BadMessage(f"it is not JSON ({getattr(exc, 'msg', exc)})") from None
     if _LONE_SURROGATE_ESCAPE.search(text):
         _check_text(msg)
+    if may_hold_controls(text):  # terminal control characters are shown, never obeyed (bt_grasp.terminal_text)
+        try:
+            msg = shown_deep(msg)
+        except RecursionError:
+            raise BadMessage("it is nested too deeply to read") from None
     check = _CHECKS.get(topic)
     if check is not None:
         check(_object(msg))

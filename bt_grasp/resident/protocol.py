@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import secrets
 import stat
@@ -22,6 +23,8 @@ IDLE_TIMEOUT_S = 600.0
 
 
 ENV_DIR = "BT_GRASP_RESIDENT_DIR"
+#: the shared key's length (HMAC-SHA256: 32 bytes is its full strength)
+KEY_BYTES = 32
 
 
 def home() -> Path:
@@ -38,7 +41,28 @@ def home() -> Path:
     return path
 
 
+def _unsafe_ancestor(path: Path) -> tuple[Path, str] | None:
+    """A folder on the way to ``path`` that someone else could use to swap the folder for their own: one owned by
+    another user than root or this one, or writable by the group or others without the sticky bit (``/tmp`` has
+    it: there others cannot rename what is not theirs). Both the path as given (the folders holding each of its
+    names, a symbolic link's included) and its real path are checked, the way OpenSSH's StrictModes does."""
+    given = path.absolute()
+    folders = {Path(os.path.realpath(p.parent)) for p in (given, *given.parents) if p != p.parent}
+    folders |= set(Path(os.path.realpath(given)).parents)
+    for folder in sorted(folders):
+        info = os.stat(folder)
+        if info.st_uid not in (0, os.getuid()):
+            return folder, f"belongs to user id {info.st_uid}"
+        if info.st_mode & 0o022 and not info.st_mode & stat.S_ISVTX:
+            return folder, f"is writable by others without the sticky bit (mode {stat.S_IMODE(info.st_mode):o})"
+    return None
+
+
 def _check_private(path: Path, source: str) -> None:
+    unsafe = _unsafe_ancestor(path)
+    if unsafe is not None:
+        raise InputError(source, f"{path} lies in {unsafe[0]}, which {unsafe[1]}: someone else could swap the folder "
+                         "for their own; the resident refuses it")
     info = os.lstat(path)
     if stat.S_ISLNK(info.st_mode) or not stat.S_ISDIR(info.st_mode):
         raise InputError(source, f"{path} is not a plain folder (a symbolic link or a file); the resident refuses it")
@@ -62,19 +86,36 @@ def socket_path() -> Path:
 
 
 def authkey() -> bytes:
-    """The shared secret of this user's client and resident process (created once, mode 0600)."""
+    """The shared secret of this user's client and resident process (created once, mode 0600, whole: it is
+    written under another name and linked into place, so a crash never leaves a short key)."""
     path = home() / "key"
     if not os.path.lexists(path):
-        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
-        with os.fdopen(fd, "wb") as f:
-            f.write(secrets.token_bytes(32))
-    fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW)
+        part = path.with_name(f"key.{secrets.token_hex(8)}.part")
+        fd = os.open(part, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW, 0o600)
+        try:
+            with os.fdopen(fd, "wb") as f:
+                f.write(secrets.token_bytes(KEY_BYTES))
+                f.flush()
+                os.fsync(f.fileno())
+            with contextlib.suppress(FileExistsError):  # a racing client made one first: both use that one
+                os.link(part, path)
+        finally:
+            part.unlink(missing_ok=True)
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
+    except OSError as exc:  # a symbolic link (ELOOP), or unreadable
+        raise InputError(path, f"the resident's key cannot be opened ({(exc.strerror or str(exc)).lower()}); "
+                         "remove it to make a new one") from None
     with os.fdopen(fd, "rb") as f:
         info = os.fstat(f.fileno())
         if info.st_uid != os.getuid() or info.st_mode & 0o077 or not stat.S_ISREG(info.st_mode):
             raise InputError(path, "the resident's key must be a private (0600) file of yours; remove it to make a "
                              "new one")
-        return f.read(64)
+        key = f.read(64)
+    if len(key) < KEY_BYTES:  # an empty or cut key (a crash while it was made) would make the proof worthless
+        raise InputError(path, f"the resident's key holds {len(key)} bytes, not {KEY_BYTES}; remove it to make a "
+                         "new one")
+    return key
 
 
 def code_version() -> str:

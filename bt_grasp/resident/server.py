@@ -22,13 +22,15 @@ from bt_grasp.resident.protocol import (
     result_adapter,
     socket_path,
 )
-from bt_grasp.resident.wire import WireError, receive, send, server_handshake
+from bt_grasp.resident.wire import WireError, deadline, receive, send, server_handshake
 
 log = logging.getLogger(__name__)
 
-#: how long a client may take to prove it knows the key, then to send its request
+#: how long a client may take to prove it knows the key, then to send its request, and both together (a peer
+#: that sends half a frame or trickles bytes is cut off at the total)
 HANDSHAKE_TIMEOUT_S = 5.0
 REQUEST_TIMEOUT_S = 10.0
+CONNECTION_DEADLINE_S = HANDSHAKE_TIMEOUT_S + REQUEST_TIMEOUT_S
 #: how long a starting resident waits for the folder's lock before leaving it to the process that holds it
 LOCK_WAIT_S = 3.0
 
@@ -112,13 +114,16 @@ def serve(idle_s: float = IDLE_TIMEOUT_S) -> None:
         state["busy"] = 1.0
         stop = False
         try:  # a bad client (wrong key, garbage, a huge declared length, silence) loses its connection, no more
-            server_handshake(conn, key, HANDSHAKE_TIMEOUT_S)
-            message = receive(conn, REQUEST_TIMEOUT_S)
+            with deadline(conn, CONNECTION_DEADLINE_S):
+                server_handshake(conn, key, HANDSHAKE_TIMEOUT_S)
+                message = receive(conn, REQUEST_TIMEOUT_S)
             kind, fields = _handle(message, worlds, version)
             send(conn, kind, **fields)
             stop = kind == "stale" or message["kind"] == "stop"  # the code changed under it, or asked to stop
         except (WireError, OSError, EOFError) as exc:
             log.warning("dropped a connection: %s", exc)
+        except Exception:  # whatever one connection does, the resident goes on serving the others
+            log.exception("dropped a connection")
         finally:
             conn.close()
             state["busy"] = 0.0

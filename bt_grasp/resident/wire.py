@@ -13,10 +13,16 @@ answers with ``HMAC(key, "server" + challenge)``.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import hmac
 import json
+import os
 import secrets
+import socket
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
 from multiprocessing.connection import Connection
 from typing import Any
 
@@ -30,6 +36,31 @@ _NONCE = 32
 
 class WireError(BtGraspError):
     """The peer broke the protocol (bad key, bad frame, too long, too slow, wrong version)."""
+
+
+@contextmanager
+def deadline(conn: Connection, seconds: float) -> Iterator[None]:
+    """Within the block, ``conn`` is shut down once ``seconds`` have passed: a peer that sends part of a frame
+    and then goes silent, or trickles a byte at a time, cannot hold the other end longer than that (``poll``
+    only waits for the first byte; ``recv_bytes`` then blocks until the whole frame is there)."""
+    sock = socket.socket(fileno=os.dup(conn.fileno()))
+
+    def cut() -> None:
+        with contextlib.suppress(OSError):
+            sock.shutdown(socket.SHUT_RDWR)
+
+    timer = threading.Timer(seconds, cut)
+    timer.daemon = True
+    timer.start()
+    try:
+        yield
+    except (EOFError, OSError, WireError):
+        if not timer.is_alive():
+            raise WireError(f"the peer took more than {seconds:g} s") from None
+        raise
+    finally:
+        timer.cancel()
+        sock.close()
 
 
 def _recv_frame(conn: Connection, timeout_s: float | None, limit: int = MAX_MESSAGE_BYTES) -> bytes:
@@ -81,6 +112,8 @@ def receive(conn: Connection, timeout_s: float | None) -> dict[str, Any]:
         message = json.loads(raw)
     except (UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise WireError(f"not JSON ({exc})") from None
+    except (RecursionError, ValueError) as exc:  # nested too deeply; an integer of more digits than Python reads
+        raise WireError(f"not a message ({type(exc).__name__})") from None
     if not isinstance(message, dict) or not isinstance(message.get("kind"), str):
         raise WireError("a message must be a JSON object with a 'kind'")
     if message.get("v") != VERSION:

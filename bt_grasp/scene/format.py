@@ -35,12 +35,28 @@ NonNegFloat = Annotated[float, Field(ge=0)]
 Vec3 = tuple[float, float, float]
 Range = tuple[float, float]
 
+#: physics steps one tree tick may take: 5 by default; 1e-9 s steps made one tick 10^7 steps (a run that never
+#: ended, found by the pre-review attack)
+MAX_STEPS_PER_TICK = 100
+
+
 class Physics(StrictModel):
-    timestep_s: Annotated[float, Field(gt=0, le=0.004)] = 0.002  # dt <= 1/250 s keeps fingers out of boxes
-    control_rate_hz: Annotated[float, Field(gt=0, le=1000)] = 100.0  # behaviour-tree ticks per second
+    timestep_s: Annotated[float, Field(ge=1e-4, le=0.004)] = 0.002  # dt <= 1/250 s keeps fingers out of boxes
+    control_rate_hz: Annotated[float, Field(ge=1, le=1000)] = 100.0  # behaviour-tree ticks per second
     gravity_m_s2: Vec3 = (0.0, 0.0, -9.81)
     solver_position_iterations: Annotated[int, Field(ge=1, le=255)] = 20
     solver_velocity_iterations: Annotated[int, Field(ge=1, le=255)] = 4
+
+    @model_validator(mode="after")
+    def _steps_per_tick(self) -> Physics:
+        steps = 1.0 / (self.control_rate_hz * self.timestep_s)
+        if steps < 1 - 1e-9:
+            raise ValueError(f"a tick ({1 / self.control_rate_hz:g} s) is shorter than one physics step "
+                             f"({self.timestep_s:g} s)")
+        if steps > MAX_STEPS_PER_TICK:
+            raise ValueError(f"one tick would take {steps:.0f} physics steps (at most {MAX_STEPS_PER_TICK}): raise "
+                             "control_rate_hz or timestep_s")
+        return self
 
 
 class Table(StrictModel):

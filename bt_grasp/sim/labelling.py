@@ -27,6 +27,7 @@ import os
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
@@ -45,6 +46,7 @@ from bt_grasp.detector.dataset import (
 )
 from bt_grasp.errors import ConfigError, InputError
 from bt_grasp.interfaces import Mount
+from bt_grasp.output_files import check_output_folder, make_output_folder, write_output_file
 from bt_grasp.scene.format import Light, Scene, load_scene
 from bt_grasp.sim.poses import to_T
 from bt_grasp.sim.table_texture import TEXTURE_KINDS, add_table_top, texture_image
@@ -240,6 +242,13 @@ class DatasetSummary:
     per_class: dict[str, int]
 
 
+def _png(bgr: NDArray[Any]) -> bytes:
+    ok, data = cv2.imencode(".png", bgr)
+    if not ok:
+        raise ValueError("a picture did not encode as PNG")
+    return data.tobytes()
+
+
 def _mount_for(rule: str, config: Scene, index: int, scenes: int) -> Mount:
     if rule == "scene":
         return Mount(config.camera.mount)
@@ -257,13 +266,17 @@ def make_dataset(scenes: Sequence[Path], images: int, out: Path, seed: int, *, m
 
     if mount not in MOUNT_CHOICES:
         raise InputError("--mount", f"expected one of {', '.join(MOUNT_CHOICES)}, got '{mount}'")
+    check_output_folder(out, "--out")
+    if out.is_dir() and any(out.iterdir()):
+        raise InputError("--out", f"'{out}' holds files already; give a new or empty folder (a dataset written over "
+                                  "another one mixes their pictures and labels)")
     configs = [(Path(s), load_scene(s)) for s in scenes]
     classes = dataset_classes()
     for path, config in configs:  # every object must have a class before anything is rendered
         for obj in config.objects:
             object_class(obj.shape, obj.mesh, path, obj.name)
-    (out / "images").mkdir(parents=True, exist_ok=True)
-    (out / "labels").mkdir(parents=True, exist_ok=True)
+    make_output_folder(out / "images", "--out")
+    make_output_folder(out / "labels", "--out")
     manifest: list[dict[str, object]] = []
     tiles: list[NDArray[np.uint8]] = []
     per_class = dict.fromkeys(classes, 0)
@@ -274,9 +287,8 @@ def make_dataset(scenes: Sequence[Path], images: int, out: Path, seed: int, *, m
         camera_mount = _mount_for(mount, config, index, len(configs))
         rgb, labels, what = labelled_picture(path, config, rng, camera_mount, min_pixels, classes)
         stem = f"{index:05d}"
-        cv2.imwrite(str(out / "images" / f"{stem}.png"), cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR))
-        (out / "labels" / f"{stem}.txt").write_text(label_lines(labels, rgb.shape[1], rgb.shape[0]),
-                                                    encoding="utf-8")
+        write_output_file(out / "images" / f"{stem}.png", _png(cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR)), "--out")
+        write_output_file(out / "labels" / f"{stem}.txt", label_lines(labels, rgb.shape[1], rgb.shape[0]), "--out")
         for label in labels:
             per_class[classes[label.class_id]] += 1
         total += len(labels)
@@ -292,10 +304,10 @@ def make_dataset(scenes: Sequence[Path], images: int, out: Path, seed: int, *, m
         if len(tiles) < PREVIEW_TILES:
             tiles.append(draw_labels(rgb, labels, classes))
         log.info("picture %d/%d: %d labels", index + 1, images, len(labels))
-    (out / "data.yaml").write_text(data_yaml(classes), encoding="utf-8")
+    write_output_file(out / "data.yaml", data_yaml(classes), "--out")
     header = {"made_by": "bt-grasp detector dataset", "scenes": [str(p) for p, _ in configs], "images": images,
               "seed": seed, "mount": mount, "min_pixels": min_pixels, "pictures": manifest}
-    (out / "manifest.yaml").write_text(yaml.safe_dump(header, sort_keys=False), encoding="utf-8")
+    write_output_file(out / "manifest.yaml", yaml.safe_dump(header, sort_keys=False), "--out")
     if tiles:
-        cv2.imwrite(str(out / "preview.png"), preview_grid(tiles))
+        write_output_file(out / "preview.png", _png(preview_grid(tiles)), "--out")
     return DatasetSummary(images, total, {k: v for k, v in per_class.items() if v})

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import sapien
 from numpy.typing import NDArray
@@ -81,12 +83,13 @@ class SimRobot:
 
     def set_joint_targets(self, q_rad: NDArray[np.float64], qd_rad_s: NDArray[np.float64] | None = None) -> None:
         q = np.asarray(q_rad, dtype=float)
-        if q.shape != (6,) or not np.all(np.isfinite(q)):
+        targets = q.tolist() if q.shape == (6,) else []  # Python floats: what float() of each element gives
+        if not targets or not all(map(math.isfinite, targets)):
             raise ValueError(f"joint targets must be 6 finite numbers, got {q!r}")
-        qd = np.zeros(6) if qd_rad_s is None else np.asarray(qd_rad_s, dtype=float)
-        for joint, target, velocity in zip(self._arm_joints, q, qd, strict=True):
-            joint.set_drive_target(float(target))
-            joint.set_drive_velocity_target(float(velocity))
+        velocities = [0.0] * 6 if qd_rad_s is None else np.asarray(qd_rad_s, dtype=float).tolist()
+        for joint, target, velocity in zip(self._arm_joints, targets, velocities, strict=True):
+            joint.set_drive_target(target)
+            joint.set_drive_velocity_target(velocity)
 
     def open_gripper(self) -> None:
         self._finger.set_drive_properties(FINGER_STIFFNESS, FINGER_DAMPING, self._default_force_n)

@@ -132,14 +132,17 @@ class Blackboard:
 
     def declare(self, key: str, kind: type | None = None) -> None:
         """Create an empty entry (BT.CPP creates one for every ``{key}`` port when it builds a tree) declared
-        with the port's scalar type; a second port of another scalar type raises BlackboardTypeError."""
+        with the port's type: a scalar, or an application type with ``from_port_text`` (BT.CPP's strongly
+        typed ports; ``object`` declares nothing). A second port of another type raises BlackboardTypeError,
+        except on an entry declared ``str`` first: BT.CPP lets any port read text (``convertFromString``),
+        and the entry stays text."""
         entry = self.create_entry(key)
-        kind = kind if kind in _SCALARS else None
-        if kind is None:
+        if kind not in _SCALARS and not _is_text_type(kind):
             return
         if entry.declared is None:
             entry.declared = kind
-        elif entry.declared is not kind:
+        elif entry.declared is not kind and entry.declared is not str:
+            assert kind is not None
             raise BlackboardTypeError(
                 f"blackboard entry '{key}' is used by ports of type {entry.declared.__name__} and "
                 f"{kind.__name__}; once declared, the type of an entry shall not change"
@@ -212,12 +215,23 @@ class Blackboard:
         return f"Blackboard({self.items()!r})"
 
 
+def _is_text_type(kind: type | None) -> bool:
+    """An application port type converted from text (``registry.is_text_port_type``)."""
+    return kind is not None and callable(getattr(kind, "from_port_text", None))
+
+
 def _fit(key: str, value: Any, entry: Entry) -> Any:
-    """``value`` converted to the type ``entry`` was declared with."""
+    """``value`` converted to the type ``entry`` was declared with (text is parsed, as BT.CPP's ``set``
+    parses a string with the entry's converter; numbers are cast without loss)."""
     declared = entry.declared
     assert declared is not None
     try:
-        fitted = convert_text(value, declared) if isinstance(value, str) else copy_into(value, declared())
+        if isinstance(value, str):
+            fitted = convert_text(value, declared)
+        elif declared in _SCALARS:
+            fitted = copy_into(value, declared())
+        else:
+            raise TreeRuntimeError(f"a {type(value).__name__} is not a {declared.__name__}")
     except TreeRuntimeError as exc:
         raise BlackboardTypeError(
             f"blackboard entry '{key}' holds {declared.__name__}; cannot store {value!r} ({exc})"

@@ -74,20 +74,43 @@ def validate_document(document: Document, registry: NodeRegistry) -> str:
     return main
 
 
-def _check_cycles(document: Document, main: str) -> None:
-    def refs(decl: NodeDecl) -> list[NodeDecl]:
-        found = [decl] if decl.type_id == "SubTree" else []
-        for child in decl.children:
-            found.extend(refs(child))
-        return found
+#: nodes the main tree may expand to, every SubTree counted as often as it is used (40 trees each using the next
+#: twice are 2^40 nodes: checking them one by one never finished), and how deep it may nest once expanded
+MAX_EXPANDED_NODES = 100_000
+MAX_EXPANDED_DEPTH = 100  # = the depth a log of the run may hold (bt_grasp.recording.validate.MAX_TREE_DEPTH)
 
-    def visit(tree_id: str, stack: tuple[str, ...]) -> None:
-        for ref in refs(document.trees[tree_id].root):
-            target = ref.subtree_id or ""
-            if target in stack or target == tree_id:
-                chain = " -> ".join((*stack, tree_id, target))
-                raise ref.error(f"cyclic SubTree: {chain}")
-            visit(target, (*stack, tree_id))
+
+def _check_cycles(document: Document, main: str) -> None:
+    """No SubTree uses itself, directly or not, and the expanded tree stays within :data:`MAX_EXPANDED_NODES` nodes
+    and :data:`MAX_EXPANDED_DEPTH` levels: each tree's expanded size and depth is computed once (memoised), so
+    the check is linear in the file, however often its subtrees are reused."""
+    expanded: dict[str, tuple[int, int]] = {}  # tree id -> (nodes, depth) once expanded
+
+    def visit(tree_id: str, stack: tuple[str, ...]) -> tuple[int, int]:
+        if tree_id in expanded:
+            return expanded[tree_id]
+        nodes, deepest = 0, 0
+        todo: list[tuple[NodeDecl, int]] = [(document.trees[tree_id].root, 1)]
+        while todo:
+            decl, depth = todo.pop()
+            nodes += 1
+            if decl.type_id == "SubTree":
+                target = decl.subtree_id or ""
+                if target in stack or target == tree_id:
+                    raise decl.error(f"cyclic SubTree: {' -> '.join((*stack, tree_id, target))}")
+                inner_nodes, inner_depth = visit(target, (*stack, tree_id))
+                nodes, depth = nodes + inner_nodes, depth + inner_depth
+            else:
+                todo.extend((child, depth + 1) for child in decl.children)
+            deepest = max(deepest, depth)
+            if nodes > MAX_EXPANDED_NODES:
+                raise decl.error(f"the tree expands to more than {MAX_EXPANDED_NODES:,} nodes (each SubTree counted "
+                                 "as often as it is used)")
+            if deepest > MAX_EXPANDED_DEPTH:
+                raise decl.error(f"the tree nests deeper than {MAX_EXPANDED_DEPTH} levels once its SubTrees are "
+                                 "expanded")
+        expanded[tree_id] = (nodes, deepest)
+        return nodes, deepest
 
     visit(main, ())
 
@@ -122,16 +145,16 @@ class TreeBuilder:
         resolved = resolve_node(decl, self.registry, self.document)
         spec, name, ports = resolved.spec, resolved.name, resolved.ports
         path = prefix + name + (f"::{uid}" if name == decl.type_id else "")
-        children = tuple(self._node(c, bb, prefix, instance, stack) for c in decl.children)
         replacement = substitute(self.rules, spec, decl.type_id, name, path)
         if replacement is not None:
             spec, ports = replacement, {}
-        for value in ports.values():
+        for value in ports.values():  # before the children's, as BT.CPP creates a parent before its children
             if value.key is not None:
                 try:
                     bb.declare(value.key, value.port.type)
                 except BlackboardTypeError as exc:
                     raise decl.error(f"{spec.name}: port '{value.port.name}': {exc}") from None
+        children = tuple(self._node(c, bb, prefix, instance, stack) for c in decl.children)
         ctx = self._context(
             decl,
             name=name,
@@ -150,8 +173,16 @@ class TreeBuilder:
             node = spec.factory(ctx)
         except (ScriptSyntaxError, PortValueError) as exc:
             raise decl.error(f"{spec.name}: {exc}") from None
+        except Exception as exc:  # a plugin's node that cannot be built is the plugin's problem, named in one line
+            origin = self.registry.origins.get(spec.name)
+            if origin is None:
+                raise
+            raise decl.error(f"{spec.name} (from {origin}) could not be built: {type(exc).__name__}: {exc}") from None
         if not isinstance(node, BtNode):
-            raise TypeError(f"the factory of {spec.name} returned {type(node).__name__}, not a bt_grasp Leaf/BtNode")
+            problem = f"the factory of {spec.name} returned {type(node).__name__}, not a bt_grasp Leaf/BtNode"
+            if spec.name in self.registry.origins:
+                raise decl.error(problem)
+            raise TypeError(problem)
         return node
 
     def _subtree(

@@ -26,6 +26,9 @@ AsyncSequence and AsyncFallback do after each synchronous child). It then yields
 from __future__ import annotations
 
 import enum
+import os
+import sys
+import traceback
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -35,6 +38,9 @@ from py_trees.common import Status
 
 from bt_grasp.tree.exceptions import TreeRuntimeError
 from bt_grasp.tree.registry import NodeKind
+
+#: this package's folder: frames inside it are bt_grasp's, not a plugin's
+_PACKAGE_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + os.sep
 
 if TYPE_CHECKING:
     from bt_grasp.tree.blackboard import Blackboard
@@ -187,6 +193,10 @@ class BtNode(py_trees.behaviour.Behaviour):
                 raise
             message = str(exc).removeprefix(f"{self.bt_path}: ")
             raise TreeRuntimeError(f"{self.bt_where}{self.bt_type} '{self.bt_path}': {message}", located=True) from None
+        except Exception as exc:
+            if not self._bt_is_plugin():
+                raise
+            raise self._bt_plugin_error(exc) from exc
         if result is BtStatus.SKIPPED:
             self.bt_status_extra = "SKIPPED"
         else:
@@ -194,6 +204,25 @@ class BtNode(py_trees.behaviour.Behaviour):
         if self.bt_listener is not None:
             self.bt_listener(self, before, result)
         return result
+
+    def _bt_is_plugin(self) -> bool:
+        """True for a node whose class comes from outside bt_grasp (a user's plugin)."""
+        module = type(self).__module__
+        return not (module == "bt_grasp" or module.startswith("bt_grasp."))
+
+    def _bt_plugin_error(self, exc: Exception) -> TreeRuntimeError:
+        """A plugin node's own exception as one located sentence: the tree's file and line, the node, what
+        was raised and where in the plugin (its innermost frame outside bt_grasp)."""
+        module_file = getattr(sys.modules.get(type(self).__module__), "__file__", None)
+        frames = [f for f in traceback.extract_tb(exc.__traceback__) if not f.filename.startswith(_PACKAGE_DIR)]
+        own = [f for f in frames if module_file is not None and f.filename == module_file]
+        chosen = own or frames
+        where = f" at {chosen[-1].filename}:{chosen[-1].lineno}" if chosen else ""
+        return TreeRuntimeError(
+            f"{self.bt_where}{self.bt_type} '{self.bt_path}': the node's code raised "
+            f"{type(exc).__name__}{where}: {exc}",
+            located=True,
+        )
 
     def set_bt_status(self, status: BtStatus) -> None:
         if status is BtStatus.IDLE or status is BtStatus.SKIPPED:
@@ -211,7 +240,14 @@ class BtNode(py_trees.behaviour.Behaviour):
 
     def halt_node(self) -> None:
         """BT.CPP ``haltNode``: ``halt()`` then the ``_onHalted`` script."""
-        self.halt()
+        try:
+            self.halt()
+        except TreeRuntimeError:
+            raise
+        except Exception as exc:
+            if not self._bt_is_plugin():
+                raise
+            raise self._bt_plugin_error(exc) from exc
         script = self._bt_conditions.get("_onHalted")
         if script is not None:
             script.run(self._bt_blackboard, self._bt_enums)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -9,15 +10,21 @@ from typing import Any
 from bt_grasp.tree.blackboard import EMPTY, Blackboard
 from bt_grasp.tree.exceptions import PortValueError, TreeRuntimeError
 from bt_grasp.tree.registry import NO_DEFAULT, PortDirection, PortSpec, is_text_port_type
-from bt_grasp.tree.values import cast_to
+from bt_grasp.tree.values import cast_to, int_prefix, real_prefix
+
+logger = logging.getLogger(__name__)
 
 _TRUE = ("true", "True", "TRUE", "1")
 _FALSE = ("false", "False", "FALSE", "0")
 _TYPE_NAMES = {str: "text", int: "an integer", float: "a number", bool: "true or false", object: "any value"}
 
 
-def convert_text(text: str, port: PortSpec) -> Any:
-    """Convert a literal as written in a tree file to the port's type (BT.CPP ``convertFromString``)."""
+def convert_text(text: str, port: PortSpec, where: str = "") -> Any:
+    """Convert a literal as written in a tree file to the port's type (BT.CPP ``convertFromString``: numbers
+    are read from the start of the text, as ``std::from_chars`` does, with no leading space or ``+``; what
+    follows a number is ignored, with a logged warning when it is more than spaces; a bool is ``true``,
+    ``false``, ``1``, ``0`` or their ``True``/``TRUE`` forms exactly). ``where`` (``file:line``) starts the
+    warning's text."""
     kind = port.type
     value: Any
     if kind is str or kind is object:
@@ -28,22 +35,22 @@ def convert_text(text: str, port: PortSpec) -> Any:
         except ValueError as exc:
             raise PortValueError(f"port '{port.name}': {exc}") from None
     elif kind is bool:
-        if text.strip() in _TRUE:
+        if text in _TRUE:
             value = True
-        elif text.strip() in _FALSE:
+        elif text in _FALSE:
             value = False
         else:
             raise PortValueError(f"port '{port.name}' needs true or false, got {text!r}")
-    elif kind is int:
-        try:
-            value = int(text.strip(), 0) if text.strip().lower().startswith(("0x", "-0x")) else int(text)
-        except ValueError:
-            raise PortValueError(f"port '{port.name}' needs an integer, got {text!r}") from None
     else:
-        try:
-            value = float(text)
-        except ValueError:
-            raise PortValueError(f"port '{port.name}' needs a number, got {text!r}") from None
+        found = int_prefix(text) if kind is int else real_prefix(text)
+        if found is None:
+            raise PortValueError(f"port '{port.name}' needs {_TYPE_NAMES[kind]}, got {text!r}")
+        value, rest = found
+        if rest.strip():
+            logger.warning(
+                "%sport '%s': %r is read as %r, as BT.CPP reads it (%r is ignored)",
+                f"{where}: " if where else "", port.name, text, value, rest,
+            )
     if port.choices and value not in port.choices:
         raise PortValueError(f"port '{port.name}' must be one of {', '.join(port.choices)}; got {text!r}")
     return value
@@ -70,7 +77,7 @@ class PortValue:
     key: str | None = None
 
     @staticmethod
-    def from_text(port: PortSpec, text: str) -> PortValue:
+    def from_text(port: PortSpec, text: str, where: str = "") -> PortValue:
         key = blackboard_key(text, port.name)
         if key is not None:
             if not key:
@@ -80,7 +87,7 @@ class PortValue:
             raise PortValueError(
                 f"output port '{port.name}' needs a blackboard key such as {{{port.name}}}, got {text!r}"
             )
-        return PortValue(port, literal=convert_text(text, port))
+        return PortValue(port, literal=convert_text(text, port, where))
 
     @staticmethod
     def from_default(port: PortSpec) -> PortValue:
@@ -145,14 +152,19 @@ class PortAccessor:
         except TreeRuntimeError as exc:
             raise TreeRuntimeError(f"{self._owner}: port '{name}' (blackboard entry '{value.key}'): {exc}") from None
 
-    def set(self, name: str, value: Any) -> None:
-        """Write an output (or inout) port's blackboard entry."""
+    def set(self, name: str, value: Any) -> bool:
+        """Write an output (or inout) port's blackboard entry; True when written. An output port the tree does
+        not connect is left alone and False returned, as BT.CPP's ``setOutput`` returns an error value that
+        nodes are free to ignore (Nav2's leaves write ``error_code_id`` whether the tree reads it or not)."""
+        if name not in self._values and name in self._specs and self._specs[name].direction is PortDirection.OUTPUT:
+            return False
         port_value = self._value(name)
         if port_value.port.direction is PortDirection.INPUT:
             raise TreeRuntimeError(f"{self._owner}: port '{name}' is an input port; it cannot be written")
         if port_value.key is None:
             raise TreeRuntimeError(f"{self._owner}: port '{name}' is a literal, not a blackboard key")
         self._blackboard.set(port_value.key, value)
+        return True
 
     def names(self) -> tuple[str, ...]:
         return tuple(self._values)

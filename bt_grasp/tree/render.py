@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import shutil
 import subprocess
-from pathlib import Path
 
 import rich.tree
 
@@ -112,13 +111,13 @@ def to_dot(root: BtNode, title: str = "tree", *, with_status: bool = False) -> s
     return "\n".join(lines) + "\n"
 
 
-def render_image(dot_text: str, fmt: str, out: Path) -> None:
-    """Run Graphviz ``dot`` to write ``out`` as png or svg."""
+def render_image(dot_text: str, fmt: str) -> bytes:
+    """The tree drawn by Graphviz ``dot`` as png or svg bytes (the caller writes them where the user said)."""
     dot = shutil.which("dot")
     if dot is None:
         raise InputError(f"--format {fmt}", "Graphviz 'dot' is not installed; install graphviz or use --format dot")
-    result = subprocess.run(
-        [dot, f"-T{fmt}", "-o", str(out)], input=dot_text, text=True, capture_output=True, check=False
-    )
+    result = subprocess.run([dot, f"-T{fmt}"], input=dot_text.encode("utf-8"), capture_output=True, check=False)
     if result.returncode != 0:
-        raise InputError(f"--format {fmt}", f"dot failed: {result.stderr.strip().splitlines()[-1:]}")
+        last = result.stderr.decode("utf-8", "replace").strip().splitlines()[-1:]
+        raise InputError(f"--format {fmt}", f"dot failed: {last}")
+    return result.stdout

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 from bt_grasp.interfaces import Stepper
-from bt_grasp.tree.introspect import node_records
+from bt_grasp.tree.introspect import bt_status_name
 from bt_grasp.tree.loader import LoadedTree
 from bt_grasp.tree.node import BtNode, BtStatus
 from bt_grasp.tree.registry import NodeKind
@@ -121,6 +121,8 @@ class TreeRunner:
         self._watch = _TickWatch()
         for node in tree.nodes():
             node.bt_listener = self._watch
+        #: every node in uid order, walked once: a tree's structure does not change while it runs
+        self._nodes = sorted(tree.nodes(), key=lambda n: n.bt_uid)
         #: per tick, every node's status as recorded (path -> status), for comparing runs
         self.stream: list[dict[str, Any]] = []
 
@@ -143,14 +145,7 @@ class TreeRunner:
             stamp = self.stepper.now_ns()
             if self.tree.runs > 1 and self.recorder is not None:
                 self.recorder.write_event(stamp, "wake_up", {"tick": tick, "runs": self.tree.runs})
-            records = node_records(self.tree.root)
-            for rec in records:
-                ticked = rec["uid"] in watch.ticked
-                rec["ticked"] = ticked
-                # what the node returned this tick (a Sequence resets a failed child to IDLE afterwards)
-                rec["status"] = watch.returned[rec["uid"]] if ticked else rec["bt_status"]
-                del rec["bt_status"]
-                rec["feedback"] = rec.pop("feedback_message")
+            records = tick_records(self._nodes, watch)
             self.stream.append({"tick": tick, "status": {rec["path"]: rec["status"] for rec in records}})
             # every FAILURE a leaf returned during this tick, also those a retry inside the tick hid again
             for node, reason, message, order in watch.failed:
@@ -191,6 +186,24 @@ class TreeRunner:
             root_runs=root_runs,
             stopped=stopped,
         )
+
+
+def tick_records(nodes: Sequence[BtNode], watch: _TickWatch) -> list[dict[str, Any]]:
+    """One dict per node (``nodes`` in uid order) as the recorders take them: uid, type, name, path, kind,
+    status (what the node returned this tick if it was ticked: a Sequence resets a failed child to IDLE
+    afterwards; else its BT.CPP status), failure_reason, ticked, feedback."""
+    ticked_now, returned = watch.ticked, watch.returned
+    records = []
+    for node in nodes:
+        uid = node.bt_uid
+        ticked = uid in ticked_now
+        records.append({
+            "uid": uid, "type": node.bt_type, "name": node.name, "path": node.bt_path, "kind": node.bt_kind.value,
+            "status": returned[uid] if ticked else bt_status_name(node),
+            "failure_reason": getattr(node, "failure_reason", None), "ticked": ticked,
+            "feedback": node.feedback_message,
+        })
+    return records
 
 
 class _TickWatch:

@@ -6,6 +6,7 @@ or runs a node.
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass, field
 
 from bt_grasp.errors import TreeFileError, did_you_mean
@@ -16,6 +17,8 @@ from bt_grasp.tree.node import POST_CONDITIONS, PRE_CONDITIONS, Conditions
 from bt_grasp.tree.ports import PortValue, blackboard_key, convert_text
 from bt_grasp.tree.registry import NodeKind, NodeRegistry, NodeSpec, PortDirection, PortSpec
 from bt_grasp.tree.scripting import parse_script
+
+logger = logging.getLogger(__name__)
 
 CONDITION_ATTRIBUTES = frozenset(PRE_CONDITIONS + POST_CONDITIONS)
 SPECIAL_ATTRIBUTES = frozenset({"name", "_description", "_autoremap", "_uid", "_fullpath"})
@@ -96,7 +99,7 @@ def resolve_node(decl: NodeDecl, registry: NodeRegistry, document: Document) -> 
             hint = did_you_mean(key, known + sorted(CONDITION_ATTRIBUTES | SPECIAL_ATTRIBUTES))
             raise decl.error(f"unknown attribute '{key}' for {spec.name} ({listing}){hint}")
         try:
-            ports[key] = PortValue.from_text(port, value)
+            ports[key] = PortValue.from_text(port, value, f"{decl.source}:{decl.line}")
         except PortValueError as exc:
             raise decl.error(f"{spec.name}: {exc}") from None
         if port.reason and ports[key].key is None and registry.reason(str(ports[key].literal)) is None:
@@ -105,6 +108,8 @@ def resolve_node(decl: NodeDecl, registry: NodeRegistry, document: Document) -> 
     for port in spec.ports:
         if port.name in ports:
             continue
+        if port.required and port.direction is PortDirection.OUTPUT:
+            continue  # BT.CPP: an output may stay unconnected (writing it then does nothing)
         if port.required:
             raise decl.error(f"{spec.name} needs the port '{port.name}' ({port.description or port.type.__name__})")
         ports[port.name] = PortValue.from_default(port)
@@ -136,15 +141,16 @@ def resolve_subtree(decl: NodeDecl, document: Document, spec: NodeSpec) -> Resol
     if model is not None:
         known = {p.name: p for p in model.ports}
         for key, _ in remaps:
-            if key not in known:
-                raise decl.error(
-                    f"SubTree {subtree_id} has no port '{key}' in its TreeNodesModel{did_you_mean(key, list(known))}"
+            if key not in known:  # BT.CPP remaps it all the same: worth a word, not a refusal
+                logger.warning(
+                    "%s:%d: SubTree %s remaps '%s', which its TreeNodesModel does not list%s",
+                    decl.source, decl.line, subtree_id, key, did_you_mean(key, list(known)),
                 )
         given = {k for k, _ in remaps}
         for port in model.ports:
             if port.name in given or autoremap:
                 continue
-            if port.default is None:
+            if not port.default:  # BT.CPP: an empty default="" is no default
                 raise decl.error(f"SubTree {subtree_id} needs the port '{port.name}' (its TreeNodesModel says so)")
             remaps.append((port.name, port.default))
     name = decl.name if decl.name is not None else subtree_id
@@ -152,38 +158,41 @@ def resolve_subtree(decl: NodeDecl, document: Document, spec: NodeSpec) -> Resol
 
 
 def check_models(document: Document, registry: NodeRegistry) -> None:
-    """TreeNodesModel entries of registered nodes must agree with the registry."""
+    """TreeNodesModel entries of registered nodes should agree with the registry. BT.CPP reads only the
+    ``<SubTree>`` models and ignores the others, so a disagreement (a stand-in that declares fewer ports than
+    the other project's real node, or another type) is logged as a warning naming the file and line, and the
+    tree loads as BT.CPP loads it."""
     for model in document.models:
         if model.kind == "SubTree":
             continue
         spec = registry.get(model.node_id)
         if spec is None:
             continue  # Groot2 describes nodes this tree may not use; an unknown node in a tree is caught there
-        _check_model(model, spec)
+        for line, problem in _model_problems(model, spec):
+            logger.warning("%s:%d: TreeNodesModel: %s (BT.CPP ignores it)", model.source, line, problem)
 
 
-def _check_model(model: ModelDecl, spec: NodeSpec) -> None:
-    def error(problem: str, line: int) -> TreeFileError:
-        return TreeFileError(model.source, f"TreeNodesModel: {problem}", where=line or model.line or None)
-
+def _model_problems(model: ModelDecl, spec: NodeSpec) -> list[tuple[int, str]]:
+    """Where a node's model and its registration disagree: (line, problem) pairs."""
     if spec.kind.value != model.kind:
-        raise error(f"{spec.name} is registered as {article(spec.kind.value)}, the model says {model.kind}", model.line)
+        return [(model.line, f"{spec.name} is registered as {article(spec.kind.value)}, the model says {model.kind}")]
+    problems = []
     for mport in model.ports:
         port = spec.port(mport.name)
+        line = mport.line or model.line
         if port is None:
             known = ", ".join(p.name for p in spec.ports) or "none"
-            raise error(f"{spec.name} has no port '{mport.name}' (its ports: {known})", mport.line)
+            problems.append((line, f"{spec.name} has no port '{mport.name}' (its ports: {known})"))
+            continue
         if port.direction.value != mport.direction:
-            raise error(
-                f"port '{mport.name}' of {spec.name} is {port.direction.value}, the model says {mport.direction}",
-                mport.line,
-            )
+            says = f"the model says {mport.direction}"
+            problems.append((line, f"port '{mport.name}' of {spec.name} is {port.direction.value}, {says}"))
+            continue
         wanted = _MODEL_TYPES.get((mport.type_name or "").strip())
         if wanted is not None and port.type is not object and wanted is not port.type:
-            raise error(
-                f"port '{mport.name}' of {spec.name} has type {port.type.__name__}, the model says {mport.type_name}",
-                mport.line,
-            )
+            says = f"the model says {mport.type_name}"
+            problems.append((line, f"port '{mport.name}' of {spec.name} has type {port.type.__name__}, {says}"))
+    return problems
 
 
 #: the ports of built-in nodes that hold a script

@@ -17,6 +17,7 @@ text with six decimals (``std::to_string``: ``2.000000``).
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Mapping
 from typing import Any
 
@@ -111,6 +112,35 @@ def parse_int(text: str) -> int | None:
     return value if _INT64_MIN <= value <= _INT64_MAX else None
 
 
+_INT_PREFIX = re.compile(r"-?[0-9]+")
+_REAL_PREFIX = re.compile(r"-?(?:(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?|(?i:infinity|inf|nan))")
+
+
+def int_prefix(text: str) -> tuple[int, str] | None:
+    """``convertFromString<int64_t>`` (``std::from_chars``, the rest unchecked): the integer at the start of
+    ``text`` and the text after it; None when none starts there (a leading space or ``+`` included) or it
+    does not fit 64 bits. ``"2.7"`` reads 2, ``"0x10"`` reads 0, as BT.CPP reads them."""
+    match = _INT_PREFIX.match(text)
+    if match is None:
+        return None
+    value = int(match.group())
+    if not _INT64_MIN <= value <= _INT64_MAX:
+        return None
+    return value, text[match.end() :]
+
+
+def real_prefix(text: str) -> tuple[float, str] | None:
+    """``convertFromString<double>`` (``std::from_chars``, the rest unchecked): the real at the start of
+    ``text`` and the text after it; None when none starts there or it is out of range (``1e400``)."""
+    match = _REAL_PREFIX.match(text)
+    if match is None:
+        return None
+    value = float(match.group())
+    if math.isinf(value) and "inf" not in match.group().lower():
+        return None
+    return value, text[match.end() :]
+
+
 def to_real(value: Any, enums: Mapping[str, int] | None = None) -> float:
     """A script operand as a real (``Any::cast<double>``; strings also read ``true``/``false``/enums,
     as ``StringToDouble`` does in comparisons)."""
@@ -186,7 +216,9 @@ def copy_into(value: Any, current: Any) -> Any:
 
 
 def convert_text(text: str, kind: type) -> Any:
-    """``convertFromString<T>`` for the scalar port types (``int``, ``float``, ``bool``, ``str``)."""
+    """``convertFromString<T>`` for the scalar port types (``int``, ``float``, ``bool``, ``str``): a number is
+    read from the start of the text and the rest ignored (``std::from_chars``; no leading space or ``+``), a
+    bool is one of BT.CPP's seven spellings exactly."""
     if kind is str:
         return text
     if kind is bool:
@@ -196,15 +228,15 @@ def convert_text(text: str, kind: type) -> Any:
             return False
         raise TreeRuntimeError(f"Can't convert string [{text}] to bool")
     if kind is int:
-        number = parse_int(text.strip())
+        number = int_prefix(text)
         if number is None:
             raise TreeRuntimeError(f"Can't convert string [{text}] to integer")
-        return number
+        return number[0]
     if kind is float:
-        real = parse_real(text.strip())
+        real = real_prefix(text)
         if real is None:
             raise TreeRuntimeError(f"Can't convert string [{text}] to double")
-        return real
+        return real[0]
     parse = getattr(kind, "from_port_text", None)
     if callable(parse):  # an application type (registry.is_text_port_type)
         try:
@@ -222,10 +254,11 @@ def cast_to(value: Any, kind: type) -> Any:
         return convert_text(value, kind)
     if kind is str:
         return to_text(value)
-    if not is_number(value):
+    if not is_number(value) or kind not in (bool, int, float):  # an application type takes only its own values
         if isinstance(value, kind):
             return value
-        raise TreeRuntimeError(f"[Any::convert]: no known safe conversion between [{type_name(value)}] and [{kind}]")
+        name = getattr(kind, "__name__", str(kind))
+        raise TreeRuntimeError(f"[Any::convert]: no known safe conversion between [{type_name(value)}] and [{name}]")
     if kind is bool:
         return to_bool(value)
     if kind is int:

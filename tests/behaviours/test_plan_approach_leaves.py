@@ -83,23 +83,43 @@ def test_one_candidate_per_tick_until_one_is_reachable() -> None:
     assert "candidate 2" in tree.find("PlanGrasp").feedback_message
 
 
+#: the 5 cm cube's four footprint grasps, then the six grasps sampled from its fitted box that are not near-same
+#: as one of them (three top-down ones 15-20 mm off its centre, three from its sides)
+FOOTPRINT, SAMPLED = 4, 6
+
+
 @pytest.mark.parametrize(
-    ("ik_failures", "statuses", "reason"),
+    ("ik_failures", "statuses", "tried", "reason"),
     [
-        (99, (), "IK_UNREACHABLE"),  # every pre-grasp unreachable
-        (0, (PlanStatus.NO_PATH,) * 4, "PLAN_FAILED"),  # reachable, but no path to any
-        (0, (PlanStatus.GOAL_IN_COLLISION,) * 4, "PLAN_FAILED"),  # every pre-grasp configuration collides
-        (0, (PlanStatus.IK_UNREACHABLE,) * 4, "IK_UNREACHABLE"),  # the planner's own IK finds nothing
+        # every pre-grasp unreachable: no sampled grasp is reachable either, so only the footprint's are tried
+        (99, (), FOOTPRINT, "IK_UNREACHABLE"),
+        (0, (PlanStatus.NO_PATH,) * 10, FOOTPRINT + SAMPLED, "PLAN_FAILED"),  # reachable, but no path to any
+        (0, (PlanStatus.GOAL_IN_COLLISION,) * 10, FOOTPRINT + SAMPLED, "PLAN_FAILED"),  # every pre-grasp collides
+        (0, (PlanStatus.IK_UNREACHABLE,) * 10, FOOTPRINT + SAMPLED, "IK_UNREACHABLE"),  # the planner's IK fails
     ],
 )
 def test_no_candidate_reachable_fails_after_trying_each(
-    ik_failures: int, statuses: tuple[PlanStatus, ...], reason: str
+    ik_failures: int, statuses: tuple[PlanStatus, ...], tried: int, reason: str
 ) -> None:
-    # the four candidates of a 5 cm cube, one per tick: RUNNING x3, then FAILURE with the last reason
+    # one candidate per tick: RUNNING while candidates remain, then FAILURE with the last reason
     tree, _, _ = _setup(PLAN, FakeKinematics(failures=ik_failures), FakePlanner(statuses))
-    assert _ticks(tree, 10) == ["RUNNING", "RUNNING", "RUNNING", "FAILURE"]
+    assert _ticks(tree, 20) == ["RUNNING"] * (tried - 1) + ["FAILURE"]
     values = tree.blackboard_values()
     assert values["failure_reason"] == reason and values["failed_leaf"] == "PlanGrasp"
+
+
+def test_when_every_footprint_grasp_is_blocked_the_sampled_grasps_are_tried_next() -> None:
+    # ticks 1-4: the footprint's four grasps have no path -> RUNNING; after the fourth, the grasps sampled from
+    # the cloud that are not near-same as one of them are added; tick 5: the first of them plans -> SUCCESS
+    from bt_grasp.perception.antipodal import near_same, rank_grasps
+
+    tree, _, _ = _setup(PLAN, FakeKinematics(), FakePlanner((PlanStatus.NO_PATH,) * FOOTPRINT))
+    assert _ticks(tree, 20) == ["RUNNING"] * FOOTPRINT + ["SUCCESS"]
+    plan = tree.root_blackboard.get("grasp")
+    assert isinstance(plan, GraspPlan)
+    footprint = rank_grasps(detection(), tree.root_blackboard.get("objects")).candidates
+    assert len(footprint) == FOOTPRINT and not any(near_same(plan.candidate, c) for c in footprint)
+    assert f"candidate {FOOTPRINT} of {FOOTPRINT + SAMPLED}" in tree.find("PlanGrasp").feedback_message
 
 
 def test_a_candidate_whose_straight_descent_is_blocked_is_passed_over() -> None:
@@ -118,11 +138,11 @@ def test_a_candidate_whose_straight_descent_is_blocked_is_passed_over() -> None:
 
 
 def test_every_descent_blocked_fails_plan_failed_naming_the_descent() -> None:
-    # the four candidates' descents all collide: RUNNING x3, then FAILURE (PLAN_FAILED, as every planning
+    # the ten candidates' descents all collide: RUNNING x9, then FAILURE (PLAN_FAILED, as every planning
     # failure of PlanGrasp other than IK) whose message says the descent was blocked
-    planner = FakePlanner(descents=(CartesianStatus.COLLISION,) * 4)
+    planner = FakePlanner(descents=(CartesianStatus.COLLISION,) * (FOOTPRINT + SAMPLED))
     tree, _, _ = _setup(PLAN, FakeKinematics(), planner)
-    assert _ticks(tree, 10) == ["RUNNING", "RUNNING", "RUNNING", "FAILURE"]
+    assert _ticks(tree, 20) == ["RUNNING"] * (FOOTPRINT + SAMPLED - 1) + ["FAILURE"]
     values = tree.blackboard_values()
     assert values["failure_reason"] == "PLAN_FAILED" and values["failed_leaf"] == "PlanGrasp"
     assert "straight descent fails (collision)" in tree.find("PlanGrasp").feedback_message
@@ -137,9 +157,16 @@ def test_no_target_and_nothing_graspable() -> None:
 
 def test_skip_past_every_candidate_fails_at_once() -> None:
     tree, _, _ = _setup(PLAN, FakeKinematics(), FakePlanner())
-    tree.root_blackboard.set("skip", 4)
+    tree.root_blackboard.set("skip", FOOTPRINT + SAMPLED)
     assert _ticks(tree, 3) == ["FAILURE"]
     assert tree.blackboard_values()["failure_reason"] == "PLAN_FAILED"
+
+
+def test_skip_past_the_footprint_s_grasps_goes_on_to_the_sampled_ones() -> None:
+    tree, _, _ = _setup(PLAN, FakeKinematics(), FakePlanner())
+    tree.root_blackboard.set("skip", FOOTPRINT + 1)
+    assert _ticks(tree, 3) == ["SUCCESS"]
+    assert "candidate 0 of 10" in tree.find("PlanGrasp").feedback_message
 
 
 def test_approach_executes_the_planned_path_without_planning_again() -> None:

@@ -1,7 +1,10 @@
 // Opens a Foxglove Studio URL in headless chromium (puppeteer-core) and writes what it shows as JSON:
 // the Problems list, topics, the 3D panel's frames, whether the image and 3D panels drew something.
 // Usage: node probe.cjs --url URL --out OUT.json --chromium PATH --profile DIR [--wait S] [--screenshot PNG]
-//        [--dump-text]
+//        [--dump-text] [--until 3d,image,state --max-wait S]
+// --until: after the --wait seconds, keep looking (every 2 s, up to --max-wait seconds in all) until each named
+// kind of panel has drawn (3d/image: a picture, by the same measure as studio_driver._drawn; state: coloured
+// bars, as _coloured), so a slow machine gets the time it needs instead of a fixed sleep that assumes a speed.
 "use strict";
 const fs = require("fs");
 const puppeteer = require("puppeteer-core");
@@ -11,6 +14,70 @@ function arg(name, fallback) {
   return i >= 0 ? process.argv[i + 1] : fallback;
 }
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+
+// The panels with a canvas (3D, image, State Transitions, ...): kind, title text and where they are.
+async function findPanels(page) {
+  return page.evaluate(() => {
+    const out = [];
+    for (const c of document.querySelectorAll("canvas")) {
+      let el = c;
+      while (el && ![...el.querySelectorAll("button")].some((b) => b.getAttribute("title") === "Close Window")) el = el.parentElement;
+      if (!el) continue;
+      const is3d = [...el.querySelectorAll("button")].some((b) => b.getAttribute("title") === "Switch to 2D camera");
+      const r = c.getBoundingClientRect();
+      if (r.width < 50 || r.height < 50) continue;
+      const text = el.innerText.trim();
+      const kind = is3d ? "3d" : text.startsWith("/camera/") ? "image" : text.startsWith("State Transitions") ? "state"
+        : "other";
+      out.push({ kind, text: el.innerText.slice(0, 200),
+                 x: r.left, y: r.top, width: r.width, height: r.height });
+    }
+    return out;
+  });
+}
+
+// Whether a panel's pixels show what studio_driver's checks look for: many distinct colours (a picture) for
+// 3d/image, more than 2% strongly saturated pixels (OpenCV's HSV S > 120) for state. Measured in the page from
+// a screenshot of the panel's rectangle.
+async function panelDrawn(page, p) {
+  const png = await page.screenshot({ clip: { x: p.x, y: p.y, width: p.width, height: p.height }, encoding: "base64" });
+  return page.evaluate(async (b64, kind) => {
+    const img = new Image();
+    img.src = "data:image/png;base64," + b64;
+    await img.decode();
+    const cv = document.createElement("canvas");
+    cv.width = img.width; cv.height = img.height;
+    const ctx = cv.getContext("2d");
+    ctx.drawImage(img, 0, 0);
+    const d = ctx.getImageData(0, 0, cv.width, cv.height).data;
+    if (kind === "state") {
+      let sat = 0;
+      for (let i = 0; i < d.length; i += 4) {
+        const mx = Math.max(d[i], d[i + 1], d[i + 2]), mn = Math.min(d[i], d[i + 1], d[i + 2]);
+        if (mx > 0 && ((mx - mn) * 255) / mx > 120) sat++;
+      }
+      return sat / (d.length / 4) > 0.02;
+    }
+    const colours = new Set();
+    for (let i = 0; i < d.length; i += 4) colours.add(((d[i] >> 3) << 10) | ((d[i + 1] >> 3) << 5) | (d[i + 2] >> 3));
+    return colours.size > 200;
+  }, png, p.kind);
+}
+
+async function waitUntilDrawn(page, kinds, deadline) {
+  for (;;) {
+    const panels = await findPanels(page);
+    let missing = [];
+    for (const kind of kinds) {
+      const mine = panels.filter((p) => p.kind === kind);
+      let ok = false;
+      for (const p of mine) if (await panelDrawn(page, p)) { ok = true; break; }
+      if (!ok) missing.push(kind);
+    }
+    if (missing.length === 0 || Date.now() > deadline) return missing;
+    await sleep(2000);
+  }
+}
 
 // foxglove-sdk 0.30's WebSocket server speaks the Foxglove WebSocket protocol under its newer subprotocol name
 // "foxglove.sdk.v1"; this Studio build (1.48, in a worker) asks only for "foxglove.websocket.v1". The bridge
@@ -58,8 +125,15 @@ async function main() {
     page.on("pageerror", (e) => result.errors.push(String(e)));
     result.requests = [];
     page.on("request", (r) => result.requests.push(r.url().slice(0, 120)));
+    const started = Date.now();
     await page.goto(url, { waitUntil: "load", timeout: 180000 });
     await sleep(waitS * 1000);
+    const until = arg("until", "");
+    if (until) {
+      const maxWaitS = Number(arg("max-wait", "120"));
+      result.notDrawnAtDeadline = await waitUntilDrawn(page, until.split(","), started + maxWaitS * 1000);
+      result.waitedS = (Date.now() - started) / 1000;
+    }
     if (process.argv.includes("--page")) {  // a plain page (the run report): its text and a full screenshot
       result.text = await page.evaluate(() => document.body.innerText);
       result.images = await page.evaluate(() => [...document.images].map((i) => [i.naturalWidth, i.naturalHeight]));
@@ -84,23 +158,7 @@ async function main() {
       return { problemsTab: true, problemCount: badge ? Number(badge) : 0, problems: [...new Set(items)] };
     }));
     // where the 3D and image panels are
-    const panels = await page.evaluate(() => {
-      const out = [];
-      for (const c of document.querySelectorAll("canvas")) {
-        let el = c;
-        while (el && ![...el.querySelectorAll("button")].some((b) => b.getAttribute("title") === "Close Window")) el = el.parentElement;
-        if (!el) continue;
-        const is3d = [...el.querySelectorAll("button")].some((b) => b.getAttribute("title") === "Switch to 2D camera");
-        const r = c.getBoundingClientRect();
-        if (r.width < 50 || r.height < 50) continue;
-        const text = el.innerText.trim();
-        const kind = is3d ? "3d" : text.startsWith("/camera/") ? "image" : text.startsWith("State Transitions") ? "state"
-          : "other";
-        out.push({ kind, text: el.innerText.slice(0, 200),
-                   x: r.left, y: r.top, width: r.width, height: r.height });
-      }
-      return out;
-    });
+    const panels = await findPanels(page);
     result.panels = panels;
     const shotDir = arg("panel-shots");
     if (shotDir) {
@@ -121,6 +179,70 @@ async function main() {
       await sleep(500);
       result.settingsText = await page.evaluate(async () => {
         const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+
+// The panels with a canvas (3D, image, State Transitions, ...): kind, title text and where they are.
+async function findPanels(page) {
+  return page.evaluate(() => {
+    const out = [];
+    for (const c of document.querySelectorAll("canvas")) {
+      let el = c;
+      while (el && ![...el.querySelectorAll("button")].some((b) => b.getAttribute("title") === "Close Window")) el = el.parentElement;
+      if (!el) continue;
+      const is3d = [...el.querySelectorAll("button")].some((b) => b.getAttribute("title") === "Switch to 2D camera");
+      const r = c.getBoundingClientRect();
+      if (r.width < 50 || r.height < 50) continue;
+      const text = el.innerText.trim();
+      const kind = is3d ? "3d" : text.startsWith("/camera/") ? "image" : text.startsWith("State Transitions") ? "state"
+        : "other";
+      out.push({ kind, text: el.innerText.slice(0, 200),
+                 x: r.left, y: r.top, width: r.width, height: r.height });
+    }
+    return out;
+  });
+}
+
+// Whether a panel's pixels show what studio_driver's checks look for: many distinct colours (a picture) for
+// 3d/image, more than 2% strongly saturated pixels (OpenCV's HSV S > 120) for state. Measured in the page from
+// a screenshot of the panel's rectangle.
+async function panelDrawn(page, p) {
+  const png = await page.screenshot({ clip: { x: p.x, y: p.y, width: p.width, height: p.height }, encoding: "base64" });
+  return page.evaluate(async (b64, kind) => {
+    const img = new Image();
+    img.src = "data:image/png;base64," + b64;
+    await img.decode();
+    const cv = document.createElement("canvas");
+    cv.width = img.width; cv.height = img.height;
+    const ctx = cv.getContext("2d");
+    ctx.drawImage(img, 0, 0);
+    const d = ctx.getImageData(0, 0, cv.width, cv.height).data;
+    if (kind === "state") {
+      let sat = 0;
+      for (let i = 0; i < d.length; i += 4) {
+        const mx = Math.max(d[i], d[i + 1], d[i + 2]), mn = Math.min(d[i], d[i + 1], d[i + 2]);
+        if (mx > 0 && ((mx - mn) * 255) / mx > 120) sat++;
+      }
+      return sat / (d.length / 4) > 0.02;
+    }
+    const colours = new Set();
+    for (let i = 0; i < d.length; i += 4) colours.add(((d[i] >> 3) << 10) | ((d[i + 1] >> 3) << 5) | (d[i + 2] >> 3));
+    return colours.size > 200;
+  }, png, p.kind);
+}
+
+async function waitUntilDrawn(page, kinds, deadline) {
+  for (;;) {
+    const panels = await findPanels(page);
+    let missing = [];
+    for (const kind of kinds) {
+      const mine = panels.filter((p) => p.kind === kind);
+      let ok = false;
+      for (const p of mine) if (await panelDrawn(page, p)) { ok = true; break; }
+      if (!ok) missing.push(kind);
+    }
+    if (missing.length === 0 || Date.now() > deadline) return missing;
+    await sleep(2000);
+  }
+}
         const nav = [...document.querySelectorAll("button")].find((b) => b.getAttribute("title") === "Panel settings");
         if (nav) { nav.click(); await sleep(1500); }
         const tf = [...document.querySelectorAll("div, span, p")].find((e) => e.children.length === 0 && /^Transforms( \(\d+\))?$/.test((e.innerText || "").trim()));

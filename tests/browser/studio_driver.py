@@ -179,8 +179,13 @@ class StudioReport:
 
 
 def open_in_studio(url: str, workdir: Path, *, wait_s: float = 25.0, screenshot: Path | None = None,
-                   timeout_s: float = 240.0, ws_bridge: str | None = None) -> StudioReport:
-    """Open ``url`` in headless chromium, let Foxglove load, and report what it shows."""
+                   timeout_s: float = 240.0, ws_bridge: str | None = None,
+                   until: tuple[str, ...] = (), max_wait_s: float = 120.0) -> StudioReport:
+    """Open ``url`` in headless chromium, let Foxglove load, and report what it shows.
+
+    ``wait_s`` is waited in any case; with ``until`` (panel kinds: "3d", "image", "state") the probe then goes on
+    looking until each of them has drawn, up to ``max_wait_s`` from the page's start: a condition, not a sleep
+    that assumes the machine's speed (a loaded machine's Studio took longer than 25 s to draw a live run)."""
     out = workdir / "probe.json"
     profile = workdir / "chromium-profile"
     profile.mkdir(parents=True, exist_ok=True)
@@ -190,6 +195,8 @@ def open_in_studio(url: str, workdir: Path, *, wait_s: float = 25.0, screenshot:
         cmd += ["--screenshot", str(screenshot)]
     if ws_bridge is not None:
         cmd += ["--ws-bridge", ws_bridge]
+    if until:
+        cmd += ["--until", ",".join(until), "--max-wait", str(max_wait_s)]
     shots = workdir / "panels"
     shots.mkdir(exist_ok=True)
     cmd += ["--panel-shots", str(shots)]

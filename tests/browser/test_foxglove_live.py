@@ -65,11 +65,11 @@ def _wait_for_line(proc: subprocess.Popen[str], prefix: str, timeout_s: float,
 def test_live_run_shows_whole_in_foxglove(tmp_path: Path) -> None:
     skip_without_browser()
     port = _free_port()
-    # slower than real time (10 ms of simulated time per tick: tick 100 after 20 s, the pick's end after
-    # about 150 s) so the run is still going while Studio starts, subscribes and is looked at
+    # slower than real time (at 0.03x: tick 100 after ~33 s, the pick's end after ~245 s) so the run is still
+    # going while Studio starts, subscribes, draws (waited for, up to 100 s) and is looked at
     proc = subprocess.Popen(
         [sys.executable, "-m", "bt_grasp.cli.main", "run", str(ROOT / "trees/pick.xml"),
-         "--scene", str(ROOT / "scenes/tabletop.yaml"), "--live", str(port), "--realtime", "0.05",
+         "--scene", str(ROOT / "scenes/tabletop.yaml"), "--live", str(port), "--realtime", "0.03",
          "--max-ticks", "1000"],
         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
         env={**os.environ, "PYTHONPATH": str(ROOT), "PYTHONUNBUFFERED": "1", "COLUMNS": "200",
@@ -84,7 +84,8 @@ def test_live_run_shows_whole_in_foxglove(tmp_path: Path) -> None:
         layout = Path(told.rsplit("(layout: ", 1)[1].strip().rstrip(")"))
         assert json.loads(layout.read_text()) == layout_for_tree_file(ROOT / "trees/pick.xml")
         with serving(tmp_path, layout) as server:
-            report = open_in_studio(server.url_for_websocket(), tmp_path, wait_s=25,
+            report = open_in_studio(server.url_for_websocket(), tmp_path, wait_s=5,
+                                    until=("3d", "image", "state"), max_wait_s=100,
                                     screenshot=tmp_path / "live.png", ws_bridge=f"ws://127.0.0.1:{port}")
         assert proc.poll() is None, "the run ended before the viewer looked: the test proves nothing"
     finally:

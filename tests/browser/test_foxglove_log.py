@@ -45,7 +45,7 @@ def pick_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def test_recorded_pick_shows_whole_in_foxglove(pick_log: Path, tmp_path: Path) -> None:
     with serving(pick_log.parent, LAYOUT) as server:
         url = server.url_for_file(pick_log.name) + "&time=" + end_time_iso(pick_log)
-        report = open_in_studio(url, tmp_path, wait_s=25, screenshot=tmp_path / "studio.png")
+        report = open_in_studio(url, tmp_path, wait_s=10, screenshot=tmp_path / "studio.png", until=("3d", "image"))
     assert report.errors == []
     assert report.problems == [] and report.problem_count == 0, report.problems
     assert set(ROBOT_LINKS) <= set(report.frames), report.frames

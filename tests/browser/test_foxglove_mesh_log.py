@@ -54,7 +54,7 @@ def test_a_mesh_scene_log_shows_in_foxglove_with_no_problem(mesh_log: Path, tmp_
     visible_layout.write_text(json.dumps(layout))
     with serving(mesh_log.parent, visible_layout) as server:
         url = server.url_for_file(mesh_log.name) + "&time=" + end_time_iso(mesh_log)
-        report = open_in_studio(url, tmp_path, wait_s=25, screenshot=tmp_path / "studio.png")
+        report = open_in_studio(url, tmp_path, wait_s=10, screenshot=tmp_path / "studio.png", until=("3d",))
     assert report.errors == []
     assert report.problems == [] and report.problem_count == 0, report.problems
     assert set(ROBOT_LINKS) <= set(report.frames), report.frames

@@ -53,7 +53,8 @@ def test_episode_keys_follow_file_contents(tmp_path: Path) -> None:
     campaign.write_text(f"name: c\ntrees: [pick.xml]\nscenes: [{REPO / 'scenes/tabletop.yaml'}]\nseeds: [0]\n")
     before = load_campaign(campaign).episodes()[0].key
     assert load_campaign(campaign).episodes()[0].key == before
-    tree.write_text(tree.read_text().replace('<Lift height="{lift_height}"/>', '<Lift height="0.2"/>'))
+    lift = '<Lift height="{lift_height}" target="{target}"/>'
+    tree.write_text(tree.read_text().replace(lift, lift.replace("{lift_height}", "0.2")))
     assert load_campaign(campaign).episodes()[0].key != before
 
 

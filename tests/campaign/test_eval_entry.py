@@ -129,9 +129,8 @@ def test_eval_report_and_export_to_a_folder_are_one_sentence(
     # on main as it was: IsADirectoryError's traceback
     code, stdout, err = _cli(capsys, "eval", "report", str(results), "--out", str(folder))
     assert (code, stdout) == (2, "")
-    assert err == f"{PREFIX}--out: '{folder}' is a folder; give the HTML file to write, e.g. {folder / 'report.html'}\n"
+    assert err == f"{PREFIX}--out: '{folder}' is a folder; give a file name such as {folder / 'report.html'}\n"
     code, stdout, err = _cli(capsys, "eval", "export", str(results), "--out", str(folder))
     assert (code, stdout) == (2, "")
-    assert err == (f"{PREFIX}--out: '{folder}' is a folder; give the Parquet file to write, e.g. "
-                   f"{folder / 'results.parquet'}\n")
+    assert err == f"{PREFIX}--out: '{folder}' is a folder; give a file name such as {folder / 'results.parquet'}\n"
     assert list(folder.iterdir()) == []

@@ -3,7 +3,9 @@ control, one resident per folder by a lock, and a client whose resident dies say
 
 from __future__ import annotations
 
+import json
 import os
+import socket
 import subprocess
 import sys
 import time
@@ -127,8 +129,8 @@ def _raw(sock: Path):  # type: ignore[no-untyped-def]
 def test_item7_wrong_key_garbage_and_a_1tb_length_do_not_kill_the_resident(resident) -> None:  # type: ignore[no-untyped-def]
     import struct
 
-    from bt_grasp.resident.protocol import authkey
-    from bt_grasp.resident.wire import WireError, client_handshake
+    from bt_grasp.resident.protocol import authkey, code_version
+    from bt_grasp.resident.wire import WireError, client_handshake, receive
 
     proc, sock = resident
     with _raw(sock) as conn, pytest.raises(WireError):
@@ -142,9 +144,11 @@ def test_item7_wrong_key_garbage_and_a_1tb_length_do_not_kill_the_resident(resid
     with _raw(sock) as conn:
         client_handshake(conn, authkey(), 10)
         conn._send(struct.pack("!i", -1) + struct.pack("!Q", 1 << 40))  # declares a 1 TB frame, sends nothing
-    with _raw(sock) as conn:
-        client_handshake(conn, authkey(), 10)
-        conn.send_bytes(b'{"v": 1, "kind": "run", "code_version": "x", "request": {"tree": 5}}')
+    with _raw(sock) as conn:  # this code's version: the request is validated (another version is "stale", and a
+        client_handshake(conn, authkey(), 10)  # resident that could answer so exits by design: a race in this test)
+        conn.send_bytes(json.dumps({"v": 1, "kind": "run", "code_version": code_version(),
+                                    "request": {"tree": 5}}).encode())
+        assert receive(conn, 60)["kind"] == "error"
     assert proc.poll() is None, "the resident died"
     assert _ping() == proc.pid  # and it still serves (then stops)
 
@@ -158,6 +162,98 @@ def test_item7_a_silent_connection_does_not_block_other_clients(resident) -> Non
         assert time.monotonic() - t0 < 60  # the server dropped the silent one after its handshake timeout
     finally:
         silent.close()
+
+
+def test_item7_half_a_frame_then_silence_does_not_block_other_clients(resident) -> None:  # type: ignore[no-untyped-def]
+    """Found by the pre-review attack: `poll` waited only for the first byte, then `recv_bytes` blocked until the
+    whole frame came, so one byte of a length header (or a byte trickled every few seconds) held the resident
+    for ever and `resident status` gave up after 30 s. A connection now has 15 s in all."""
+    proc, sock = resident
+    stalled = socket.socket(socket.AF_UNIX)
+    stalled.connect(str(sock))
+    try:
+        stalled.recv(256)  # the challenge
+        stalled.send(b"\x00")  # one byte of the answer's 4-byte length, then nothing
+        t0 = time.monotonic()
+        assert _ping() == proc.pid
+        assert time.monotonic() - t0 < 25  # the stalled one was cut off at its 15 s
+    finally:
+        stalled.close()
+
+
+def test_item7_a_trickling_authenticated_peer_is_cut_off_at_the_deadline(resident) -> None:  # type: ignore[no-untyped-def]
+    import struct
+
+    from bt_grasp.resident.protocol import authkey
+    from bt_grasp.resident.server import CONNECTION_DEADLINE_S
+    from bt_grasp.resident.wire import client_handshake
+
+    proc, sock = resident
+    conn = _raw(sock)
+    try:
+        client_handshake(conn, authkey(), 10)
+        conn._send(struct.pack("!i", 1000))  # announces 1000 bytes ...
+        t0, cut = time.monotonic(), False
+        while time.monotonic() - t0 < CONNECTION_DEADLINE_S + 10:
+            try:
+                conn._send(b" ")  # ... and sends one every second
+            except OSError:
+                cut = True
+                break
+            time.sleep(1.0)
+        assert cut, "the trickling peer was never cut off"
+    finally:
+        conn.close()
+    assert proc.poll() is None and _ping() == proc.pid
+
+
+def test_item7_a_message_nested_too_deeply_does_not_kill_the_resident(resident) -> None:  # type: ignore[no-untyped-def]
+    """Found by the pre-review attack: an authenticated peer's `[[[[...` 100,000 deep was a RecursionError the
+    server loop did not catch: the resident died."""
+    from bt_grasp.resident.protocol import authkey
+    from bt_grasp.resident.wire import client_handshake
+
+    proc, sock = resident
+    with _raw(sock) as conn:
+        client_handshake(conn, authkey(), 10)
+        conn.send_bytes(b"[" * 100_000 + b"]" * 100_000)
+    time.sleep(1.0)
+    assert proc.poll() is None, "the resident died"
+    assert _ping() == proc.pid
+
+
+def test_item2_a_folder_inside_one_others_can_rename_in_is_refused(tmp_path: Path) -> None:
+    """Found by the pre-review attack: only the folder itself was checked; inside a folder others can write
+    (without the sticky bit /tmp has) they can rename it away and put their own, key and socket included."""
+    open_to_all = tmp_path / "open"
+    open_to_all.mkdir()
+    open_to_all.chmod(0o777)
+    folder = open_to_all / "resident"
+    folder.mkdir(mode=0o700)
+    proc = subprocess.run([*BT, *RUN], capture_output=True, text=True, timeout=120, cwd=REPO, env=_env(folder))
+    _one_sentence(proc, "writable by others without the sticky bit")
+    assert list(folder.iterdir()) == []
+    open_to_all.chmod(0o1777)  # sticky, as /tmp: others cannot rename what is not theirs
+    from bt_grasp.resident.protocol import _unsafe_ancestor
+
+    assert _unsafe_ancestor(folder) is None
+
+
+@pytest.mark.parametrize("content", [b"", b"short"])
+def test_item2_a_short_key_is_refused_not_used(content: bytes, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from bt_grasp.errors import InputError
+    from bt_grasp.resident.protocol import authkey
+
+    folder = tmp_path / "resident"
+    folder.mkdir(mode=0o700)
+    key = folder / "key"
+    key.write_bytes(content)
+    key.chmod(0o600)
+    monkeypatch.setenv("BT_GRASP_RESIDENT_DIR", str(folder))
+    with pytest.raises(InputError, match=r"holds .* bytes, not 32"):
+        authkey()
+    key.unlink()
+    assert len(authkey()) == 32 and not list(folder.glob("*.part"))
 
 
 def test_a_client_whose_resident_is_killed_says_so_and_does_not_exit_130(resident, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]

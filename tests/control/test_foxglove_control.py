@@ -204,6 +204,11 @@ def test_commands_published_on_the_command_topic() -> None:
     unknown = fox.command_message(b'{"kind": "jump"}')
     assert unknown.sent == () and "unknown command kind 'jump'" in unknown.problems[0]
     assert "'n'" in fox.command_message(b'{"kind": "step", "n": "two"}').problems[0]
+    # found by the pre-review attack: these raised out of the SDK's callback (RecursionError, ValueError)
+    for hostile in (b"[" * 100_000, b'{"kind": "step", "n": ' + b"9" * 5000 + b"}",
+                    b'{"kind": "set_blackboard", "key": "h", "value": ' + b"[" * 2000 + b"]" * 2000 + b"}"):
+        answer = fox.command_message(hostile)
+        assert answer.sent == () and "cannot be read" in answer.problems[0]
 
 
 def test_which_answers_are_refusals() -> None:

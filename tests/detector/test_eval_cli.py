@@ -123,3 +123,42 @@ def test_train_without_the_extra_says_how_to_install_it(tmp_path: Path) -> None:
     err = done.stderr.strip()
     assert "\n" not in err and err.startswith("bt-grasp: error: bt-grasp detector train: needs the training extra")
     assert "pip install 'bt-grasp[train]'" in err
+
+
+def _png_header(width: int, height: int) -> bytes:
+    import struct
+    import zlib
+
+    ihdr = b"IHDR" + struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)
+    return b"\x89PNG\r\n\x1a\n" + struct.pack(">I", 13) + ihdr + struct.pack(">I", zlib.crc32(ihdr))
+
+
+@pytest.mark.parametrize(("damage", "fragment"), [
+    ("bomb", "says it is 30000 x 30000 pixels, more than 8192 a side"),
+    ("image_fifo", "is not a regular file"),
+    ("label_fifo", "no such label file"),
+    ("image_to_dev_zero", "is not a regular file"),
+])
+def test_hostile_dataset_files_are_one_sentence_never_a_hang(damage: str, fragment: str, tmp_path: Path,
+                                                            capsys: pytest.CaptureFixture[str]) -> None:
+    """Found by the pre-review attack: dataset pictures were read by cv2.imread, unbounded: a FIFO picture hung
+    `detector eval`, and a PNG of zeros saying 30,000 x 30,000 (under OpenCV's own 2^30-pixel limit) is decoded
+    into 2.7 GB; now a picture is read bounded and its header checked first."""
+    import os
+
+    data = _dataset(tmp_path / "ds")
+    image, label = data / "images" / "00000.png", data / "labels" / "00000.txt"
+    if damage == "bomb":
+        image.write_bytes(_png_header(30_000, 30_000))
+    elif damage == "image_fifo":
+        image.unlink()
+        os.mkfifo(image)
+    elif damage == "label_fifo":
+        label.unlink()
+        os.mkfifo(label)
+    else:
+        image.unlink()
+        image.symlink_to("/dev/zero")
+    model = _model(tmp_path / "m.onnx", [])
+    assert main(["detector", "eval", str(model), str(data)]) == 2
+    assert fragment in _one_sentence(capsys)

@@ -126,3 +126,25 @@ def test_onnxruntime_is_imported_only_when_a_model_is_loaded(tmp_path: Path) -> 
     done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
     assert json.loads(done.stdout.strip().splitlines()[-1]) == [False, True]
+
+
+@pytest.mark.parametrize(("imgsz", "input_shape", "message"), [
+    ("abc", (1, 3, "h", "w"), r"imgsz must be a positive size or \[height, width\], got 'abc'"),
+    ("[" * 5000, (1, 3, "h", "w"), r"imgsz must be a positive size"),
+    ((100_000, 100_000), (1, 3, "h", "w"), r"takes 100000x100000 images, more than 4096 pixels a side"),
+    (None, (1, 3, 100_000, 100_000), r"takes 100000x100000 images, more than 4096 pixels a side"),
+], ids=["text", "deep", "huge-declared", "huge-graph"])
+def test_a_hostile_input_size_is_refused_when_the_model_loads(tmp_path: Path, imgsz, input_shape, message) -> None:
+    """Found by the pre-review attack: an imgsz that is not a Python literal was a ValueError traceback, and a model
+    declaring 100,000-pixel inputs loaded, to ask for a 120 GB tensor at its first picture."""
+    path = write_model(tmp_path / "m.onnx", GOOD, names=NAMES, imgsz=imgsz, input_shape=input_shape)
+    with pytest.raises(ModelError, match=message):
+        ObbModel.load(path)
+
+
+def test_class_names_with_markup_and_paths_are_printed_as_they_are(tmp_path: Path,
+                                                                    capsys: pytest.CaptureFixture[str]) -> None:
+    names = {0: "[/]<script>x</script>$x$", 1: "../../etc/passwd", 2: "[bold]"}
+    path = write_model(tmp_path / "m.onnx", GOOD, names=names)
+    assert main(["detector", "check", str(path)]) == 0
+    assert "([/]<script>x</script>$x$, ../../etc/passwd, [bold])" in capsys.readouterr().out

@@ -18,13 +18,20 @@ REPO = Path(__file__).resolve().parents[2]
 LINE = "bt-grasp: error: interrupted (Ctrl-C)"
 
 
+def _ctrl_c_reaches_the_child() -> None:
+    """Run in the child before exec: a terminal's Ctrl-C reaches a foreground command, but a suite started in the
+    background by a non-interactive shell (nohup, CI runners) hands its children SIGINT ignored, and Python keeps
+    it ignored, so the signal below would do nothing and the run would end normally (exit 0)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 @pytest.mark.sim
 def test_ctrl_c_mid_run_finishes_the_log_marked_interrupted(tmp_path: Path) -> None:
     log = tmp_path / "run.mcap"
     proc = subprocess.Popen(
         [sys.executable, "-m", "bt_grasp.cli.main", "run", "trees/pick.xml", "--scene", "scenes/tabletop.yaml",
          "--log", str(log), "--realtime", "0.3"],  # slowed down: tick 100 comes long before the end
-        cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=_ctrl_c_reaches_the_child,
     )
     assert proc.stderr is not None
     seen = []

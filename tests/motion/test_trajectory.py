@@ -93,3 +93,40 @@ def test_bad_path_raises(bad: np.ndarray) -> None:
 def test_bad_limits_raise() -> None:
     with pytest.raises(ValueError):
         MotionLimits(max_jerk_rad_s3=0.0)
+
+
+def _reference_sample(traj: Trajectory, t_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The interpolation as first written (searchsorted, q, qd and qdd one by one): the executor's targets."""
+    t = min(max(float(t_s), 0.0), traj.duration_s)
+    k = min(max(int(np.searchsorted(traj.times_s, t, side="right")) - 1, 0), len(traj.times_s) - 1)
+    if k == len(traj.times_s) - 1:
+        return traj.q[k], traj.qd[k], traj.qdd[k]
+    dt = traj.times_s[k + 1] - traj.times_s[k]
+    w = (t - traj.times_s[k]) / dt if dt > 0 else 0.0
+    return tuple(a[k] + w * (a[k + 1] - a[k]) for a in (traj.q, traj.qd, traj.qdd))  # type: ignore[return-value]
+
+
+@pytest.mark.parametrize("blend", [False, True])
+def test_sample_is_bit_for_bit_the_interpolation_of_each_array(blend: bool) -> None:
+    # issue 27 interpolates q, qd and qdd side by side in one array: every commanded target must stay the same
+    rng = np.random.default_rng(5)
+    traj = time_parametrize(HOME_Q + np.cumsum(rng.uniform(-0.4, 0.4, (5, 6)), axis=0), blend=blend)
+    times = [*rng.uniform(-0.1, traj.duration_s + 0.1, 300), *traj.times_s, 0.0, traj.duration_s, 1e-12]
+    for t in times:
+        for got, want in zip(traj.sample(float(t)), _reference_sample(traj, float(t)), strict=True):
+            assert got.tobytes() == np.asarray(want).tobytes()
+    q, _, _ = traj.sample(0.0)
+    q[:] = 99.0  # a sample is the caller's own array: the trajectory is unchanged
+    assert traj.sample(0.0)[0][0] != 99.0 and traj.q[0][0] != 99.0
+
+
+def test_the_deviation_is_the_largest_distance_from_the_polyline() -> None:
+    line = np.linspace(HOME_Q, HOME_Q + 0.3, 12) + np.random.default_rng(2).uniform(-0.02, 0.02, (12, 6))
+    traj = time_parametrize(line, blend=True)
+    a, b = traj.waypoints[:-1], traj.waypoints[1:]
+    worst = 0.0
+    for q in traj.q:
+        s = np.clip(np.einsum("ij,ij->i", q - a, b - a) / np.einsum("ij,ij->i", b - a, b - a), 0.0, 1.0)
+        worst = max(worst, float(np.min(np.linalg.norm(a + s[:, None] * (b - a) - q, axis=1))))
+    assert traj.max_path_deviation_rad == pytest.approx(worst, rel=1e-12)
+    assert traj.max_path_deviation_rad > 0.0

@@ -137,6 +137,23 @@ def test_a_long_thin_rod_is_grasped_across_its_long_axis(noise_seed: int, yaw: f
     assert grasps[0].T_base_tcp_grasp[2, 3] >= 0.02 + 0.005 - 1e-9
 
 
+def test_a_low_object_is_grasped_from_as_low_as_the_table_allows() -> None:
+    """A 12 mm rod with nothing around it: a top-down grasp sits where the gripper's lowest corner (a finger tip,
+    20 mm ahead of the tcp) clears the table by exactly 5 mm (25 mm up when the approach is vertical), not a
+    back-off step higher (the tcp stepped back 5 mm at a time from the contacts' midpoint came to rest up to 5 mm
+    too high: the pads then held only the rod's top few mm, and a household pen held so slipped out in Lift)."""
+    from bt_grasp.perception.antipodal import _Gripper
+
+    corners = _Gripper(AntipodalSettings()).corners
+    cloud = _noisy_cloud(box_points((0.55, -0.1), (0.146, 0.014, 0.012), yaw_deg=20.0, step=0.002), 3)
+    top_down = [c for c in sample_grasps(cloud, table_z_m=0.0) if c.kind is ApproachKind.TOP_DOWN]
+    assert top_down
+    for c in top_down:
+        T = c.T_base_tcp_grasp
+        lowest = float(np.min((corners @ T[:3, :3].T + T[:3, 3])[:, 2]))
+        assert lowest == pytest.approx(0.005, abs=1e-6), c.reason
+
+
 def test_too_wide_for_the_gripper_gives_no_candidate() -> None:
     cloud = _noisy_cloud(box_points((0.5, 0.0), (0.12, 0.12, 0.05)))
     assert sample_grasps(cloud, table_z_m=0.0) == ()

@@ -94,3 +94,19 @@ def test_final_poses_and_run_length_count() -> None:
     difference = a.first_difference(shorter)
     assert difference is not None and difference.tick == 5 and "run length" in difference.what[0]
     assert a.first_difference(shorter, compare_final=False) is None
+
+
+def test_a_ticks_digest_is_the_sha256_of_its_canonical_text_with_or_without_the_blackboards_text() -> None:
+    # issue 27: the blackboard's canonical text is kept by the recorder (not re-encoded every tick); the digest
+    # must stay what it was: sha256 of _canonical([tick, nodes, blackboard, q, gripper]), addresses removed
+    import hashlib
+
+    from bt_grasp.recording.fingerprint import TickPrint, _canonical
+
+    board = (("grasp", '{"x":"<Thing at 0x7f12ab>","y":[1.5,"nan"]}'), ("quote", 'say "hi" at 0xZ \u00e9'))
+    nodes = ((1, "RUNNING", None), (2, "FAILURE", "NO_DETECTION at 0xdeadbeef"))
+    for q, gripper in (((1, -2, 3, 4, 5, 6), 850), (None, None)):
+        want = hashlib.sha256(_canonical([7, nodes, board, q, gripper]).encode()).hexdigest()
+        assert TickPrint(7, nodes, board, q, gripper).digest == want
+        assert TickPrint(7, nodes, board, q, gripper, _canonical(board)).digest == want
+        assert TickPrint(7, nodes, board, q, gripper) == TickPrint(7, nodes, board, q, gripper, _canonical(board))

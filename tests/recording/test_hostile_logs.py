@@ -18,8 +18,8 @@ from bt_grasp.recording.writer import RunRecorder
 REPO = Path(__file__).resolve().parents[2]
 
 
-def _log(path: Path, attachments: dict[str, bytes]) -> Path:
-    with RunRecorder(path, metadata={"seed": "0"}, attachments=attachments, handle_signals=False,
+def _log(path: Path, attachments: dict[str, bytes], metadata: dict[str, str] | None = None) -> Path:
+    with RunRecorder(path, metadata={"seed": "0", **(metadata or {})}, attachments=attachments, handle_signals=False,
                      time_origin_ns=1_700_000_000 * 10**9) as rec:
         rec.write_log(0, "INFO", "test", "hostile")
     return path
@@ -49,6 +49,65 @@ def test_item1_resim_attachment_names_cannot_leave_the_work_folder(name: str, tm
     escaped += [p for p in tmp_path.rglob("*escaped*") if p.is_file()]
     assert escaped == []
     assert _resim_dirs() <= before, "the work folder was left behind"
+
+
+def _outside_scene(mesh: Path) -> bytes:
+    text = (REPO / "scenes/tabletop.yaml").read_text()
+    return text.replace("calibration: tabletop.calibration.yaml\n", "").replace(
+        "  - name: red_box\n    shape: box\n    size_m: [0.05, 0.05, 0.05]\n",
+        f"  - name: red_box\n    shape: mesh\n    mesh: {mesh}\n").encode()
+
+
+@pytest.mark.parametrize("what", ["scene_mesh", "tree_include"])
+def test_item1_resim_reads_no_file_outside_the_logs_own(what: str, tmp_path: Path) -> None:
+    """Found by the pre-review attack: attachment names were gated, but what the attached files name was not: a
+    log's scene naming `/home/me/part.obj` (or a tree including `/home/me/x.xml`) made `replay --resim` read the
+    user's file and carry it into the new log. Within a re-simulation every input file must lie in its folder."""
+    outside = tmp_path / "private"
+    outside.mkdir()
+    (outside / "part.obj").write_bytes((REPO / "tests/data/meshes/box.obj").read_bytes())
+    (outside / "lib.xml").write_text('<root BTCPP_format="4"><BehaviorTree ID="Lib"><AlwaysSuccess/></BehaviorTree>'
+                                     "</root>")
+    tree = (REPO / "trees/pick.xml").read_bytes()
+    scene = (REPO / "scenes/tabletop.yaml").read_bytes()
+    if what == "scene_mesh":
+        scene = _outside_scene(outside / "part.obj")
+    else:
+        tree = tree.replace(b'main_tree_to_execute="Pick">', f'main_tree_to_execute="Pick"><include path="{outside}'
+                            f'/lib.xml"/>'.encode(), 1)
+    attachments = {"tree/pick.xml": tree, "scene/tabletop.yaml": scene,
+                   "calibration/c.yaml": (REPO / "scenes/tabletop.calibration.yaml").read_bytes()}
+    log = _log(tmp_path / "outside.mcap", attachments)
+    before = _resim_dirs()
+    proc = subprocess.run([sys.executable, "-m", "bt_grasp.cli.main", "replay", str(log), "--resim"],
+                          capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert proc.returncode == 2, proc.stderr[-2000:]
+    lines = [line for line in proc.stderr.splitlines() if line.strip()]
+    assert len(lines) == 1 and "lies outside" in lines[0] and "Traceback" not in proc.stderr, proc.stderr[-2000:]
+    assert ("part.obj" if what == "scene_mesh" else "lib.xml") in lines[0]
+    assert _resim_dirs() <= before
+
+
+@pytest.mark.parametrize(("metadata", "fragment"), [
+    ({"seed": "abc"}, "'seed' is 'abc'"),
+    ({"seed": "-1"}, "'seed' is '-1'"),
+    ({"max_ticks": "1" + "0" * 15}, "'max_ticks' is '1000000000000000'"),
+    ({"max_ticks": "0"}, "'max_ticks' is '0'"),
+    ({"blackboard": "[" * 50_000}, "'blackboard' is not a JSON object"),
+    ({"blackboard": '{"k": [1, 2]}'}, "'blackboard' is not a JSON object"),
+])
+def test_item1_resim_refuses_run_metadata_it_cannot_run(metadata: dict[str, str], fragment: str,
+                                                        tmp_path: Path) -> None:
+    """Found by the pre-review attack: a recorded seed or tick limit that is not an integer was a ValueError
+    traceback, a blackboard nested 50,000 deep a RecursionError, and a limit of 10^15 ticks ran for ever."""
+    attachments = {"tree/pick.xml": (REPO / "trees/pick.xml").read_bytes(),
+                   "scene/tabletop.yaml": (REPO / "scenes/tabletop.yaml").read_bytes()}
+    log = _log(tmp_path / "meta.mcap", attachments, metadata)
+    proc = subprocess.run([sys.executable, "-m", "bt_grasp.cli.main", "replay", str(log), "--resim"],
+                          capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert proc.returncode == 2, proc.stderr[-2000:]
+    lines = [line for line in proc.stderr.splitlines() if line.strip()]
+    assert len(lines) == 1 and fragment in lines[0] and "Traceback" not in proc.stderr, proc.stderr[-2000:]
 
 
 def _bomb(path: Path, declared: int, payload_bytes: int, compression: str = "zstd") -> Path:
@@ -157,6 +216,8 @@ BAD_CONTENTS = {
     "tree_without_structure": ("/bt/tree", 0, lambda m: {"tick": None}, "'structure' is missing"),
     "tree_structure_null": ("/bt/tree", 0, lambda m: {**m, "structure": None}, "structure is null"),
     "tree_too_deep": ("/bt/tree", 0, lambda m: {**m, "structure": _deep(150)}, "nested deeper than 100"),
+    "tree_attributes_a_list": ("/bt/tree", 0, lambda m: {**m, "structure": {**m["structure"], "attributes": [1]}},
+                               "'structure.attributes' is a list"),
     "joint_positions_text": ("/robot/joint_state", 4, lambda m: {**m, "position": "x"}, "'position' is a string"),
     "result_success_text": ("/run/result", 0, lambda m: {**m, "success": "yes"}, "'success' is a string"),
     "fault_stamp_text": ("/faults", 0, lambda m: {**m, "stamp_ns": "late"}, "'stamp_ns' is a string"),
@@ -219,8 +280,21 @@ def _image_change(topic: str, edit: Any) -> Any:
     return change
 
 
+def _png_header(width: int, height: int) -> bytes:
+    import struct
+    import zlib
+
+    ihdr = b"IHDR" + struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)
+    return b"\x89PNG\r\n\x1a\n" + struct.pack(">I", 13) + ihdr + struct.pack(">I", zlib.crc32(ihdr))
+
+
 IMAGES = {
-    "colour_not_an_image": ("/camera/color", lambda m: setattr(m, "data", b"\x89PNG not really"), "does not decode"),
+    "colour_not_an_image": ("/camera/color", lambda m: setattr(m, "data", b"\x89PNG not really"),
+                            "is not a PNG or JPEG"),
+    "colour_header_only": ("/camera/color", lambda m: setattr(m, "data", _png_header(10, 10)), "does not decode"),
+    # found by the pre-review attack: a 2.6 MB PNG of zeros saying 30,000 x 30,000 took 5-8 GB and 90 s to decode
+    "colour_decompression_bomb": ("/camera/color", lambda m: setattr(m, "data", _png_header(30_000, 30_000)),
+                                  "30000 x 30000 pixels, more than a camera's 4096 a side"),
     "depth_short": ("/camera/depth", lambda m: setattr(m, "data", m.data[:-7]), "are not"),
     "depth_encoding": ("/camera/depth", lambda m: setattr(m, "encoding", "rgb8"), "'rgb8' is not one of"),
     "depth_no_rows": ("/camera/depth", lambda m: setattr(m, "height", 0), "are not 0 rows"),
@@ -265,3 +339,18 @@ def test_weak_item_damage_only_where_the_index_points_for_images_is_one_sentence
     assert code == 0, lines
     code, lines = _replay(capsys, str(log), "--export-frames", str(tmp_path / "frames"))
     assert code == 2 and len(lines) == 1 and "idx.mcap" in lines[0] and "/camera/color" in lines[0], lines
+
+
+def test_weak_item_image_sizes_are_read_from_headers_only() -> None:
+    import cv2
+    import numpy as np
+
+    from bt_grasp.image_header import image_size
+
+    picture = np.zeros((48, 64, 3), np.uint8)
+    for ext, params in ((".png", []), (".jpg", []), (".jpg", [cv2.IMWRITE_JPEG_PROGRESSIVE, 1])):
+        ok, data = cv2.imencode(ext, picture, params)
+        assert ok and image_size(data.tobytes()) == (64, 48)
+    assert image_size(_png_header(30_000, 20_000)) == (30_000, 20_000)
+    for junk in (b"", b"GIF89a....", b"\xff\xd8\xff", b"\xff\xd8\x00\x00", b"\x89PNG\r\n\x1a\n\x00"):
+        assert image_size(junk) is None

@@ -42,10 +42,30 @@ def test_a_live_run_writes_its_layout_beside_its_log_or_in_a_private_folder(tmp_
     assert control["configById"][STATE_PANEL] == layout_for_tree_file(tree)["configById"][STATE_PANEL]
     import tempfile
 
-    loose = write_live_layout(tree)  # no log: a new folder of its own under the temporary directory
-    try:
-        assert loose.parent.parent == Path(tempfile.gettempdir()) and loose.name == "sort_by_color.layout.json"
-        assert (loose.parent.stat().st_mode & 0o077) == 0  # private to this user
-    finally:
-        loose.unlink()
-        loose.parent.rmdir()
+    from bt_grasp.recording.tree_layout import live_layout_folder
+
+    assert live_layout_folder(True, tmp_path / "a.mcap") is None and live_layout_folder(False, None) is None
+    folder = live_layout_folder(True, None)  # no log: a folder of its own under the temporary directory
+    assert folder is not None
+    loose = write_live_layout(tree, folder=Path(folder.name))
+    assert loose.parent.parent == Path(tempfile.gettempdir()) and loose.name == "sort_by_color.layout.json"
+    assert (loose.parent.stat().st_mode & 0o077) == 0  # private to this user
+    folder.cleanup()  # what the run command does when the run ends (it was left behind before)
+    assert not loose.parent.exists()
+
+
+def test_a_live_run_without_a_log_leaves_no_folder_behind(tmp_path: Path) -> None:
+    """Found by the pre-review attack: each `run --live` without --log left a bt_grasp_layout_* folder in the
+    temporary directory."""
+    import os
+    import subprocess
+    import sys
+
+    tmp = tmp_path / "tmp"
+    tmp.mkdir()
+    proc = subprocess.run([sys.executable, "-m", "bt_grasp.cli.main", "run", str(ROOT / "trees/pick.xml"), "--scene",
+                           str(ROOT / "scenes/tabletop.yaml"), "--max-ticks", "3", "--quiet", "--live", "0"],
+                          capture_output=True, text=True, timeout=300, env={**os.environ, "TMPDIR": str(tmp)})
+    assert proc.returncode in (0, 1), proc.stderr[-2000:]
+    assert "layout: " + str(tmp) in proc.stderr, proc.stderr[-2000:]  # it was there while the run served
+    assert [p.name for p in tmp.iterdir() if p.name.startswith("bt_grasp_layout_")] == []

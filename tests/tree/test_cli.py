@@ -172,3 +172,34 @@ def test_models_describe_the_leaves_for_groot2(tmp_path: Path, capsys: pytest.Ca
     check_models(document, tree_registry())  # the models agree with the registry they came from
     assert main(["tree", "models", "--builtins"]) == 0
     assert '<Control ID="ParallelAll">' in capsys.readouterr().out
+
+
+WARNED = """<root BTCPP_format="4" main_tree_to_execute="Main">
+  <BehaviorTree ID="Main">
+    <Sequence>
+      <Sleep msec="30ms"/>
+      <Sleep msec="30ms"/>
+    </Sequence>
+  </BehaviorTree>
+  <TreeNodesModel>
+    <Action ID="Sleep"><input_port name="duration"/></Action>
+  </TreeNodesModel>
+</root>
+"""
+
+
+def test_validate_shows_each_warning_once_with_its_place(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A tree BT.CPP loads loads here too, but what it ignores is said: one line each, file:line first (the tree
+    commands turned these warnings off before, so a user never heard that '30ms' is read as 30)."""
+    path = tmp_path / "warned.xml"
+    path.write_text(WARNED)
+    for _ in range(2):  # a second command in the same process says them again
+        code, out, err = run_cli(capsys, "tree", "validate", str(path))
+        lines = err.splitlines()
+        assert code == 0 and "OK" in out
+        assert lines == [
+            f"bt-grasp: warning: {path}:9: TreeNodesModel: Sleep has no port 'duration' (its ports: msec)"
+            " (BT.CPP ignores it)",
+            f"bt-grasp: warning: {path}:4: port 'msec': '30ms' is read as 30, as BT.CPP reads it ('ms' is ignored)",
+            f"bt-grasp: warning: {path}:5: port 'msec': '30ms' is read as 30, as BT.CPP reads it ('ms' is ignored)",
+        ], lines

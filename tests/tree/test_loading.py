@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 from pathlib import Path
 
 import pytest
@@ -208,3 +209,29 @@ def test_yaml_tree_loads_directly(tmp_path: Path) -> None:
     )
     tree = load_tree(path, builtin_registry())
     assert tree.tick().value == S and tree.root_blackboard.get("n") == 16
+
+
+@pytest.mark.parametrize(
+    ("model", "warning"),
+    [
+        ('<Condition ID="Sleep"/>', "<string>:4: TreeNodesModel: Sleep is registered as an Action, the model says"),
+        ('<Action ID="Sleep"><input_port name="duration"/></Action>', "<string>:4: TreeNodesModel: Sleep has no port"),
+        ('<Action ID="Sleep"><input_port name="msec" type="std::string"/></Action>',
+         "<string>:4: TreeNodesModel: port 'msec' of Sleep has type int, the model says std::string"),
+    ],
+)
+def test_a_model_that_disagrees_with_a_registered_node_is_a_warning(
+    model: str, warning: str, caplog: pytest.LogCaptureFixture
+) -> None:
+    """BT.CPP ignores the models of registered nodes (tests/tree_conformance/corpus/ext_model_*.xml: it loads and
+    runs such trees), so a stand-in that declares fewer ports than the other project's node still loads."""
+    xml = f"""<root BTCPP_format="4">
+      <BehaviorTree ID="Main"><Sleep msec="5"/></BehaviorTree>
+      <TreeNodesModel>
+        {model}
+      </TreeNodesModel>
+    </root>"""
+    with caplog.at_level(logging.WARNING, logger="bt_grasp.tree"):
+        tree = load_tree_from_string(xml, builtin_registry())
+    assert tree.tick().value == R
+    assert any(warning in record.getMessage() for record in caplog.records), caplog.text

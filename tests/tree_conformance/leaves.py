@@ -7,11 +7,13 @@ counts its ticks, starts and halts in a shared :class:`Traces` so a run can be c
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from py_trees.common import Status
 
 from bt_grasp.tree import Leaf, NodeContext, NodeKind, NodeRegistry, NodeSpec, PortDirection, PortSpec
 from bt_grasp.tree.exceptions import TreeRuntimeError
+from bt_grasp.tree.plugins import load_plugins
 from bt_grasp.tree.registry import builtin_registry
 
 IN, OUT, INOUT = PortDirection.INPUT, PortDirection.OUTPUT, PortDirection.INOUT
@@ -105,9 +107,14 @@ class EchoText(_Traced):
         return Status.SUCCESS
 
 
+STANDINS = Path(__file__).parent / "standins.py"
+
+
 def conformance_registry(traces: Traces) -> NodeRegistry:
-    """The built-in registry plus the driver's test leaves and enums."""
+    """The built-in registry plus the driver's test leaves and enums, and the stand-ins of other projects' nodes
+    (``standins.py``, loaded as a user's ``--leaves`` plugin file is)."""
     registry = builtin_registry()
+    load_plugins(registry, [str(STANDINS)], installed=False)
 
     def spec(cls: type[_Traced], kind: NodeKind, ports: tuple[PortSpec, ...]) -> NodeSpec:
         return NodeSpec(cls.__name__, kind, ports, lambda ctx: cls(ctx, traces), cls.__doc__ or "")

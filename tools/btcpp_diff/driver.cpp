@@ -8,7 +8,8 @@
 // "paths": [the nodes' full paths], "blackboard": {key: {"type": int|real|str|bool|empty|other, "value"}},
 // "leaves": {name: {"ticks", "starts", "halts"}}, "error": null | {"phase": "load"|"tick", "message"}}.
 //
-// The test leaves registered here have twins in tests/tree_conformance/leaves.py (Python); keep them equal.
+// The test leaves registered here have twins in tests/tree_conformance/leaves.py (Python), and the stand-ins
+// of other projects' nodes (standins.hpp) in tests/tree_conformance/standins.py; keep them equal.
 // This file is bt_grasp's own code; it only links against a BehaviorTree.CPP build the user provides.
 
 #include <behaviortree_cpp/bt_factory.h>
@@ -24,6 +25,8 @@
 #include <string>
 #include <thread>
 #include <vector>
+
+#include "standins.hpp"
 
 namespace
 {
@@ -333,6 +336,7 @@ int main(int argc, char** argv)
   factory.registerScriptingEnum("RED", 1);
   factory.registerScriptingEnum("GREEN", 2);
   factory.registerScriptingEnum("BLUE", 3);
+  standins::registerAll(factory);
 
   BT::Tree tree;
   try

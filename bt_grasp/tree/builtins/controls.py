@@ -29,6 +29,8 @@ class Control(BtNode, py_trees.composites.Composite):
         py_trees.composites.Composite.__init__(self, ctx.name, list(ctx.children))
         self._bt_bind(ctx)
         self.ports = ctx.ports
+        self.clock = ctx.clock
+        self.blackboard = ctx.blackboard  # the tree instance's, as a leaf's (BT.CPP ``config().blackboard``)
         self.kids: list[BtNode] = self.children  # type: ignore[assignment]
 
     def halt(self) -> None:

@@ -33,6 +33,7 @@ class Decorator(BtNode, py_trees.decorators.Decorator):
         self._bt_bind(ctx)
         self.ports = ctx.ports
         self.clock = ctx.clock
+        self.blackboard = ctx.blackboard  # the tree instance's, as a leaf's (BT.CPP ``config().blackboard``)
         self.child: BtNode = child  # type: ignore[assignment]
 
     def update(self) -> py_trees.common.Status:  # pragma: no cover - py_trees never calls it here

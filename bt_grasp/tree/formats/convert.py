@@ -20,6 +20,7 @@ from pathlib import Path
 import yaml
 
 from bt_grasp.errors import InputError
+from bt_grasp.output_files import write_output_file
 from bt_grasp.tree.formats.document import Document, NodeDecl
 from bt_grasp.tree.formats.yaml_format import write_yaml
 
@@ -223,10 +224,10 @@ def convert_file(source: Path, target: Path) -> Document:
     from bt_grasp.tree.loader import read_single
 
     document = read_single(source)
-    text = source.read_text(encoding="utf-8")  # read_single parsed it safely (no DTD, no YAML tags): plain text
+    text = document.texts[str(source)]  # the text read_single parsed (bounded, no DTD, no YAML tags)
     if format_of(source) == "xml":
         comments = xml_comments(text, _node_lines(document))
     else:
         comments = yaml_comments(text, _node_lines(document))
-    target.write_text(write_document(document, format_of(target), comments), encoding="utf-8")
+    write_output_file(target, write_document(document, format_of(target), comments), "TARGET", example="tree.yaml")
     return document

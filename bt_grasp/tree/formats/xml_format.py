@@ -41,12 +41,16 @@ class _LineRecordingParser(DefusedXMLParser):  # type: ignore[misc]
         return element
 
 
+#: elements nested deeper than this are refused (a person's tree is a dozen deep; 5,000 was a RecursionError)
+MAX_XML_DEPTH = 100
+
+
 def parse_xml(data: bytes, source: str) -> Any:
     """The root element of ``data``; every problem is a :class:`TreeFileError` with its line."""
     parser = _LineRecordingParser(forbid_dtd=True, forbid_entities=True, forbid_external=True)
     try:
         parser.feed(data)
-        return parser.close()
+        root = parser.close()
     except ParseError as exc:
         line = exc.position[0] if getattr(exc, "position", None) else None
         message = re.sub(r": line \d+, column \d+$", "", str(exc))
@@ -59,6 +63,13 @@ def parse_xml(data: bytes, source: str) -> Any:
     except (defusedxml.EntitiesForbidden, defusedxml.ExternalReferenceForbidden, defusedxml.NotSupportedError):
         line = parser.parser.CurrentLineNumber
         raise TreeFileError(source, "XML entities and external references are not allowed", line) from None
+    stack = [(root, 1)]
+    while stack:  # iterative: the nesting is checked before anything walks it recursively
+        element, depth = stack.pop()
+        if depth > MAX_XML_DEPTH:
+            raise TreeFileError(source, f"elements are nested deeper than {MAX_XML_DEPTH} levels", _line(element))
+        stack.extend((child, depth + 1) for child in element)
+    return root
 
 
 def _line(element: Any) -> int:

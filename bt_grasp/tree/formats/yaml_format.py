@@ -26,6 +26,7 @@ from typing import Any
 
 import yaml
 
+from bt_grasp import bounded_yaml
 from bt_grasp.errors import TreeFileError
 from bt_grasp.tree.formats.document import Document, IncludeDecl, ModelDecl, ModelPort, NodeDecl, TreeDecl
 
@@ -173,9 +174,11 @@ def read_yaml(data: bytes, source: str) -> Document:
     except UnicodeDecodeError as exc:
         line = data[: exc.start].count(b"\n") + 1
         raise TreeFileError(source, "the file is not UTF-8 text", where=line) from None
-    loader = yaml.SafeLoader(text)
-    try:
-        root = loader.get_single_node()
+    def refused(problem: str, line: int | None) -> TreeFileError:
+        return TreeFileError(source, f"malformed YAML: {problem}", where=line)
+
+    try:  # bounded: nesting depth and alias expansion (bt_grasp.bounded_yaml); aliases are refused below
+        root = bounded_yaml.compose(text, yaml.SafeLoader, refused)
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         mark_line = mark.line + 1 if mark else None
@@ -184,8 +187,6 @@ def read_yaml(data: bytes, source: str) -> Document:
         position = getattr(exc, "position", None)
         line = text[:position].count("\n") + 1 if isinstance(position, int) else 1
         raise TreeFileError(source, f"malformed YAML: {getattr(exc, 'reason', exc)}", where=line) from None
-    finally:
-        loader.dispose()
     if root is None:
         raise TreeFileError(source, "the file is empty; expected a mapping with 'trees'", where=1)
     for event in yaml.parse(text, Loader=yaml.SafeLoader):

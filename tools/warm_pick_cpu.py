@@ -1,0 +1,85 @@
+"""CPU time of warm picks, which a machine shared with other work disturbs far less than wall time (issue 27).
+
+    python tools/warm_pick_cpu.py picks [--n 5] [--fingerprint] [--log]
+    python tools/warm_pick_cpu.py stages [--log]
+
+``picks``: one warm-up pick, then ``--n`` picks of the same seed beside a warm renderer (``WarmWorlds``: what the
+resident and a campaign worker run); prints the medians of the episode's set-up CPU (building the world and the
+tree), the tick loop thread's CPU, the process's CPU during the run (every thread: OpenBLAS's, lavapipe's, the
+log's feeder) and the tick loop's wall time. ``--fingerprint`` computes the run fingerprint as campaign workers do.
+
+``stages``: ``bt-grasp bench budget`` with its stage clocks reading the tick loop thread's CPU time instead of
+the wall clock (the floor stays wall time).
+
+Both run with one OpenBLAS thread, as ``bt-grasp`` does. To compare with an older commit, unpack it
+(``git archive OLD | tar -x -C /tmp/old``) and alternate ``PYTHONPATH=/tmp/old python tools/warm_pick_cpu.py ...``
+with this tree's runs; docs/performance.md ("Third pass") has figures taken that way.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from bt_grasp.numeric_threads import use_one_blas_thread  # noqa: E402
+
+use_one_blas_thread()  # as `bt-grasp` does, before numpy is imported
+
+TREE, SCENE = ROOT / "trees" / "pick.xml", ROOT / "scenes" / "tabletop.yaml"
+
+
+def picks(n: int, fingerprint: bool, log: bool) -> dict[str, float]:
+    import tempfile
+
+    from bt_grasp.episode import Episode, WarmWorlds, pick_request
+
+    folder = Path(tempfile.mkdtemp(prefix="bt_grasp_cpu_"))
+    worlds = WarmWorlds()
+
+    def request(k: int):  # type: ignore[no-untyped-def]
+        r = pick_request(TREE, SCENE, 0, calibration=None, log=folder / f"{k}.mcap" if log else None)
+        return replace(r, fingerprint=True) if fingerprint else r
+
+    Episode(request(0), worlds).run()  # imports, the renderer's start-up, first pictures: not measured
+    rows = []
+    for k in range(n):
+        c0 = time.process_time()
+        episode = Episode(request(k + 1), worlds)
+        c1, t1 = time.process_time(), time.thread_time()
+        result = episode.run()
+        c2, t2 = time.process_time(), time.thread_time()
+        rows.append({"setup_cpu_s": c1 - c0, "tick_loop_thread_cpu_s": t2 - t1, "run_process_cpu_s": c2 - c1,
+                     "tick_loop_wall_s": result.wall_time_s, "ticks": result.ticks})
+    return {key: round(statistics.median(r[key] for r in rows), 4) for key in rows[0]}
+
+
+def stages(log: bool) -> dict[str, object]:
+    from bt_grasp.episode.budget_bench import run_budget_bench
+
+    report = run_budget_bench(TREE, SCENE, 0, None, log, now=time.thread_time)
+    return {"episode_thread_cpu_s": report["episode_wall_s"], "same_as_warmup": report["same_as_warmup"],
+            "stages_thread_cpu_s": {s["stage"]: s["s"] for s in report["stages"]},
+            "per_tick_us": report["tick_loop_overhead_us_per_tick"]}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("what", choices=("picks", "stages"))
+    parser.add_argument("--n", type=int, default=5)
+    parser.add_argument("--fingerprint", action="store_true")
+    parser.add_argument("--log", action="store_true")
+    args = parser.parse_args()
+    out = picks(args.n, args.fingerprint, args.log) if args.what == "picks" else stages(args.log)
+    print(json.dumps(out))
+
+
+if __name__ == "__main__":
+    main()
