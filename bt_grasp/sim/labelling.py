@@ -6,9 +6,17 @@ colour and position only) placed exactly where the pipeline's camera is, with it
 in a process pays the pack's image-based-lighting set-up (about 12 s on lavapipe), later ones ~0.15 s.
 
 Domain randomisation per picture, all drawn from ``[seed, index]``: the scene's own seeded draw (object subset,
-rest poses, positions, yaws) from a world seed, the lights (ambient level, the sun's direction and strength), the
-table's colour, the camera's pose jittered around its mount (eye-to-hand: up to 3 cm and 3 degrees; eye-in-hand:
-1 cm and 3 degrees), the mount itself when both are asked for, and the camera's colour noise.
+rest poses, positions, yaws) from a world seed (drawn again when a draw cannot place its objects), the lights
+(ambient level, the sun's direction and strength), the table's colour and surface (``bt_grasp.sim.table_texture``:
+plain, wood, mottled, tiles or speckle), the arm's pose (its home joints jittered: always with the camera on the
+wrist, so that it looks at other parts of the table from other heights and rolls; every other picture with the
+camera on its stand, so that the arm stands elsewhere in view), the camera's pose jittered around its mount
+(eye-to-hand: up to 3 cm and 3 degrees; eye-in-hand: 1 cm and 3 degrees), the mount itself when both are asked
+for, and the camera's colour noise (the D435 model's Gaussian colour noise, its sigma drawn per picture).
+
+The segmentation camera uses SAPIEN's ``trivial`` shader pack: it draws per-entity ids like the ``default`` pack
+(the same labels, checked on the same pictures) without the image-based-lighting table the ``default`` pack builds
+for every new scene (about 12 s per picture on lavapipe; ``trivial``: a few milliseconds).
 """
 
 from __future__ import annotations
@@ -17,7 +25,7 @@ import logging
 import math
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -36,22 +44,38 @@ from bt_grasp.detector.dataset import (
     object_class,
     preview_grid,
 )
-from bt_grasp.errors import InputError
+from bt_grasp.errors import ConfigError, InputError
 from bt_grasp.interfaces import Mount
 from bt_grasp.output_files import check_output_folder, make_output_folder, write_output_file
 from bt_grasp.scene.format import Light, Scene, load_scene
+from bt_grasp.sim.poses import to_T
+from bt_grasp.sim.table_texture import TEXTURE_KINDS, add_table_top, texture_image
 from bt_grasp.sim.world import World
 
 log = logging.getLogger(__name__)
 
 #: camera pose jitter around the mount: (position m, angle deg) for each mount
 JITTER = {Mount.EYE_TO_HAND: (0.03, 3.0), Mount.EYE_IN_HAND: (0.01, 3.0)}
+#: eye-to-hand: the arm's home joints jittered by up to this much (rad), joint by joint (shoulder pan ... wrist 3)
+ARM_JITTER_RAD = (0.35, 0.2, 0.2, 0.25, 0.2, 0.6)
+#: eye-in-hand: the arm's joints drawn in home + [low, high] (rad) until the camera's optical axis meets the table
+#: inside the scene's workspace (grown by WRIST_VIEW_MARGIN_M) from at least WRIST_MIN_HEIGHT_M above the top
+WRIST_Q_OFFSET_RAD = ((-0.8, 0.3), (-0.25, 0.2), (-0.5, 0.1), (-0.5, 0.15), (-0.2, 0.2), (-0.6, 0.6))
+WRIST_VIEW_MARGIN_M = 0.05
+WRIST_MIN_HEIGHT_M = 0.3
+WRIST_TRIES = 50
+#: the camera's colour noise: its sigma (8-bit levels) drawn in this range (the scenes' D435 model has 2)
+COLOR_SIGMA = (1.0, 5.0)
+#: one copy of a table texture covers this much of the table, m (drawn per picture)
+TEXTURE_REPEAT_M = (0.4, 1.2)
+#: a scene draw that cannot place its objects is drawn again with a new world seed, up to this many times
+WORLD_TRIES = 20
 MOUNT_CHOICES = ("scene", "eye-to-hand", "eye-in-hand", "both")
 PREVIEW_TILES = 4
 
 
-def _default_shader_dir() -> str:
-    return os.path.join(os.path.dirname(sapien.__file__), "vulkan_shader", "default")
+def _segmentation_shader_dir() -> str:
+    return os.path.join(os.path.dirname(sapien.__file__), "vulkan_shader", "trivial")
 
 
 @dataclass(frozen=True)
@@ -65,10 +89,17 @@ class Randomisation:
     ambient: float
     sun_direction: tuple[float, float, float]
     sun: float
+    table_texture: str
+    texture_seed: int
+    texture_repeat_m: float
+    arm_q_rad: tuple[float, ...]
+    color_sigma: float
 
 
 def randomised_scene(config: Scene, rng: np.random.Generator, mount: Mount) -> tuple[Scene, Randomisation]:
-    """``config`` with the lights, the table colour and the camera pose drawn from ``rng``."""
+    """``config`` with the lights, the table colour and surface, the arm's home pose (eye-to-hand: jittered half
+    the time; eye-in-hand: :func:`aim_wrist_camera` draws it once the world is built), the camera pose and its
+    colour noise drawn from ``rng``."""
     grey = float(rng.uniform(0.25, 0.85))
     r, g, b = (float(np.clip(grey + rng.uniform(-0.12, 0.12), 0.05, 0.95)) for _ in range(3))
     table_rgb = (r, g, b)
@@ -100,9 +131,69 @@ def randomised_scene(config: Scene, rng: np.random.Generator, mount: Mount) -> t
         })
         camera = camera.model_copy(update={"eye_in_hand": eih, "mount": mount.value})
     table = config.table.model_copy(update={"color": table_rgb})
-    drawn = config.model_copy(update={"lights": lights, "camera": camera, "table": table})
+    texture = TEXTURE_KINDS[int(rng.integers(len(TEXTURE_KINDS)))]
+    texture_seed = int(rng.integers(0, 2**31 - 1))
+    repeat_m = float(rng.uniform(*TEXTURE_REPEAT_M))
+    arm_q = np.asarray(config.robot.home_q_rad, dtype=float)
+    jitter = rng.uniform(-1.0, 1.0, 6) * np.asarray(ARM_JITTER_RAD)
+    if mount == Mount.EYE_TO_HAND and rng.random() < 0.5:
+        arm_q = arm_q + jitter
+    robot = config.robot.model_copy(update={"home_q_rad": tuple(float(v) for v in arm_q)})
+    color_sigma = float(rng.uniform(*COLOR_SIGMA))
+    camera = camera.model_copy(update={"noise": camera.noise.model_copy(update={"color_sigma": color_sigma})})
+    drawn = config.model_copy(update={"lights": lights, "camera": camera, "table": table, "robot": robot})
     world_seed = int(rng.integers(0, 2**31 - 1))
-    return drawn, Randomisation(config.name, world_seed, mount.value, table_rgb, ambient, sun_direction, sun)
+    return drawn, Randomisation(config.name, world_seed, mount.value, table_rgb, ambient, sun_direction, sun,
+                                texture, texture_seed, repeat_m, tuple(float(v) for v in arm_q), color_sigma)
+
+
+def view_centre_xy(world: World) -> tuple[float, float, float] | None:
+    """Where the camera's optical axis meets the table top (x, y) and the camera's height; None looking up."""
+    T = to_T(world.camera._component.get_global_pose())  # SAPIEN's camera looks along its +x
+    position, forward = T[:3, 3], T[:3, 0]
+    if forward[2] >= -1e-6:
+        return None
+    hit = position - position[2] / forward[2] * forward
+    return float(hit[0]), float(hit[1]), float(position[2])
+
+
+def aim_wrist_camera(world: World, rng: np.random.Generator) -> tuple[float, ...]:
+    """Eye-in-hand: place the arm (before any picture; objects are not touched) at joints drawn around home until
+    the camera looks at the workspace from high enough (the last draw after :data:`WRIST_TRIES`); returns them."""
+    home = np.asarray(world.config.robot.home_q_rad, dtype=float)
+    low, high = (np.array(v, dtype=float) for v in zip(*WRIST_Q_OFFSET_RAD, strict=True))
+    ws, margin = world.config.workspace, WRIST_VIEW_MARGIN_M
+    q = home
+    for _ in range(WRIST_TRIES):
+        q = home + rng.uniform(low, high)
+        world.robot.reset(q)
+        seen = view_centre_xy(world)
+        if seen is not None and ws.x_m[0] - margin <= seen[0] <= ws.x_m[1] + margin and \
+                ws.y_m[0] - margin <= seen[1] <= ws.y_m[1] + margin and seen[2] >= WRIST_MIN_HEIGHT_M:
+            break
+    return tuple(float(v) for v in q)
+
+
+def build_world(scene_path: Path, drawn: Scene, what: Randomisation,
+                rng: np.random.Generator) -> tuple[World, Randomisation]:
+    """The drawn scene's world with its table surface and, eye-in-hand, the arm aimed (:func:`aim_wrist_camera`);
+    a world seed whose draw cannot place the objects is replaced by another from ``rng`` (up to
+    :data:`WORLD_TRIES` draws). Returns the world and what was drawn (the world seed and arm joints used)."""
+    seed = what.world_seed
+    for _ in range(WORLD_TRIES):
+        try:
+            world = World(drawn, seed, camera_mount=what.mount, source=scene_path)
+        except ConfigError as exc:
+            log.debug("world seed %d: %s; drawing another", seed, exc)
+            seed = int(rng.integers(0, 2**31 - 1))
+            continue
+        rgba = texture_image(what.table_texture, what.table_rgb, np.random.default_rng(what.texture_seed))
+        if rgba is not None:
+            table = drawn.table
+            add_table_top(world.scene, rgba, table.center_xy_m, table.size_m[:2], what.texture_repeat_m)
+        arm_q = aim_wrist_camera(world, rng) if world.camera_mount == Mount.EYE_IN_HAND else what.arm_q_rad
+        return world, replace(what, world_seed=seed, arm_q_rad=arm_q)
+    raise ConfigError(scene_path, f"no placement of its objects in {WORLD_TRIES} draws", "objects")
 
 
 class SegmentationCamera:
@@ -110,7 +201,7 @@ class SegmentationCamera:
 
     def __init__(self, world: World) -> None:
         source = world.camera._component  # the pipeline's camera component: same pose, same intrinsics
-        camera = sapien.render.RenderCameraComponent(source.width, source.height, _default_shader_dir())
+        camera = sapien.render.RenderCameraComponent(source.width, source.height, _segmentation_shader_dir())
         camera.set_fovy(source.fovy, compute_x=True)
         camera.near, camera.far = source.near, source.far
         camera.set_local_pose(source.get_local_pose())
@@ -130,7 +221,7 @@ def labelled_picture(scene_path: Path, config: Scene, rng: np.random.Generator, 
                      classes: Sequence[str]) -> tuple[NDArray[np.uint8], list[ObbLabel], Randomisation]:
     """One randomised picture of ``config`` and the oriented-box labels of the objects visible in it."""
     drawn, what = randomised_scene(config, rng, mount)
-    world = World(drawn, what.world_seed, camera_mount=mount.value, source=scene_path)
+    world, what = build_world(scene_path, drawn, what, rng)
     frame = world.camera.capture()
     assert frame is not None
     masks = SegmentationCamera(world).masks()
@@ -158,11 +249,11 @@ def _png(bgr: NDArray[Any]) -> bytes:
     return data.tobytes()
 
 
-def _mount_for(rule: str, config: Scene, index: int) -> Mount:
+def _mount_for(rule: str, config: Scene, index: int, scenes: int) -> Mount:
     if rule == "scene":
         return Mount(config.camera.mount)
-    if rule == "both":
-        return (Mount.EYE_TO_HAND, Mount.EYE_IN_HAND)[index % 2]
+    if rule == "both":  # each scene's pictures alternate (index // scenes: with an even number of scenes, index % 2
+        return (Mount.EYE_TO_HAND, Mount.EYE_IN_HAND)[(index // scenes) % 2]  # would give each scene one mount)
     return Mount(rule)
 
 
@@ -193,8 +284,8 @@ def make_dataset(scenes: Sequence[Path], images: int, out: Path, seed: int, *, m
     for index in range(images):
         path, config = configs[index % len(configs)]
         rng = np.random.default_rng([seed, index])
-        rgb, labels, what = labelled_picture(path, config, rng, _mount_for(mount, config, index), min_pixels,
-                                             classes)
+        camera_mount = _mount_for(mount, config, index, len(configs))
+        rgb, labels, what = labelled_picture(path, config, rng, camera_mount, min_pixels, classes)
         stem = f"{index:05d}"
         write_output_file(out / "images" / f"{stem}.png", _png(cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR)), "--out")
         write_output_file(out / "labels" / f"{stem}.txt", label_lines(labels, rgb.shape[1], rgb.shape[0]), "--out")
@@ -205,6 +296,10 @@ def make_dataset(scenes: Sequence[Path], images: int, out: Path, seed: int, *, m
                          "mount": what.mount, "table_rgb": [round(v, 4) for v in what.table_rgb],
                          "ambient": round(what.ambient, 4), "sun": round(what.sun, 4),
                          "sun_direction": [round(v, 4) for v in what.sun_direction],
+                         "table_texture": what.table_texture, "texture_seed": what.texture_seed,
+                         "texture_repeat_m": round(what.texture_repeat_m, 4),
+                         "arm_q_rad": [round(v, 4) for v in what.arm_q_rad],
+                         "color_sigma": round(what.color_sigma, 3),
                          "objects": [classes[label.class_id] for label in labels]})
         if len(tiles) < PREVIEW_TILES:
             tiles.append(draw_labels(rgb, labels, classes))

@@ -15,8 +15,7 @@ from bt_grasp.cli.main import main
 from bt_grasp.detector.dataset import dataset_classes, object_class, read_label_file
 from bt_grasp.interfaces import Mount
 from bt_grasp.scene.format import load_scene
-from bt_grasp.sim.labelling import SegmentationCamera, randomised_scene
-from bt_grasp.sim.world import World
+from bt_grasp.sim.labelling import SegmentationCamera, build_world, randomised_scene
 
 pytestmark = pytest.mark.sim
 
@@ -81,8 +80,9 @@ def test_each_label_covers_its_objects_mask(datasets: tuple[Path, Path], index: 
     a, _ = datasets
     scene = SCENES[index % len(SCENES)]
     config = load_scene(scene)
-    drawn, what = randomised_scene(config, np.random.default_rng([SEED, index]), Mount(config.camera.mount))
-    world = World(drawn, what.world_seed, camera_mount=what.mount, source=scene)
+    rng = np.random.default_rng([SEED, index])
+    drawn, what = randomised_scene(config, rng, Mount(config.camera.mount))
+    world, _ = build_world(scene, drawn, what, rng)
     masks = SegmentationCamera(world).masks()
     image = cv2.imread(str(a / "images" / f"{index:05d}.png"))
     h, w = image.shape[:2]
