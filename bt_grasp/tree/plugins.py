@@ -164,17 +164,18 @@ def entry_point_plugins() -> tuple[Plugin, ...]:
 
 def apply(registry: NodeRegistry, plugins: Iterable[Plugin]) -> NodeRegistry:
     """Run each plugin's ``register(registry)``; a failing one raises PluginError naming it. Records the
-    origin of every node and reason a plugin added."""
+    origin of every node and reason a plugin added or replaced."""
     for plugin in plugins:
-        before = set(registry.names())
+        before = {spec.name: spec for spec in registry.specs()}
         reasons_before = {r.name for r in registry.reasons()}
         try:
             plugin.register(registry)
         except Exception as exc:  # DeclarationError (duplicate, bad port), or any error of the user's code
             where = _error_line(exc, plugin.path) if plugin.path else None
             raise PluginError(plugin.source, _register_problem(exc), where=where) from None
-        for name in set(registry.names()) - before:
-            registry.origins[name] = plugin.source
+        for name in registry.names():  # added, or a node of that name replaced (unregister, then register)
+            if before.get(name) is not registry.get(name):
+                registry.origins[name] = plugin.source
         for reason in registry.reasons():
             if reason.name not in reasons_before:
                 registry.reason_origins[reason.name] = plugin.source

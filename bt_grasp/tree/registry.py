@@ -219,7 +219,8 @@ class NodeRegistry:
         if not isinstance(spec, NodeSpec):
             raise DeclarationError(f"register() takes a NodeSpec (e.g. MyLeaf.bt_spec), got {spec!r}")
         if spec.name in self._specs:
-            raise DeclarationError(f"a node named {spec.name!r} is already registered")
+            raise DeclarationError(f"a node named {spec.name!r} is already registered (to replace it, call "
+                                   f"registry.unregister({spec.name!r}) first)")
         if spec.factory is None or not callable(spec.factory):
             raise DeclarationError(f"node {spec.name!r} has no factory")
         for reason in spec.failure_reasons:
@@ -228,6 +229,13 @@ class NodeRegistry:
                                        "registered (registry.register_reason(...) before registry.register(...))")
         self._specs[spec.name] = spec
         return spec
+
+    def unregister(self, name: str) -> bool:
+        """Remove the node type ``name``, whoever registered it (BT.CPP's ``unregisterBuilder``): a plugin that
+        brings a node of a name bt_grasp already uses (another project's ``OpenGripper``) removes the shipped one
+        first, then registers its own. True when there was such a node."""
+        self.origins.pop(name, None)
+        return self._specs.pop(name, None) is not None
 
     def register_reason(self, reason: Reason | str, description: str = "") -> Reason:
         """Declare a failure reason leaves may report and ``FailureIs`` may test; a name registered twice

@@ -105,11 +105,13 @@ BAD_PLUGINS = {
     "duplicate_builtin": (
         HEADER + "@action(name='Sequence')\nclass Mine(Leaf):\n    pass\n"
         "def register(registry: NodeRegistry) -> None:\n    registry.register(Mine.bt_spec)\n",
-        6, "bad declaration: a node named 'Sequence' is already registered"),
+        6, "bad declaration: a node named 'Sequence' is already registered "
+        "(to replace it, call registry.unregister('Sequence') first)"),
     "duplicate_robot_leaf": (
         HEADER + "@action(name='Perceive')\nclass Mine(Leaf):\n    pass\n"
         "def register(registry: NodeRegistry) -> None:\n    registry.register(Mine.bt_spec)\n",
-        6, "bad declaration: a node named 'Perceive' is already registered"),
+        6, "bad declaration: a node named 'Perceive' is already registered "
+        "(to replace it, call registry.unregister('Perceive') first)"),
     "duplicate_reason": (
         HEADER + "def register(registry: NodeRegistry) -> None:\n    registry.register_reason(Reason('SLIPPED'))\n",
         3, "bad declaration: a failure reason named 'SLIPPED' is already registered"),

@@ -82,7 +82,8 @@ def test_an_entry_point_naming_a_module_uses_its_register(installed: list[FakeEn
         (ModuleNotFoundError("No module named 'pyzbar'", name="pyzbar"),
          "import error: ModuleNotFoundError: No module named 'pyzbar'"),
         (42, "names 42, neither a register(registry) function nor a module"),
-        ("dup", "bad declaration: a node named 'Sequence' is already registered"),
+        ("dup", "bad declaration: a node named 'Sequence' is already registered "
+        "(to replace it, call registry.unregister('Sequence') first)"),
     ],
 )
 def test_a_bad_installed_plugin_is_named_with_its_distribution(
