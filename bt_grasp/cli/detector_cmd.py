@@ -70,6 +70,8 @@ def train(
     seed: int = typer.Option(0, "--seed", help="Ultralytics' seed (deterministic=True, workers=0)."),
     batch: int = typer.Option(16, "--batch", min=1, help="Batch size."),
     threads: int = typer.Option(2, "--threads", min=1, help="torch threads."),
+    resume: bool = typer.Option(False, "--resume", help="Continue the interrupted run in --out from its last "
+                                                         "finished epoch (the same datasets and options)."),
 ) -> None:
     """Train a YOLO11n-OBB from scratch on CPU (needs the `train` extra: Ultralytics, AGPL-3.0, and torch), export it
     to ONNX and write its model card with the held-out figures measured as `detector eval` measures them."""
@@ -86,7 +88,7 @@ def train(
 
     check_output_folder(out, "--out")  # before training: where its files go can be written
     check_output_file(out / f"{name}.onnx", "--out", example="model.onnx")
-    request = TrainRequest(tuple(datasets), val, out, name, epochs, imgsz, seed, batch, threads)
+    request = TrainRequest(tuple(datasets), val, out, name, epochs, imgsz, seed, batch, threads, resume)
     result = train_model(request)
     held_out = evaluate_model(result.onnx, val) if val is not None else None
     folders = [(d, "train") for d in datasets] + ([(val, "val")] if val is not None else [])

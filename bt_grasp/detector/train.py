@@ -57,6 +57,9 @@ class TrainRequest:
     seed: int = 0
     batch: int = 16
     threads: int = 2
+    #: continue the interrupted run in ``out`` from its last finished epoch (Ultralytics' resume): the same
+    #: datasets, epochs and settings as when it started
+    resume: bool = False
 
     def command(self) -> str:
         """The command line that makes this model."""
@@ -66,6 +69,8 @@ class TrainRequest:
         parts += ["--out", str(self.out), "--name", self.name, "--epochs", str(self.epochs), "--imgsz",
                   str(self.imgsz), "--seed", str(self.seed), "--batch", str(self.batch), "--threads",
                   str(self.threads)]
+        if self.resume:
+            parts.append("--resume")
         return " ".join(parts)
 
 
@@ -179,13 +184,70 @@ def _last_row(results_csv: Path) -> tuple[int, dict[str, float]]:
     return len(rows), {k: v for k, v in last.items() if k.startswith("metrics/")}
 
 
+def _training_seconds(results_csv: Path) -> float | None:
+    """The run's training time from Ultralytics' ``time`` column: it counts from each start, so a run resumed
+    after an interruption is the sum of its pieces (the time lost with the interrupted epoch is not counted)."""
+    if not results_csv.is_file():
+        return None
+    with results_csv.open(encoding="utf-8") as handle:
+        rows = list(csv.DictReader(handle))
+    total, previous = 0.0, 0.0
+    for row in rows:
+        value = next((v for k, v in row.items() if k and k.strip() == "time"), None)
+        try:
+            now = float(value) if value not in (None, "") else previous
+        except ValueError:
+            return None
+        if now < previous:  # a resumed piece starts again from zero
+            total += previous
+        previous = now
+    return total + previous if rows else None
+
+
+def check_resumable(run_dir: Path, request: TrainRequest, names: Sequence[str]) -> Path:
+    """The interrupted run's ``weights/last.pt`` when ``run_dir`` holds one that ``request`` continues: the same
+    datasets, classes, epochs, input size, seed and batch as it was started with (read from its ``args.yaml`` and
+    ``data.yaml``); otherwise an InputError naming what differs. Before torch is imported."""
+    last = run_dir / "weights" / "last.pt"
+    args_file, data_file = run_dir / "args.yaml", run_dir / "data.yaml"
+    if not last.is_file() or not args_file.is_file() or not data_file.is_file():
+        raise InputError("--resume", f"{run_dir} holds no interrupted run (weights/last.pt, args.yaml and data.yaml)")
+    from bt_grasp.bounded_io import read_user_file
+    from bt_grasp.bounded_yaml import load_value
+
+    docs = []
+    for path in (args_file, data_file):
+        try:
+            doc = load_value(read_user_file(path).decode("utf-8", errors="replace"))
+        except ValueError as exc:
+            raise InputError(str(path), str(exc)) from None
+        if not isinstance(doc, dict):
+            raise InputError(str(path), "is not a mapping (the interrupted run's own file)")
+        docs.append(doc)
+    args, data = docs
+    started = {"epochs": args.get("epochs"), "imgsz": args.get("imgsz"), "seed": args.get("seed"),
+               "batch": args.get("batch")}
+    asked = {"epochs": request.epochs, "imgsz": request.imgsz, "seed": request.seed, "batch": request.batch}
+    for key, value in asked.items():
+        if started[key] != value:
+            raise InputError("--resume", f"the run in {run_dir} was started with --{key} {started[key]}, not {value}")
+    train = [str(Path(d).resolve() / "images") for d in request.datasets]
+    val = [str(Path(request.val).resolve() / "images")] if request.val is not None else train
+    recorded = (list(data.get("train") or []), list(data.get("val") or []))
+    if recorded != (train, val) or list((data.get("names") or {}).values()) != list(names):
+        raise InputError("--resume", f"the run in {run_dir} was started on other datasets or classes "
+                                     f"({data_file}); give the same folders and --val")
+    return last
+
+
 def train_model(request: TrainRequest) -> TrainResult:
     """Train, export to ``out/NAME.onnx`` (opset 18, simplified with onnxslim, fixed input size) and return what
     happened. Ultralytics prints its own progress."""
     names = check_datasets(request.datasets, request.val)
-    require_training_extra()
     out = request.out.resolve()  # Ultralytics puts a relative project under its own runs folder
     run_dir = out / RUN_FOLDER
+    last = check_resumable(run_dir, request, names) if request.resume else None
+    require_training_extra()
     _offline_config(run_dir / "config")  # before Ultralytics is first imported: it reads the settings then
     os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")  # before torch's OpenMP starts: no spinning at barriers
     import torch
@@ -196,13 +258,16 @@ def train_model(request: TrainRequest) -> TrainResult:
     # Ultralytics resets torch's threads to its NUM_THREADS (cores - 1: one on a 2-core machine) when it picks the
     # CPU; the number asked for wins
     torch_utils.NUM_THREADS = request.threads  # type: ignore[attr-defined]
-    data = write_data_yaml(run_dir / "data.yaml", request.datasets, request.val, names)
-    model = YOLO(ARCHITECTURE, task="obb")
     start = time.perf_counter()
-    model.train(data=str(data), epochs=request.epochs, imgsz=request.imgsz, batch=request.batch, device="cpu",
-                workers=0, seed=request.seed, deterministic=True, pretrained=False, project=str(out),
-                name=RUN_FOLDER, exist_ok=True, plots=False, amp=False, patience=request.epochs, verbose=True,
-                val=False)  # validated once, after the last epoch: a young model's validation costs a third of an epoch
+    if last is not None:
+        YOLO(str(last), task="obb").train(resume=True)  # the saved run's own arguments, from its next epoch
+    else:
+        data = write_data_yaml(run_dir / "data.yaml", request.datasets, request.val, names)
+        model = YOLO(ARCHITECTURE, task="obb")
+        model.train(data=str(data), epochs=request.epochs, imgsz=request.imgsz, batch=request.batch, device="cpu",
+                    workers=0, seed=request.seed, deterministic=True, pretrained=False, project=str(out),
+                    name=RUN_FOLDER, exist_ok=True, plots=False, amp=False, patience=request.epochs, verbose=True,
+                    val=False)  # validated once, after the last epoch: a young model's validation costs a third
     seconds = time.perf_counter() - start
     best = run_dir / "weights" / "best.pt"
     if not best.is_file():
@@ -213,4 +278,6 @@ def train_model(request: TrainRequest) -> TrainResult:
 
     onnx_path = copy_output_file(exported, out / f"{request.name}.onnx", "--out", example="model.onnx")
     epochs_run, metrics = _last_row(run_dir / "results.csv")
+    if request.resume:  # the whole run's time, not only this command's
+        seconds = _training_seconds(run_dir / "results.csv") or seconds
     return TrainResult(onnx_path, best, seconds, epochs_run, metrics, versions(), names)
