@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import atexit
 import ctypes
 import logging
 import multiprocessing
@@ -39,6 +40,20 @@ def _init(factory: Callable[[], EpisodeBackend], log_dir: Path, keep_logs: KeepL
     # the episodes' library logs are not the terminal's (the coordinator prints progress)
     logging.getLogger().addHandler(logging.NullHandler())
     _WORKER = Worker(factory, log_dir, keep_logs)
+    atexit.register(_exit_quietly)
+
+
+def _exit_quietly() -> None:
+    """Leave before the interpreter's teardown, where nanobind (OMPL's bindings) prints a hundred "leaked ..."
+    lines into the user's terminal at every worker's end (the coordinator leaves the same way, in ``cli.main``).
+    Registered last, so called first: it runs every other exit handler itself (idle log writers closed,
+    temporary folders removed), as a normal exit would, then ends the process. A spawned worker's exit code is
+    not read by the pool (a lost worker is seen by its sentinel), so 0 is kept."""
+    atexit.unregister(_exit_quietly)
+    atexit._run_exitfuncs()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(0)
 
 
 def tie_to_coordinator(coordinator: int, kernel_signal: bool, poll_s: float = PARENT_POLL_S) -> None:
