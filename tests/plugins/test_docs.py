@@ -22,7 +22,7 @@ DOC = Path(__file__).resolve().parents[2] / "docs" / "own-leaves.md"
 
 
 def _blocks(language: str) -> list[str]:
-    example = DOC.read_text().split("## A complete example", 1)[1]
+    example = DOC.read_text().split("## A complete example", 1)[1].split("\n## ", 1)[0]  # that section alone
     return re.findall(rf"```{language}\n(.*?)```", example, flags=re.S)
 
 
