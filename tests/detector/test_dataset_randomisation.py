@@ -19,9 +19,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from bt_grasp.colors import rgb_of
 from bt_grasp.interfaces import Mount
 from bt_grasp.scene.format import load_scene
 from bt_grasp.sim.labelling import (
+    SCENE_LOOK_JITTER,
     WRIST_MIN_HEIGHT_M,
     WRIST_VIEW_MARGIN_M,
     SegmentationCamera,
@@ -55,6 +57,27 @@ def test_plain_is_the_scenes_own_table_and_an_unknown_kind_is_refused() -> None:
     assert texture_image("plain", (0.5, 0.5, 0.5), np.random.default_rng(0)) is None
     with pytest.raises(ValueError, match="unknown table texture 'marble'"):
         texture_image("marble", (0.5, 0.5, 0.5), np.random.default_rng(0))
+
+
+def test_a_third_of_the_pictures_have_the_scenes_own_look() -> None:
+    """The pipeline's camera sees the scene's wood-coloured plain table under the scene's lights: about a third of
+    the draws (SCENE_LOOK_SHARE) keep them (table colour within 0.04 per channel), the rest draw a grey, a surface
+    and lights."""
+    config = load_scene(HOUSEHOLD)
+    own = rgb_of(config.table.color)
+    draws = [randomised_scene(config, np.random.default_rng([7, i]), Mount.EYE_TO_HAND) for i in range(300)]
+    looks = [what for _, what in draws if what.scene_look]
+    assert 75 <= len(looks) <= 125  # 100 expected of 300 (binomial sd ~8)
+    for drawn, what in draws:
+        if what.scene_look:
+            assert what.table_texture == "plain" and drawn.lights == config.lights
+            assert np.allclose(what.table_rgb, own, atol=SCENE_LOOK_JITTER + 1e-9)
+            assert np.allclose(rgb_of(drawn.table.color), what.table_rgb)
+        else:
+            assert drawn.lights != config.lights
+    # the drawn greys never come this close to the wood colour in all three channels at once
+    others = [what.table_rgb for _, what in draws if not what.scene_look]
+    assert not any(np.allclose(rgb, own, atol=0.02) for rgb in others)
 
 
 def test_both_mounts_alternate_within_each_scene() -> None:
