@@ -72,6 +72,8 @@ def train(
     threads: int = typer.Option(2, "--threads", min=1, help="torch threads."),
     resume: bool = typer.Option(False, "--resume", help="Continue the interrupted run in --out from its last "
                                                          "finished epoch (the same datasets and options)."),
+    weights: Path | None = typer.Option(None, "--weights", help="Start from an earlier run's weights "
+                                                               "(OUT/ultralytics/weights/best.pt): fine-tuning."),
 ) -> None:
     """Train a YOLO11n-OBB from scratch on CPU (needs the `train` extra: Ultralytics, AGPL-3.0, and torch), export it
     to ONNX and write its model card with the held-out figures measured as `detector eval` measures them."""
@@ -88,13 +90,15 @@ def train(
 
     check_output_folder(out, "--out")  # before training: where its files go can be written
     check_output_file(out / f"{name}.onnx", "--out", example="model.onnx")
-    request = TrainRequest(tuple(datasets), val, out, name, epochs, imgsz, seed, batch, threads, resume)
+    request = TrainRequest(tuple(datasets), val, out, name, epochs, imgsz, seed, batch, threads, resume, weights)
     result = train_model(request)
     held_out = evaluate_model(result.onnx, val) if val is not None else None
     folders = [(d, "train") for d in datasets] + ([(val, "val")] if val is not None else [])
     card = ModelCard(
         model_file=result.onnx.name, sha256=sha256(result.onnx),
-        architecture=f"YOLO11n-OBB (Ultralytics {ARCHITECTURE}, from scratch)", classes=result.names, imgsz=imgsz,
+        architecture=f"YOLO11n-OBB (Ultralytics {ARCHITECTURE}, "
+                     + ("from scratch)" if weights is None else f"fine-tuned from {weights})"),
+        classes=result.names, imgsz=imgsz,
         datasets=tuple({"folder": str(d), "role": role, "images": len(dataset_images(d)),
                         "command": dataset_command(d)} for d, role in folders),
         train_command=request.command(),

@@ -96,8 +96,10 @@ class ModelCard:
 
     def to_markdown(self) -> str:
         lines = [f"# Model card: {self.model_file}", "",
-                 f"A {self.architecture} oriented-box detector of {len(self.classes)} classes, trained from scratch "
-                 f"(no pretrained weights) on the datasets below, exported to ONNX (input {self.imgsz}x"
+                 f"A {self.architecture} oriented-box detector of {len(self.classes)} classes, "
+                 + ("fine-tuned from the weights named there" if "fine-tuned" in self.architecture else
+                    "trained from scratch (no pretrained weights)")
+                 + f" on the datasets below, exported to ONNX (input {self.imgsz}x"
                  f"{self.imgsz}) and run by bt_grasp through onnxruntime with its own decoder "
                  "(`bt_grasp.detector.model.ObbModel`).", "",
                  f"- file: `{self.model_file}`, SHA-256 `{self.sha256}`",

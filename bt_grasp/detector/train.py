@@ -60,6 +60,8 @@ class TrainRequest:
     #: continue the interrupted run in ``out`` from its last finished epoch (Ultralytics' resume): the same
     #: datasets, epochs and settings as when it started
     resume: bool = False
+    #: start from these weights (an earlier run's ``ultralytics/weights/best.pt``: fine-tuning), not from scratch
+    weights: Path | None = None
 
     def command(self) -> str:
         """The command line that makes this model."""
@@ -69,6 +71,8 @@ class TrainRequest:
         parts += ["--out", str(self.out), "--name", self.name, "--epochs", str(self.epochs), "--imgsz",
                   str(self.imgsz), "--seed", str(self.seed), "--batch", str(self.batch), "--threads",
                   str(self.threads)]
+        if self.weights is not None:
+            parts += ["--weights", str(self.weights)]
         if self.resume:
             parts.append("--resume")
         return " ".join(parts)
@@ -247,6 +251,10 @@ def train_model(request: TrainRequest) -> TrainResult:
     out = request.out.resolve()  # Ultralytics puts a relative project under its own runs folder
     run_dir = out / RUN_FOLDER
     last = check_resumable(run_dir, request, names) if request.resume else None
+    if request.weights is not None and (request.weights.suffix != ".pt" or not request.weights.is_file()):
+        raise InputError("--weights", f"{request.weights} is not an Ultralytics checkpoint (.pt) here: give "
+                                      "an earlier run's OUT/ultralytics/weights/best.pt (an ONNX export cannot be "
+                                      "trained)")
     require_training_extra()
     _offline_config(run_dir / "config")  # before Ultralytics is first imported: it reads the settings then
     os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")  # before torch's OpenMP starts: no spinning at barriers
@@ -263,7 +271,8 @@ def train_model(request: TrainRequest) -> TrainResult:
         YOLO(str(last), task="obb").train(resume=True)  # the saved run's own arguments, from its next epoch
     else:
         data = write_data_yaml(run_dir / "data.yaml", request.datasets, request.val, names)
-        model = YOLO(ARCHITECTURE, task="obb")
+        start_from = ARCHITECTURE if request.weights is None else str(request.weights.resolve())
+        model = YOLO(start_from, task="obb")  # a checkpoint: its weights are where training starts (fine-tuning)
         model.train(data=str(data), epochs=request.epochs, imgsz=request.imgsz, batch=request.batch, device="cpu",
                     workers=0, seed=request.seed, deterministic=True, pretrained=False, project=str(out),
                     name=RUN_FOLDER, exist_ok=True, plots=False, amp=False, patience=request.epochs, verbose=True,

@@ -69,3 +69,18 @@ def test_training_time_sums_the_pieces_of_a_resumed_run(tmp_path: Path) -> None:
     csv.write_text("epoch,time\n1,50.0\n2,99.0\n")
     assert _training_seconds(csv) == pytest.approx(99.0)
     assert _training_seconds(tmp_path / "none.csv") is None
+
+
+def test_weights_must_be_a_checkpoint(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """`--weights` fine-tunes from an earlier run's checkpoint; an ONNX export (or a missing file) is refused in one
+    sentence before anything is imported."""
+    make_synthetic_dataset(tmp_path / "train", 2, seed=1)
+    onnx = tmp_path / "model.onnx"
+    onnx.write_bytes(b"not trainable")
+    code = main(["detector", "train", str(tmp_path / "train"), "--out", str(tmp_path / "out"), "--weights", str(onnx)])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and err == (f"bt-grasp: error: --weights: {onnx} is not an Ultralytics checkpoint (.pt) here: "
+                                 "give an earlier run's OUT/ultralytics/weights/best.pt (an ONNX export cannot be "
+                                 "trained)")
+    request = TrainRequest((tmp_path / "train",), None, tmp_path / "out", "m", weights=tmp_path / "best.pt")
+    assert request.command().endswith("--threads 2 --weights " + str(tmp_path / "best.pt"))
