@@ -271,10 +271,12 @@ def train_model(request: TrainRequest) -> TrainResult:
         YOLO(str(last), task="obb").train(resume=True)  # the saved run's own arguments, from its next epoch
     else:
         data = write_data_yaml(run_dir / "data.yaml", request.datasets, request.val, names)
-        start_from = ARCHITECTURE if request.weights is None else str(request.weights.resolve())
-        model = YOLO(start_from, task="obb")  # a checkpoint: its weights are where training starts (fine-tuning)
+        # fine-tuning: Ultralytics loads a checkpoint's weights into the model built from the architecture when
+        # `pretrained` names it (with pretrained=False even a model loaded from a .pt starts from random weights)
+        initial: bool | str = False if request.weights is None else str(request.weights.resolve())
+        model = YOLO(ARCHITECTURE, task="obb")
         model.train(data=str(data), epochs=request.epochs, imgsz=request.imgsz, batch=request.batch, device="cpu",
-                    workers=0, seed=request.seed, deterministic=True, pretrained=False, project=str(out),
+                    workers=0, seed=request.seed, deterministic=True, pretrained=initial, project=str(out),
                     name=RUN_FOLDER, exist_ok=True, plots=False, amp=False, patience=request.epochs, verbose=True,
                     val=False)  # validated once, after the last epoch: a young model's validation costs a third
     seconds = time.perf_counter() - start
