@@ -72,3 +72,23 @@ def transform_points(T_a_b: Mat4, points_b: NDArray[np.float64]) -> NDArray[np.f
 def rot_z(angle_rad: float) -> NDArray[np.float64]:
     c, s = np.cos(angle_rad), np.sin(angle_rad)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def convex_hull_xy(points: NDArray[np.float64], decimals: int = 9) -> NDArray[np.float64]:
+    """The 2-D convex hull of points (N, 2), counter-clockwise (Andrew's monotone chain); points equal to
+    ``decimals`` places are one point; fewer than three distinct points are returned as they are."""
+    pts = sorted({(round(float(x), decimals), round(float(y), decimals)) for x, y in points})
+    if len(pts) < 3:
+        return np.array(pts, dtype=float)
+
+    def half(seq: list[tuple[float, float]]) -> list[tuple[float, float]]:
+        out: list[tuple[float, float]] = []
+        for p in seq:
+            while len(out) >= 2 and ((out[-1][0] - out[-2][0]) * (p[1] - out[-2][1])
+                                     - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0])) <= 0:
+                out.pop()
+            out.append(p)
+        return out
+
+    lower, upper = half(pts), half(pts[::-1])
+    return np.array(lower[:-1] + upper[:-1], dtype=float)

@@ -37,7 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from bt_grasp.geometry import Mat4, make_T, rot_z
+from bt_grasp.geometry import Mat4, convex_hull_xy, make_T, rot_z
 
 #: the step of the grid of positions tried besides those against a wall or an object, m
 GRID_STEP_M = 0.01
@@ -146,26 +146,7 @@ def _shadow(part: ToolPart, T_container_object: Mat4, grow: float) -> tuple[NDAr
     corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * half
     T = np.asarray(T_container_object) @ np.asarray(part.T_object_part)
     pts = corners @ T[:3, :3].T + T[:3, 3]
-    return _hull(pts[:, :2]), float(pts[:, 2].min())
-
-
-def _hull(points: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Counter-clockwise convex hull (Andrew's monotone chain)."""
-    pts = sorted({(round(float(x), 12), round(float(y), 12)) for x, y in points})
-    if len(pts) < 3:
-        return np.array(pts, dtype=float)
-
-    def half(seq: list[tuple[float, float]]) -> list[tuple[float, float]]:
-        out: list[tuple[float, float]] = []
-        for p in seq:
-            while len(out) >= 2 and ((out[-1][0] - out[-2][0]) * (p[1] - out[-2][1])
-                                     - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0])) <= 0:
-                out.pop()
-            out.append(p)
-        return out
-
-    lower, upper = half(pts), half(pts[::-1])
-    return np.array(lower[:-1] + upper[:-1], dtype=float)
+    return convex_hull_xy(pts[:, :2], decimals=12), float(pts[:, 2].min())
 
 
 def _contact(x0: NDArray[np.float64], x1: NDArray[np.float64], y0: NDArray[np.float64], y1: NDArray[np.float64],

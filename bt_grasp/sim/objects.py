@@ -14,7 +14,7 @@ import numpy as np
 import sapien
 
 from bt_grasp.errors import ConfigError
-from bt_grasp.geometry import Mat4, make_T, rot_z
+from bt_grasp.geometry import Mat4, convex_hull_xy, make_T, rot_z
 from bt_grasp.scene.mesh_cache import collision_shapes
 from bt_grasp.scene.mesh_geometry import VisualPart
 from bt_grasp.scene.objects import DEFAULT_MESH_RGB, SceneObject
@@ -48,7 +48,7 @@ def footprint_xy(obj: SceneObject, T_world_object: Mat4) -> np.ndarray:
     object's circle as 16 points on its circumscribed polygon; a mesh's bounding rectangle (a mesh set down on
     a side, ``T_world_object`` not upright: the convex hull of its vertices seen from above)."""
     if obj.is_mesh and abs(T_world_object[2, 2] - 1.0) > 1e-9:
-        return _hull_xy(obj.geometry.vertices_m @ T_world_object[:3, :3].T[:, :2] + T_world_object[:2, 3])
+        return convex_hull_xy(obj.geometry.vertices_m @ T_world_object[:3, :3].T[:, :2] + T_world_object[:2, 3])
     if obj.is_mesh:
         (x0, y0, _), (x1, y1, _) = obj.geometry.bounds_m
         local = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
@@ -63,23 +63,6 @@ def footprint_xy(obj: SceneObject, T_world_object: Mat4) -> np.ndarray:
         local = np.stack([r * np.cos(angles), r * np.sin(angles)], axis=1)
     R, t = T_world_object[:2, :2], T_world_object[:2, 3]
     return np.asarray(local @ R.T + t)
-
-
-def _hull_xy(points: np.ndarray) -> np.ndarray:
-    """The 2-D convex hull of points (N, 2), counter-clockwise (Andrew's monotone chain)."""
-    pts = sorted({(round(float(x), 9), round(float(y), 9)) for x, y in points})
-
-    def half(seq: list[tuple[float, float]]) -> list[tuple[float, float]]:
-        out: list[tuple[float, float]] = []
-        for p in seq:
-            while len(out) >= 2 and ((out[-1][0] - out[-2][0]) * (p[1] - out[-2][1])
-                                     - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0])) <= 0:
-                out.pop()
-            out.append(p)
-        return out
-
-    lower, upper = half(pts), half(pts[::-1])
-    return np.array(lower[:-1] + upper[:-1])
 
 
 def footprint_gap_m(a: np.ndarray, b: np.ndarray) -> float:
