@@ -164,3 +164,19 @@ def test_choose_needs_version_2(tmp_path: Path, capsys: pytest.CaptureFixture[st
     path.write_text("choose: {count: 1}\nobjects:\n  - " + BOX % "a" + "\n")
     assert main(["scene", "validate", str(path)]) == 2
     assert "'choose' needs scene format version 2" in capsys.readouterr().err
+
+
+def test_the_wedge_training_scene_puts_the_wood_wedge_on_every_table(household: Scene) -> None:
+    """scenes/training/household_wedge.yaml (the detector's run-4 dataset): the household objects as they are in
+    scenes/household.yaml, 3 to 5 per table like it, and the wood wedge always among them (it is left out of
+    ``choose.among``), on the scene's own wood-coloured table."""
+    wedge_scene = load_scene(REPO / "scenes" / "training" / "household_wedge.yaml")
+    assert [(o.name, o.mass_kg, o.friction, o.color, o.rest_pose) for o in wedge_scene.objects] == \
+        [(o.name, o.mass_kg, o.friction, o.color, o.rest_pose) for o in household.objects]
+    assert wedge_scene.table == household.table
+    counts = set()
+    for seed in SEEDS:
+        names = [p.spec.name for p in drawn(wedge_scene, seed)]
+        assert "wedge" in names, seed
+        counts.add(len(names))
+    assert counts == {3, 4, 5}
