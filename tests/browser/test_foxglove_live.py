@@ -96,6 +96,7 @@ def test_live_run_shows_whole_in_foxglove(tmp_path: Path) -> None:
     assert report.errors == []
     assert report.problems == [] and report.problem_count == 0, report.problems
     assert set(ROBOT_LINKS) <= set(report.frames), report.frames
-    assert report.three_d_drawn, "the 3D panel drew nothing"
-    assert report.image_drawn, "the image panel drew nothing"
-    assert report.state_transitions_drawn, "State Transitions drew no leaf status from /bt/tick.leaves"
+    waited = {k: report.raw.get(k) for k in ("waitedS", "notDrawnAtDeadline", "shotWaitS", "notDrawnAtShots")}
+    assert report.three_d_drawn, f"the 3D panel drew nothing ({waited})"
+    assert report.image_drawn, f"the image panel drew nothing ({waited})"
+    assert report.state_transitions_drawn, f"State Transitions drew no leaf status from /bt/tick.leaves ({waited})"
