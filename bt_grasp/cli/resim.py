@@ -11,6 +11,7 @@ that names the first differing node statuses.
 from __future__ import annotations
 
 import json
+import os
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -116,6 +117,7 @@ def _resimulate(log_path: Path, workdir: Path, leaves: tuple[str, ...] = ()) -> 
     from bt_grasp.recording.compare import compare_tick_streams
     from bt_grasp.recording.fingerprint import fingerprint_of_log
     from bt_grasp.recording.reader import open_log
+    from bt_grasp.recording.reproducible import log_epoch_ns
 
     run = open_log(log_path)
     meta = run.metadata
@@ -157,6 +159,7 @@ def _resimulate(log_path: Path, workdir: Path, leaves: tuple[str, ...] = ()) -> 
         blackboard=blackboard,
         argv=("bt-grasp", "replay", str(log_path), "--resim"),
         leaves=leaves,
+        log_epoch_ns=log_epoch_ns(os.environ),
     )
     controller = None
     if recorded_interventions:

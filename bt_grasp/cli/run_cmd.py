@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -201,6 +202,7 @@ def run(
     # episode (the simulator's modules) nor the control package (issue 27)
     from bt_grasp.episode.request import EpisodeRequest, parse_assignments
     from bt_grasp.output_files import check_output_file, write_output_file
+    from bt_grasp.recording.reproducible import log_epoch_ns
 
     blackboard: dict[str, BlackboardValue] = {"lift_height": lift_height}
     if color is not None:  # not given: the scene's default (bt_grasp.scene.run_goal.default_color)
@@ -223,6 +225,7 @@ def run(
         live_host=live_host,
         realtime=realtime,
         leaves=tuple(leaves),
+        log_epoch_ns=log_epoch_ns(os.environ),
     )
     if realtime is not None and realtime <= 0:
         raise InputError("--realtime", f"the factor must be positive, got {realtime}")

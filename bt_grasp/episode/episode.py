@@ -287,7 +287,7 @@ class Episode:
             if recorder is not None:
                 if extras is not None:
                     extras.finish()
-                recorder.write_result(world.now_ns(), result.to_json())
+                recorder.write_result(world.now_ns(), _logged_result(result.to_json(), request.log_epoch_ns))
         finally:
             if controller is not None:
                 controller.finish()
@@ -338,6 +338,7 @@ class Episode:
                          # the Foxglove layout of this tree (its leaves' rows, by path)
                          LAYOUT_ATTACHMENT: layout_bytes(tree_structure(self.tree.root), request.tree.name)},
             flush_every_ticks=LOG_FLUSH_EVERY_TICKS,
+            **_fixed_clock(request.log_epoch_ns),
             robot_model=default_robot_model(),
             leaf_names=[n["path"] for n in node_records(self.tree.root) if n["kind"] in ("Action", "Condition")],
             writer_process=True,  # a file log is written by a child process; the tick loop only hands over
@@ -353,6 +354,22 @@ class Episode:
         recorder.write_tree_structure(self.world.now_ns(), tree_structure(self.tree.root))
         self.cell.media = RecorderSink(recorder, self.world.now_ns)
         return recorder
+
+
+def _fixed_clock(epoch_ns: int | None) -> dict[str, Any]:
+    """The recorder's clock arguments for a log with a fixed time origin (none: the wall clock)."""
+    if epoch_ns is None:
+        return {}
+    return {"wall_clock": lambda: epoch_ns, "time_origin_ns": epoch_ns}
+
+
+def _logged_result(result: Mapping[str, object], epoch_ns: int | None) -> Mapping[str, object]:
+    """The /run/result a log holds: without wall-clock figures when its time origin is fixed."""
+    if epoch_ns is None:
+        return result
+    from bt_grasp.recording.reproducible import without_wall_clock
+
+    return without_wall_clock(result)
 
 
 def _close_log(recorder: RunRecorder, path: Path | None) -> None:

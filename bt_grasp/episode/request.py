@@ -49,6 +49,9 @@ class EpisodeRequest:
     realtime: float | None = None
     #: users' own nodes: ``--leaves`` plugin files or modules, loaded after the installed entry points
     leaves: tuple[str, ...] = ()
+    #: the log's time origin fixed (ns since 1970, from ``SOURCE_DATE_EPOCH``): the log then holds no wall-clock
+    #: reading, so the same request writes the same bytes (``bt_grasp.recording.reproducible``); None: now
+    log_epoch_ns: int | None = None
 
 
 def parse_assignments(items: Sequence[str], source: str = "--set") -> dict[str, BlackboardValue]:
