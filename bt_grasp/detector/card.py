@@ -115,7 +115,7 @@ class ModelCard:
             lines.append(f"- {_md(str(d['role']))}: {_md(str(d['folder']))}, {d['images']} pictures")
         lines += [f"- {self.epochs} epochs, seed {self.seed}, training time {self.training_seconds / 60:.1f} min "
                   f"on {self.machine.get('cores')} cores ({self.machine.get('cpu')}, no GPU; load average at the "
-                  f"end {self.machine.get('load_average_1_5_15_min_at_end')}: the machine was shared)",
+                  f"end {self.machine.get('load_average_1_5_15_min_at_end')}, the training's own threads included)",
                   f"- versions: {', '.join(f'{k} {v}' for k, v in self.versions.items())}", ""]
         lines += ["## Held-out figures", ""]
         if self.held_out is None:
