@@ -10,6 +10,7 @@ from __future__ import annotations
 import logging
 import re
 import sys
+import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -338,7 +339,8 @@ class Episode:
                          # the Foxglove layout of this tree (its leaves' rows, by path)
                          LAYOUT_ATTACHMENT: layout_bytes(tree_structure(self.tree.root), request.tree.name)},
             flush_every_ticks=LOG_FLUSH_EVERY_TICKS,
-            **_fixed_clock(request.log_epoch_ns),
+            wall_clock=_wall_clock(request.log_epoch_ns),
+            time_origin_ns=request.log_epoch_ns,  # None: now
             robot_model=default_robot_model(),
             leaf_names=[n["path"] for n in node_records(self.tree.root) if n["kind"] in ("Action", "Condition")],
             writer_process=True,  # a file log is written by a child process; the tick loop only hands over
@@ -356,11 +358,11 @@ class Episode:
         return recorder
 
 
-def _fixed_clock(epoch_ns: int | None) -> dict[str, Any]:
-    """The recorder's clock arguments for a log with a fixed time origin (none: the wall clock)."""
+def _wall_clock(epoch_ns: int | None) -> Callable[[], int]:
+    """The recorder's wall clock: the real one, or a log's fixed time origin (``SOURCE_DATE_EPOCH``)."""
     if epoch_ns is None:
-        return {}
-    return {"wall_clock": lambda: epoch_ns, "time_origin_ns": epoch_ns}
+        return time.time_ns
+    return lambda: epoch_ns
 
 
 def _logged_result(result: Mapping[str, object], epoch_ns: int | None) -> Mapping[str, object]:
