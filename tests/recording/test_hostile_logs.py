@@ -5,9 +5,9 @@ a tree without structure, an image that fails to decode only when shown) are one
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
-import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -25,8 +25,19 @@ def _log(path: Path, attachments: dict[str, bytes], metadata: dict[str, str] | N
     return path
 
 
-def _resim_dirs() -> set[str]:
-    return {p.name for p in Path(tempfile.gettempdir()).glob("bt_grasp_resim_*")}
+def _resim(log: Path, cwd: Path, tmp_path: Path) -> subprocess.CompletedProcess[str]:
+    """``replay LOG --resim`` with a temporary folder of its own (``TMPDIR``): what it leaves there is its own,
+    whatever else runs on the machine (r22h, 2026-11-28: another process's resim folder appeared in the shared
+    /tmp between the two looks and failed the old check)."""
+    private = tmp_path / "tmpdir"
+    private.mkdir(exist_ok=True)
+    return subprocess.run([sys.executable, "-m", "bt_grasp.cli.main", "replay", str(log), "--resim"],
+                          capture_output=True, text=True, timeout=300, cwd=cwd,
+                          env={**os.environ, "TMPDIR": str(private)})
+
+
+def _resim_dirs(tmp_path: Path) -> list[str]:
+    return sorted(p.name for p in (tmp_path / "tmpdir").glob("bt_grasp_resim_*"))
 
 
 HOSTILE = ["tree/../../../escaped.xml", "scene/../../escaped.yaml", "calibration/../../escaped.yaml"]
@@ -39,16 +50,13 @@ def test_item1_resim_attachment_names_cannot_leave_the_work_folder(name: str, tm
     attachments = {"tree/pick.xml": (REPO / "trees/pick.xml").read_bytes(),
                    "scene/tabletop.yaml": (REPO / "scenes/tabletop.yaml").read_bytes(), name: b"<owned/>"}
     log = _log(tmp_path / "hostile.mcap", attachments)
-    before = _resim_dirs()
-    proc = subprocess.run([sys.executable, "-m", "bt_grasp.cli.main", "replay", str(log), "--resim"],
-                          capture_output=True, text=True, timeout=300, cwd=work)
+    proc = _resim(log, work, tmp_path)
     assert proc.returncode == 2, proc.stderr
     lines = [line for line in proc.stderr.splitlines() if line.strip()]
     assert len(lines) == 1 and "attachment name" in lines[0] and "Traceback" not in proc.stderr, proc.stderr
-    escaped = [p for p in Path(tempfile.gettempdir()).rglob("*escaped*") if p.is_file()]
-    escaped += [p for p in tmp_path.rglob("*escaped*") if p.is_file()]
-    assert escaped == []
-    assert _resim_dirs() <= before, "the work folder was left behind"
+    # the work folder is tmp_path/tmpdir/bt_grasp_resim_*: each name's ../ reaches at most tmp_path
+    assert [p for p in tmp_path.rglob("*escaped*") if p.is_file()] == []
+    assert _resim_dirs(tmp_path) == [], "the work folder was left behind"
 
 
 def _outside_scene(mesh: Path) -> bytes:
@@ -78,14 +86,12 @@ def test_item1_resim_reads_no_file_outside_the_logs_own(what: str, tmp_path: Pat
     attachments = {"tree/pick.xml": tree, "scene/tabletop.yaml": scene,
                    "calibration/c.yaml": (REPO / "scenes/tabletop.calibration.yaml").read_bytes()}
     log = _log(tmp_path / "outside.mcap", attachments)
-    before = _resim_dirs()
-    proc = subprocess.run([sys.executable, "-m", "bt_grasp.cli.main", "replay", str(log), "--resim"],
-                          capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    proc = _resim(log, tmp_path, tmp_path)
     assert proc.returncode == 2, proc.stderr[-2000:]
     lines = [line for line in proc.stderr.splitlines() if line.strip()]
     assert len(lines) == 1 and "lies outside" in lines[0] and "Traceback" not in proc.stderr, proc.stderr[-2000:]
     assert ("part.obj" if what == "scene_mesh" else "lib.xml") in lines[0]
-    assert _resim_dirs() <= before
+    assert _resim_dirs(tmp_path) == []
 
 
 @pytest.mark.parametrize(("metadata", "fragment"), [
