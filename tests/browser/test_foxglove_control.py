@@ -61,7 +61,9 @@ def _steps(shot: Path) -> list[dict[str, Any]]:
         {"op": "set", "name": "breakpoints", "text": "[]"},
         {"op": "set", "name": "run.paused", "text": "false"},
         wait("run.tick", gt=8),
-        {"op": "set", "name": "run.paused", "text": "true"},
+        # while the run goes, its parameters change every tick and Studio draws the Parameters panel's rows again,
+        # losing what is being typed (r24, idle: 5 tries, none submitted): pause with the Publish panel's button
+        {"op": "press", "text": "Pause"},
         wait("run.status", eq="paused: paused (foxglove)"),
         read("paused"),
         {"op": "sleep", "s": 4},
