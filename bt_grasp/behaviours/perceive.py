@@ -80,7 +80,10 @@ class DetectorLeaf(RobotLeaf):
         path = model_path(text, self.ctx.source if from_tree else None)
         key = (path, imgsz)
         if key not in self._models:
-            self._models[key] = LearnedDetector.load(path, imgsz=imgsz or None)
+            from bt_grasp.perception.learned import TENTATIVE_SCORE
+
+            # decoded down to the tentative score: the join decides what a box under the sure score may name
+            self._models[key] = LearnedDetector.load(path, imgsz=imgsz or None, conf=TENTATIVE_SCORE)
         return self._models[key]
 
     def detector_now(self) -> LearnedDetector | Status | None:

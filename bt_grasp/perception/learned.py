@@ -8,10 +8,18 @@ in the colour image's pixels). Each object's points are projected back into the 
 
 * the box's object is the cluster with the most not-yet-claimed points inside the box (fewer than the
   segmentation's ``min_cluster_points``: no object under the box, the box is dropped);
-* when at least :data:`WHOLE_FRACTION` of that cluster lies inside the box, the whole cluster is the object (the
-  network's box is a little tight or loose; the depth is what decides the object's extent); otherwise the cluster
-  holds more than this object (touching objects clustered together) and only its points inside the box are
-  described, as the geometric pipeline describes a cluster;
+* when at least :data:`WHOLE_FRACTION` of that cluster lies inside the box, and no other box of the frame covers
+  an object's worth (``min_cluster_points``) of the cluster's points outside this one, the whole cluster is the
+  object (the network's box is a little tight or loose; the depth is what decides the object's extent);
+  otherwise the cluster holds more than this object (touching objects clustered together: a plate's box, a
+  square around a disc, also covers the corner of a small box pushed against its rim) and only its points
+  inside the box are described, as the geometric pipeline describes a cluster;
+* boxes at or above :data:`SURE_SCORE` (the decoder's usual threshold) are joined first, best score first; then
+  boxes down to :data:`TENTATIVE_SCORE`, which may only name a whole cluster no surer box touched and which lies
+  at least :data:`TENTATIVE_COVER` inside them (a weak box is often short of the object's ends). A network's score is weak evidence on its own (a box over bare
+  table, a second guess over a named object), but a box that frames exactly one unnamed object the depth found is
+  two pieces of evidence agreeing: a black pen the network scores 0.2 is still the pen when a tree asks for
+  one. Such an object keeps its low ``class_score``, so a surer one of the same class always ranks first;
 * the box's long axis, carried to the table through the camera's rays, decides the object's ``yaw_rad``, the
   axis the grasp closes across (as the systems that grasp from YOLO-OBB boxes do): within
   :data:`AGREE_RAD` of the footprint's own long axis, the footprint's axis (measured on the points, it is the
@@ -45,6 +53,13 @@ from bt_grasp.perception.segment import Plane, gravity_axes
 
 #: a box covering at least this fraction of a cluster's points takes the whole cluster
 WHOLE_FRACTION = 0.8
+#: boxes at or above this score name what they cover (Ultralytics' and ``bt_grasp.detector.obb``'s ``conf``)
+SURE_SCORE = 0.25
+#: boxes from this score up to SURE_SCORE name only a whole object no surer box touched (see the module's text);
+#: the learned detector is decoded down to this score
+TENTATIVE_SCORE = 0.10
+#: a box under SURE_SCORE names a cluster no surer box touched when it covers at least this fraction of it
+TENTATIVE_COVER = 0.5
 #: a box this much longer than wide (in the image) has a long axis worth following
 MIN_ASPECT = 1.3
 #: a box's long axis this close to the footprint's own long axis agrees with it (the footprint's is kept)
@@ -174,6 +189,13 @@ def _axis_gap(a_rad: float, b_rad: float) -> float:
     return min(d, math.pi - d)
 
 
+def _another_box_names_the_rest(covers: list[list[NDArray[np.bool_]]], i: int, k: int, min_points: int) -> bool:
+    """Whether a box other than the ``i``-th covers at least ``min_points`` of cluster ``k``'s points that lie
+    outside the ``i``-th box (``covers[box][cluster]``: which of the cluster's points the box covers)."""
+    outside = ~covers[i][k]
+    return any(int((c[k] & outside).sum()) >= min_points for j, c in enumerate(covers) if j != i)
+
+
 def _plane(result: PerceptionResult) -> Plane | None:
     if result.table_plane_base is None:
         return None
@@ -202,18 +224,28 @@ def join_boxes(
     hsv = to_hsv(rgb)
     named: list[Detection] = []
     whole_taken: set[int] = set()
-    for box in sorted(boxes, key=lambda b: -b.score):
-        mask = box_mask(box, intr.width_px, intr.height_px)
-        inside = [_inside(p, mask) & ~c for p, c in zip(pixels, claimed, strict=True)]
-        counts = [int(i.sum()) for i in inside]
+    ordered = sorted((b for b in boxes if b.score >= TENTATIVE_SCORE), key=lambda b: -b.score)
+    covers = [[_inside(p, box_mask(b, intr.width_px, intr.height_px)) for p in pixels] for b in ordered]
+    for i, box in enumerate(ordered):
+        inside = [c & ~taken for c, taken in zip(covers[i], claimed, strict=True)]
+        counts = [int(c.sum()) for c in inside]
         k = int(np.argmax(counts))
         if counts[k] < seg.min_cluster_points:
             continue  # no object under this box (or only points another box already took)
         det = objects[k]
-        if k not in whole_taken and not claimed[k].any() and counts[k] >= WHOLE_FRACTION * len(pixels[k]):
+        whole = (k not in whole_taken and not claimed[k].any() and counts[k] >= WHOLE_FRACTION * len(pixels[k])
+                 and not _another_box_names_the_rest(covers, i, k, seg.min_cluster_points))
+        sure = box.score >= SURE_SCORE
+        if not sure:  # a tentative box names a whole object no surer box touched, or nothing
+            if k in whole_taken or claimed[k].any() or counts[k] < TENTATIVE_COVER * len(pixels[k]):
+                continue
+            whole = True
+        if whole:
             claimed[k][:] = True
             whole_taken.add(k)
-            joined: Detection | None = det
+            note = f"named by a {box.class_name} box under the sure score ({box.score:.2f})"
+            joined: Detection | None = det if sure else replace(
+                det, cluster_note="; ".join(n for n in (det.cluster_note, note) if n))
         else:
             claimed[k] |= inside[k]
             part = pc.PixelCloud(np.asarray(det.points_base_m, dtype=float)[inside[k]],

@@ -15,7 +15,7 @@ import pytest
 from perception.perception_synth import DEFAULT_T_BASE_CAMERA, INTRINSICS, Box, render
 
 from bt_grasp.perception.grasps import synthesize_grasps
-from bt_grasp.perception.learned import join_boxes, long_axis_yaw, orient_along
+from bt_grasp.perception.learned import SURE_SCORE, TENTATIVE_SCORE, join_boxes, long_axis_yaw, orient_along
 from bt_grasp.perception.pipeline import perceive
 from bt_grasp.perception.results import PerceptionStatus
 from bt_grasp.perception.segment import Plane
@@ -119,3 +119,47 @@ def test_orient_along_measures_the_footprint_along_the_given_axis() -> None:
     assert turned.obb is not None and turned.obb.axes[0][:2] == pytest.approx(
         (math.cos(math.radians(20)), math.sin(math.radians(20))), abs=1e-9)
     assert orient_along(det, math.radians(90.0), plane) is det  # 8 cm along, 10 across: the points disagree
+
+
+PLATE = Box((0.45, 0.05), (0.16, 0.16, 0.03))
+TOUCHING_CUBE = Box((0.45, -0.05), (0.04, 0.04, 0.03))  # touches the plate's edge, as tall: one cluster
+
+
+def test_a_surer_box_does_not_take_a_touching_object_another_box_names() -> None:
+    frame = render([PLATE, TOUCHING_CUBE])
+    geometric = perceive(frame, DEFAULT_T_BASE_CAMERA)
+    assert len(geometric.others) == 1  # the plate's box covers over 80 % of this cluster, the cube's corner too
+    boxes = [image_box(PLATE, "plate", 0.9), image_box(TOUCHING_CUBE, "small_box", 0.6)]
+    result = join_boxes(geometric, boxes, frame, DEFAULT_T_BASE_CAMERA)
+    named = {d.class_name: d for d in result.detections}
+    assert set(named) == {"plate", "small_box"} and len(result.others) == 2
+    assert named["plate"].centroid_base_m[:2] == pytest.approx(PLATE.centre_xy, abs=0.008)
+    assert named["plate"].size_m[0] == pytest.approx(0.16, abs=0.01)
+    assert named["small_box"].centroid_base_m[1] == pytest.approx(-0.05, abs=0.012)
+    alone = join_boxes(geometric, boxes[:1], frame, DEFAULT_T_BASE_CAMERA)  # no box names the cube: the whole
+    assert alone.detections[0].size_m[0] == pytest.approx(0.19, abs=0.01)  # cluster, as the geometry sees it
+
+
+def test_a_box_under_the_sure_score_names_only_a_whole_object_no_surer_box_named() -> None:
+    frame = render([PEN, CUBE])
+    geometric = perceive(frame, DEFAULT_T_BASE_CAMERA)
+    assert TENTATIVE_SCORE < SURE_SCORE
+    low_pen = image_box(PEN, "pen", 0.15)
+    result = join_boxes(geometric, [image_box(CUBE, "box", 0.9), low_pen], frame, DEFAULT_T_BASE_CAMERA)
+    assert [(d.class_name, d.class_score) for d in result.detections] == [("box", 0.9), ("pen", 0.15)]
+    assert "under the sure score" in result.detections[1].cluster_note
+    # a low box over an object a sure box named does not rename it, nor cut it
+    mug = image_box(CUBE, "mug", 0.2)
+    again = join_boxes(geometric, [image_box(CUBE, "box", 0.9), mug], frame, DEFAULT_T_BASE_CAMERA)
+    assert [d.class_name for d in again.detections] == ["box"] and len(again.others) == 2
+    # a low box over bare table, or over a part of an object only, names nothing
+    ghost = image_box(Box((0.40, -0.25), (0.05, 0.05, 0.05)), "mug", 0.2)
+    half_pen = image_box(replace(PEN, size=(0.03, 0.03, 0.04)), "pen", 0.2)  # a small part of the pen
+    none = join_boxes(geometric, [ghost, half_pen], frame, DEFAULT_T_BASE_CAMERA)
+    assert none.status is PerceptionStatus.NO_MATCH and not none.detections and len(none.others) == 2
+    # a weak box is often short of the object's ends: over most of an unnamed object it names all of it
+    short_pen = image_box(replace(PEN, size=(0.10, 0.03, 0.04)), "pen", 0.2)
+    (pen,) = join_boxes(geometric, [short_pen], frame, DEFAULT_T_BASE_CAMERA).detections
+    assert pen.size_m[0] == pytest.approx(0.14, abs=0.01) and pen.class_score == 0.2
+    # a sure box still cuts: the rule for low boxes is only that they take whole objects
+    assert join_boxes(geometric, [image_box(PEN, "pen", 0.3)], frame, DEFAULT_T_BASE_CAMERA).detections
