@@ -19,8 +19,9 @@ from bt_grasp.environment import machine_description
 
 @bench_app.command("pick", rich_help_panel=EPISODE_BENCHMARKS)
 def pick(
-    trees: list[Path] = typer.Option(
-        [Path("trees/pick.xml"), Path("trees/pick_with_recovery.xml")], "--tree", help="Tree(s) to run."
+    trees: list[Path] | None = typer.Option(
+        None, "--tree", help="Tree(s) to run. Default: trees/pick.xml and trees/pick_with_recovery.xml; with "
+                             "--detector learned, trees/pick_class.xml and trees/pick_with_recovery.xml."
     ),
     scene: Path = typer.Option(Path("scenes/tabletop.yaml"), "--scene"),
     seeds: int = typer.Option(20, "--seeds", min=1, help="Number of seeded episodes per tree."),
@@ -43,8 +44,9 @@ def pick(
     """Pick success over seeded episodes, judged by physics (object held 15 cm up at the end), per tree and per
     object picked, with why each failure failed. (A developer benchmark, in one process: to evaluate a tree,
     `bt-grasp eval run --tree T --scene S --seeds N`.)"""
-    from bt_grasp.episode.pick_bench import run_pick_bench
+    from bt_grasp.episode.pick_bench import default_pick_trees, run_pick_bench
 
+    trees = trees or default_pick_trees(detector.value)
     err = Console(stderr=True)  # progress on stderr: stdout stays one JSON object with --json
     report = run_pick_bench(trees, scene, seeds, first_seed, calibration, log_dir, warm, color,
                             progress=lambda line: err.print(line, highlight=False, markup=False, soft_wrap=True),

@@ -33,6 +33,13 @@ if TYPE_CHECKING:
     from bt_grasp.episode import EpisodeResult
 
 
+def default_pick_trees(detector: str = "geometric") -> list[Path]:
+    """The trees `bench pick` runs when none is named: today's pick and its recovery by colour; with the learned
+    detector, the pick by class and, on the same targets by colour, the geometric recovery tree beside it."""
+    first = Path("trees/pick_class.xml") if detector == "learned" else Path("trees/pick.xml")
+    return [first, Path("trees/pick_with_recovery.xml")]
+
+
 def run_pick_bench(
     trees: list[Path], scene: Path, seeds: int, first_seed: int, calibration: Path | None, log_dir: Path | None,
     warm: bool = False, color: str | None = None, progress: Callable[[str], None] | None = None,

@@ -16,10 +16,11 @@ in the colour image's pixels). Each object's points are projected back into the 
   inside the box are described, as the geometric pipeline describes a cluster;
 * boxes at or above :data:`SURE_SCORE` (the decoder's usual threshold) are joined first, best score first; then
   boxes down to :data:`TENTATIVE_SCORE`, which may only name a whole cluster no surer box touched and which lies
-  at least :data:`TENTATIVE_COVER` inside them (a weak box is often short of the object's ends). A network's score is weak evidence on its own (a box over bare
-  table, a second guess over a named object), but a box that frames exactly one unnamed object the depth found is
-  two pieces of evidence agreeing: a black pen the network scores 0.2 is still the pen when a tree asks for
-  one. Such an object keeps its low ``class_score``, so a surer one of the same class always ranks first;
+  at least :data:`TENTATIVE_COVER` inside them (a weak box is often short of the object's ends). A network's
+  score is weak evidence on its own (a box over bare table, a second guess over a named object), but a box that
+  frames one unnamed object the depth found is two pieces of evidence agreeing: a black pen the network scores
+  0.2 is still the pen when a tree asks for one. Such an object keeps its low ``class_score``, so a surer one of
+  the same class always ranks first;
 * the box's long axis, carried to the table through the camera's rays, decides the object's ``yaw_rad``, the
   axis the grasp closes across (as the systems that grasp from YOLO-OBB boxes do): within
   :data:`AGREE_RAD` of the footprint's own long axis, the footprint's axis (measured on the points, it is the

@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from types import SimpleNamespace
 
-from bt_grasp.episode.pick_bench import _per_object
+from bt_grasp.episode.pick_bench import _per_object, default_pick_trees
 from bt_grasp.scene.format import load_scene
 from bt_grasp.scene.run_goal import default_color
 
@@ -38,3 +38,12 @@ def test_per_object_counts_and_says_why_each_failure_failed() -> None:
     assert report["can"]["failures"] == {1: "GRASP_EMPTY (Grasp); judge: held: can not between the fingers"}
     assert report["bowl"]["failure_reasons"] == {"NOTHING_TO_GRASP": 1}
     assert report["(none)"]["failures"] == {3: "tree SUCCESS; judge: lifted: rose 1.0 cm of 15.0 cm"}
+
+
+def test_the_learned_detector_runs_the_pick_by_class_beside_the_geometric_tree_when_no_tree_is_named() -> None:
+    """The issue's `bench pick --scene scenes/household.yaml --detector learned --seeds 100` compares the learned
+    detector's pick by class with the geometric detector on the same targets, with no --tree."""
+    assert default_pick_trees("learned") == [Path("trees/pick_class.xml"), Path("trees/pick_with_recovery.xml")]
+    assert default_pick_trees("geometric") == [Path("trees/pick.xml"), Path("trees/pick_with_recovery.xml")]
+    for tree in (*default_pick_trees("learned"), *default_pick_trees()):
+        assert (REPO / tree).is_file()
