@@ -8,12 +8,13 @@ in the colour image's pixels). Each object's points are projected back into the 
 
 * the box's object is the cluster with the most not-yet-claimed points inside the box (fewer than the
   segmentation's ``min_cluster_points``: no object under the box, the box is dropped);
-* when at least :data:`WHOLE_FRACTION` of that cluster lies inside the box, and no other box of the frame covers
-  an object's worth (``min_cluster_points``) of the cluster's points outside this one, the whole cluster is the
-  object (the network's box is a little tight or loose; the depth is what decides the object's extent);
-  otherwise the cluster holds more than this object (touching objects clustered together: a plate's box, a
-  square around a disc, also covers the corner of a small box pushed against its rim) and only its points
-  inside the box are described, as the geometric pipeline describes a cluster;
+* when at least :data:`WHOLE_FRACTION` of that cluster lies inside the box, and no other sure box of the frame
+  lying mostly elsewhere (most of the cluster's points it covers are outside this box: not a second box over the
+  same object) covers an object's worth (``min_cluster_points``) of the cluster's points outside this one, the
+  whole cluster is the object (the network's box is a little tight or loose; the depth is what decides the
+  object's extent); otherwise the cluster holds more than this object (touching objects clustered together: a
+  plate's box, a square around a disc, also covers the corner of a small box pushed against its rim) and only
+  its points inside the box are described, as the geometric pipeline describes a cluster;
 * boxes at or above :data:`SURE_SCORE` (the decoder's usual threshold) are joined first, best score first; then
   boxes down to :data:`TENTATIVE_SCORE`, which may only name a whole cluster no surer box touched and which lies
   at least :data:`TENTATIVE_COVER` inside them (a weak box is often short of the object's ends). A network's
@@ -190,11 +191,19 @@ def _axis_gap(a_rad: float, b_rad: float) -> float:
     return min(d, math.pi - d)
 
 
-def _another_box_names_the_rest(covers: list[list[NDArray[np.bool_]]], i: int, k: int, min_points: int) -> bool:
-    """Whether a box other than the ``i``-th covers at least ``min_points`` of cluster ``k``'s points that lie
-    outside the ``i``-th box (``covers[box][cluster]``: which of the cluster's points the box covers)."""
+def _another_box_names_the_rest(covers: list[list[NDArray[np.bool_]]], sure: list[bool], i: int, k: int,
+                                min_points: int) -> bool:
+    """Whether a sure box other than the ``i``-th covers at least ``min_points`` of cluster ``k``'s points
+    outside the ``i``-th box, and those are most of the cluster's points it covers: a box of another object, not
+    a second box over the same one (``covers[box][cluster]``: which of the cluster's points the box covers)."""
     outside = ~covers[i][k]
-    return any(int((c[k] & outside).sum()) >= min_points for j, c in enumerate(covers) if j != i)
+    for j, c in enumerate(covers):
+        if j == i or not sure[j]:
+            continue
+        beyond = int((c[k] & outside).sum())
+        if beyond >= min_points and 2 * beyond > int(c[k].sum()):
+            return True
+    return False
 
 
 def _plane(result: PerceptionResult) -> Plane | None:
@@ -227,6 +236,7 @@ def join_boxes(
     whole_taken: set[int] = set()
     ordered = sorted((b for b in boxes if b.score >= TENTATIVE_SCORE), key=lambda b: -b.score)
     covers = [[_inside(p, box_mask(b, intr.width_px, intr.height_px)) for p in pixels] for b in ordered]
+    sure_boxes = [b.score >= SURE_SCORE for b in ordered]
     for i, box in enumerate(ordered):
         inside = [c & ~taken for c, taken in zip(covers[i], claimed, strict=True)]
         counts = [int(c.sum()) for c in inside]
@@ -235,8 +245,8 @@ def join_boxes(
             continue  # no object under this box (or only points another box already took)
         det = objects[k]
         whole = (k not in whole_taken and not claimed[k].any() and counts[k] >= WHOLE_FRACTION * len(pixels[k])
-                 and not _another_box_names_the_rest(covers, i, k, seg.min_cluster_points))
-        sure = box.score >= SURE_SCORE
+                 and not _another_box_names_the_rest(covers, sure_boxes, i, k, seg.min_cluster_points))
+        sure = sure_boxes[i]
         if not sure:  # a tentative box names a whole object no surer box touched, or nothing
             if k in whole_taken or claimed[k].any() or counts[k] < TENTATIVE_COVER * len(pixels[k]):
                 continue

@@ -140,6 +140,18 @@ def test_a_surer_box_does_not_take_a_touching_object_another_box_names() -> None
     assert alone.detections[0].size_m[0] == pytest.approx(0.19, abs=0.01)  # cluster, as the geometry sees it
 
 
+def test_a_second_box_over_the_same_object_does_not_split_it() -> None:
+    """Networks often draw two boxes over one object (two classes, or one a little larger); the rule above is
+    about a box mostly elsewhere, so the surer box still takes the whole object, and the other names nothing."""
+    frame = render([PEN, CUBE])
+    geometric = perceive(frame, DEFAULT_T_BASE_CAMERA)
+    for second in (image_box(CUBE, "mug", 0.5, grow=1.5), image_box(CUBE, "mug", 0.5, grow=1.3, turn_rad=0.3)):
+        result = join_boxes(geometric, [image_box(CUBE, "box", 0.9, grow=0.95), second], frame,
+                            DEFAULT_T_BASE_CAMERA)
+        assert [d.class_name for d in result.detections] == ["box"] and len(result.others) == 2
+        assert result.detections[0].size_m[:2] == pytest.approx((0.05, 0.05), abs=0.006)
+
+
 def test_a_box_under_the_sure_score_names_only_a_whole_object_no_surer_box_named() -> None:
     frame = render([PEN, CUBE])
     geometric = perceive(frame, DEFAULT_T_BASE_CAMERA)
