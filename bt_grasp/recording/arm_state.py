@@ -7,7 +7,6 @@ every link's pose from one forward kinematics pass of the robot description, and
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -15,13 +14,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bt_grasp.recording import schemas
+from bt_grasp.recording.encodings import dumps
 from bt_grasp.recording.jsonable import to_jsonable
 from bt_grasp.recording.tf_encoding import FrameTransformsEncoder
-
-
-def dumps(obj: Any) -> bytes:
-    """Compact JSON; NaN and infinities raise ``ValueError`` (the log's JSON has none)."""
-    return json.dumps(obj, separators=(",", ":"), allow_nan=False).encode()
 
 
 def ticked(tick: int | None, msg: dict[str, Any]) -> dict[str, Any]:

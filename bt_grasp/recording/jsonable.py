@@ -104,6 +104,9 @@ def _is_frozen(value: Any, depth: int = 0) -> bool:
     return False
 
 
+_MISSING = object()
+
+
 class BlackboardDiffer:
     """Remembers the last value written per key; ``diff`` returns only the keys that changed."""
 
@@ -118,8 +121,12 @@ class BlackboardDiffer:
     def diff(self, blackboard: Mapping[str, Any]) -> tuple[dict[str, JsonValue], list[str]]:
         """(changed keys with their JSON values, keys that disappeared since the last call)."""
         changed: dict[str, JsonValue] = {}
+        raw, frozen = self._raw, self._frozen
         for key, value in blackboard.items():
-            if key in self._raw and self._unchanged(key, value):
+            last = raw.get(key, _MISSING)
+            if last is value and frozen[key]:  # the same immutable object (most entries, most ticks)
+                continue
+            if last is not _MISSING and self._unchanged(key, value):
                 continue
             converted = to_jsonable(value, self._max)
             if key not in self._json or self._json[key] != converted:
@@ -127,7 +134,8 @@ class BlackboardDiffer:
                 self._json[key] = converted
             self._raw[key] = self._remember(value)
             self._frozen[key] = _is_frozen(value)  # arrays are compared by value instead
-        removed = [key for key in self._raw if key not in blackboard]
+        # every key of ``blackboard`` is in ``_raw`` now: keys went away only if ``_raw`` holds more
+        removed = [key for key in self._raw if key not in blackboard] if len(self._raw) > len(blackboard) else []
         for key in removed:
             del self._raw[key]
             del self._json[key]
@@ -170,12 +178,15 @@ class NodeDiffer:
 
     def diff(self, nodes: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
         out: list[dict[str, Any]] = []
+        last_of = self._last
         for node in nodes:
-            uid = int(node["uid"])
-            state = (node["status"], node.get("feedback", "") or "", node.get("failure_reason"))
-            last = self._last.get(uid)
-            ticked = bool(node.get("ticked", False))
-            if last == state and not ticked:
+            uid = node["uid"]
+            if type(uid) is not int:
+                uid = int(uid)
+            state = (node["status"], node.get("feedback") or "", node.get("failure_reason"))
+            last = last_of.get(uid)
+            ticked = bool(node.get("ticked"))
+            if not ticked and last == state:
                 continue
             entry: dict[str, Any] = {"uid": uid, "status": state[0], "feedback": state[1]}
             if state[2] is not None:  # left out when none (Foxglove's JSON schemas have no nullable types)

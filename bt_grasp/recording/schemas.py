@@ -143,9 +143,8 @@ def frame_transforms(stamp_ns: int, transforms: Sequence[tuple[str, str, ArrayLi
 def compressed_image(
     stamp_ns: int, rgb: NDArray[np.uint8], frame_id: str, fmt: str = "jpeg", jpeg_quality: int = 90
 ) -> CompressedImage:
-    if rgb.ndim != 3 or rgb.shape[2] != 3 or rgb.dtype != np.uint8:
-        raise ValueError(f"a colour image must be HxWx3 uint8, got {rgb.shape} {rgb.dtype}")
-    import cv2  # here: the log's writer process encodes no image and need not load OpenCV
+    check_color_image(rgb, fmt)
+    import cv2  # here: a writer process loads OpenCV at its first image only
 
     bgr = np.ascontiguousarray(rgb[:, :, ::-1])
     if fmt == "jpeg":
@@ -170,13 +169,28 @@ def camera_calibration(
                              height=int(height), distortion_model="plumb_bob", D=[0.0] * 5, K=K, R=R, P=P)
 
 
+def check_color_image(rgb: NDArray[np.uint8], fmt: str) -> None:
+    """``ValueError`` unless ``rgb`` is an HxWx3 uint8 image and ``fmt`` "jpeg" or "png"."""
+    if rgb.ndim != 3 or rgb.shape[2] != 3 or rgb.dtype != np.uint8:
+        raise ValueError(f"a colour image must be HxWx3 uint8, got {rgb.shape} {rgb.dtype}")
+    if fmt not in ("jpeg", "png"):
+        raise ValueError(f"unknown image format {fmt!r}; expected 'jpeg' or 'png'")
+
+
+def check_depth_image(depth_m: NDArray[np.floating], encoding: str) -> None:
+    """``ValueError`` unless ``depth_m`` is HxW and ``encoding`` "16UC1" or "32FC1"."""
+    if depth_m.ndim != 2:
+        raise ValueError(f"a depth image must be HxW, got shape {depth_m.shape}")
+    if encoding not in ("16UC1", "32FC1"):
+        raise ValueError(f"unknown depth encoding {encoding!r}; expected '16UC1' or '32FC1'")
+
+
 def depth_image(
     stamp_ns: int, depth_m: NDArray[np.floating], frame_id: str, encoding: str = "16UC1"
 ) -> RawImage:
     """Depth in metres as a RawImage: ``16UC1`` (millimetres, 0 = invalid, the RealSense convention) or
     ``32FC1`` (metres)."""
-    if depth_m.ndim != 2:
-        raise ValueError(f"a depth image must be HxW, got shape {depth_m.shape}")
+    check_depth_image(depth_m, encoding)
     height, width = depth_m.shape
     if encoding == "16UC1":
         mm = np.nan_to_num(np.asarray(depth_m, dtype=np.float64) * 1000.0, nan=0.0, posinf=0.0, neginf=0.0)

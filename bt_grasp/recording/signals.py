@@ -13,8 +13,6 @@ from __future__ import annotations
 import logging
 import signal
 import threading
-from collections.abc import Iterator
-from contextlib import contextmanager
 from types import FrameType
 from typing import Any
 
@@ -36,6 +34,7 @@ class SignalGuard:
         self._previous: dict[int, Any] = {}
         self._busy = 0
         self._pending: int | None = None
+        self._section = _Busy(self)
 
     @property
     def installed(self) -> bool:
@@ -66,12 +65,30 @@ class SignalGuard:
         """The interruption reached its destination (the recorder is closing): stop raising it."""
         self._pending = None
 
-    @contextmanager
-    def busy(self) -> Iterator[None]:
+    def busy(self) -> _Busy:
+        """A critical section (``with guard.busy(): ...``): a signal arriving inside is raised at its end."""
+        return self._section
+
+    def _enter(self) -> None:
         self._busy += 1
-        try:
-            yield
-        finally:
-            self._busy -= 1
-            if not self._busy and self._pending is not None:
-                raise _interrupt_for(self._pending)
+
+    def _leave(self) -> None:
+        self._busy -= 1
+        if not self._busy and self._pending is not None:
+            raise _interrupt_for(self._pending)
+
+
+class _Busy:
+    """``SignalGuard.busy()``'s context manager: one object per guard, entered many times a tick (a plain
+    class: a generator-based context manager cost a few microseconds each time)."""
+
+    __slots__ = ("_guard",)
+
+    def __init__(self, guard: SignalGuard) -> None:
+        self._guard = guard
+
+    def __enter__(self) -> None:
+        self._guard._enter()
+
+    def __exit__(self, *exc: object) -> None:
+        self._guard._leave()

@@ -41,8 +41,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from bt_grasp.recording import schemas, topics
 from bt_grasp.recording.arm_state import ArmStateEncoder
-from bt_grasp.recording.arm_state import dumps as _dumps
 from bt_grasp.recording.arm_state import ticked as _ticked
+from bt_grasp.recording.encodings import Encoding, encode
 from bt_grasp.recording.jsonable import BlackboardDiffer, NodeDiffer, to_jsonable
 from bt_grasp.recording.projection import box_corners_px
 from bt_grasp.recording.signals import SignalGuard
@@ -198,7 +198,11 @@ class RunRecorder:
         self.channel_listeners: list[Callable[[ChannelSpec], None]] = []
         self._robot_model = robot_model
         self._leaf_names = tuple(leaf_names)
-        self._leaf_keys: tuple[tuple[str, ...], list[str]] = ((), [])
+        # the leaves' statuses as the last tick wrote them (``_leaf_statuses``)
+        self._node_count = -1
+        self._leaf_uids: set[int] = set()
+        self._leaf_of_uid: dict[int, str] = {}
+        self._leaf_status: dict[str, Any] = {}
         #: (parent, child) -> T_parent_child repeated in every /tf message written with an arm state, so a
         #: viewer that seeks (and reads only the last /tf message) still has the whole frame tree
         self.static_transforms: dict[tuple[str, str], NDArray[np.float64]] = {}
@@ -292,7 +296,8 @@ class RunRecorder:
         seq = self._sequence.get(channel, 0) + 1
         self._sequence[channel] = seq
         stamp_ns = int(stamp_ns)
-        self._last_stamp_ns = max(self._last_stamp_ns, stamp_ns)
+        if stamp_ns > self._last_stamp_ns:
+            self._last_stamp_ns = stamp_ns
         return channel, seq, self.time_origin_ns + stamp_ns
 
     def _write(self, topic: str, stamp_ns: int, data: bytes) -> None:
@@ -323,8 +328,20 @@ class RunRecorder:
         """The file's time of simulated time ``stamp_ns``."""
         return self.time_origin_ns + int(stamp_ns)
 
+    def _write_encoded(self, topic: str, stamp_ns: int, encoding: Encoding, args: tuple[Any, ...]) -> None:
+        """A message given by its inputs: with a writer process and no live viewer the child encodes it (off
+        the tick loop's thread); else it is encoded here. The same bytes either way (``encodings.py``)."""
+        if self._process is not None and not self._taps:
+            channel, seq, t = self._next(topic, stamp_ns)
+            with self._guard.busy():
+                self._process.add_encoded(channel, t, seq, encoding, args)
+            return
+        self._write(topic, stamp_ns, encode(encoding, args))
+
     def _write_json(self, topic: str, stamp_ns: int, obj: Any) -> None:
-        self._write(topic, stamp_ns, _dumps(obj))
+        """``obj`` as compact JSON; ``obj`` must not be changed afterwards (a writer process encodes it at the
+        tick's end)."""
+        self._write_encoded(topic, stamp_ns, Encoding.JSON, (obj,))
 
     # -- the tree ----------------------------------------------------------------------------------------
 
@@ -367,12 +384,8 @@ class RunRecorder:
                 write()
         changed_nodes = self._nodes.diff(nodes)
         bb_changed, bb_removed = self._blackboard.diff(blackboard)
-        leaves = [n for n in nodes if n.get("kind") in _LEAF_KINDS]
-        names = tuple(str(n.get("path") or n.get("name", "")) for n in leaves)  # keyed by path (format 3)
-        if names != self._leaf_keys[0]:
-            self._leaf_keys = (names, topics.leaf_keys(names))
         msg: dict[str, Any] = {"tick": int(tick), "stamp_ns": int(stamp_ns), "nodes": changed_nodes,
-                               "leaves": {k: n["status"] for k, n in zip(self._leaf_keys[1], leaves, strict=True)}}
+                               "leaves": self._leaf_statuses(nodes, changed_nodes)}
         if bb_changed:
             msg["bb"] = bb_changed
         if bb_removed:
@@ -381,6 +394,32 @@ class RunRecorder:
         self._write_json(topics.TICK, stamp_ns, msg)
         if robot is not None:
             self.write_robot_state(stamp_ns, robot)
+
+    def _leaf_statuses(
+        self, nodes: Sequence[Mapping[str, Any]], changed: Sequence[Mapping[str, Any]]
+    ) -> dict[str, Any]:
+        """Every leaf's status this tick, keyed by ``topics.leaf_keys`` of the leaves' paths, in uid order.
+
+        A leaf's status changes only in a node entry ``NodeDiffer`` writes (it writes every node whose status
+        changed), so the statuses are kept between ticks and updated from this tick's entries; they are read
+        from ``nodes`` again only when the nodes are not the ones seen before (another count, or an entry
+        for a uid never seen)."""
+        known = self._leaf_uids
+        if len(nodes) != self._node_count or any(entry["uid"] not in known for entry in changed):
+            leaves = [n for n in nodes if n.get("kind") in _LEAF_KINDS]
+            names = tuple(str(n.get("path") or n.get("name", "")) for n in leaves)  # keyed by path (format 3)
+            keys = topics.leaf_keys(names)
+            self._leaf_status = {k: n["status"] for k, n in zip(keys, leaves, strict=True)}
+            self._leaf_of_uid = {int(n["uid"]): k for k, n in zip(keys, leaves, strict=True)}
+            self._leaf_uids = {int(n["uid"]) for n in nodes}
+            self._node_count = len(nodes)
+        else:
+            leaf_of_uid, status = self._leaf_of_uid, self._leaf_status
+            for entry in changed:
+                key = leaf_of_uid.get(entry["uid"])
+                if key is not None:
+                    status[key] = entry["status"]
+        return dict(self._leaf_status)
 
     def write_robot_state(self, stamp_ns: int, robot: Mapping[str, Any]) -> None:
         """The arm state on /robot/joint_state (JSON, for plots) and base->tool on /tf (for the 3D view)."""
@@ -407,8 +446,9 @@ class RunRecorder:
     # -- sensors and perception ----------------------------------------------------------------------------
 
     def write_color_image(self, stamp_ns: int, rgb: NDArray[np.uint8], frame_id: str) -> None:
-        msg = schemas.compressed_image(self.t(stamp_ns), rgb, frame_id, self._image_format, self._jpeg_quality)
-        self._write(topics.COLOR, stamp_ns, msg.SerializeToString())
+        schemas.check_color_image(rgb, self._image_format)
+        self._write_encoded(topics.COLOR, stamp_ns, Encoding.COLOR,
+                            (self.t(stamp_ns), np.array(rgb), frame_id, self._image_format, self._jpeg_quality))
 
     def write_camera_calibration(self, stamp_ns: int, frame_id: str, intrinsics: Any) -> None:
         """``intrinsics``: width_px, height_px, fx_px, fy_px, cx_px, cy_px (a CameraIntrinsics)."""
@@ -431,8 +471,9 @@ class RunRecorder:
         self._write(topic, stamp_ns, update.SerializeToString())
 
     def write_depth(self, stamp_ns: int, depth_m: NDArray[np.floating], frame_id: str) -> None:
-        msg = schemas.depth_image(self.t(stamp_ns), depth_m, frame_id, self._depth_encoding)
-        self._write(topics.DEPTH, stamp_ns, msg.SerializeToString())
+        schemas.check_depth_image(depth_m, self._depth_encoding)
+        self._write_encoded(topics.DEPTH, stamp_ns, Encoding.DEPTH,
+                            (self.t(stamp_ns), np.array(depth_m), frame_id, self._depth_encoding))
 
     def write_points(
         self, stamp_ns: int, xyz: ArrayLike, rgb: ArrayLike | None = None, frame_id: str | None = None
@@ -497,15 +538,9 @@ class RunRecorder:
     ) -> None:
         if not self.active:  # a live view nobody watches (not latched: a later viewer needs no old motion)
             return
-        times = np.asarray(times_s, dtype=np.float64).ravel()
-        q = np.asarray(q_rad, dtype=np.float64).reshape(times.size, -1)
-        msg = {"name": name, "kind": kind, "times_s": times.tolist(),
-               "points": [{"t_s": t, "q_rad": row} for t, row in zip(times.tolist(), q.tolist(), strict=True)]}
-        try:  # plain floats: straight to JSON; NaN or inf take the careful path
-            data = _dumps(msg)
-        except ValueError:
-            data = _dumps(to_jsonable(msg, max_array_elements=1 << 30))
-        self._write(topics.TRAJECTORY, stamp_ns, data)
+        times = np.array(times_s, dtype=np.float64).ravel()  # copies: the caller may reuse its arrays
+        q = np.array(q_rad, dtype=np.float64).reshape(times.size, -1)
+        self._write_encoded(topics.TRAJECTORY, stamp_ns, Encoding.TRAJECTORY, (name, kind, times, q))
 
     def write_log(self, stamp_ns: int, level: str | int, name: str, message: str) -> None:
         self._write(topics.LOG, stamp_ns, schemas.log(self.t(stamp_ns), level, name, message).SerializeToString())

@@ -2,9 +2,12 @@
 
 :class:`ProcessWriter` offers the calls of ``mcap.writer.Writer`` that :class:`RunRecorder` makes, plus
 ``add_arm_state``: the arm state of a tick as plain numbers, which the child turns into ``/robot/joint_state``
-and ``/tf`` with the same :class:`ArmStateEncoder` the recorder uses in-process (the same bytes). Calls are
-batched in the parent and handed, at every ``flush()`` (the recorder's tick boundary), to a feeder thread that
-pickles the batch and writes it to the child's stdin while the tick loop goes on. The child
+and ``/tf`` with the same :class:`ArmStateEncoder` the recorder uses in-process (the same bytes), and
+``add_encoded``: any message given by its inputs (the tick's JSON, a trajectory, an image), which the child
+encodes with ``encodings.encode``, as the recorder would (the same bytes). So the tick loop's thread neither
+encodes JSON nor compresses images. Calls are batched in the parent; at every ``flush()`` (the recorder's
+tick boundary) the batch is pickled (arrays of 64 KiB or more out of band, not copied: pickle protocol 5) and
+handed to a feeder thread that writes it to the child's stdin while the tick loop goes on. The child
 (``python -m bt_grasp.recording.writer_process``: a fresh interpreter, so nothing of a renderer's threads is
 forked and no caller's ``__main__`` is imported again) owns the file: it writes each batch and ends a chunk at
 each flush, and at ``finish()`` writes the summary, fsyncs, closes and says "ok"; then it waits for the next
@@ -40,6 +43,8 @@ from typing import TYPE_CHECKING, Any, BinaryIO, TextIO
 import numpy as np
 from numpy.typing import NDArray
 
+from bt_grasp.recording.encodings import Encoding, encode, encoding_named
+
 if TYPE_CHECKING:
     from bt_grasp.recording.arm_state import ArmStateEncoder
 
@@ -49,7 +54,12 @@ log = logging.getLogger(__name__)
 FINISH_TIMEOUT_S = 120.0
 
 _Item = tuple[Any, ...]
-_FRAME = struct.Struct("<Q")
+#: a batch on the pipe: the pickle's size and how many out-of-band buffers follow it, then each buffer's size
+_FRAME = struct.Struct("<QI")
+_BUFFER_SIZE = struct.Struct("<Q")
+#: arrays at least this large (images, depth) travel beside the pickle, not copied into it (pickle protocol 5)
+OUT_OF_BAND_BYTES = 64 * 1024
+_Send = tuple[bytes, list[pickle.PickleBuffer]]
 
 
 class WriterProcessError(RuntimeError):
@@ -152,7 +162,7 @@ class ProcessWriter:
                     "arm_state": dict(arm_state) if arm_state is not None else None}
         self._child = _take_child()
         self._process = self._child.process
-        self._pending: queue.SimpleQueue[bytes | None] = queue.SimpleQueue()
+        self._pending: queue.SimpleQueue[_Send | None] = queue.SimpleQueue()
         self._feeder = threading.Thread(target=self._feed, name="log-writer-feeder", daemon=True)
         self._feeder.start()
         self._batch: list[_Item] = [("open", settings)]
@@ -184,6 +194,13 @@ class ProcessWriter:
 
     def add_message(self, channel_id: int, log_time: int, data: bytes, publish_time: int, sequence: int = 0) -> None:
         self._batch.append(("m", channel_id, log_time, data, publish_time, sequence))
+
+    def add_encoded(self, channel_id: int, log_time: int, sequence: int, encoding: Encoding,
+                    args: tuple[Any, ...]) -> None:
+        """A message the child encodes (``encodings.encode(encoding, args)``: the same bytes as in this
+        process) and writes on ``channel_id`` at ``log_time``. ``args`` must not change until the next
+        ``flush()`` (they are pickled then): pass copies of arrays a caller may write to."""
+        self._batch.append(("e", channel_id, log_time, sequence, encoding.value, args))
 
     def flush(self, fsync: bool = False) -> None:
         """Send what was added since the last flush; the child writes it and ends the chunk (then fsyncs)."""
@@ -231,7 +248,15 @@ class ProcessWriter:
 
     def _send(self) -> None:
         batch, self._batch = self._batch, []
-        self._pending.put(pickle.dumps(batch, protocol=pickle.HIGHEST_PROTOCOL))
+        buffers: list[pickle.PickleBuffer] = []
+
+        def out_of_band(buffer: pickle.PickleBuffer) -> bool:  # True: in the pickle; False: beside it
+            if buffer.raw().nbytes < OUT_OF_BAND_BYTES:
+                return True
+            buffers.append(buffer)
+            return False
+
+        self._pending.put((pickle.dumps(batch, protocol=5, buffer_callback=out_of_band), buffers))
 
     def _feed(self) -> None:
         """Write each pickled batch to the child's stdin, in order, until the last one (the pipe stays open for
@@ -239,14 +264,20 @@ class ProcessWriter:
         stdin = self._process.stdin
         assert stdin is not None
         while True:
-            data = self._pending.get()
-            if data is None:
+            sent = self._pending.get()
+            if sent is None:
                 break
             if self._broken is not None:
                 continue
+            data, buffers = sent
+            raws = [buffer.raw() for buffer in buffers]
             try:
-                stdin.write(_FRAME.pack(len(data)))
+                stdin.write(_FRAME.pack(len(data), len(raws)))
+                for raw in raws:
+                    stdin.write(_BUFFER_SIZE.pack(raw.nbytes))
                 stdin.write(data)
+                for raw in raws:
+                    stdin.write(raw)
                 stdin.flush()
             except OSError as exc:  # the child died: finish() reports it
                 self._broken = f"the pipe to the log writer broke: {exc}"
@@ -257,11 +288,23 @@ def _read_batch(stream: BinaryIO) -> list[_Item] | None:
     head = stream.read(_FRAME.size)
     if len(head) < _FRAME.size:
         return None
-    (size,) = _FRAME.unpack(head)
+    size, count = _FRAME.unpack(head)
+    sizes = []
+    for _ in range(count):
+        field = stream.read(_BUFFER_SIZE.size)
+        if len(field) < _BUFFER_SIZE.size:
+            return None
+        sizes.append(_BUFFER_SIZE.unpack(field)[0])
     data = stream.read(size)
     if len(data) < size:
         return None
-    batch: list[_Item] = pickle.loads(data)
+    buffers = []
+    for length in sizes:
+        buffer = stream.read(length)
+        if len(buffer) < length:
+            return None
+        buffers.append(buffer)
+    batch: list[_Item] = pickle.loads(data, buffers=buffers)
     return batch
 
 
@@ -303,6 +346,9 @@ def write_file(first: list[_Item], requests: BinaryIO) -> bool:
                 kind = item[0]
                 if kind == "m":
                     writer.add_message(item[1], log_time=item[2], data=item[3], publish_time=item[4], sequence=item[5])
+                elif kind == "e":
+                    data = encode(encoding_named(item[4]), item[5])
+                    writer.add_message(item[1], log_time=item[2], data=data, publish_time=item[2], sequence=item[3])
                 elif kind == "arm":
                     if encoder is None:
                         raise ValueError("an arm state, but no arm-state settings")

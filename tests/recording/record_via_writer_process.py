@@ -1,14 +1,13 @@
 """Child process for the writer-process kill test: records ticks through the writer process (as ``bt-grasp run
 --log`` does) until killed, and says on its stdout which ticks were flushed, outside the file.
 
-"Flushed", for the writer process, means handed over whole: ``ProcessWriter.flush()`` queues the tick's batch,
-and its feeder thread writes the batch (length prefix, then the pickled batch) to the writer process's stdin and
-flushes that pipe. Once that ``flush()`` of the pipe has returned, the batch is in the kernel's pipe (or already
-read by the writer process), which outlives this process: the writer process reads its input to the end and
-finishes the file. So this script watches the pipe itself: it wraps the idle writer process's stdin before the
-recorder takes it, and after each completed ``flush()`` of the pipe prints ``flushed N`` for every tick N whose
-arm state was in the bytes just handed over. A tick printed here is one the log must keep however the process
-dies.
+"Flushed", for the writer process, means handed over whole: ``ProcessWriter.flush()`` queues the tick's batch, and
+its feeder thread writes the batch (its lengths, the pickled batch, then its large arrays out of band) to the writer
+process's stdin and flushes that pipe. Once that ``flush()`` of the pipe has returned, the batch is in the kernel's
+pipe (or already read by the writer process), which outlives this process: the writer process reads its input to the
+end and finishes the file. So this script watches the pipe itself: it wraps the idle writer process's stdin before
+the recorder takes it, and after each completed ``flush()`` of the pipe prints ``flushed N`` for every tick N whose
+arm state was in the bytes just handed over. A tick printed here is one the log must keep however the process dies.
 
 Usage: python record_via_writer_process.py OUT.mcap [--max-ticks N]
 Prints ``writer PID`` (the writer process) first.
@@ -18,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import pickle
-import struct
 import sys
 from typing import IO, Any
 
@@ -28,7 +26,10 @@ from bt_grasp.recording import writer_process
 from bt_grasp.recording.robot_model import default_robot_model
 from bt_grasp.recording.writer import RunRecorder
 
-_FRAME = struct.Struct("<Q")  # writer_process's framing: a little-endian length, then the pickled batch
+# writer_process's framing: the pickle's length and the count of out-of-band buffers, each buffer's length, the
+# pickled batch, then the buffers
+_FRAME = writer_process._FRAME
+_BUFFER_SIZE = writer_process._BUFFER_SIZE
 
 
 class ReportingPipe:
@@ -48,11 +49,20 @@ class ReportingPipe:
         self._pipe.flush()  # returned: every byte written so far is in the kernel's pipe
         ticks: list[int] = []
         while len(self._pending) >= _FRAME.size:
-            (size,) = _FRAME.unpack_from(self._pending)
-            end = _FRAME.size + size
+            size, count = _FRAME.unpack_from(self._pending)
+            start = _FRAME.size + count * _BUFFER_SIZE.size
+            if len(self._pending) < start:
+                break
+            lengths = [_BUFFER_SIZE.unpack_from(self._pending, _FRAME.size + k * _BUFFER_SIZE.size)[0]
+                       for k in range(count)]
+            end = start + size + sum(lengths)
             if len(self._pending) < end:
                 break
-            batch: list[tuple[Any, ...]] = pickle.loads(bytes(self._pending[_FRAME.size:end]))
+            buffers, offset = [], start + size
+            for length in lengths:
+                buffers.append(bytes(self._pending[offset:offset + length]))
+                offset += length
+            batch: list[tuple[Any, ...]] = pickle.loads(bytes(self._pending[start:start + size]), buffers=buffers)
             del self._pending[:end]
             ticks += [int(item[4]) for item in batch if item[0] == "arm"]  # ("arm", channels, seqs, t, tick, robot)
         for tick in ticks:
