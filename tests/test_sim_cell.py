@@ -139,3 +139,37 @@ def test_the_log_cameras_8_bit_colour_leaves_later_cameras_float(tabletop_scene_
     b = World.from_file(tabletop_scene_path, seed=2)
     after, _ = b.camera.render_true()
     np.testing.assert_array_equal(after, before)
+
+
+def test_arm_readings_are_taken_once_per_step_and_follow_every_step(tabletop_scene_path: Path) -> None:
+    """The arm is read from SAPIEN once per physics step (the executor, the log and the gripper share it): every
+    reading must still be what SAPIEN says now, after steps and a reset, and a caller writing to the array it was
+    given changes no later reading."""
+    world = World.from_file(tabletop_scene_path, seed=0)
+    robot = world.robot
+
+    def sapien_now() -> tuple[np.ndarray, np.ndarray, float]:
+        qpos = robot.articulation.get_qpos()
+        qvel = np.asarray(robot.articulation.get_qvel(), dtype=float)
+        arm = robot._arm_idx
+        return (np.asarray(qpos, dtype=float)[arm], qvel[arm],
+                float(qpos[robot._finger_idx] + qpos[robot._mimic_idx]))
+
+    home = robot.joint_positions()
+    home[:] = 99.0
+    assert not np.any(robot.joint_positions() == 99.0)
+    robot.set_joint_targets(robot.joint_positions() + 0.3)
+    robot.close_gripper()
+    seen = []
+    for _ in range(4):
+        q, qd, width = sapien_now()
+        assert np.array_equal(robot.joint_positions(), q) and np.array_equal(robot.joint_velocities(), qd)
+        assert robot.gripper_width_m() == width
+        seen.append(q)
+        world.step(3)
+    assert not np.array_equal(seen[0], seen[-1])  # the arm moved, and the readings followed it
+    moved = robot.joint_positions()  # read before the reset: the reset must not leave this reading behind
+    robot.reset(seen[0])
+    assert not np.allclose(moved, seen[0], atol=1e-3)
+    assert np.array_equal(robot.joint_positions(), sapien_now()[0])
+    assert np.allclose(robot.joint_positions(), seen[0], atol=1e-6)

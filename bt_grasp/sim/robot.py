@@ -55,6 +55,7 @@ class SimRobot:
         self._target_width_m = MAX_OPENING_M
         self.links = {link.name: link for link in self.articulation.get_links()}
         self.gripper_links = tuple(self.links[n] for n in GRIPPER_LINKS)
+        self._read: tuple[NDArray[np.float32], NDArray[np.float64], NDArray[np.float64]] | None = None
         self.reset(np.asarray(mount.home_q_rad, dtype=float))
 
     # --- state -------------------------------------------------------------------------------------
@@ -65,6 +66,7 @@ class SimRobot:
         qpos = np.zeros(self.articulation.dof)
         qpos[self._arm_idx] = q_rad
         qpos[self._finger_idx] = qpos[self._mimic_idx] = opening_m / 2
+        self._read = None
         self.articulation.set_qpos(qpos.astype(np.float32))
         self.articulation.set_qvel(np.zeros(self.articulation.dof, dtype=np.float32))
         self.set_joint_targets(q_rad)
@@ -75,11 +77,21 @@ class SimRobot:
     def joint_names(self) -> tuple[str, ...]:
         return ARM_JOINTS
 
+    def _state(self) -> tuple[NDArray[np.float32], NDArray[np.float64], NDArray[np.float64]]:
+        """(qpos as SAPIEN gives it, arm joint positions, arm joint velocities), read once per physics step:
+        the executor, the log and the gripper all read the arm in the same tick, and nothing moves it between
+        two steps (``before_physics_step`` and ``reset`` forget the reading)."""
+        if self._read is None:
+            qpos = self.articulation.get_qpos()
+            self._read = (qpos, np.asarray(qpos, dtype=float)[self._arm_idx],
+                          np.asarray(self.articulation.get_qvel(), dtype=float)[self._arm_idx])
+        return self._read
+
     def joint_positions(self) -> NDArray[np.float64]:
-        return np.asarray(self.articulation.get_qpos(), dtype=float)[self._arm_idx]
+        return self._state()[1].copy()
 
     def joint_velocities(self) -> NDArray[np.float64]:
-        return np.asarray(self.articulation.get_qvel(), dtype=float)[self._arm_idx]
+        return self._state()[2].copy()
 
     def set_joint_targets(self, q_rad: NDArray[np.float64], qd_rad_s: NDArray[np.float64] | None = None) -> None:
         q = np.asarray(q_rad, dtype=float)
@@ -103,7 +115,7 @@ class SimRobot:
         self._target_width_m = 0.0
 
     def gripper_width_m(self) -> float:
-        qpos = self.articulation.get_qpos()
+        qpos = self._state()[0]
         return float(qpos[self._finger_idx] + qpos[self._mimic_idx])
 
     def gripper_target_width_m(self) -> float:
@@ -112,5 +124,6 @@ class SimRobot:
     # --- physics hook --------------------------------------------------------------------------------
     def before_physics_step(self) -> None:
         """Gravity and Coriolis compensation, as a real UR controller does."""
+        self._read = None  # the step about to be taken moves the arm
         qf = self.articulation.compute_passive_force(gravity=True, coriolis_and_centrifugal=True)
         self.articulation.set_qf(qf)
