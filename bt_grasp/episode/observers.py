@@ -77,6 +77,8 @@ class LogExtras:
 
     def __call__(self, tick: int, tree: LoadedTree) -> None:
         self._tick = tick
+        if not (self._pending or self._failed or self.period_ns) and self._camera_fixed():
+            return  # the usual tick: no frame to write or take, the camera's frame unchanged
         self._write_ready()
         now = self.world.now_ns()
         self._update_camera_frame()
@@ -95,6 +97,11 @@ class LogExtras:
             self.capture("end")
         self._write_ready(wait=True)
         self.write_truth()
+
+    def _camera_fixed(self) -> bool:
+        """Whether ``_update_camera_frame`` would change nothing (no calibration, or eye-to-hand and written)."""
+        calibration = self.cell.calibration
+        return calibration is None or (calibration is self._camera_from and calibration.mount != Mount.EYE_IN_HAND)
 
     def _update_camera_frame(self) -> None:
         """base_link -> camera from the calibration the run holds (eye-in-hand: follows the tool link)."""
