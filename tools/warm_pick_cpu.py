@@ -2,11 +2,18 @@
 
     python tools/warm_pick_cpu.py picks [--n 5] [--fingerprint] [--log]
     python tools/warm_pick_cpu.py stages [--log]
+    python tools/warm_pick_cpu.py log [--n 8]
 
 ``picks``: one warm-up pick, then ``--n`` picks of the same seed beside a warm renderer (``WarmWorlds``: what the
 resident and a campaign worker run); prints the medians of the episode's set-up CPU (building the world and the
 tree), the tick loop thread's CPU, the process's CPU during the run (every thread: OpenBLAS's, lavapipe's, the
 log's feeder) and the tick loop's wall time. ``--fingerprint`` computes the run fingerprint as campaign workers do.
+
+``log``: what ``--log`` costs the tick loop: after a warm-up with and without a log, ``--n`` picks without and
+``--n`` with a log, alternating, in one process; prints both sides' medians of the CPU of the thread running
+the episode (``Episode.run``: with a log also the recorder's set-up, the end frame and closing the file), the
+process's CPU during the run (the writer process's own is not in it) and the tick loop's wall time, and each
+one's increase with the log.
 
 ``stages``: ``bt-grasp bench budget`` with its stage clocks reading the tick loop thread's CPU time instead of
 the wall clock (the floor stays wall time).
@@ -61,6 +68,36 @@ def picks(n: int, fingerprint: bool, log: bool) -> dict[str, float]:
     return {key: round(statistics.median(r[key] for r in rows), 4) for key in rows[0]}
 
 
+def log_cost(n: int) -> dict[str, object]:
+    import tempfile
+
+    from bt_grasp.episode import Episode, WarmWorlds, pick_request
+
+    folder = Path(tempfile.mkdtemp(prefix="bt_grasp_cpu_"))
+    worlds = WarmWorlds()
+
+    def run(k: int, log: bool) -> dict[str, float]:
+        episode = Episode(pick_request(TREE, SCENE, 0, calibration=None, log=folder / f"{k}.mcap" if log else None),
+                          worlds)
+        c1, t1 = time.process_time(), time.thread_time()
+        result = episode.run()
+        return {"run_thread_cpu_s": time.thread_time() - t1, "run_process_cpu_s": time.process_time() - c1,
+                "tick_loop_wall_s": result.wall_time_s}
+
+    run(0, True), run(0, False)  # imports, the renderer's start-up, the writer process: not measured
+    rows: dict[bool, list[dict[str, float]]] = {False: [], True: []}
+    for k in range(n):
+        for log in (False, True):
+            rows[log].append(run(k + 1, log))
+    out: dict[str, object] = {}
+    for key in rows[False][0]:
+        without = statistics.median(r[key] for r in rows[False])
+        with_log = statistics.median(r[key] for r in rows[True])
+        out[key] = {"no_log": round(without, 4), "log": round(with_log, 4), "added_s": round(with_log - without, 4),
+                    "added_pct": round(100.0 * (with_log / without - 1.0), 1)}
+    return out
+
+
 def stages(log: bool) -> dict[str, object]:
     from bt_grasp.episode.budget_bench import run_budget_bench
 
@@ -72,12 +109,17 @@ def stages(log: bool) -> dict[str, object]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("what", choices=("picks", "stages"))
+    parser.add_argument("what", choices=("picks", "stages", "log"))
     parser.add_argument("--n", type=int, default=5)
     parser.add_argument("--fingerprint", action="store_true")
     parser.add_argument("--log", action="store_true")
     args = parser.parse_args()
-    out = picks(args.n, args.fingerprint, args.log) if args.what == "picks" else stages(args.log)
+    if args.what == "picks":
+        out: dict[str, object] = picks(args.n, args.fingerprint, args.log)
+    elif args.what == "log":
+        out = log_cost(args.n)
+    else:
+        out = stages(args.log)
     print(json.dumps(out))
 
 
