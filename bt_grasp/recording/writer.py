@@ -356,6 +356,7 @@ class RunRecorder:
         if converted == self._last_structure:
             return False
         self._last_structure = converted
+        self._node_count = -1  # another tree: the next tick reads its leaves afresh
         self._write_json(topics.TREE, stamp_ns, _ticked(self._last_tick, {"structure": converted}))
         return True
 
