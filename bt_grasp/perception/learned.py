@@ -244,10 +244,11 @@ def join_boxes(
         if counts[k] < seg.min_cluster_points:
             continue  # no object under this box (or only points another box already took)
         det = objects[k]
-        whole = (k not in whole_taken and not claimed[k].any() and counts[k] >= WHOLE_FRACTION * len(pixels[k])
-                 and not _another_box_names_the_rest(covers, sure_boxes, i, k, seg.min_cluster_points))
         sure = sure_boxes[i]
-        if not sure:  # a tentative box names a whole object no surer box touched, or nothing
+        if sure:
+            whole = (k not in whole_taken and not claimed[k].any() and counts[k] >= WHOLE_FRACTION * len(pixels[k])
+                     and not _another_box_names_the_rest(covers, sure_boxes, i, k, seg.min_cluster_points))
+        else:  # a tentative box names a whole object no surer box touched, or nothing
             if k in whole_taken or claimed[k].any() or counts[k] < TENTATIVE_COVER * len(pixels[k]):
                 continue
             whole = True
