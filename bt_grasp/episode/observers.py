@@ -105,11 +105,10 @@ class LogExtras:
 
     def _update_camera_frame(self) -> None:
         """base_link -> camera from the calibration the run holds (eye-in-hand: follows the tool link)."""
+        if self._camera_fixed():
+            return  # no calibration, or eye-to-hand and written: fixed until the calibration changes
         calibration = self.cell.calibration
-        if calibration is None:
-            return
-        if calibration is self._camera_from and calibration.mount != Mount.EYE_IN_HAND:
-            return  # eye-to-hand: fixed until the calibration changes
+        assert calibration is not None
         self._camera_from = calibration
         T_base_tool = None
         if calibration.mount == Mount.EYE_IN_HAND:

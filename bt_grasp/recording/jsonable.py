@@ -107,6 +107,16 @@ def _is_frozen(value: Any, depth: int = 0) -> bool:
 _MISSING = object()
 
 
+def _same_array(last: Any, value: np.ndarray) -> bool:
+    """Whether ``last`` (the remembered copy) is an array equal to ``value`` (NaNs equal to NaNs)."""
+    return (
+        isinstance(last, np.ndarray)
+        and last.shape == value.shape
+        and last.dtype == value.dtype
+        and bool(np.array_equal(last, value, equal_nan=value.dtype.kind in "fc"))
+    )
+
+
 class BlackboardDiffer:
     """Remembers the last value written per key; ``diff`` returns only the keys that changed."""
 
@@ -126,7 +136,7 @@ class BlackboardDiffer:
             last = raw.get(key, _MISSING)
             if last is value and frozen[key]:  # the same immutable object (most entries, most ticks)
                 continue
-            if last is not _MISSING and self._unchanged(key, value):
+            if isinstance(value, np.ndarray) and _same_array(last, value):  # arrays: compared by value
                 continue
             converted = to_jsonable(value, self._max)
             if key not in self._json or self._json[key] != converted:
@@ -141,17 +151,6 @@ class BlackboardDiffer:
             del self._json[key]
             del self._frozen[key]
         return changed, removed
-
-    def _unchanged(self, key: str, value: Any) -> bool:
-        last = self._raw[key]
-        if isinstance(value, np.ndarray):
-            return (
-                isinstance(last, np.ndarray)
-                and last.shape == value.shape
-                and last.dtype == value.dtype
-                and bool(np.array_equal(last, value, equal_nan=value.dtype.kind in "fc"))
-            )
-        return last is value and self._frozen[key]
 
     @staticmethod
     def _remember(value: Any) -> Any:

@@ -396,12 +396,8 @@ class RunRecorder:
         if bb_removed:
             msg["bb_removed"] = bb_removed
         self._last_tick = int(tick)
-        self._write_encoded(topics.TICK, stamp_ns, Encoding.JSON, (msg,))
-        if robot is None:
-            return
-        if self._process is not None and not self._taps and "q_rad" in robot:  # write_robot_state's own path
-            self._hand_over_arm_state(stamp_ns, robot)
-        else:
+        self._write_json(topics.TICK, stamp_ns, msg)
+        if robot is not None:
             self.write_robot_state(stamp_ns, robot)
 
     def _leaf_statuses(
