@@ -16,20 +16,15 @@ Prints ``writer PID`` (the writer process) first.
 from __future__ import annotations
 
 import argparse
-import pickle
+import io
 import sys
-from typing import IO, Any
+from typing import IO
 
 import numpy as np
 
 from bt_grasp.recording import writer_process
 from bt_grasp.recording.robot_model import default_robot_model
 from bt_grasp.recording.writer import RunRecorder
-
-# writer_process's framing: the pickle's length and the count of out-of-band buffers, each buffer's length, the
-# pickled batch, then the buffers
-_FRAME = writer_process._FRAME
-_BUFFER_SIZE = writer_process._BUFFER_SIZE
 
 
 class ReportingPipe:
@@ -48,22 +43,12 @@ class ReportingPipe:
     def flush(self) -> None:
         self._pipe.flush()  # returned: every byte written so far is in the kernel's pipe
         ticks: list[int] = []
-        while len(self._pending) >= _FRAME.size:
-            size, count = _FRAME.unpack_from(self._pending)
-            start = _FRAME.size + count * _BUFFER_SIZE.size
-            if len(self._pending) < start:
+        while True:  # every whole batch written so far, read as the writer process reads it
+            stream = io.BytesIO(bytes(self._pending))
+            batch = writer_process._read_batch(stream)
+            if batch is None:
                 break
-            lengths = [_BUFFER_SIZE.unpack_from(self._pending, _FRAME.size + k * _BUFFER_SIZE.size)[0]
-                       for k in range(count)]
-            end = start + size + sum(lengths)
-            if len(self._pending) < end:
-                break
-            buffers, offset = [], start + size
-            for length in lengths:
-                buffers.append(bytes(self._pending[offset:offset + length]))
-                offset += length
-            batch: list[tuple[Any, ...]] = pickle.loads(bytes(self._pending[start:start + size]), buffers=buffers)
-            del self._pending[:end]
+            del self._pending[:stream.tell()]
             ticks += [int(item[4]) for item in batch if item[0] == "arm"]  # ("arm", channels, seqs, t, tick, robot)
         for tick in ticks:
             self._report.write(f"flushed {tick}\n")
