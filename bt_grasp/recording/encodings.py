@@ -65,7 +65,7 @@ def depth_bytes(log_time_ns: int, depth_m: NDArray[np.floating], frame_id: str, 
 
 _ENCODERS = {Encoding.JSON: json_bytes, Encoding.TRAJECTORY: trajectory_bytes, Encoding.COLOR: color_bytes,
              Encoding.DEPTH: depth_bytes}
-_BY_VALUE = {e.value: e for e in Encoding}
+
 
 
 def encode(encoding: Encoding, args: tuple[Any, ...]) -> bytes:
@@ -73,9 +73,4 @@ def encode(encoding: Encoding, args: tuple[Any, ...]) -> bytes:
     return _ENCODERS[encoding](*args)  # type: ignore[operator]
 
 
-def encoding_named(value: str) -> Encoding:
-    """The :class:`Encoding` a writer process was sent by its value (``ValueError`` for an unknown one)."""
-    try:
-        return _BY_VALUE[value]
-    except KeyError:
-        raise ValueError(f"unknown encoding {value!r}") from None
+

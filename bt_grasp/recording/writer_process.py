@@ -43,7 +43,7 @@ from typing import TYPE_CHECKING, Any, BinaryIO, TextIO
 import numpy as np
 from numpy.typing import NDArray
 
-from bt_grasp.recording.encodings import Encoding, encode, encoding_named
+from bt_grasp.recording.encodings import Encoding, encode
 
 if TYPE_CHECKING:
     from bt_grasp.recording.arm_state import ArmStateEncoder
@@ -347,7 +347,7 @@ def write_file(first: list[_Item], requests: BinaryIO) -> bool:
                 if kind == "m":
                     writer.add_message(item[1], log_time=item[2], data=item[3], publish_time=item[4], sequence=item[5])
                 elif kind == "e":
-                    data = encode(encoding_named(item[4]), item[5])
+                    data = encode(Encoding(item[4]), item[5])  # ValueError for a value no Encoding has
                     writer.add_message(item[1], log_time=item[2], data=data, publish_time=item[2], sequence=item[3])
                 elif kind == "arm":
                     if encoder is None:
