@@ -26,12 +26,9 @@ FORBIDDEN = {
     "scene": ("sapien", "bt_grasp.sim", "bt_grasp.perception", "bt_grasp.motion", "bt_grasp.behaviours",
               "bt_grasp.tree", "bt_grasp.episode", "bt_grasp.cli"),
 }
-LEAF_MODULES = (
-    "errors", "clock", "geometry", "interfaces", "config", "robot_description", "colors", "safe_path", "defaults",
-    "bounded_io", "bounded_yaml", "output_files", "terminal_text", "image_header",
-)
+LEAF_MODULES = ("errors", "clock", "geometry", "interfaces", "robot_description", "defaults", "files")
 #: leaf packages: every module in them imports only leaf modules and modules of the same package
-LEAF_PACKAGES = ("scene",)
+LEAF_PACKAGES = ("scene", "files")
 
 
 def _module_name(path: Path) -> str:
@@ -129,7 +126,10 @@ def test_oracle_is_used_only_by_the_judge_and_benchmarks() -> None:
 
 @pytest.mark.parametrize("module", LEAF_MODULES)
 def test_leaf_modules_import_nothing_of_ours_but_leaves(module: str) -> None:
-    names = _imports(PKG / f"{module}.py")
+    path = PKG / f"{module}.py"
+    if not path.exists():  # a leaf package: its own test below
+        return
+    names = _imports(path)
     ours = {n.removeprefix("bt_grasp.").split(".")[0] for n in names if n.startswith("bt_grasp.")}
     assert ours <= set(LEAF_MODULES), ours
 

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from bt_grasp.bounded_io import read_user_file
 from bt_grasp.errors import ConfigError
+from bt_grasp.files.bounded_io import read_user_file
 
 REPO = Path(__file__).resolve().parents[1]
 BT = [sys.executable, "-m", "bt_grasp.cli.main"]

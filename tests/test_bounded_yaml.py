@@ -1,7 +1,7 @@
 """Issue 22, item 3 (inputs that exhaust the machine), found by the pre-review attack: YAML nested thousands
 deep was a ``RecursionError`` traceback in every YAML reader, and a few hundred bytes of aliases ("billion
 laughs") hung scene, campaign and fault-plan loading. Every YAML a user gives now goes through
-``bt_grasp.bounded_yaml``: one sentence, exit 2, at once."""
+``bt_grasp.files.bounded_yaml``: one sentence, exit 2, at once."""
 
 from __future__ import annotations
 
@@ -13,8 +13,8 @@ from pathlib import Path
 import pytest
 import yaml
 
-from bt_grasp import bounded_yaml
-from bt_grasp.bounded_yaml import MAX_VALUES, load_value, scalar_or_text
+from bt_grasp.files import bounded_yaml
+from bt_grasp.files.bounded_yaml import MAX_VALUES, load_value, scalar_or_text
 
 REPO = Path(__file__).resolve().parents[1]
 BT = [sys.executable, "-m", "bt_grasp.cli.main"]

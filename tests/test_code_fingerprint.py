@@ -11,9 +11,9 @@ from pathlib import Path
 
 import pytest
 
-import bt_grasp.code_fingerprint as cf
+import bt_grasp.process.code_fingerprint as cf
 from bt_grasp.campaign.environment import environment
-from bt_grasp.code_fingerprint import DEPENDENCIES, code_fingerprint, package_root
+from bt_grasp.process.code_fingerprint import DEPENDENCIES, code_fingerprint, package_root
 from bt_grasp.resident.protocol import code_version
 
 

@@ -19,9 +19,9 @@ import trimesh
 import yaml
 from scipy.spatial import ConvexHull
 
-from bt_grasp.colors import COLOR_NAMES
 from bt_grasp.perception.config import GraspSettings
 from bt_grasp.robot_description import MAX_OPENING_M
+from bt_grasp.scene.colors import COLOR_NAMES
 
 REPO = Path(__file__).resolve().parents[1]
 TOOL = REPO / "tools" / "make_household.py"

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bt_grasp.numeric_threads import NUMERIC_ENV, use_one_blas_thread
+from bt_grasp.process.numeric_threads import NUMERIC_ENV, use_one_blas_thread
 
 _OPENBLAS = sorted((Path(np.__file__).parent.parent / "numpy.libs").glob("libscipy_openblas64_*.so"))
 

@@ -2,7 +2,7 @@
 or a path under /proc as `run --log` was a traceback, a FIFO hung `run --log`, `replay --report` and
 `--layout-out` for ever, /dev/full and /dev/null failed only after the whole run, and `tree convert --force`
 over a symbolic link overwrote the file the link pointed at. Every writer now goes through
-``bt_grasp.output_files``: checked before the work, written whole and renamed into place, never through a link."""
+``bt_grasp.files.output_files``: checked before the work, written whole and renamed into place, never through a link."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from bt_grasp.errors import InputError
-from bt_grasp.output_files import (
+from bt_grasp.files.output_files import (
     check_output_file,
     check_output_folder,
     open_output_stream,

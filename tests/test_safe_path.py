@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from bt_grasp.errors import InputError
-from bt_grasp.safe_path import check_relative_name, file_component, join_under
+from bt_grasp.files.safe_path import check_relative_name, file_component, join_under
 
 
 @pytest.mark.parametrize("name", ["tree/pick.xml", "tree/lib/pick.xml", "scene.yaml", "a.b-c_d"])

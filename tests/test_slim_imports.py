@@ -31,7 +31,7 @@ def test_the_pipeline_loads_open3d_without_its_drawing_helpers(repo_root: Path) 
 
 def test_without_the_deferral_open3d_loads_dash(repo_root: Path) -> None:
     """The check above can fail: with the finder taken out before the pipeline imports open3d, dash loads."""
-    setup = "import bt_grasp.slim_imports as s; s.defer_unused_submodules = lambda: None"
+    setup = "import bt_grasp.process.slim_imports as s; s.defer_unused_submodules = lambda: None"
     assert "dash" in _top_level_modules(repo_root, setup)
 
 

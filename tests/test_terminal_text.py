@@ -1,6 +1,6 @@
 """Terminal control characters from files and peers are shown, never obeyed (found by the pre-review attack: Rich
 escapes markup but passes ESC through, click keeps it on a terminal, and the Foxglove SDK's log lines quote what a
-viewer sent). ``bt_grasp.terminal_text`` is applied where such text reaches the terminal: log contents when read,
+viewer sent). ``bt_grasp.files.terminal_text`` is applied where such text reaches the terminal: log contents when read,
 error sentences, the live server's lines."""
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from bt_grasp.terminal_text import may_hold_controls, shown, shown_deep
+from bt_grasp.files.terminal_text import may_hold_controls, shown, shown_deep
 
 REPO = Path(__file__).resolve().parents[1]
 ESC = "\x1b[2J\x1b]0;owned\x1b\\\x07\u202e\x9b"

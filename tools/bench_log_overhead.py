@@ -31,7 +31,7 @@ from typing import Any
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bt_grasp.numeric_threads import use_one_blas_thread  # noqa: E402
+from bt_grasp.process.numeric_threads import use_one_blas_thread  # noqa: E402
 
 use_one_blas_thread()  # as `bt-grasp run` does, before numpy is imported
 

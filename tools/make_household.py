@@ -35,8 +35,8 @@ import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
-from bt_grasp.colors import COLOR_NAMES as COLORS
 from bt_grasp.robot_description import MAX_OPENING_M
+from bt_grasp.scene.colors import COLOR_NAMES as COLORS
 
 REPO = Path(__file__).resolve().parents[1]
 DEFAULT_OUT = REPO / "bt_grasp" / "assets" / "household"

@@ -56,7 +56,6 @@ def _box_json(box: Any) -> dict[str, Any]:
 
 
 def main() -> int:
-    from bt_grasp.environment import machine_description
     from bt_grasp.geometry import rotation_angle_rad
     from bt_grasp.motion.bench import AT_OBJECT_MARGIN_M, feasibility_labels, make_problems
     from bt_grasp.motion.collision import FINE_RESOLUTION_RAD, collision_checker
@@ -64,6 +63,7 @@ def main() -> int:
     from bt_grasp.motion.planner import PlannerOptions, default_planner
     from bt_grasp.motion.planning_scene import PlanningScene, table_box
     from bt_grasp.motion.trajectory import time_parametrize
+    from bt_grasp.process.environment import machine_description
     from bt_grasp.robot_description import ARM_JOINTS, FINGER_JOINT, MAX_OPENING_M, MIMIC_FINGER_JOINT, robot_urdf_path
     from bt_grasp.scene.format import load_scene
 

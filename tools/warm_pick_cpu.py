@@ -36,7 +36,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bt_grasp.numeric_threads import use_one_blas_thread  # noqa: E402
+from bt_grasp.process.numeric_threads import use_one_blas_thread  # noqa: E402
 
 use_one_blas_thread()  # as `bt-grasp` does, before numpy is imported
 

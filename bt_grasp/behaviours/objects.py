@@ -5,7 +5,7 @@ name, ``color_name`` its dominant colour, ``shape`` "box" or "round", ``shape_cl
 cylinder-like, elongated, flat or other, ``size_m`` length/width/height, ``class_name`` the learned detector's
 class, "" when it named none). Objects are found by geometry; colour, shape class, size and (with
 ``detector="learned"``) class are attributes to choose by. A list of them (an *object list*) is a tuple of
-detections; the object loop (``ForEachObject``) walks one. Poses are :class:`bt_grasp.pose.Pose`.
+detections; the object loop (``ForEachObject``) walks one. Poses are :class:`bt_grasp.behaviours.pose.Pose`.
 """
 
 from __future__ import annotations
@@ -19,10 +19,10 @@ from py_trees.common import Status
 
 from bt_grasp.behaviours.base import RobotLeaf
 from bt_grasp.behaviours.perceive import DETECTOR_PORTS, DetectorLeaf, perceive_once
+from bt_grasp.behaviours.pose import Pose
 from bt_grasp.behaviours.reasons import FailureReason
 from bt_grasp.detector.kinds import DetectorKind, parse_detector
 from bt_grasp.errors import TreeFileError
-from bt_grasp.pose import Pose
 from bt_grasp.tree.leaf import Leaf
 from bt_grasp.tree.registry import NodeKind, PortDirection, PortSpec, leaf
 

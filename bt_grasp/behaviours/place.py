@@ -36,10 +36,10 @@ from bt_grasp.behaviours.motion_leaves import (
     retreat_after_release,
 )
 from bt_grasp.behaviours.objects import is_detection, object_list
+from bt_grasp.behaviours.pose import Pose
 from bt_grasp.behaviours.reasons import FailureReason
 from bt_grasp.geometry import Mat4, inv, make_T, rot_z
 from bt_grasp.motion.place_orientation import PlaceYaw, footprint_kind, footprint_turns_rad, place_yaws
-from bt_grasp.pose import Pose
 from bt_grasp.robot_description import MAX_OPENING_M, TCP_LINK
 from bt_grasp.tree.registry import PortDirection, PortSpec, leaf
 

@@ -18,9 +18,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from bt_grasp.behaviours.place import _HELD_PORTS, _PlaceBase
+from bt_grasp.behaviours.pose import Pose
 from bt_grasp.geometry import Mat4, inv, make_T, rot_z
 from bt_grasp.motion.place_orientation import PlaceYaw, wrap_rad
-from bt_grasp.pose import Pose
 from bt_grasp.scene.fixtures import Container
 from bt_grasp.tree.registry import PortDirection, PortSpec, leaf
 

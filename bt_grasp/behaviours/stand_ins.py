@@ -10,8 +10,8 @@ read (a grasp plan, a calibration, a track) are a :class:`bt_grasp.tree.dry_run.
 
 from __future__ import annotations
 
+from bt_grasp.behaviours.pose import Pose
 from bt_grasp.perception.results import Detection
-from bt_grasp.pose import Pose
 from bt_grasp.tree.dry_run import type_placeholder
 from bt_grasp.tree.registry import NodeSpec, PortSpec
 

@@ -9,8 +9,8 @@ import platform
 from functools import lru_cache
 from typing import Any
 
-from bt_grasp.code_fingerprint import code_fingerprint
-from bt_grasp.environment import KEY_LIBRARIES, cpu_model, library_version
+from bt_grasp.process.code_fingerprint import code_fingerprint
+from bt_grasp.process.environment import KEY_LIBRARIES, cpu_model, library_version
 
 #: the run's key libraries, plus what changes numbers or speed underneath them
 LIBRARIES = (*KEY_LIBRARIES, "numpy", "ray")

@@ -18,7 +18,7 @@ from bt_grasp.campaign import plots
 from bt_grasp.campaign.results import read_report_rows
 from bt_grasp.campaign.stats import Rate, success_rates, tree_label
 from bt_grasp.errors import InputError
-from bt_grasp.output_files import make_output_folder, write_output_file
+from bt_grasp.files.output_files import make_output_folder, write_output_file
 
 MAX_FAILURE_ROWS = 200
 

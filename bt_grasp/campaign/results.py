@@ -15,9 +15,9 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-from bt_grasp.bounded_io import MAX_RESULTS_BYTES, read_user_file
 from bt_grasp.errors import InputError
-from bt_grasp.output_files import open_output_stream, write_output_file
+from bt_grasp.files.bounded_io import MAX_RESULTS_BYTES, read_user_file
+from bt_grasp.files.output_files import open_output_stream, write_output_file
 
 SUFFIX = ".jsonl"
 

@@ -17,7 +17,7 @@ from bt_grasp.campaign.out_lock import campaign_lock
 from bt_grasp.campaign.results import ResultsWriter, read_rows, results_path
 from bt_grasp.campaign.spec import Campaign, Episode
 from bt_grasp.errors import BtGraspError, InputError
-from bt_grasp.output_files import check_output_file
+from bt_grasp.files.output_files import check_output_file
 
 log = logging.getLogger(__name__)
 

@@ -19,8 +19,8 @@ from typing import Any
 
 from pydantic import Field, field_validator, model_validator
 
-from bt_grasp.config import KeyPath, StrictModel, read_yaml, validate
 from bt_grasp.errors import ConfigError, InputError
+from bt_grasp.files.config import KeyPath, StrictModel, read_yaml, validate
 from bt_grasp.scene.goals import Goal
 
 NO_FAULTS = "none"
@@ -211,7 +211,7 @@ class Campaign:
 
 
 def _digest(path: Path) -> str:
-    from bt_grasp.bounded_io import read_user_file
+    from bt_grasp.files.bounded_io import read_user_file
 
     return hashlib.sha256(read_user_file(path, error=ConfigError)).hexdigest()  # bounded: no device, no giant
 
@@ -372,7 +372,7 @@ def _unique(path: Path, lines: dict[KeyPath, int], key: str, names: list[str]) -
 
 
 def _where(key: KeyPath) -> str:
-    from bt_grasp.config import format_key_path
+    from bt_grasp.files.config import format_key_path
 
     return format_key_path(key)
 
@@ -414,6 +414,6 @@ def write_options_campaign(
     }
     if max_ticks is not None:
         data["max_ticks"] = max_ticks
-    from bt_grasp.output_files import write_output_file
+    from bt_grasp.files.output_files import write_output_file
 
     return write_output_file(folder / f"{name}.campaign.yaml", yaml.safe_dump(data, sort_keys=False), "--out")

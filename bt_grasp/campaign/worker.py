@@ -16,9 +16,9 @@ from typing import Any
 from bt_grasp.campaign.environment import environment
 from bt_grasp.campaign.episode import EpisodeBackend, EpisodeOutcome
 from bt_grasp.campaign.spec import Episode
-from bt_grasp.numeric_threads import NUMERIC_ENV
-from bt_grasp.output_files import check_output_file, make_output_folder
-from bt_grasp.safe_path import file_component
+from bt_grasp.files.output_files import check_output_file, make_output_folder
+from bt_grasp.files.safe_path import file_component
+from bt_grasp.process.numeric_threads import NUMERIC_ENV
 
 log = logging.getLogger(__name__)
 
@@ -30,7 +30,7 @@ PLACE_COLUMNS = ("wall_time_s", "setup_wall_s", "episode_wall_s", "mcap", "envir
 #: after each small linear-algebra call: ~0.2 s of CPU per pick episode that does nothing (same wall time, same
 #: fingerprint without it) but takes a core from the other workers. One thread each: 2 workers on 2 cores went
 #: from 69.9 to 82.5 episodes/min, 1 worker from 45.7 to 50.8 (`bt-grasp bench eval --seeds 50`, idle).
-#: The command line sets the same in its own process (``bt_grasp.numeric_threads``).
+#: The command line sets the same in its own process (``bt_grasp.process.numeric_threads``).
 WORKER_ENV: dict[str, str] = dict(NUMERIC_ENV)
 
 

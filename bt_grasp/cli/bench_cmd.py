@@ -12,7 +12,7 @@ from pathlib import Path
 import typer
 
 from bt_grasp.cli.choices import MOUNT_LIST, Mount, PlannerChoice, TaskChoice
-from bt_grasp.environment import machine_description
+from bt_grasp.process.environment import machine_description
 
 PLAN_BUDGET_DEFAULT = 40_000  # = PlannerOptions().max_state_checks (kept literal: the CLI imports lazily)
 

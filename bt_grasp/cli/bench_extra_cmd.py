@@ -14,7 +14,7 @@ from rich.text import Text
 
 from bt_grasp.cli.bench_cmd import EPISODE_BENCHMARKS, MICRO_BENCHMARKS, bench_app
 from bt_grasp.detector.kinds import DetectorKind
-from bt_grasp.environment import machine_description
+from bt_grasp.process.environment import machine_description
 
 
 @bench_app.command("pick", rich_help_panel=EPISODE_BENCHMARKS)

@@ -40,7 +40,7 @@ def calibrate(
     if mount not in MOUNTS:
         raise InputError("--mount", f"expected eye-to-hand or eye-in-hand, got '{mount}'")
     load_scene(scene)  # a bad scene file fails here with file:line, before the simulator starts
-    from bt_grasp.output_files import check_output_file
+    from bt_grasp.files.output_files import check_output_file
 
     check_output_file(out, "--out", example="calibration.yaml", inputs=(scene,))  # and a place it cannot write to
     if as_json:

@@ -9,8 +9,8 @@ import typer
 from rich.console import Console
 from rich.markup import escape
 
+from bt_grasp.files.output_files import make_output_folder, write_output_file
 from bt_grasp.interfaces import Mount
-from bt_grasp.output_files import make_output_folder, write_output_file
 
 
 def demo(

@@ -86,7 +86,7 @@ def train(
         raise InputError("--imgsz", f"must be a multiple of 32 (the network's stride), got {imgsz}")
     if not name or "/" in name or name.startswith("."):
         raise InputError("--name", f"must be a plain file name, got '{name}'")
-    from bt_grasp.output_files import check_output_file, check_output_folder
+    from bt_grasp.files.output_files import check_output_file, check_output_folder
 
     check_output_folder(out, "--out")  # before training: where its files go can be written
     check_output_file(out / f"{name}.onnx", "--out", example="model.onnx")

@@ -136,7 +136,7 @@ def run(
     if out is None:
         out = Path("out") / campaign.name
     log_dir = out / "logs"
-    from bt_grasp.output_files import check_output_folder
+    from bt_grasp.files.output_files import check_output_folder
 
     check_output_folder(out, "--out")
     check_output_folder(log_dir, "--out")  # kept logs go in <out>/logs: never through a link elsewhere
@@ -194,9 +194,9 @@ def report(
 
 
 def _writable_file(out: Path, kind: str, *inputs: Path | None) -> None:
-    """``--out`` names a file that can be written (``bt_grasp.output_files``), checked before any work: a folder
+    """``--out`` names a file that can be written (``bt_grasp.files.output_files``), checked before any work: a folder
     was a traceback (issue 24); a link, a FIFO, a device or the results file itself are refused too."""
-    from bt_grasp.output_files import check_output_file
+    from bt_grasp.files.output_files import check_output_file
 
     check_output_file(out, "--out", example="report.html" if kind == "HTML" else "results.parquet", inputs=inputs)
 

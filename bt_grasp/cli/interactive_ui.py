@@ -116,7 +116,7 @@ def parse_prompt(key: str, text: str) -> Command:
 
 
 def _params(text: str) -> dict[str, Any]:
-    from bt_grasp.bounded_yaml import load_value
+    from bt_grasp.files.bounded_yaml import load_value
 
     params: dict[str, Any] = {}
     for item in (i.strip() for i in text.replace(",", " ").split()):

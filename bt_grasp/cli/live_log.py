@@ -4,14 +4,14 @@ The Foxglove SDK logs through Python's ``logging`` (logger ``foxglove``): a view
 dropped client. Its messages quote what the client sent (``unknown variant `...```), so anyone who reaches the
 port could write terminal control sequences into the user's terminal (found by the pre-review attack: a
 window title and colours set from a WebSocket message). Here each line is printed once, prefixed, cut to one
-line of at most 300 characters, with control characters shown (``bt_grasp.terminal_text``)."""
+line of at most 300 characters, with control characters shown (``bt_grasp.files.terminal_text``)."""
 
 from __future__ import annotations
 
 import logging
 import sys
 
-from bt_grasp.terminal_text import shown
+from bt_grasp.files.terminal_text import shown
 
 MAX_LINE = 300
 

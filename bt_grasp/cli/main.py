@@ -10,7 +10,7 @@ from __future__ import annotations
 import os
 import sys
 
-from bt_grasp.numeric_threads import use_one_blas_thread
+from bt_grasp.process.numeric_threads import use_one_blas_thread
 
 use_one_blas_thread()  # before anything imports numpy (this process and the ones it starts)
 
@@ -18,7 +18,7 @@ import typer  # noqa: E402
 
 from bt_grasp.cli import ERROR_PREFIX  # noqa: E402
 from bt_grasp.errors import BtGraspError  # noqa: E402
-from bt_grasp.terminal_text import shown  # noqa: E402
+from bt_grasp.files.terminal_text import shown  # noqa: E402
 
 INTERRUPTED = 130  # the exit code of a command Ctrl-C ended (128 + SIGINT)
 

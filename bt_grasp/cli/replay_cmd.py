@@ -173,8 +173,8 @@ def _resim(console: Console, log: Path, as_json: bool, keep: Path | None, leaves
 
 def _check_outputs(log: Path, report: Path | None, report_dir: Path | None, btlog: Path | None,
                    frames_dir: Path | None, layout_out: Path | None, resim_log: Path | None) -> None:
-    """Every place the command will write, checked before the log is read (``bt_grasp.output_files``)."""
-    from bt_grasp.output_files import check_output_file, check_output_folder
+    """Every place the command will write, checked before the log is read (``bt_grasp.files.output_files``)."""
+    from bt_grasp.files.output_files import check_output_file, check_output_folder
 
     files = ((report, "--report", "report.html"), (btlog, "--export-btlog", "run.btlog"),
              (layout_out, "--layout-out", "run.layout.json"), (resim_log, "--resim-log", "resim.mcap"))

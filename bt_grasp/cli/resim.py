@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from bt_grasp.errors import LogFileError
-from bt_grasp.safe_path import check_relative_name, join_under
+from bt_grasp.files.safe_path import check_relative_name, join_under
 from bt_grasp.scene.goals import Goal
 
 
@@ -97,14 +97,14 @@ def resimulate(log_path: Path, keep_log: Path | None = None, leaves: tuple[str, 
     """Re-run a recorded log in a temporary folder that is removed afterwards, whatever happens; the new run's
     log is kept only at ``keep_log`` when given. ``leaves``: the ``--leaves`` plugins the run used (a log never
     names code to load by itself: the user passes them again)."""
-    from bt_grasp.bounded_io import confined_to
+    from bt_grasp.files.bounded_io import confined_to
 
     with tempfile.TemporaryDirectory(prefix="bt_grasp_resim_") as tmp, \
             confined_to(Path(tmp), "a log's tree, scene, calibration and fault plan may name only the files the log "
                                    "carries, so this run cannot be re-simulated"):
         report = _resimulate(log_path, Path(tmp), leaves)
         if keep_log is not None:
-            from bt_grasp.output_files import copy_output_file
+            from bt_grasp.files.output_files import copy_output_file
 
             report.new_log = str(copy_output_file(report.new_log, keep_log, "--resim-log", example="resim.mcap"))
         else:

@@ -201,7 +201,7 @@ def run(
     # only what every run needs here: a --resident run's client hands the request over and imports neither the
     # episode (the simulator's modules) nor the control package (issue 27)
     from bt_grasp.episode.request import EpisodeRequest, parse_assignments
-    from bt_grasp.output_files import check_output_file, write_output_file
+    from bt_grasp.files.output_files import check_output_file, write_output_file
     from bt_grasp.recording.reproducible import log_epoch_ns
 
     blackboard: dict[str, BlackboardValue] = {"lift_height": lift_height}

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import typer
 
+from bt_grasp.files.output_files import make_output_folder, write_output_file
 from bt_grasp.interfaces import Mount
-from bt_grasp.output_files import make_output_folder, write_output_file
 
 scene_app = typer.Typer(help="Inspect scene files.", no_args_is_help=True)
 

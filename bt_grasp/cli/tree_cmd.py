@@ -16,8 +16,8 @@ import typer
 from bt_grasp.cli import ERROR_PREFIX
 from bt_grasp.cli.plugin_option import leaves_option
 from bt_grasp.errors import InputError
-from bt_grasp.output_files import check_output_file, write_output_file
-from bt_grasp.terminal_text import shown
+from bt_grasp.files.output_files import check_output_file, write_output_file
+from bt_grasp.files.terminal_text import shown
 
 if TYPE_CHECKING:  # the tree package (py_trees) is imported when a command reads a tree, not for --help
     from bt_grasp.tree.registry import NodeRegistry

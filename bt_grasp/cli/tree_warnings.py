@@ -10,7 +10,7 @@ from __future__ import annotations
 import logging
 import sys
 
-from bt_grasp.terminal_text import shown
+from bt_grasp.files.terminal_text import shown
 
 WARNING_PREFIX = "bt-grasp: warning: "
 

@@ -71,7 +71,9 @@ def set_entry(tree: LoadedTree, key: str, value: BlackboardScalar) -> Any:
         if not typed and spec.type is not object:
             stored, typed = fitted, True
     if not typed and isinstance(value, str) and not ports:
-        from bt_grasp.bounded_yaml import scalar_or_text  # as ``--set`` reads a value: a YAML scalar, else the text
+        from bt_grasp.files.bounded_yaml import (
+            scalar_or_text,  # as ``--set`` reads a value: a YAML scalar, else the text
+        )
 
         stored = scalar_or_text(value)
     entry = blackboard.entry(key)

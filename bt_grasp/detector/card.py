@@ -150,7 +150,7 @@ class ModelCard:
         return "\n".join(lines) + "\n"
 
     def write(self, folder: Path) -> tuple[Path, Path]:
-        from bt_grasp.output_files import write_output_file
+        from bt_grasp.files.output_files import write_output_file
 
         md = write_output_file(folder / CARD_MD, self.to_markdown(), "--out")
         js = write_output_file(folder / CARD_JSON, json.dumps(self.to_json(), indent=2) + "\n", "--out")

@@ -246,7 +246,7 @@ def dataset_names(folder: Path) -> tuple[str, ...]:
     data = folder / "data.yaml"
     if not data.is_file():
         raise DatasetError(folder, "is not a dataset: it has no data.yaml (make one with `bt-grasp detector dataset`)")
-    from bt_grasp.config import read_yaml
+    from bt_grasp.files.config import read_yaml
 
     try:
         doc, _ = read_yaml(data)  # bounded: size, nesting, aliases
@@ -279,8 +279,8 @@ def read_image(path: Path) -> NDArray[np.uint8]:
     """One dataset picture (BGR), read bounded: a regular file of at most 64 MB whose header (PNG, JPEG) says at
     most 8192 pixels a side, so a FIFO, a link to /dev/zero or a small file saying 50,000 x 50,000 is one
     sentence, not a hang or an exhausted machine (found by the pre-review attack)."""
-    from bt_grasp.bounded_io import read_user_file
-    from bt_grasp.image_header import image_size
+    from bt_grasp.files.bounded_io import read_user_file
+    from bt_grasp.files.image_header import image_size
 
     data = read_user_file(path, MAX_DATASET_IMAGE_BYTES, error=DatasetError)
     size = image_size(data)
@@ -299,7 +299,7 @@ def read_labels(label_file: Path, width_px: int, height_px: int, nc: int) -> Box
     if not label_file.is_file():
         raise DatasetError(label_file, "no such label file (every image needs one; empty for no object)")
     xywhr, classes = [], []
-    from bt_grasp.bounded_io import read_user_file
+    from bt_grasp.files.bounded_io import read_user_file
 
     try:
         text = read_user_file(label_file, error=DatasetError).decode("utf-8")  # bounded: no FIFO, no giant file

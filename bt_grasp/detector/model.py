@@ -53,7 +53,7 @@ def _parse_names(raw: object, source: Path, where: str) -> tuple[str, ...]:
 
 
 def _read_card(path: Path) -> dict[str, Any]:
-    from bt_grasp.config import read_yaml
+    from bt_grasp.files.config import read_yaml
 
     try:
         data, _ = read_yaml(path)  # bounded: size, nesting, aliases

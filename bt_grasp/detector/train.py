@@ -110,7 +110,7 @@ def dataset_command(folder: Path) -> str | None:
     manifest = folder / "manifest.yaml"
     if not manifest.is_file():
         return None
-    from bt_grasp.config import read_yaml
+    from bt_grasp.files.config import read_yaml
 
     try:
         doc, _ = read_yaml(manifest)  # bounded: size, nesting, aliases
@@ -216,8 +216,8 @@ def check_resumable(run_dir: Path, request: TrainRequest, names: Sequence[str]) 
     args_file, data_file = run_dir / "args.yaml", run_dir / "data.yaml"
     if not last.is_file() or not args_file.is_file() or not data_file.is_file():
         raise InputError("--resume", f"{run_dir} holds no interrupted run (weights/last.pt, args.yaml and data.yaml)")
-    from bt_grasp.bounded_io import read_user_file
-    from bt_grasp.bounded_yaml import load_value
+    from bt_grasp.files.bounded_io import read_user_file
+    from bt_grasp.files.bounded_yaml import load_value
 
     docs = []
     for path in (args_file, data_file):
@@ -285,7 +285,7 @@ def train_model(request: TrainRequest) -> TrainResult:
         best = run_dir / "weights" / "last.pt"
     exported = Path(str(YOLO(str(best), task="obb").export(format="onnx", imgsz=request.imgsz, opset=ONNX_OPSET,
                                                              simplify=True, dynamic=False, device="cpu")))
-    from bt_grasp.output_files import copy_output_file
+    from bt_grasp.files.output_files import copy_output_file
 
     onnx_path = copy_output_file(exported, out / f"{request.name}.onnx", "--out", example="model.onnx")
     epochs_run, metrics = _last_row(run_dir / "results.csv")

@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from bt_grasp.environment import machine_description
+from bt_grasp.process.environment import machine_description
 
 #: the stages in the order they are printed, with the issue's group each belongs to
 STAGES: tuple[tuple[str, str], ...] = (

@@ -105,12 +105,12 @@ def load_inputs(request: EpisodeRequest) -> Inputs:
 
 
 def _check_log_path(log_path: Path | None, inputs: tuple[Path | None, ...] = ()) -> None:
-    """The log must be a file that can be created (``bt_grasp.output_files``): a folder, a device or FIFO, a
+    """The log must be a file that can be created (``bt_grasp.files.output_files``): a folder, a device or FIFO, a
     symbolic link, or a place where nothing can be written is bad input before anything runs (each was a
     traceback or a hang, some only after the run)."""
     if log_path is None:
         return
-    from bt_grasp.output_files import check_output_file
+    from bt_grasp.files.output_files import check_output_file
 
     check_output_file(log_path, "--log", example="run.mcap", inputs=inputs)  # never over the run's own inputs
 

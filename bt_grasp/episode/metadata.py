@@ -7,9 +7,9 @@ import subprocess
 import sys
 from pathlib import Path
 
-from bt_grasp.environment import versions_line
 from bt_grasp.episode.request import EpisodeRequest
 from bt_grasp.episode.result import goal_json
+from bt_grasp.process.environment import versions_line
 from bt_grasp.scene.format import Scene
 from bt_grasp.scene.goals import Goal
 from bt_grasp.tree.loader import LoadedTree

@@ -26,8 +26,8 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from bt_grasp.environment import machine_description
 from bt_grasp.interfaces import Mount
+from bt_grasp.process.environment import machine_description
 
 if TYPE_CHECKING:
     from bt_grasp.episode import EpisodeResult

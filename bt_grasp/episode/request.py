@@ -56,7 +56,7 @@ class EpisodeRequest:
 
 def parse_assignments(items: Sequence[str], source: str = "--set") -> dict[str, BlackboardValue]:
     """KEY=VALUE pairs; values are parsed as YAML scalars (numbers, true/false) or kept as text."""
-    from bt_grasp.bounded_yaml import scalar_or_text
+    from bt_grasp.files.bounded_yaml import scalar_or_text
 
     out: dict[str, BlackboardValue] = {}
     for item in items:

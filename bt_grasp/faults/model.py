@@ -13,7 +13,7 @@ from typing import Any, Literal
 
 from pydantic import Field, model_validator
 
-from bt_grasp.config import StrictModel
+from bt_grasp.files.config import StrictModel
 
 
 class FaultKind(enum.StrEnum):

@@ -8,10 +8,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from bt_grasp.config import KeyPath, read_yaml, validate
 from bt_grasp.errors import ConfigError, InputError
 from bt_grasp.faults.model import PARAMS, FaultEntry, FaultKind, FaultPlanFile
 from bt_grasp.faults.syntax import parse_inject
+from bt_grasp.files.config import KeyPath, read_yaml, validate
 
 log = logging.getLogger(__name__)
 

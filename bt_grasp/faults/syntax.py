@@ -16,8 +16,8 @@ from __future__ import annotations
 import re
 from typing import Any
 
-from bt_grasp.bounded_yaml import scalar_or_text
 from bt_grasp.errors import InputError
+from bt_grasp.files.bounded_yaml import scalar_or_text
 
 #: short names accepted on the command line
 KIND_ALIASES = {

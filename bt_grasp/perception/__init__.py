@@ -14,7 +14,7 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING
 
-from bt_grasp.slim_imports import defer_unused_submodules
+from bt_grasp.process.slim_imports import defer_unused_submodules
 
 # open3d (cloud.py, segment.py) would load plotly and dash for drawing helpers nothing here calls (issue 27)
 defer_unused_submodules()

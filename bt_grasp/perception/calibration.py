@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 from pydantic import Field
 from scipy.spatial.transform import Rotation
 
-from bt_grasp.config import StrictModel
+from bt_grasp.files.config import StrictModel
 from bt_grasp.geometry import Mat4, T_from_xyz_rpy, inv, make_T, rotation_angle_rad, transform_points
 from bt_grasp.interfaces import CameraIntrinsics, RGBDFrame
 from bt_grasp.perception.calibration_file import CalibrationFile, make_calibration

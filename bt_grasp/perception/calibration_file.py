@@ -28,8 +28,8 @@ import numpy as np
 import yaml
 from pydantic import Field, model_validator
 
-from bt_grasp.config import StrictModel, read_yaml, validate
 from bt_grasp.errors import ConfigError
+from bt_grasp.files.config import StrictModel, read_yaml, validate
 from bt_grasp.geometry import Mat4, T_from_pos_quat_wxyz, quat_wxyz
 from bt_grasp.interfaces import CameraIntrinsics, Mount
 from bt_grasp.perception.charuco import BoardSpec
@@ -159,8 +159,8 @@ def make_calibration(
 
 
 def save_calibration(calibration: CalibrationFile, path: str | Path) -> Path:
-    """Write the file whole (parents created; ``bt_grasp.output_files``); returns its path."""
-    from bt_grasp.output_files import write_output_file
+    """Write the file whole (parents created; ``bt_grasp.files.output_files``); returns its path."""
+    from bt_grasp.files.output_files import write_output_file
 
     data = calibration.model_dump(mode="json")
     header = (f"# bt_grasp hand-eye calibration ({calibration.mount}): maps camera_color_optical_frame "

@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import Field, model_validator
 
-from bt_grasp.config import StrictModel
+from bt_grasp.files.config import StrictModel
 from bt_grasp.geometry import Mat4, make_T
 from bt_grasp.interfaces import CameraIntrinsics
 

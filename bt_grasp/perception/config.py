@@ -12,7 +12,7 @@ from typing import Annotated
 import numpy as np
 from pydantic import Field, field_validator
 
-from bt_grasp.config import StrictModel, load_model
+from bt_grasp.files.config import StrictModel, load_model
 from bt_grasp.geometry import inv, transform_points
 from bt_grasp.robot_description import MAX_OPENING_M, TCP_TO_FINGERTIP_M
 from bt_grasp.scene.format import Scene

@@ -25,7 +25,7 @@ from typing import Any
 import defusedxml.ElementTree as SafeET
 
 from bt_grasp.errors import InputError, LogFileError
-from bt_grasp.output_files import write_output_file
+from bt_grasp.files.output_files import write_output_file
 from bt_grasp.recording.reader import RunLog
 from bt_grasp.recording.replay import status_changes
 from bt_grasp.tree.registry import NodeKind

@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 
 from bt_grasp.errors import InputError
-from bt_grasp.output_files import make_output_folder, write_output_file
+from bt_grasp.files.output_files import make_output_folder, write_output_file
 from bt_grasp.recording.reader import RunLog
 
 log = logging.getLogger(__name__)

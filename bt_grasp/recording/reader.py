@@ -20,11 +20,11 @@ from google.protobuf.json_format import MessageToDict
 from numpy.typing import NDArray
 
 from bt_grasp.errors import LogFileError
-from bt_grasp.image_header import MAX_IMAGE_SIDE, image_size
+from bt_grasp.files.image_header import MAX_IMAGE_SIDE, image_size
+from bt_grasp.files.terminal_text import shown
 from bt_grasp.recording import mcap_io, topics
 from bt_grasp.recording.schemas import PROTOBUF_CLASSES
 from bt_grasp.recording.validate import BadMessage, is_int, parse_json
-from bt_grasp.terminal_text import shown
 from bt_grasp.tree.registry import NodeKind
 
 log = logging.getLogger(__name__)

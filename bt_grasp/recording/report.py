@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from bt_grasp.output_files import make_output_folder, write_output_file
+from bt_grasp.files.output_files import make_output_folder, write_output_file
 from bt_grasp.recording import replay, report_figures, topics
 from bt_grasp.recording.reader import RunLog
 from bt_grasp.recording.schemas import as_matrix

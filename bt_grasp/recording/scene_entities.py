@@ -127,7 +127,7 @@ def object_model(geometry: MeshGeometry) -> bytes:
     its visual file, else its collision mesh, else that mesh's convex hull, else its bounding box."""
     import trimesh
 
-    from bt_grasp.bounded_io import read_user_file
+    from bt_grasp.files.bounded_io import read_user_file
     from bt_grasp.scene.meshes import MAX_MESH_BYTES
 
     vertices, faces = geometry.vertices_m, geometry.faces

@@ -94,7 +94,7 @@ def layout_for_log(run: RunLog) -> dict[str, Any]:
 def write_layout(run: RunLog, target: Path | None = None) -> Path:
     """Write the log's layout to ``target`` (default ``<log>.layout.json`` beside the log); returns the file.
     A place that cannot be written is an ``InputError`` naming it."""
-    from bt_grasp.output_files import write_output_file
+    from bt_grasp.files.output_files import write_output_file
 
     target = target if target is not None else run.path.with_name(run.path.stem + ".layout.json")
     return write_output_file(target, json.dumps(layout_for_log(run), indent=2) + "\n", "--layout-out",
@@ -117,7 +117,7 @@ def write_live_layout(tree: Path, leaves: Sequence[str] = (), log: Path | None =
     """Write the layout of ``tree`` for a live view (``control``: with the control panels of ``--control``)
     beside the run's log (``<log>.layout.json``) when it has one, else in ``folder`` (a private temporary folder
     the caller removes when the run ends: :func:`live_layout_folder`); returns the file."""
-    from bt_grasp.output_files import write_output_file
+    from bt_grasp.files.output_files import write_output_file
     from bt_grasp.recording.layout import with_control_panels
 
     if log is None and folder is None:

@@ -13,8 +13,8 @@ import re
 from collections.abc import Callable
 from typing import Any
 
+from bt_grasp.files.terminal_text import may_hold_controls, shown_deep
 from bt_grasp.recording import topics
-from bt_grasp.terminal_text import may_hold_controls, shown_deep
 
 #: deeper than any real tree (the views walk trees recursively in places: a hostile depth would crash them)
 MAX_TREE_DEPTH = 100
@@ -204,7 +204,7 @@ def parse_json(topic: str, data: bytes) -> Any:
         raise BadMessage(f"it is not JSON ({getattr(exc, 'msg', exc)})") from None
     if _LONE_SURROGATE_ESCAPE.search(text):
         _check_text(msg)
-    if may_hold_controls(text):  # terminal control characters are shown, never obeyed (bt_grasp.terminal_text)
+    if may_hold_controls(text):  # terminal control characters are shown, never obeyed (bt_grasp.files.terminal_text)
         try:
             msg = shown_deep(msg)
         except RecursionError:

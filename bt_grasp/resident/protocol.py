@@ -10,8 +10,8 @@ from functools import cache
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from bt_grasp.code_fingerprint import code_fingerprint
 from bt_grasp.errors import InputError
+from bt_grasp.process.code_fingerprint import code_fingerprint
 
 if TYPE_CHECKING:
     from pydantic import TypeAdapter
@@ -121,7 +121,7 @@ def authkey() -> bytes:
 def code_version() -> str:
     """Changes whenever the content of any bt_grasp file (sources, shaders, assets) or the version of a library
     that simulates, renders, perceives or plans changes: a resident process never runs stale code
-    (``bt_grasp.code_fingerprint``)."""
+    (``bt_grasp.process.code_fingerprint``)."""
     return code_fingerprint()
 
 

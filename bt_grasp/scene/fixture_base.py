@@ -11,9 +11,9 @@ from typing import Annotated
 import numpy as np
 from pydantic import Field, field_validator
 
-from bt_grasp.colors import RGB, check_color, rgb_of
-from bt_grasp.config import StrictModel
+from bt_grasp.files.config import StrictModel
 from bt_grasp.geometry import Mat4, make_T, rot_z
+from bt_grasp.scene.colors import RGB, check_color, rgb_of
 
 PositiveFloat = Annotated[float, Field(gt=0)]
 Name = Annotated[str, Field(min_length=1, pattern=r"^[A-Za-z_][A-Za-z0-9_\-]*$")]

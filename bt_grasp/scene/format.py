@@ -15,9 +15,9 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import Field, model_validator
 
-from bt_grasp.colors import COLOR_NAMES
-from bt_grasp.config import KeyPath, StrictModel, read_yaml, validate
 from bt_grasp.errors import ConfigError
+from bt_grasp.files.config import KeyPath, StrictModel, read_yaml, validate
+from bt_grasp.scene.colors import COLOR_NAMES
 from bt_grasp.scene.fixtures import CONTAINER_KINDS, Fixture
 from bt_grasp.scene.goals import Goal, PickGoal, PlaceGoal, SortGoal, StackGoal
 from bt_grasp.scene.objects import Choose, SceneObject

@@ -20,8 +20,8 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from bt_grasp.colors import check_color
-from bt_grasp.config import StrictModel
+from bt_grasp.files.config import StrictModel
+from bt_grasp.scene.colors import check_color
 
 Name = Annotated[str, Field(min_length=1, pattern=r"^[A-Za-z_][A-Za-z0-9_\-]*$")]
 PositiveFloat = Annotated[float, Field(gt=0)]

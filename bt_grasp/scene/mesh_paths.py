@@ -3,7 +3,7 @@
 NAME is found in the scene's ``packages:`` map, else as a folder above the URDF named NAME or holding a
 ``package.xml`` that names NAME, else as a folder NAME beside one of those folders (a workspace's ``src/``),
 looking at most :data:`PACKAGE_SEARCH_DEPTH` folders up. PATH goes through the one gate for names read from
-files (:func:`bt_grasp.safe_path.check_relative_name`): no ``..``, nothing absolute. Other URLs are refused.
+files (:func:`bt_grasp.files.safe_path.check_relative_name`): no ``..``, nothing absolute. Other URLs are refused.
 Only read here: a ``package.xml`` (bounded) and whether folders exist.
 """
 
@@ -15,7 +15,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from bt_grasp.errors import ConfigError, InputError
-from bt_grasp.safe_path import check_relative_name
+from bt_grasp.files.safe_path import check_relative_name
 
 log = logging.getLogger(__name__)
 

@@ -15,8 +15,8 @@ import re
 from pathlib import Path
 from urllib.parse import unquote
 
-from bt_grasp.bounded_io import read_user_file
 from bt_grasp.errors import InputError
+from bt_grasp.files.bounded_io import read_user_file
 
 #: the largest material file read, bytes
 MAX_MTL_BYTES = 4 << 20

@@ -22,9 +22,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from bt_grasp.bounded_io import read_user_file
-from bt_grasp.config import KeyPath
 from bt_grasp.errors import ConfigError
+from bt_grasp.files.bounded_io import read_user_file
+from bt_grasp.files.config import KeyPath
 from bt_grasp.scene.mesh_geometry import MeshGeometry, Vec3, VisualPart
 from bt_grasp.scene.notices import notice
 from bt_grasp.scene.objects import DEFAULT_MESH_RGB, MESH_SUFFIXES

@@ -10,9 +10,9 @@ from typing import Annotated, Literal
 
 from pydantic import Field, PrivateAttr, field_validator, model_validator
 
-from bt_grasp.colors import check_color, rgb_of
-from bt_grasp.config import StrictModel
 from bt_grasp.errors import ConfigError
+from bt_grasp.files.config import StrictModel
+from bt_grasp.scene.colors import check_color, rgb_of
 from bt_grasp.scene.mesh_geometry import MeshGeometry
 
 PositiveFloat = Annotated[float, Field(gt=0)]

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bt_grasp.environment import machine_description
+from bt_grasp.process.environment import machine_description
 from bt_grasp.scene.format import load_scene
 from bt_grasp.sim.world import World
 

@@ -34,7 +34,6 @@ import numpy as np
 import sapien
 from numpy.typing import NDArray
 
-from bt_grasp.colors import rgb_of
 from bt_grasp.detector.dataset import (
     ObbLabel,
     data_yaml,
@@ -46,8 +45,9 @@ from bt_grasp.detector.dataset import (
     preview_grid,
 )
 from bt_grasp.errors import ConfigError, InputError
+from bt_grasp.files.output_files import check_output_folder, make_output_folder, write_output_file
 from bt_grasp.interfaces import Mount
-from bt_grasp.output_files import check_output_folder, make_output_folder, write_output_file
+from bt_grasp.scene.colors import rgb_of
 from bt_grasp.scene.format import Light, Scene, load_scene
 from bt_grasp.sim.poses import to_T
 from bt_grasp.sim.table_texture import TEXTURE_KINDS, add_table_top, texture_image

@@ -15,9 +15,9 @@ from typing import Any
 
 import py_trees
 
-from bt_grasp.bounded_io import read_user_file
 from bt_grasp.clock import Clock, ManualClock
 from bt_grasp.errors import TreeFileError
+from bt_grasp.files.bounded_io import read_user_file
 from bt_grasp.tree.blackboard import Blackboard
 from bt_grasp.tree.builder import TreeBuilder, validate_document
 from bt_grasp.tree.formats.document import Document

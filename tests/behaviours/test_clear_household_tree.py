@@ -14,9 +14,9 @@ from behaviour_fakes import FakeRobot, fake_cell
 
 from bt_grasp.behaviours import robot_registry
 from bt_grasp.behaviours.library import ROBOT_LEAVES, check_tree_against_scene
+from bt_grasp.behaviours.pose import Pose
 from bt_grasp.clock import ManualClock
 from bt_grasp.perception.results import Detection, PerceptionResult, PerceptionStatus, ShapeClass
-from bt_grasp.pose import Pose
 from bt_grasp.scene.format import load_scene
 from bt_grasp.tree.loader import load_tree
 

@@ -9,10 +9,10 @@ import pytest
 from behaviour_fakes import FakeRobot, fake_cell
 
 from bt_grasp.behaviours import robot_registry
+from bt_grasp.behaviours.pose import Pose
 from bt_grasp.clock import ManualClock
 from bt_grasp.errors import TreeFileError
 from bt_grasp.perception.results import Detection, PerceptionResult, PerceptionStatus
-from bt_grasp.pose import Pose
 from bt_grasp.scene.format import Scene
 from bt_grasp.tree.loader import load_tree_from_string
 

@@ -19,8 +19,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bt_grasp.colors import rgb_of
 from bt_grasp.interfaces import Mount
+from bt_grasp.scene.colors import rgb_of
 from bt_grasp.scene.format import load_scene
 from bt_grasp.sim.labelling import (
     SCENE_LOOK_JITTER,

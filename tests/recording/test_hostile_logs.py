@@ -351,7 +351,7 @@ def test_weak_item_image_sizes_are_read_from_headers_only() -> None:
     import cv2
     import numpy as np
 
-    from bt_grasp.image_header import image_size
+    from bt_grasp.files.image_header import image_size
 
     picture = np.zeros((48, 64, 3), np.uint8)
     for ext, params in ((".png", []), (".jpg", []), (".jpg", [cv2.IMWRITE_JPEG_PROGRESSIVE, 1])):

@@ -137,7 +137,7 @@ def test_weak_item_terminal_control_sequences_in_a_log_are_shown_not_obeyed(view
     """Found by the pre-review attack: Rich escapes markup but passes ESC through, so a log's node name could
     clear the screen, retitle the window or colour the rest of the output of `replay`."""
     log = _hostile_log(tmp_path / "esc.mcap", suffix=TERMINAL)
-    from bt_grasp.terminal_text import shown
+    from bt_grasp.files.terminal_text import shown
 
     leaf = shown("Grasp" + TERMINAL)  # as every view shows it: the name a user can type
     args = {"summary": [], "tick": ["--tick", "5"], "failures": ["--failures"], "leaf": ["--leaf", leaf]}[view]

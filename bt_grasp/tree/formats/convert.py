@@ -20,7 +20,7 @@ from pathlib import Path
 import yaml
 
 from bt_grasp.errors import InputError
-from bt_grasp.output_files import write_output_file
+from bt_grasp.files.output_files import write_output_file
 from bt_grasp.tree.formats.document import Document, NodeDecl
 from bt_grasp.tree.formats.yaml_format import write_yaml
 

@@ -26,8 +26,8 @@ from typing import Any
 
 import yaml
 
-from bt_grasp import bounded_yaml
 from bt_grasp.errors import TreeFileError
+from bt_grasp.files import bounded_yaml
 from bt_grasp.tree.formats.document import Document, IncludeDecl, ModelDecl, ModelPort, NodeDecl, TreeDecl
 
 _PLAIN_TAGS = frozenset("tag:yaml.org,2002:" + t for t in ("map", "seq", "str", "int", "float", "bool", "null"))
@@ -177,7 +177,7 @@ def read_yaml(data: bytes, source: str) -> Document:
     def refused(problem: str, line: int | None) -> TreeFileError:
         return TreeFileError(source, f"malformed YAML: {problem}", where=line)
 
-    try:  # bounded: nesting depth and alias expansion (bt_grasp.bounded_yaml); aliases are refused below
+    try:  # bounded: nesting depth and alias expansion (bt_grasp.files.bounded_yaml); aliases are refused below
         root = bounded_yaml.compose(text, yaml.SafeLoader, refused)
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark

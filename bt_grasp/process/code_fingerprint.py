@@ -25,7 +25,7 @@ import stat
 from pathlib import Path
 
 import bt_grasp
-from bt_grasp.environment import library_version
+from bt_grasp.process.environment import library_version
 
 #: the distributions whose versions change a run: simulation and rendering, perception, planning and
 #: collision, trajectories, numerics, the tree library and the log format

@@ -14,9 +14,9 @@ from typing import Any, TypeVar
 import yaml
 from pydantic import BaseModel, ConfigDict, ValidationError
 
-from bt_grasp import bounded_yaml
-from bt_grasp.bounded_io import read_user_file
 from bt_grasp.errors import ConfigError, did_you_mean
+from bt_grasp.files import bounded_yaml
+from bt_grasp.files.bounded_io import read_user_file
 
 M = TypeVar("M", bound=BaseModel)
 
@@ -78,7 +78,7 @@ def read_yaml(path: str | Path) -> tuple[Any, dict[KeyPath, int]]:
     def refused(problem: str, line: int | None) -> ConfigError:
         return ConfigError(path, f"invalid YAML: {problem}", where=line)
 
-    try:  # parsed once, bounded: nesting depth and the values its aliases expand to (bt_grasp.bounded_yaml)
+    try:  # parsed once, bounded: nesting depth and the values its aliases expand to (bt_grasp.files.bounded_yaml)
         node = bounded_yaml.compose(text, _Yaml12Loader, refused)
         if node is not None:
             _line_map(node, (), lines)  # before constructing: merge keys (<<) flatten the node in place

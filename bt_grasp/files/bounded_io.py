@@ -15,7 +15,7 @@ from contextlib import contextmanager
 from contextvars import ContextVar
 from pathlib import Path
 
-from .errors import InputError
+from bt_grasp.errors import InputError
 
 _confined: ContextVar[tuple[Path, str] | None] = ContextVar("bt_grasp_confined", default=None)
 

@@ -26,7 +26,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import BinaryIO
 
-from .errors import InputError
+from bt_grasp.errors import InputError
 
 
 def _problem(exc: OSError) -> str:

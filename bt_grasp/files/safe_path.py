@@ -20,7 +20,7 @@ import hashlib
 import re
 from pathlib import Path, PurePosixPath
 
-from .errors import InputError
+from bt_grasp.errors import InputError
 
 MAX_PART_BYTES = 255
 MAX_PARTS = 32
