@@ -20,10 +20,11 @@ from bt_grasp.behaviours.reasons import FailureReason as R
 from bt_grasp.errors import TreeFileError
 from bt_grasp.perception.results import Detection
 from bt_grasp.scene.format import Scene
+from bt_grasp.tree.builtins import builtin_registry
 from bt_grasp.tree.builtins.loops import loop_spec
 from bt_grasp.tree.leaf import Leaf
 from bt_grasp.tree.node import BtNode
-from bt_grasp.tree.registry import NodeRegistry, builtin_registry
+from bt_grasp.tree.registry import NodeRegistry
 
 ROBOT_LEAVES = (
     calibration_leaves.LoadCalibration,

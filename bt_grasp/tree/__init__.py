@@ -9,6 +9,7 @@ The public entry points::
 from __future__ import annotations
 
 from bt_grasp.tree.blackboard import Blackboard
+from bt_grasp.tree.builtins import builtin_registry
 from bt_grasp.tree.context import NodeContext
 from bt_grasp.tree.leaf import Leaf
 from bt_grasp.tree.loader import LoadedTree, load_tree, load_tree_from_string
@@ -20,7 +21,6 @@ from bt_grasp.tree.registry import (
     NodeSpec,
     PortDirection,
     PortSpec,
-    builtin_registry,
     leaf,
 )
 

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 from bt_grasp.errors import closest_names
 from bt_grasp.tree.exceptions import DeclarationError
-from bt_grasp.tree.reasons import Reason, ReasonLike, builtin_reasons, reason_name
+from bt_grasp.tree.reasons import Reason, ReasonLike, reason_name
 
 if TYPE_CHECKING:
     import py_trees
@@ -70,7 +70,7 @@ PORT_TYPES: tuple[type, ...] = (str, int, float, bool, object)
 def is_text_port_type(kind: type) -> bool:
     """An application type a port may carry besides PORT_TYPES (BT.CPP's ``convertFromString<T>``): a class
     with a classmethod ``from_port_text(text) -> instance`` that raises ValueError with one sentence on
-    malformed text (e.g. ``bt_grasp.tasks.pose.Pose`` for ``"0.35;-0.25;0.0;90"``)."""
+    malformed text (e.g. ``bt_grasp.behaviours.pose.Pose`` for ``"0.35;-0.25;0.0;90"``)."""
     return callable(getattr(kind, "from_port_text", None))
 
 
@@ -324,12 +324,3 @@ def leaf(
         return cls
 
     return decorate
-
-
-def builtin_registry() -> NodeRegistry:
-    """A fresh registry holding every built-in node (BT.CPP's and bt_grasp's own)."""
-    from bt_grasp.tree.builtins import register_builtins
-
-    registry = NodeRegistry(reasons=builtin_reasons())
-    register_builtins(registry)
-    return registry

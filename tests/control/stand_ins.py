@@ -23,9 +23,10 @@ from py_trees.common import Status
 
 from bt_grasp.clock import ManualClock
 from bt_grasp.control import Controller
+from bt_grasp.tree.builtins import builtin_registry
 from bt_grasp.tree.leaf import Leaf
 from bt_grasp.tree.loader import LoadedTree, load_tree_from_string
-from bt_grasp.tree.registry import PortDirection, PortSpec, builtin_registry, leaf
+from bt_grasp.tree.registry import PortDirection, PortSpec, leaf
 from bt_grasp.tree.runner import RunOutcome, TickGate, TreeRunner
 
 STEP_NS = 10_000_000  # 10 ms a tick

@@ -13,7 +13,8 @@ import pytest
 
 from bt_grasp.cli.main import main
 from bt_grasp.tree import plugins
-from bt_grasp.tree.registry import NodeRegistry, builtin_registry
+from bt_grasp.tree.builtins import builtin_registry
+from bt_grasp.tree.registry import NodeRegistry
 
 PLUGIN = Path(__file__).parent / "data" / "user_nodes.py"
 

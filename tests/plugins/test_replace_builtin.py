@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from bt_grasp.cli.main import main
-from bt_grasp.tree.registry import builtin_registry
+from bt_grasp.tree.builtins import builtin_registry
 
 LEAF = '''
 from bt_grasp.nodes import Leaf, Status, action, input_port

@@ -19,10 +19,11 @@ from bt_grasp.recording import replay
 from bt_grasp.recording.reader import open_log
 from bt_grasp.recording.render import failures_table
 from bt_grasp.recording.writer import RunRecorder
+from bt_grasp.tree.builtins import builtin_registry
 from bt_grasp.tree.introspect import tree_structure
 from bt_grasp.tree.leaf import Leaf
 from bt_grasp.tree.loader import load_tree_from_string
-from bt_grasp.tree.registry import NodeRegistry, builtin_registry, leaf
+from bt_grasp.tree.registry import NodeRegistry, leaf
 from bt_grasp.tree.runner import FailureEvent, RunOutcome, TreeRunner
 
 # Reach fails twice (UNREACHABLE) and succeeds on its third attempt; after each failure the Fallback asks

@@ -15,10 +15,11 @@ from bt_grasp.clock import ManualClock
 from bt_grasp.recording.reader import open_log
 from bt_grasp.recording.replay import summary
 from bt_grasp.recording.writer import RunRecorder
+from bt_grasp.tree.builtins import builtin_registry
 from bt_grasp.tree.introspect import tree_structure
 from bt_grasp.tree.leaf import Leaf
 from bt_grasp.tree.loader import load_tree_from_string
-from bt_grasp.tree.registry import NodeKind, NodeRegistry, builtin_registry, leaf
+from bt_grasp.tree.registry import NodeKind, NodeRegistry, leaf
 from bt_grasp.tree.runner import TreeRunner
 
 # FlakyReach: each attempt is RUNNING for one tick, then FAILURE (UNREACHABLE) on the first two attempts,

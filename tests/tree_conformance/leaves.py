@@ -12,9 +12,9 @@ from pathlib import Path
 from py_trees.common import Status
 
 from bt_grasp.tree import Leaf, NodeContext, NodeKind, NodeRegistry, NodeSpec, PortDirection, PortSpec
+from bt_grasp.tree.builtins import builtin_registry
 from bt_grasp.tree.exceptions import TreeRuntimeError
 from bt_grasp.tree.plugins import load_plugins
-from bt_grasp.tree.registry import builtin_registry
 
 IN, OUT, INOUT = PortDirection.INPUT, PortDirection.OUTPUT, PortDirection.INOUT
 ENUMS = {"RED": 1, "GREEN": 2, "BLUE": 3}

@@ -7,9 +7,10 @@ from typing import Any
 from py_trees.common import Status
 
 from bt_grasp.clock import ManualClock
+from bt_grasp.tree.builtins import builtin_registry
 from bt_grasp.tree.leaf import Leaf
 from bt_grasp.tree.loader import load_tree_from_string
-from bt_grasp.tree.registry import builtin_registry, leaf
+from bt_grasp.tree.registry import leaf
 from bt_grasp.tree.runner import TreeRunner
 
 

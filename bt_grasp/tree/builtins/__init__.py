@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 from bt_grasp.tree.builtins import actions, conditions, controls, decorators, loops
+from bt_grasp.tree.reasons import builtin_reasons
 from bt_grasp.tree.registry import NodeRegistry, NodeSpec
 
 
@@ -15,6 +16,14 @@ def builtin_specs() -> tuple[NodeSpec, ...]:
 def register_builtins(registry: NodeRegistry) -> None:
     for spec in builtin_specs():
         registry.register(spec)
+
+
+def builtin_registry() -> NodeRegistry:
+    """A registry holding BT.CPP's built-in nodes and bt_grasp's built-in failure reasons (assembled here, where
+    the built-ins live, so that the registry module never imports them)."""
+    registry = NodeRegistry(reasons=builtin_reasons())
+    register_builtins(registry)
+    return registry
 
 
 #: BT.CPP 3.x names that 4.x removed, with the replacement to suggest
