@@ -21,11 +21,11 @@ def _resolved(path: Any) -> Path | None:
 
 def test_bench_tasks_and_eval_run_stand_for_the_same_episodes(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     import bt_grasp.episode as episode_package
+    from bt_grasp.bench.tasks import TASKS, run_task_bench
     from bt_grasp.campaign.spec import load_campaign, write_options_campaign
     from bt_grasp.defaults import DEFAULT_MAX_TICKS
     from bt_grasp.perception.calibration_file import calibration_for_scene
     from bt_grasp.scene.format import load_scene
-    from bt_grasp.tasks import TASKS, run_task_bench
 
     requests: list[Any] = []
 

@@ -88,12 +88,12 @@ def test_mounts_still_take_a_comma_separated_list_and_complete_after_a_comma() -
 
 def test_each_enum_is_the_set_its_source_defines() -> None:
     """The CLI keeps the values literal (--help imports no planner or task code): they must not drift."""
+    from bt_grasp.bench.follow import SCENES
+    from bt_grasp.bench.tasks import TASKS as tasks
     from bt_grasp.cli.choices import MOUNT_LIST, GoalChoice, PlannerChoice, TaskChoice
-    from bt_grasp.episode.follow_bench import SCENES
     from bt_grasp.interfaces import Mount
     from bt_grasp.motion.planner import PLANNERS as planners
     from bt_grasp.scene.run_goal import COMMAND_LINE_KINDS
-    from bt_grasp.tasks import TASKS as tasks
 
     assert [g.value for g in GoalChoice] == list(COMMAND_LINE_KINDS)
     assert [p.value for p in PlannerChoice] == list(planners) == PLANNERS

@@ -56,8 +56,8 @@ def _box_json(box: Any) -> dict[str, Any]:
 
 
 def main() -> int:
+    from bt_grasp.bench.plan import AT_OBJECT_MARGIN_M, feasibility_labels, make_problems
     from bt_grasp.geometry import rotation_angle_rad
-    from bt_grasp.motion.bench import AT_OBJECT_MARGIN_M, feasibility_labels, make_problems
     from bt_grasp.motion.collision import FINE_RESOLUTION_RAD, collision_checker
     from bt_grasp.motion.kinematics import default_kinematics
     from bt_grasp.motion.planner import PlannerOptions, default_planner

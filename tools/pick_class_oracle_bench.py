@@ -4,7 +4,7 @@ For each seed: the seed's settled table is drawn once (``World``) and each visib
 from the simulator's segmentation (``bt_grasp.sim.labelling``, the dataset command's labels: a benchmark tool,
 reading the truth on purpose); a tiny ONNX model whose constant output is those boxes stands in for the network;
 ``trees/pick_class.xml`` (its ``model`` pointed at that stand-in) then picks the seed's target of ``bench pick
---detector learned`` (``bt_grasp.episode.pick_bench.class_target``) by class, judged by physics on that object.
+--detector learned`` (``bt_grasp.bench.pick.class_target``) by class, judged by physics on that object.
 
     python tools/pick_class_oracle_bench.py --seeds 20 [--first-seed 0] [--scene scenes/household.yaml]
 
@@ -79,8 +79,8 @@ def main() -> None:
     parser.add_argument("--first-seed", type=int, default=0)
     parser.add_argument("--scene", type=Path, default=REPO / "scenes" / "household.yaml")
     args = parser.parse_args()
+    from bt_grasp.bench.pick import class_target
     from bt_grasp.episode import pick_request, run_episode
-    from bt_grasp.episode.pick_bench import class_target
     from bt_grasp.scene.goals import PickGoal
 
     work = Path(tempfile.mkdtemp(prefix="bt_grasp_oracle_"))

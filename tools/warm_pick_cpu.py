@@ -99,7 +99,7 @@ def log_cost(n: int) -> dict[str, object]:
 
 
 def stages(log: bool) -> dict[str, object]:
-    from bt_grasp.episode.budget_bench import run_budget_bench
+    from bt_grasp.bench.budget import run_budget_bench
 
     report = run_budget_bench(TREE, SCENE, 0, None, log, now=time.thread_time)
     return {"episode_thread_cpu_s": report["episode_wall_s"], "same_as_warmup": report["same_as_warmup"],

@@ -137,7 +137,7 @@ def timed_seams(clock: StageClock) -> Iterator[Callable[[Any], None]]:
 
 def _floor(scene: Path, physics_steps: int, dt_s: float) -> dict[str, float]:
     """The physics of ``physics_steps`` steps alone and one warm capture, measured here and now."""
-    from bt_grasp.sim.bench import run_sim_bench
+    from bt_grasp.bench.sim import run_sim_bench
 
     sim = run_sim_bench(scene, captures=5, physics_seconds=max(1.0, physics_steps * dt_s))
     physics_s = physics_steps / float(sim["physics_steps_per_s"])  # type: ignore[arg-type]

@@ -47,7 +47,7 @@ def _campaign_run(campaign_file: Path, out: Path, workers: int) -> dict[str, Any
 
 
 def run_eval_bench(trees: list[Path], scene: Path, seeds: int, first_seed: int, workers: list[int]) -> dict[str, Any]:
-    from bt_grasp.episode.pick_bench import run_pick_bench
+    from bt_grasp.bench.pick import run_pick_bench
     from bt_grasp.process.environment import machine_description
     from bt_grasp.scene.format import load_scene
 

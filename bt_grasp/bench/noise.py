@@ -15,9 +15,9 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from bt_grasp.bench.perception import DETECTED_WITHIN_M, random_scene, yaw_error_deg
 from bt_grasp.geometry import Mat4
 from bt_grasp.interfaces import Mount, RGBDFrame
-from bt_grasp.perception.bench import DETECTED_WITHIN_M, random_scene, yaw_error_deg
 from bt_grasp.perception.config import PerceptionConfig
 from bt_grasp.perception.pipeline import perceive
 from bt_grasp.scene.format import DepthNoise, Scene

@@ -2,7 +2,7 @@
 
 This module holds the scene randomisation, the loop and the scoring; it never imports the simulator. The
 simulator side (building a world per scene, capturing, reading true poses, calibrating) is a
-:class:`BenchBackend` the composition root passes in (``bt_grasp.cli.calibrate_cmd.SimBenchBackend``).
+:class:`BenchBackend` the composition root passes in (``bt_grasp.bench.sim_backend.SimBenchBackend``).
 
 Per scene: one target object (random colour, shape, size, pose) and 1-3 distractors of other colours,
 camera noise on; perception runs with the camera pose from one hand-eye calibration made at the start

@@ -7,8 +7,8 @@ import platform
 import time
 from typing import Any
 
+from bt_grasp.tree.builtins import builtin_registry
 from bt_grasp.tree.loader import load_tree_from_string
-from bt_grasp.tree.registry import builtin_registry
 
 
 def bench_xml(n_nodes: int) -> str:

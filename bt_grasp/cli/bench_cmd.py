@@ -1,4 +1,4 @@
-"""`bt-grasp bench ...`: benchmarks. `plan` runs the motion-planning benchmark (bt_grasp.motion.bench).
+"""`bt-grasp bench ...`: benchmarks. `plan` runs the motion-planning benchmark (bt_grasp.bench.plan).
 
 The group lives here; each benchmark's logic lives in its own package.
 """
@@ -42,7 +42,7 @@ def plan(
     export: Path = typer.Option(None, "--export", help="Also write the problems as JSON (for tools/)."),
 ) -> None:
     """Plan a fixed seeded set of tabletop problems: success rate, planning/IK/trajectory times."""
-    from bt_grasp.motion.bench import make_problems, run_plan_bench
+    from bt_grasp.bench.plan import make_problems, run_plan_bench
     from bt_grasp.motion.planner import PlannerOptions
     from bt_grasp.scene.format import load_scene
 
@@ -96,9 +96,9 @@ def perception(
     as_json: bool = typer.Option(False, "--json", help="Print exactly one JSON object."),
 ) -> None:
     """Perception accuracy against the simulator's truth: detection rate, centroid/yaw error, timings."""
-    from bt_grasp.cli.calibrate_cmd import SimBenchBackend
-    from bt_grasp.perception.bench import run_perception_bench
-    from bt_grasp.perception.noise_bench import run_noise_sweep
+    from bt_grasp.bench.noise import run_noise_sweep
+    from bt_grasp.bench.perception import run_perception_bench
+    from bt_grasp.bench.sim_backend import SimBenchBackend
 
     if noise_sweep:
         summary = run_noise_sweep(scenes, seed, backend=SimBenchBackend(scene), adapt=adapt)
@@ -137,7 +137,7 @@ def tasks(
     """Run every shipped task (trees/T.xml on scenes/T.yaml, judged by the scene's goal) over N seeds in one
     process; print the success rate per task and why the failures failed. (A developer benchmark: for one task as
     a resumable campaign, `bt-grasp eval run --tree trees/T.xml --scene scenes/T.yaml --seeds N`.)"""
-    from bt_grasp.tasks import TASKS, run_task_bench
+    from bt_grasp.bench.tasks import TASKS, run_task_bench
 
     known = {t.name: t for t in TASKS}
     chosen = [known[n.value] for n in task] if task else list(TASKS)
@@ -182,7 +182,7 @@ def follow(
     as_json: bool = typer.Option(False, "--json", help="Print exactly one JSON object."),
 ) -> None:
     """Visual following on the conveyor: tracking error against the simulator's truth, and the pick rate."""
-    from bt_grasp.episode.follow_bench import run_conveyor_pick_bench, run_tracking_bench
+    from bt_grasp.bench.follow import run_conveyor_pick_bench, run_tracking_bench
     from bt_grasp.errors import InputError
 
     try:

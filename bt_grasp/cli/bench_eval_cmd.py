@@ -23,7 +23,7 @@ def bench_eval(
 ) -> None:
     """Episodes per minute, side by side: `bench pick`'s loop, then a campaign on each worker count. (A developer
     benchmark of campaigns themselves: to evaluate a tree, `bt-grasp eval run --tree T --scene S --seeds N`.)"""
-    from bt_grasp.campaign.bench import run_eval_bench
+    from bt_grasp.bench.eval_speed import run_eval_bench
 
     report = run_eval_bench(trees, scene, seeds, first_seed, workers)
     if as_json:

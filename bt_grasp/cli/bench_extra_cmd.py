@@ -44,7 +44,7 @@ def pick(
     """Pick success over seeded episodes, judged by physics (object held 15 cm up at the end), per tree and per
     object picked, with why each failure failed. (A developer benchmark, in one process: to evaluate a tree,
     `bt-grasp eval run --tree T --scene S --seeds N`.)"""
-    from bt_grasp.episode.pick_bench import default_pick_trees, run_pick_bench
+    from bt_grasp.bench.pick import default_pick_trees, run_pick_bench
 
     trees = trees or default_pick_trees(detector.value)
     err = Console(stderr=True)  # progress on stderr: stdout stays one JSON object with --json
@@ -84,7 +84,7 @@ def sim(
     as_json: bool = typer.Option(False, "--json"),
 ) -> None:
     """Scene build time, RGB-D capture time on this renderer, physics speed with no rendering."""
-    from bt_grasp.sim.bench import run_sim_bench
+    from bt_grasp.bench.sim import run_sim_bench
 
     report = run_sim_bench(scene)
     typer.echo(json.dumps(report) if as_json else "\n".join(f"{k:24s} {v}" for k, v in report.items()))
@@ -97,7 +97,7 @@ def tree(
     as_json: bool = typer.Option(False, "--json"),
 ) -> None:
     """Tick overhead of the tree runtime itself (no physics, no rendering), per node per tick."""
-    from bt_grasp.tree.bench import tick_overhead
+    from bt_grasp.bench.tree import tick_overhead
 
     report = {"machine": machine_description(), **tick_overhead(nodes, ticks)}
     typer.echo(json.dumps(report) if as_json else "\n".join(f"{k:24s} {v}" for k, v in report.items()))
@@ -110,7 +110,7 @@ def logging_bench(
     as_json: bool = typer.Option(False, "--json"),
 ) -> None:
     """MCAP logging cost per tick and file size per simulated minute; summary time of a 10,000-tick log."""
-    from bt_grasp.recording.bench import bench_logging, bench_reading
+    from bt_grasp.bench.recording import bench_logging, bench_reading
 
     t0 = time.perf_counter()
     report: dict[str, Any] = {
@@ -134,7 +134,7 @@ def budget(
     as_json: bool = typer.Option(False, "--json"),
 ) -> None:
     """Where one warm pick's time goes, by stage, with the floor (physics alone + one capture) beside it."""
-    from bt_grasp.episode.budget_bench import run_budget_bench
+    from bt_grasp.bench.budget import run_budget_bench
 
     report = run_budget_bench(tree, scene, seed, calibration, log)
     if as_json:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import typer
 from rich.markup import escape
@@ -18,7 +18,7 @@ from rich.markup import escape
 from bt_grasp.interfaces import Mount
 
 if TYPE_CHECKING:  # annotations only
-    import numpy as np
+    pass
 
 MOUNTS = tuple(m.value for m in Mount)
 
@@ -99,47 +99,6 @@ def calibrate(
                   "calibration never reads.")
     console.print(f"wrote {escape(str(out))} (method {run.solution.method}, {len(run.views)} samples) in "
                   f"{result.elapsed_s:.1f} s")
-
-
-class SimBenchBackend:
-    """The simulator side of ``bt_grasp.perception.bench`` (a fresh World per scene; truth from the oracle)."""
-
-    def __init__(self, scene_path: Path) -> None:
-        from bt_grasp.scene.format import load_scene
-
-        self._base = load_scene(scene_path)
-
-    def base_scene(self) -> Any:
-        return self._base
-
-    def capture(self, scene: Any, seed: int) -> tuple[Any, dict[str, np.ndarray]]:
-        from bt_grasp.sim.oracle import GroundTruthOracle
-        from bt_grasp.sim.world import World
-
-        world = World(scene, seed, camera_mount=Mount.EYE_TO_HAND)
-        world.step(world.steps_per_tick * 10)
-        oracle = GroundTruthOracle(world)
-        return world.camera.capture(), {name: oracle.T_base_object(name) for name in oracle.object_names()}
-
-    def capture_levels(self, scene: Any, seed: int, noises: Any) -> tuple[list[Any], dict[str, np.ndarray]]:
-        from bt_grasp.sim.oracle import GroundTruthOracle
-        from bt_grasp.sim.render_keeper import keep_renderer_warm
-        from bt_grasp.sim.world import World
-
-        # a world per scene beside a renderer kept warm for the sweep: its first picture costs ~0.1 s
-        keep_renderer_warm()
-        world = World(scene, seed, camera_mount=Mount.EYE_TO_HAND)
-        world.step(world.steps_per_tick * 10)
-        oracle = GroundTruthOracle(world)
-        frames = world.camera.capture_variants(noises, seed)
-        return list(frames), {name: oracle.T_base_object(name) for name in oracle.object_names()}
-
-    def calibrate(self, scene: Any, mount: str, seed: int, poses: int
-                  ) -> tuple[np.ndarray, dict[str, tuple[float, float]]]:
-        from bt_grasp.episode.calibration import calibrate_in_sim
-
-        result = calibrate_in_sim(scene, mount, seed, poses)
-        return result.run.solution.X, result.true_error_per_method
 
 
 def register(app: typer.Typer) -> None:

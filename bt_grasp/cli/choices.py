@@ -36,7 +36,7 @@ class PlannerChoice(StrEnum):
 
 
 class TaskChoice(StrEnum):
-    """`bench tasks --task`: the shipped tasks (``bt_grasp.tasks.TASKS``), in the suite's order."""
+    """`bench tasks --task`: the shipped tasks (``bt_grasp.bench.tasks.TASKS``), in the suite's order."""
 
     pick = "pick"
     pick_and_place = "pick_and_place"

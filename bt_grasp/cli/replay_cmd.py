@@ -120,7 +120,7 @@ def replay_command(
 
 
 def _print_foxglove(console: Console, run: RunLog, target: Path | None) -> None:
-    from bt_grasp.recording.tree_layout import write_layout
+    from bt_grasp.foxglove.tree_layout import write_layout
 
     origin = run.time_origin_ns
     layout = write_layout(run, target)  # the layout of this log's tree (attached to the log since format 3)

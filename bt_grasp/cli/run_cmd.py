@@ -28,7 +28,7 @@ if TYPE_CHECKING:  # the episode package (numpy, pydantic, the simulator) is imp
     from bt_grasp.tree.runner import FailureEvent
 
 
-#: the live view's port when ``--live`` has no value (bt_grasp.recording.live.DEFAULT_PORT, not imported here
+#: the live view's port when ``--live`` has no value (bt_grasp.foxglove.live.DEFAULT_PORT, not imported here
 #: so that a run without --live does not load the WebSocket server)
 LIVE_DEFAULT_PORT = 8765
 #: the run summary's causal chain shows at most this many failures (the last ones)
@@ -253,6 +253,8 @@ def run(
         from bt_grasp.cli.live_log import show_live_server_log
 
         show_live_server_log()  # a viewer's bytes quoted in the SDK's lines are shown, never obeyed
+    from bt_grasp.hosts import is_loopback
+
     if live is not None and not is_loopback(live_host):
         console.print(exposure_warning(live_host), highlight=False, markup=False)
     if resident:
@@ -265,7 +267,7 @@ def run(
     elif interactive:
         summary = _run_interactive(request, breakpoints)
     else:
-        from bt_grasp.recording.tree_layout import live_layout_folder
+        from bt_grasp.foxglove.tree_layout import live_layout_folder
 
         layouts = live_layout_folder(live is not None, request.log)  # removed when the run ends
         try:
@@ -289,9 +291,12 @@ def _run_served(request: EpisodeRequest, breakpoints: tuple[Breakpoint, ...], co
     """A run in this process, served live (with ``--control``, driven from the viewer) when asked."""
     on_tick = () if quiet else (live_progress(console),)
     if control:
-        from bt_grasp.cli.foxglove_control import run_foxglove_control
+        from bt_grasp.episode.foxglove_run import run_foxglove_control
 
-        return run_foxglove_control(request, breakpoints, allow_remote=allow_remote, console=console,
+        def say(line: str) -> None:
+            console.print(line, highlight=False, markup=False)
+
+        return run_foxglove_control(request, breakpoints, allow_remote=allow_remote, say=say,
                                     on_tick=on_tick, layout_folder=layout_folder)
     from bt_grasp.episode.episode import Episode
 
@@ -299,7 +304,7 @@ def _run_served(request: EpisodeRequest, breakpoints: tuple[Breakpoint, ...], co
     if not quiet:
         episode.on_failure.append(failure_line(console))
     if request.live_port is not None:  # the layout of this tree (its leaves' rows), beside the log or in the folder
-        from bt_grasp.recording.tree_layout import write_live_layout
+        from bt_grasp.foxglove.tree_layout import write_live_layout
 
         layout = write_live_layout(request.tree, request.leaves, request.log, folder=layout_folder)
         episode.on_live.append(lambda url: console.print(
@@ -346,24 +351,10 @@ def _run_interactive(request: EpisodeRequest, breakpoints: tuple[Breakpoint, ...
     return results[-1]
 
 
-def is_loopback(host: str) -> bool:
-    """True for an address only this machine can reach (127.0.0.0/8, ::1, localhost)."""
-    import ipaddress
-
-    if host == "localhost":
-        return True
-    try:
-        return ipaddress.ip_address(host).is_loopback
-    except ValueError:
-        return False
-
-
 def exposure_warning(host: str) -> str:
-    return (
-        f"warning: --live-host {host} serves this run to anyone who can reach the port: the Foxglove WebSocket "
-        "protocol has no authentication. To watch from another machine, keep the default 127.0.0.1 and tunnel "
-        "(ssh -L 8765:127.0.0.1:8765 this-host); see docs/security.md."
-    )
+    from bt_grasp.hosts import exposure_warning as warning
+
+    return warning("--live-host", host, "this run (Foxglove WebSocket)", 8765)
 
 
 def _goal(kind: str, color: str, lift_height: float) -> Goal:

@@ -33,8 +33,8 @@ tree_app = typer.Typer(
 def tree_registry(leaves: list[str] | None = None) -> NodeRegistry:
     """The built-in nodes plus the robot leaves, when ``bt_grasp.behaviours`` provides ``register(registry)``,
     plus the installed plugins' and ``--leaves`` nodes (a bad plugin raises PluginError, an InputError)."""
+    from bt_grasp.tree.builtins import builtin_registry
     from bt_grasp.tree.plugins import load_plugins
-    from bt_grasp.tree.registry import builtin_registry
 
     registry = builtin_registry()
     try:

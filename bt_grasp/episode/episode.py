@@ -32,8 +32,8 @@ if TYPE_CHECKING:
     from bt_grasp.faults.injector import Injector
     from bt_grasp.faults.physics import PhysicsHook
     from bt_grasp.faults.plan import FaultPlan
+    from bt_grasp.foxglove.live import LiveServer
     from bt_grasp.perception.calibration_file import CalibrationFile
-    from bt_grasp.recording.live import LiveServer
     from bt_grasp.recording.writer import RunRecorder
     from bt_grasp.scene.format import Scene
     from bt_grasp.sim.judge import Verdict
@@ -317,15 +317,15 @@ class Episode:
             return None
         from bt_grasp.episode.media import RecorderSink
         from bt_grasp.episode.metadata import run_attachments, run_metadata
+        from bt_grasp.foxglove.tree_layout import LAYOUT_ATTACHMENT, layout_bytes
         from bt_grasp.recording import topics
         from bt_grasp.recording.robot_model import default_robot_model
         from bt_grasp.recording.scene_entities import fixture_update
-        from bt_grasp.recording.tree_layout import LAYOUT_ATTACHMENT, layout_bytes
         from bt_grasp.recording.writer import BASE_FRAME, WORLD_FRAME, RunRecorder
         from bt_grasp.tree.introspect import node_records, tree_structure
 
         if request.live_port is not None:  # first: a port that cannot be bound leaves no log behind
-            from bt_grasp.recording.live import LiveServer
+            from bt_grasp.foxglove.live import LiveServer
 
             self.live = LiveServer(request.live_port, request.live_host)
         if request.log is not None:

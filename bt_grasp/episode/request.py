@@ -24,7 +24,7 @@ class EpisodeRequest:
     too); ``log``: write the run to this MCAP file; ``faults``/``inject``: a fault plan file and/or
     one-line faults; ``blackboard``: entries set on the main tree's blackboard before the first tick;
     ``argv``: the command line, recorded in the log's metadata. ``image_hz``, ``live_port``/``live_host``
-    and ``realtime`` only observe the run (see ``bt_grasp.episode.observers`` and ``bt_grasp.recording.live``).
+    and ``realtime`` only observe the run (see ``bt_grasp.episode.observers`` and ``bt_grasp.foxglove.live``).
     """
 
     tree: Path

@@ -41,12 +41,11 @@ Security: the Foxglove WebSocket protocol has no authentication, and the SDK's s
 client connects from. Control is therefore accepted only when the live server listens on a loopback address
 (only this machine's viewers can reach it); on any other host it is refused unless ``allow_remote`` (the run
 command's ``--allow-remote-control``, which prints a warning). Nothing here imports the simulator or the
-WebSocket server: :class:`bt_grasp.recording.live.LiveServer` carries the values to and from the protocol.
+WebSocket server: :class:`bt_grasp.foxglove.live.LiveServer` carries the values to and from the protocol.
 """
 
 from __future__ import annotations
 
-import ipaddress
 import json
 import logging
 import math
@@ -76,6 +75,7 @@ from bt_grasp.control.commands import (
 from bt_grasp.control.controller import Controller
 from bt_grasp.control.state import RunState
 from bt_grasp.errors import InputError
+from bt_grasp.hosts import is_loopback
 
 log = logging.getLogger(__name__)
 
@@ -102,16 +102,6 @@ def is_refusal(message: str) -> bool:
     """Whether a controller's answer (``RunState.message``) refuses a command: every other answer says what was
     applied or that it waits for the tick boundary."""
     return bool(message) and not message.startswith(_APPLIED_PREFIXES) and _WAITING not in message
-
-
-def is_loopback(host: str) -> bool:
-    """True for an address only this machine can reach (127.0.0.0/8, ::1, localhost)."""
-    if host == "localhost":
-        return True
-    try:
-        return ipaddress.ip_address(host).is_loopback
-    except ValueError:
-        return False
 
 
 def fault_kinds() -> tuple[str, ...]:

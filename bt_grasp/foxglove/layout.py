@@ -1,13 +1,13 @@
-"""The Foxglove layouts shipped with bt_grasp (``bt_grasp/foxglove_layouts/``).
+"""The Foxglove layouts shipped with bt_grasp (``bt_grasp/foxglove/layouts/``).
 
 ``bt_grasp.layout.json``: 3D (the arm, fixtures, point cloud, detections, grasp candidates; the judge's true
 poses off by default), the camera image with the detections overlaid, a State Transitions panel with no rows,
 joint-angle and gripper plots, the log and the run result: the base of the layout made for the tree that
-runs (``bt_grasp.recording.tree_layout`` fills in one row per leaf of that tree, by path).
+runs (``bt_grasp.foxglove.tree_layout`` fills in one row per leaf of that tree, by path).
 
 ``bt_grasp_control.layout.json`` (a run with ``--live --control``): the same panels and, on the right, the
 stock Parameters panel (the run's state, breakpoints, settings, object choice and faults:
-``bt_grasp.control.foxglove``) above Publish buttons that send commands on ``/control/command``. It is made
+``bt_grasp.foxglove.control``) above Publish buttons that send commands on ``/control/command``. It is made
 from the first by :func:`control_layout`; a test keeps the shipped file equal to it.
 """
 
@@ -28,11 +28,11 @@ CONTROL_BUTTONS: tuple[tuple[str, str, str, dict[str, Any]], ...] = (
 
 
 def layout_path() -> Path:
-    return Path(str(files("bt_grasp") / "foxglove_layouts" / "bt_grasp.layout.json"))
+    return Path(str(files("bt_grasp") / "foxglove" / "layouts" / "bt_grasp.layout.json"))
 
 
 def control_layout_path() -> Path:
-    return Path(str(files("bt_grasp") / "foxglove_layouts" / "bt_grasp_control.layout.json"))
+    return Path(str(files("bt_grasp") / "foxglove" / "layouts" / "bt_grasp_control.layout.json"))
 
 
 def control_layout() -> dict[str, Any]:
@@ -43,7 +43,7 @@ def control_layout() -> dict[str, Any]:
 def with_control_panels(base: dict[str, Any]) -> dict[str, Any]:
     """A layout (the shipped one, or a tree's own: ``tree_layout.layout_for_structure``) with the control panels
     on its right: the Parameters panel above the Publish buttons of :data:`CONTROL_BUTTONS`."""
-    from bt_grasp.control.foxglove import COMMAND_SCHEMA, COMMAND_TOPIC
+    from bt_grasp.foxglove.control import COMMAND_SCHEMA, COMMAND_TOPIC
 
     config = dict(base["configById"])
     config["Parameters!control"] = {"title": "bt_grasp control (Parameters)"}

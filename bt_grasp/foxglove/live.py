@@ -10,7 +10,7 @@ not). A topic written once (the robot model, the fixtures, the tree, the camera 
 a viewer that subscribes later, so joining mid-run still shows the arm.
 
 Control (``serve_control``): the server always offers the protocol's parameters and client publishing; a run
-started with ``--control`` hands them to a :class:`bt_grasp.control.foxglove.FoxgloveControl` (Studio's
+started with ``--control`` hands them to a :class:`bt_grasp.foxglove.control.FoxgloveControl` (Studio's
 Parameters and Publish panels drive the run), any other run answers a client that tries with one sentence.
 """
 
@@ -27,7 +27,7 @@ from bt_grasp.recording import topics
 from bt_grasp.recording.writer import RunRecorder
 
 if TYPE_CHECKING:
-    from bt_grasp.control.foxglove import Answer, FoxgloveControl
+    from bt_grasp.foxglove.control import Answer, FoxgloveControl
 
 log = logging.getLogger(__name__)
 
@@ -62,7 +62,7 @@ class _Listener:  # implements foxglove.ServerListener (every callback: the SDK 
         self._server.subscribed(-1)
 
     def on_client_advertise(self, client: Any, channel: Any) -> None:
-        from bt_grasp.control.foxglove import COMMAND_TOPIC
+        from bt_grasp.foxglove.control import COMMAND_TOPIC
 
         if str(channel.topic) == COMMAND_TOPIC:
             self._command_channels.add((int(client.id), int(channel.id)))

@@ -15,8 +15,8 @@ from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from bt_grasp.foxglove.layout import layout_path
 from bt_grasp.recording import topics
-from bt_grasp.recording.layout import layout_path
 
 if TYPE_CHECKING:
     from bt_grasp.recording.reader import RunLog
@@ -118,7 +118,7 @@ def write_live_layout(tree: Path, leaves: Sequence[str] = (), log: Path | None =
     beside the run's log (``<log>.layout.json``) when it has one, else in ``folder`` (a private temporary folder
     the caller removes when the run ends: :func:`live_layout_folder`); returns the file."""
     from bt_grasp.files.output_files import write_output_file
-    from bt_grasp.recording.layout import with_control_panels
+    from bt_grasp.foxglove.layout import with_control_panels
 
     if log is None and folder is None:
         raise ValueError("a live layout without a log needs the folder it goes in")

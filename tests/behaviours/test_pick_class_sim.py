@@ -50,8 +50,8 @@ def oracle_model(path: Path, seed: int) -> tuple[Path, list[str]]:
 
 
 def test_pick_class_xml_picks_the_mug_by_class(tmp_path: Path) -> None:
+    from bt_grasp.bench.pick import class_target
     from bt_grasp.episode import pick_request, run_episode
-    from bt_grasp.episode.pick_bench import class_target
 
     model, on_table = oracle_model(tmp_path / "oracle.onnx", SEED)
     assert "mug" in on_table and class_target(SCENE, SEED) == ("mug", "mug", "white")  # the bench's draw

@@ -32,7 +32,7 @@ import pytest
 from studio_driver import CACHE, chromium_path, serving, skip_without_browser
 from test_foxglove_live import _free_port, _wait_for_port
 
-from bt_grasp.recording.layout import control_layout_path
+from bt_grasp.foxglove.layout import control_layout_path
 from bt_grasp.recording.reader import open_log
 
 ROOT = Path(__file__).resolve().parents[2]

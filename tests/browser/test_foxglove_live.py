@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 from studio_driver import ROBOT_LINKS, open_in_studio, serving, skip_without_browser
 
-from bt_grasp.recording.tree_layout import layout_for_tree_file
+from bt_grasp.foxglove.tree_layout import layout_for_tree_file
 
 ROOT = Path(__file__).resolve().parents[2]
 

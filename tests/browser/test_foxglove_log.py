@@ -15,7 +15,7 @@ from studio_driver import ROBOT_LINKS, open_in_studio, serving, skip_without_bro
 from bt_grasp.recording.reader import open_log
 
 ROOT = Path(__file__).resolve().parents[2]
-LAYOUT = ROOT / "bt_grasp" / "foxglove_layouts" / "bt_grasp.layout.json"
+LAYOUT = ROOT / "bt_grasp" / "foxglove" / "layouts" / "bt_grasp.layout.json"
 
 pytestmark = [pytest.mark.sim, pytest.mark.slow]
 

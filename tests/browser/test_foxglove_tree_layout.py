@@ -17,9 +17,9 @@ import pytest
 from studio_driver import open_in_studio, serving, skip_without_browser
 from test_foxglove_log import end_time_iso
 
+from bt_grasp.foxglove.tree_layout import LAYOUT_ATTACHMENT, STATE_PANEL
 from bt_grasp.recording import topics
 from bt_grasp.recording.reader import open_log
-from bt_grasp.recording.tree_layout import LAYOUT_ATTACHMENT, STATE_PANEL
 
 ROOT = Path(__file__).resolve().parents[2]
 

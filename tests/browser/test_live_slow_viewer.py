@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from studio_driver import CACHE, HERE
 
-from bt_grasp.recording.live import LiveServer
+from bt_grasp.foxglove.live import LiveServer
 from bt_grasp.recording.writer import RunRecorder
 
 

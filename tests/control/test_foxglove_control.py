@@ -33,17 +33,17 @@ from bt_grasp.control import (
     command_from_json,
     parse_breakpoint,
 )
-from bt_grasp.control.foxglove import (
+from bt_grasp.control.state import DetectionView
+from bt_grasp.foxglove.control import (
     COMMAND_TOPIC,
     FoxgloveControl,
     fault_kinds,
-    is_loopback,
     is_refusal,
     parameter_commands,
     state_parameters,
 )
-from bt_grasp.control.state import DetectionView
-from bt_grasp.recording.layout import CONTROL_BUTTONS, control_layout, control_layout_path, layout_path
+from bt_grasp.foxglove.layout import CONTROL_BUTTONS, control_layout, control_layout_path, layout_path
+from bt_grasp.hosts import is_loopback
 from tests.control.stand_ins import build, run
 from tests.control.test_controller import Faults, Sink
 
@@ -243,7 +243,7 @@ def test_control_is_refused_on_a_host_other_machines_reach_unless_allowed() -> N
 def test_the_shipped_control_layout() -> None:
     shipped = json.loads(control_layout_path().read_text())
     assert shipped == control_layout(), ("bt_grasp_control.layout.json is stale: run python -c 'from "
-                                         "bt_grasp.recording.layout import write_control_layout as w; w()'")
+                                         "bt_grasp.foxglove.layout import write_control_layout as w; w()'")
     base = json.loads(layout_path().read_text())
     assert set(base["configById"]) < set(shipped["configById"])
     assert shipped["configById"]["Parameters!control"]["title"]
@@ -287,7 +287,7 @@ def test_the_live_servers_listener_hands_viewers_requests_to_the_control(monkeyp
     # stand-in tree's controller driven by hand between "ticks"
     from foxglove.websocket import Parameter
 
-    from bt_grasp.recording.live import NO_CONTROL, LiveServer, _Listener
+    from bt_grasp.foxglove.live import NO_CONTROL, LiveServer, _Listener
 
     server = LiveServer(port=0)
     said: list[str] = []

@@ -134,7 +134,7 @@ def test_pick_from_the_conveyor_succeeds_by_physics_and_logs_the_servo(scene: st
 
 
 def test_the_benchmark_changes_only_the_belt_speed(tmp_path: Path) -> None:
-    from bt_grasp.episode.follow_bench import scene_at_speed
+    from bt_grasp.bench.follow import scene_at_speed
 
     path = scene_at_speed(REPO, "eye-in-hand", 0.1, tmp_path)
     scene, original = load_scene(path), load_scene(REPO / "scenes/conveyor_eye_in_hand.yaml")

@@ -6,7 +6,7 @@ import time
 
 import pytest
 
-from bt_grasp.episode.budget_bench import StageClock, timed_seams
+from bt_grasp.bench.budget import StageClock, timed_seams
 
 
 def test_a_stage_inside_another_counts_once_for_the_inner_stage() -> None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from types import SimpleNamespace
 
-from bt_grasp.episode.pick_bench import _per_object, default_pick_trees
+from bt_grasp.bench.pick import _per_object, default_pick_trees
 from bt_grasp.scene.format import load_scene
 from bt_grasp.scene.run_goal import default_color
 

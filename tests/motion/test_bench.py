@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from bt_grasp.motion.bench import make_problems, run_plan_bench
+from bt_grasp.bench.plan import make_problems, run_plan_bench
 
 
 def test_problem_set_is_reproducible_and_large_enough(scene_config) -> None:  # type: ignore[no-untyped-def]
@@ -57,7 +57,7 @@ def test_cli_rejects_an_unknown_planner(capsys: pytest.CaptureFixture[str]) -> N
 
 
 def test_labels_count_success_over_feasible_problems(scene_config) -> None:  # type: ignore[no-untyped-def]
-    from bt_grasp.motion.bench import feasibility_labels
+    from bt_grasp.bench.plan import feasibility_labels
 
     labels = feasibility_labels(0)
     assert len(labels) == 60 and [i for i, ok in labels.items() if not ok] == [16, 18, 31]

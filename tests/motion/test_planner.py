@@ -162,7 +162,7 @@ def test_the_safety_net_is_a_named_failure(detour: tuple) -> None:
 
 def test_the_goal_set_checks_every_closed_form_solution(scene_config) -> None:  # type: ignore[no-untyped-def]
     """Bench problem 2: of the pose's 8 IK solutions the closest free one is the goal, whatever collides first."""
-    from bt_grasp.motion.bench import make_problems
+    from bt_grasp.bench.plan import make_problems
     from bt_grasp.motion.planner import default_planner
 
     problem = make_problems(scene_config, 3, seed=0)[2]
@@ -183,7 +183,7 @@ def test_the_goal_set_checks_every_closed_form_solution(scene_config) -> None:  
 
 def test_seeded_ik_goal_sets_go_on_past_colliding_solutions(scene_config, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     """Without a closed form (a non-UR arm), seeding goes on: bench problem 2's first three solutions collide."""
-    from bt_grasp.motion.bench import make_problems
+    from bt_grasp.bench.plan import make_problems
     from bt_grasp.motion.kinematics import ArmKinematics
     from bt_grasp.motion.planner import default_planner
 
@@ -201,7 +201,7 @@ def test_seeded_ik_goal_sets_go_on_past_colliding_solutions(scene_config, monkey
 
 def test_a_pose_whose_every_ik_solution_collides_is_goal_in_collision(scene_config) -> None:  # type: ignore[no-untyped-def]
     """Bench problem 18: all eight solutions of the UR5 collide; the closed form says so."""
-    from bt_grasp.motion.bench import make_problems
+    from bt_grasp.bench.plan import make_problems
 
     problem = make_problems(scene_config, 19, seed=0)[18]
     result = plan_to_pose(problem.q_start, problem.T_base_tcp_goal, problem.scene(scene_config))

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from perception_synth import DEFAULT_T_BASE_CAMERA, Box, render
 
+from bt_grasp.bench.perception import random_scene, run_perception_bench, yaw_error_deg
 from bt_grasp.geometry import make_T, rot_z
-from bt_grasp.perception.bench import random_scene, run_perception_bench, yaw_error_deg
 from bt_grasp.scene.format import Scene
 
 
@@ -48,7 +48,7 @@ class _FakeBackend:
 
 
 def test_bench_loop_with_a_stand_in_backend(monkeypatch: pytest.MonkeyPatch) -> None:
-    import bt_grasp.perception.bench as bench
+    import bt_grasp.bench.perception as bench
 
     monkeypatch.setattr(bench, "BENCH_COLORS", ("red",) * 6)  # the stand-in draws every target red
     summary = run_perception_bench(4, 0, backend=_FakeBackend(), calibrate=True)

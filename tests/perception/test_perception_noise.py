@@ -67,8 +67,8 @@ def test_a_noisy_frame_fixed_thresholds_miss_is_read_when_adapting() -> None:
 def test_sim_scenes_at_three_times_the_stereo_error(tabletop_scene_path: Path) -> None:
     """Three seeded random bench scenes rendered once, seen at 3x the default error: all targets found
     within 4 mm (a perfect calibration isolates perception's own error)."""
-    from bt_grasp.perception.bench import random_scene
-    from bt_grasp.perception.noise_bench import level_noise
+    from bt_grasp.bench.noise import level_noise
+    from bt_grasp.bench.perception import random_scene
     from bt_grasp.scene.format import load_scene
     from bt_grasp.sim.oracle import GroundTruthOracle
     from bt_grasp.sim.world import World
@@ -111,8 +111,8 @@ class _SweepBackend:
 
 
 def test_noise_sweep_loop_with_a_stand_in_backend(monkeypatch: pytest.MonkeyPatch) -> None:
-    import bt_grasp.perception.bench as bench
-    from bt_grasp.perception.noise_bench import run_noise_sweep
+    import bt_grasp.bench.perception as bench
+    from bt_grasp.bench.noise import run_noise_sweep
 
     monkeypatch.setattr(bench, "BENCH_COLORS", ("red",) * 6)  # the stand-in draws every target red
     summary = run_noise_sweep(2, 0, backend=_SweepBackend(), levels=("1x", "3x"))

@@ -9,8 +9,8 @@ from typing import Any
 import pytest
 
 from bt_grasp.episode.observers import RealtimePacer
+from bt_grasp.foxglove.live import LiveServer, LiveServerError
 from bt_grasp.recording import topics
-from bt_grasp.recording.live import LiveServer, LiveServerError
 from bt_grasp.recording.writer import RunRecorder
 
 

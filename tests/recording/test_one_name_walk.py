@@ -22,9 +22,9 @@ from typing import Any
 
 import pytest
 
+from bt_grasp.foxglove.tree_layout import LAYOUT_ATTACHMENT, STATE_PANEL
 from bt_grasp.recording import report, report_figures, topics
 from bt_grasp.recording.reader import open_log
-from bt_grasp.recording.tree_layout import LAYOUT_ATTACHMENT, STATE_PANEL
 
 ROOT = Path(__file__).resolve().parents[2]
 TREE = ROOT / "trees" / "sort_by_color.xml"

@@ -8,9 +8,9 @@ import json
 from pathlib import Path
 
 from bt_grasp.behaviours.library import robot_registry
+from bt_grasp.foxglove.layout import layout_path
+from bt_grasp.foxglove.tree_layout import STATE_PANEL, layout_for_tree_file, write_live_layout
 from bt_grasp.recording import topics
-from bt_grasp.recording.layout import layout_path
-from bt_grasp.recording.tree_layout import STATE_PANEL, layout_for_tree_file, write_live_layout
 from bt_grasp.tree.loader import load_tree
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -42,7 +42,7 @@ def test_a_live_run_writes_its_layout_beside_its_log_or_in_a_private_folder(tmp_
     assert control["configById"][STATE_PANEL] == layout_for_tree_file(tree)["configById"][STATE_PANEL]
     import tempfile
 
-    from bt_grasp.recording.tree_layout import live_layout_folder
+    from bt_grasp.foxglove.tree_layout import live_layout_folder
 
     assert live_layout_folder(True, tmp_path / "a.mcap") is None and live_layout_folder(False, None) is None
     folder = live_layout_folder(True, None)  # no log: a folder of its own under the temporary directory

@@ -279,8 +279,8 @@ def worlds() -> WarmWorlds:
 @pytest.mark.sim
 @pytest.mark.parametrize("tree", list(CASES))
 def test_shipped_tree_runs_end_to_end_on_its_scene(tree: str, worlds: WarmWorlds, tmp_path: Path) -> None:
+    from bt_grasp.bench.follow import _follow_errors  # the measurement `bench follow` reports
     from bt_grasp.episode import Episode, EpisodeRequest
-    from bt_grasp.episode.follow_bench import _follow_errors  # the measurement `bench follow` reports
     from bt_grasp.sim.oracle import GroundTruthOracle
 
     case = CASES[tree]

@@ -9,10 +9,10 @@ import pytest
 
 from bt_grasp.behaviours import robot_registry
 from bt_grasp.behaviours.library import ROBOT_LEAVES, check_tree_against_scene
+from bt_grasp.bench.tasks import TASKS
 from bt_grasp.clock import ManualClock
 from bt_grasp.perception.results import Detection
 from bt_grasp.scene.format import load_scene
-from bt_grasp.tasks import TASKS
 from bt_grasp.tree.loader import load_tree
 
 REPO = Path(__file__).resolve().parents[2]

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
+from bt_grasp.bench.tree import tick_overhead
 from bt_grasp.cli.main import main
-from bt_grasp.tree.bench import tick_overhead
 
 TREE = """<root BTCPP_format="4" main_tree_to_execute="Main">
   <BehaviorTree ID="Main">
