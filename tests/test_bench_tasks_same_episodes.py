@@ -50,10 +50,10 @@ def test_bench_tasks_and_eval_run_stand_for_the_same_episodes(tmp_path: Path, mo
         episodes = campaign.episodes()
         bench = [(_resolved(r.tree), _resolved(r.scene), r.seed, dict(r.blackboard), r.max_ticks, r.goal, r.faults,
                   r.inject) for r in requests]
-        evaluated = [(_resolved(e.tree_file), _resolved(e.scene_file), e.seed, e.blackboard, e.max_ticks, e.goal,
-                      e.fault_file, e.inject) for e in episodes]
+        evaluated = [(_resolved(e.request.tree), _resolved(e.request.scene), e.seed, dict(e.request.blackboard),
+                      e.max_ticks, e.request.goal, e.request.faults, e.request.inject) for e in episodes]
         assert bench == evaluated, task.name
         assert [r.seed for r in requests] == [5, 6, 7]
         for request, episode in zip(requests, episodes, strict=True):  # the same calibration, once resolved
             used, _ = calibration_for_scene(load_scene(request.scene), request.scene, request.calibration)
-            assert _resolved(used) == _resolved(episode.calibration_file), task.name
+            assert _resolved(used) == _resolved(episode.request.calibration), task.name

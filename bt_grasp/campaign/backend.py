@@ -9,10 +9,14 @@ world is not reset and reused).
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from bt_grasp.campaign.episode import EpisodeOutcome
-from bt_grasp.campaign.spec import Episode
+from bt_grasp.campaign.spec import PlannedEpisode
+
+if TYPE_CHECKING:
+    from bt_grasp.episode.result import EpisodeResult
 
 
 class WarmEpisodeBackend:
@@ -28,46 +32,15 @@ class WarmEpisodeBackend:
         import bt_grasp.behaviours
         import bt_grasp.episode.episode  # noqa: F401
 
-    def run(self, episode: Episode, log: Path | None) -> EpisodeOutcome:
-        from bt_grasp.episode import Episode as EpisodeRun
-        from bt_grasp.episode import EpisodeRequest
+    def run(self, planned: PlannedEpisode, log: Path | None) -> EpisodeResult:
+        from bt_grasp.episode import Episode
 
-        request = EpisodeRequest(
-            tree=episode.tree_file,
-            scene=episode.scene_file,
-            seed=episode.seed,
-            goal=episode.goal,
-            calibration=episode.calibration_file,
-            log=log,
-            max_ticks=episode.max_ticks,
-            faults=episode.fault_file,
-            inject=episode.inject,
-            blackboard=episode.blackboard,
-            argv=("bt-grasp", "eval", "run", episode.campaign, episode.key),
-            fingerprint=True,
-            leaves=episode.leaves,
-        )
+        request = replace(planned.request, log=log, fingerprint=True,
+                          argv=("bt-grasp", "eval", "run", planned.campaign, planned.key))
         t0 = time.perf_counter()
-        prepared = EpisodeRun(request, self.worlds)
+        prepared = Episode(request, self.worlds)
         setup_s = time.perf_counter() - t0
-        result = prepared.run()
-        judge = result.judged.to_json()
-        return EpisodeOutcome(
-            success=result.success,
-            judged_goal=result.goal.kind,
-            tree_status=result.tree_status,
-            failure_reason=result.reason,
-            failed_leaf=result.failed_leaf,
-            failed_path=result.failed_path,
-            ticks=result.ticks,
-            sim_time_s=result.sim_time_s,
-            wall_time_s=result.wall_time_s,
-            setup_wall_s=setup_s,
-            retries=result.retries,
-            faults_fired=result.faults_fired,
-            judge=judge,
-            fingerprint=str(result.fingerprint),
-        )
+        return replace(prepared.run(), setup_wall_s=setup_s)
 
 
 def warm_backend() -> WarmEpisodeBackend:

@@ -24,7 +24,7 @@ from typing import Any
 
 from bt_grasp.campaign.episode import EpisodeBackend
 from bt_grasp.campaign.runner import EpisodeError
-from bt_grasp.campaign.spec import Episode
+from bt_grasp.campaign.spec import PlannedEpisode
 from bt_grasp.campaign.worker import WORKER_ENV, KeepLogs, Worker
 from bt_grasp.errors import InputError
 
@@ -43,7 +43,7 @@ class EpisodeActor:
         Path(log_dir).mkdir(parents=True, exist_ok=True)
         self.worker = Worker(factory, log_dir, keep_logs)
 
-    def run(self, episode: Episode) -> dict[str, Any]:
+    def run(self, episode: PlannedEpisode) -> dict[str, Any]:
         return self.worker.run(episode)
 
 
@@ -106,7 +106,7 @@ class RayEngine:
             raise InputError("--ray", f"cannot connect to the Ray cluster at '{self.address}': {exc}") from None
         return ray
 
-    def run(self, episodes: Sequence[Episode]) -> Iterator[dict[str, Any] | EpisodeError]:
+    def run(self, episodes: Sequence[PlannedEpisode]) -> Iterator[dict[str, Any] | EpisodeError]:
         ray = self._connect()
         try:
             slots = self.workers or max(1, int(ray.cluster_resources().get("CPU", 1)))
@@ -116,7 +116,7 @@ class RayEngine:
                 for _ in range(min(slots, len(episodes)))
             ]
             queue = list(reversed(episodes))
-            running: dict[Any, tuple[Episode, Any]] = {}
+            running: dict[Any, tuple[PlannedEpisode, Any]] = {}
             for actor in actors:
                 if queue:
                     episode = queue.pop()

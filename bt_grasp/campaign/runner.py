@@ -15,7 +15,7 @@ from typing import Any, Protocol
 
 from bt_grasp.campaign.out_lock import campaign_lock
 from bt_grasp.campaign.results import ResultsWriter, read_rows, results_path
-from bt_grasp.campaign.spec import Campaign, Episode
+from bt_grasp.campaign.spec import Campaign, PlannedEpisode
 from bt_grasp.errors import BtGraspError, InputError
 from bt_grasp.files.output_files import check_output_file
 
@@ -26,7 +26,7 @@ log = logging.getLogger(__name__)
 class EpisodeError:
     """An episode that raised instead of finishing (a bug, or its worker died): no row; it runs again on resume."""
 
-    episode: Episode
+    episode: PlannedEpisode
     message: str
     worker_lost: bool = False
 
@@ -34,7 +34,7 @@ class EpisodeError:
 class Engine(Protocol):
     """Runs episodes somewhere and yields each finished row (or error) as soon as it is available."""
 
-    def run(self, episodes: Sequence[Episode]) -> Iterator[dict[str, Any] | EpisodeError]: ...
+    def run(self, episodes: Sequence[PlannedEpisode]) -> Iterator[dict[str, Any] | EpisodeError]: ...
 
 
 class CampaignIncomplete(BtGraspError):
@@ -72,7 +72,7 @@ class Progress:
         return self.successes / self.finished if self.finished else None
 
 
-def pending(campaign: Campaign, rows: list[dict[str, Any]], path: Path) -> list[Episode]:
+def pending(campaign: Campaign, rows: list[dict[str, Any]], path: Path) -> list[PlannedEpisode]:
     """The campaign's episodes that have no row yet; rows of episodes not in the campaign are refused."""
     episodes = campaign.episodes()
     keys = {e.key for e in episodes}

@@ -19,6 +19,7 @@ from typing import Any
 
 from pydantic import Field, field_validator, model_validator
 
+from bt_grasp.episode.request import EpisodeRequest
 from bt_grasp.errors import ConfigError, InputError
 from bt_grasp.files.config import KeyPath, StrictModel, read_yaml, validate
 from bt_grasp.scene.goals import Goal
@@ -118,33 +119,35 @@ class SceneRef:
 
 
 @dataclass(frozen=True)
-class Episode:
-    """Every input of one episode; ``key`` identifies it across runs (resume) and machines."""
+class PlannedEpisode:
+    """One episode a campaign plans: the request it runs (every input, as ``bt-grasp run`` takes them) and the
+    campaign's labels for it; ``key`` identifies it across runs (resume) and machines."""
 
     campaign: str
     index: int
     tree: str  # as written in the campaign file
     scene: str  # the scene's label
-    seed: int
     fault_plan: str  # the fault plan's label ("none")
     params: tuple[tuple[str, str | int | float | bool], ...]
-    tree_file: Path
-    scene_file: Path
-    calibration_file: Path | None
-    fault_file: Path | None
-    inject: tuple[str, ...]
-    max_ticks: int
     inputs_digest: str  # content hash of every input file of this episode
-    goal: Goal | None = None  # the campaign's goal for this scene (None: the scene's declared goal, else a pick)
-    leaves: tuple[str, ...] = ()  # users' own nodes: ``eval run --leaves`` plugin files or modules
+    request: EpisodeRequest
 
     @property
-    def blackboard(self) -> dict[str, Any]:
+    def seed(self) -> int:
+        return self.request.seed
+
+    @property
+    def max_ticks(self) -> int:
+        return self.request.max_ticks
+
+    @property
+    def blackboard(self) -> dict[str, str | int | float | bool]:
         return dict(self.params)
 
     @property
     def key(self) -> str:
         """Stable id: the same inputs (file contents included) give the same key."""
+        goal = self.request.goal
         text = json.dumps(
             [
                 self.tree,
@@ -154,7 +157,7 @@ class Episode:
                 self.params,
                 self.max_ticks,
                 self.inputs_digest,
-                self.goal.model_dump(mode="json") if self.goal is not None else None,
+                goal.model_dump(mode="json") if goal is not None else None,
             ],
             sort_keys=True,
         )
@@ -179,10 +182,27 @@ class Campaign:
     digests: dict[Path, str] = field(default_factory=dict, compare=False)
     leaves: tuple[str, ...] = ()  # users' own nodes (``eval run --leaves``), loaded by every episode
 
-    def episodes(self) -> list[Episode]:
+    def episodes(self) -> list[PlannedEpisode]:
         return list(self._iter())
 
-    def _iter(self) -> Iterator[Episode]:
+    def request(self, tree: str, scene: SceneRef, plan: FaultPlanRef, params: dict[str, Any], seed: int
+                ) -> EpisodeRequest:
+        """The one mapping from a campaign's row (tree x scene x fault plan x parameters x seed) to the request
+        ``bt-grasp run`` would make of the same inputs."""
+        return EpisodeRequest(
+            tree=self.base / tree,
+            scene=scene.file,
+            seed=seed,
+            goal=scene.goal,
+            calibration=scene.calibration,
+            faults=plan.file,
+            inject=plan.inject,
+            blackboard=dict(params),
+            max_ticks=self.max_ticks,
+            leaves=self.leaves,
+        )
+
+    def _iter(self) -> Iterator[PlannedEpisode]:
         grid = itertools.product(self.trees, self.scenes, self.fault_plans, range(len(self.blackboard)), self.seeds)
         for index, (tree, scene, plan, params_i, seed) in enumerate(grid):
             tree_file = self.base / tree
@@ -190,23 +210,15 @@ class Campaign:
             digest = hashlib.sha256(
                 "|".join(self.digests.get(f, "") if f is not None else "-" for f in files).encode()
             ).hexdigest()[:16]
-            yield Episode(
+            yield PlannedEpisode(
                 campaign=self.name,
                 index=index,
                 tree=tree,
                 scene=scene.name,
-                seed=seed,
                 fault_plan=plan.name,
                 params=tuple(sorted(self.blackboard[params_i].items())),
-                tree_file=tree_file,
-                scene_file=scene.file,
-                calibration_file=scene.calibration,
-                fault_file=plan.file,
-                inject=plan.inject,
-                max_ticks=self.max_ticks,
                 inputs_digest=digest,
-                goal=scene.goal,
-                leaves=self.leaves,
+                request=self.request(tree, scene, plan, self.blackboard[params_i], seed),
             )
 
 
@@ -317,7 +329,7 @@ def _check_inputs(campaign: Campaign, lines: dict[KeyPath, int]) -> None:
 def _check_combinations(campaign: Campaign, lines: dict[KeyPath, int]) -> None:
     """Every tree x scene x fault plan x parameter set passes the episode API's own input checks (goal names,
     tree leaves against the scene, fault plans against the tree), once, before the first episode runs."""
-    from bt_grasp.episode import EpisodeRequest, load_inputs
+    from bt_grasp.episode import load_inputs
 
     seed = campaign.seeds[0]
     for (ti, tree), (si, scene), (fi, plan), (bi, params) in itertools.product(
@@ -326,20 +338,8 @@ def _check_combinations(campaign: Campaign, lines: dict[KeyPath, int]) -> None:
         enumerate(campaign.fault_plans),
         enumerate(campaign.blackboard),
     ):
-        request = EpisodeRequest(
-            tree=campaign.base / tree,
-            scene=scene.file,
-            seed=seed,
-            goal=scene.goal,
-            calibration=scene.calibration,
-            faults=plan.file,
-            inject=plan.inject,
-            blackboard=params,
-            max_ticks=campaign.max_ticks,
-            leaves=campaign.leaves,
-        )
         try:
-            load_inputs(request)
+            load_inputs(campaign.request(tree, scene, plan, params, seed))
         except InputError as exc:
             where = f"trees[{ti}] on scenes[{si}] with fault_plans[{fi}] and blackboard[{bi}]"
             raise ConfigError(

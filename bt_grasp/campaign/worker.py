@@ -1,4 +1,4 @@
-"""One campaign worker: a warm episode backend plus what turns an outcome into a results row."""
+"""One campaign worker: a warm episode backend plus what turns an episode's result into a results row."""
 
 from __future__ import annotations
 
@@ -14,8 +14,9 @@ from pathlib import Path
 from typing import Any
 
 from bt_grasp.campaign.environment import environment
-from bt_grasp.campaign.episode import EpisodeBackend, EpisodeOutcome
-from bt_grasp.campaign.spec import Episode
+from bt_grasp.campaign.episode import EpisodeBackend
+from bt_grasp.campaign.spec import PlannedEpisode
+from bt_grasp.episode.result import EpisodeResult
 from bt_grasp.files.output_files import check_output_file, make_output_folder
 from bt_grasp.files.safe_path import file_component
 from bt_grasp.process.numeric_threads import NUMERIC_ENV
@@ -42,14 +43,15 @@ class KeepLogs(enum.StrEnum):
     NONE = "none"
 
 
-def log_path(log_dir: Path, episode: Episode) -> Path:
+def log_path(log_dir: Path, episode: PlannedEpisode) -> Path:
     """Where an episode's kept log goes: one plain file name inside ``log_dir``, whatever the campaign file
     names its tree, scene or fault plan (``../x`` becomes ``_x-<hash>``: a name never leaves the folder)."""
     parts = (Path(episode.tree).stem, episode.scene, episode.fault_plan, f"seed{episode.seed}", episode.key)
     return log_dir / ("__".join(file_component(str(p)) for p in parts) + ".mcap")
 
 
-def make_row(episode: Episode, outcome: EpisodeOutcome, mcap: Path | None, episode_wall_s: float) -> dict[str, Any]:
+def make_row(episode: PlannedEpisode, result: EpisodeResult, mcap: Path | None, episode_wall_s: float
+             ) -> dict[str, Any]:
     env = environment()
     return {
         "campaign": episode.campaign,
@@ -62,21 +64,21 @@ def make_row(episode: Episode, outcome: EpisodeOutcome, mcap: Path | None, episo
         "params": episode.blackboard,
         "max_ticks": episode.max_ticks,
         "inputs_digest": episode.inputs_digest,
-        "success": outcome.success,
-        "judged_goal": outcome.judged_goal,
-        "tree_status": outcome.tree_status,
-        "failure_reason": outcome.failure_reason,
-        "failed_leaf": outcome.failed_leaf,
-        "failed_path": outcome.failed_path,
-        "retries": outcome.retries,
-        "retries_total": sum(outcome.retries.values()),
-        "faults_fired": outcome.faults_fired,
-        "ticks": outcome.ticks,
-        "sim_time_s": round(outcome.sim_time_s, 6),
-        "judge": outcome.judge,
-        "fingerprint": outcome.fingerprint,
-        "wall_time_s": round(outcome.wall_time_s, 3),
-        "setup_wall_s": round(outcome.setup_wall_s, 3),
+        "success": result.success,
+        "judged_goal": result.goal.kind,
+        "tree_status": result.tree_status,
+        "failure_reason": result.reason,
+        "failed_leaf": result.failed_leaf,
+        "failed_path": result.failed_path,
+        "retries": result.retries,
+        "retries_total": sum(result.retries.values()),
+        "faults_fired": result.faults_fired,
+        "ticks": result.ticks,
+        "sim_time_s": round(result.sim_time_s, 6),
+        "judge": result.judged.to_json(),
+        "fingerprint": str(result.fingerprint),
+        "wall_time_s": round(result.wall_time_s, 3),
+        "setup_wall_s": round(result.setup_wall_s, 3),
         "episode_wall_s": round(episode_wall_s, 3),
         "mcap": str(mcap) if mcap is not None else None,
         "worker": f"{socket.gethostname()}:{os.getpid()}",
@@ -97,7 +99,7 @@ class Worker:
         self.warm_up_s = time.perf_counter() - t0
         log.debug("worker %d warm in %.2f s", os.getpid(), self.warm_up_s)
 
-    def run(self, episode: Episode) -> dict[str, Any]:
+    def run(self, episode: PlannedEpisode) -> dict[str, Any]:
         """Run one episode; its fingerprint is computed as it runs. With ``--keep-logs all`` it is recorded as
         it runs; with ``failures`` a failed episode is run once more with a log (same seed, same run: the
         second run's fingerprint must equal the first's, else the row says so)."""
@@ -106,12 +108,12 @@ class Worker:
         make_output_folder(path.parent, "--out")
         check_output_file(path, "--out", example="x.mcap")  # a link planted at a kept log's name is not followed
         keep = self.keep_logs is KeepLogs.ALL
-        outcome = self.backend.run(episode, path if keep else None)
-        if not outcome.success and self.keep_logs is KeepLogs.FAILURES:
+        result = self.backend.run(episode, path if keep else None)
+        if not result.success and self.keep_logs is KeepLogs.FAILURES:
             again = self.backend.run(episode, path)
             keep = True
-            if again.fingerprint != outcome.fingerprint:
+            if again.fingerprint != result.fingerprint:
                 log.warning("%s: the run again with its log differs (fingerprint %s, then %s)", episode.key,
-                            outcome.fingerprint, again.fingerprint)
-                outcome = replace(outcome, fingerprint=f"{outcome.fingerprint} (its log's run: {again.fingerprint})")
-        return make_row(episode, outcome, path if keep else None, time.perf_counter() - t0)
+                            result.fingerprint, again.fingerprint)
+                result = replace(result, fingerprint=f"{result.fingerprint} (its log's run: {again.fingerprint})")
+        return make_row(episode, result, path if keep else None, time.perf_counter() - t0)

@@ -94,6 +94,10 @@ class EpisodeResult:
     failed_path: str | None = None
     #: every leaf FAILURE that was not by design, in order, with what followed it (the run summary's last lines)
     failure_chain: tuple[ChainStep, ...] = ()
+    #: wall time spent preparing the episode (inputs loaded, world built, tree wired) before its first tick;
+    #: set by whoever prepared it (a campaign worker), 0 when nobody measured it. Not in ``to_json``: the log's
+    #: result holds no wall-clock figure of preparation.
+    setup_wall_s: float = 0.0
 
     @property
     def object_lift_m(self) -> float:

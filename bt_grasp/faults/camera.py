@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from bt_grasp.faults.episode import Episode
+from bt_grasp.faults.armed import ArmedFault
 from bt_grasp.interfaces import Camera, CameraIntrinsics, Mount, RGBDFrame
 
 #: changes a frame (or drops it: returns None) and says what it did
@@ -17,9 +17,9 @@ FrameEffect = Callable[[RGBDFrame], tuple[RGBDFrame | None, dict[str, Any]]]
 
 @dataclasses.dataclass
 class _Active:
-    episode: Episode
+    arming: ArmedFault
     effect: FrameEffect | None  # None: no frame at all
-    frames_left: int | None  # None: until the episode is finished by its owner (a timed hang)
+    frames_left: int | None  # None: until the arming is finished by its owner (a timed hang)
 
 
 class FaultyCamera:
@@ -37,19 +37,19 @@ class FaultyCamera:
     def mount(self) -> Mount:
         return self.inner.mount
 
-    def add(self, episode: Episode, effect: FrameEffect | None, frames: int | None) -> None:
+    def add(self, arming: ArmedFault, effect: FrameEffect | None, frames: int | None) -> None:
         """Apply ``effect`` (None: drop the frame) to the next ``frames`` captures (None: until finished)."""
-        self._active.append(_Active(episode, effect, frames))
+        self._active.append(_Active(arming, effect, frames))
 
     def capture(self) -> RGBDFrame | None:
-        self._active = [a for a in self._active if not a.episode.done]
+        self._active = [a for a in self._active if not a.arming.done]
         if not self._active:
             return self.inner.capture()
         dropping = [a for a in self._active if a.effect is None]
         frame: RGBDFrame | None = None
         if dropping:
             for a in dropping:
-                a.episode.fire(effect="no frame")
+                a.arming.fire(effect="no frame")
         else:
             frame = self.inner.capture()
             for a in self._active:
@@ -57,12 +57,12 @@ class FaultyCamera:
                     break
                 assert a.effect is not None
                 frame, details = a.effect(frame)
-                a.episode.fire(**details)
+                a.arming.fire(**details)
         for a in dropping if dropping else self._active:
             if a.frames_left is not None:
                 a.frames_left -= 1
                 if a.frames_left <= 0:
-                    a.episode.finish()
+                    a.arming.finish()
         return frame
 
 

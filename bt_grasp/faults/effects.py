@@ -9,9 +9,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bt_grasp.faults import physics
+from bt_grasp.faults.armed import ArmedFault
 from bt_grasp.faults.calibration import OffsetCalibration, offset_transform
 from bt_grasp.faults.camera import FaultyCamera, depth_burst, depth_hole
-from bt_grasp.faults.episode import Episode
 from bt_grasp.faults.model import FaultKind
 from bt_grasp.faults.physics import PhysicsHook
 from bt_grasp.faults.robot import FaultyRobot
@@ -62,21 +62,21 @@ class Wrapped:
         self.cell.calibration = OffsetCalibration(calibration, total)
 
 
-def _frame_drop(ep: Episode, w: Wrapped, index: int) -> None:
+def _frame_drop(ep: ArmedFault, w: Wrapped, index: int) -> None:
     w.camera.add(ep, None, ep.params.frames)
 
 
-def _depth_burst(ep: Episode, w: Wrapped, index: int) -> None:
+def _depth_burst(ep: ArmedFault, w: Wrapped, index: int) -> None:
     p = ep.params
     w.camera.add(ep, depth_burst(p.sigma_m, p.fraction, w.rngs[index]), p.frames)
 
 
-def _depth_hole(ep: Episode, w: Wrapped, index: int) -> None:
+def _depth_hole(ep: ArmedFault, w: Wrapped, index: int) -> None:
     p = ep.params
     w.camera.add(ep, depth_hole(p.u_px, p.v_px, p.width_px, p.height_px), p.frames)
 
 
-def _calibration_offset(ep: Episode, w: Wrapped, index: int) -> None:
+def _calibration_offset(ep: ArmedFault, w: Wrapped, index: int) -> None:
     p = ep.params
     w.offsets.append(offset_transform((p.dx_mm, p.dy_mm, p.dz_mm), (p.droll_deg, p.dpitch_deg, p.dyaw_deg)))
     w.apply_calibration_offsets()
@@ -84,26 +84,26 @@ def _calibration_offset(ep: Episode, w: Wrapped, index: int) -> None:
     ep.finish()
 
 
-def _ik_fail(ep: Episode, w: Wrapped, index: int) -> None:
+def _ik_fail(ep: ArmedFault, w: Wrapped, index: int) -> None:
     w.kinematics.failing.add(ep, ep.params.calls)
 
 
-def _planner_fail(ep: Episode, w: Wrapped, index: int) -> None:
+def _planner_fail(ep: ArmedFault, w: Wrapped, index: int) -> None:
     w.planner.failing.add(ep, ep.params.calls)
 
 
-def _controller_stall(ep: Episode, w: Wrapped, index: int) -> None:
+def _controller_stall(ep: ArmedFault, w: Wrapped, index: int) -> None:
     w.robot.hold(ep, ep.params.duration_s, gripper_too=False)
 
 
-def _leaf_timeout(ep: Episode, w: Wrapped, index: int) -> None:
+def _leaf_timeout(ep: ArmedFault, w: Wrapped, index: int) -> None:
     until = w.now_ns() + round(ep.params.duration_s * 1e9)
     w.robot.hold(ep, ep.params.duration_s, gripper_too=True)
     w.camera.add(ep, None, None)
     ep.fire(effect="cell not responding", until_ns=until)
 
 
-def _gripper_slip(ep: Episode, w: Wrapped, index: int) -> None:
+def _gripper_slip(ep: ArmedFault, w: Wrapped, index: int) -> None:
     p = ep.params
     details, restore = w.physics.weaken_grip(p.friction, p.force_n)
     ep.fire(effect="grip weakened", duration_s=p.duration_s, **details)
@@ -116,7 +116,7 @@ def _gripper_slip(ep: Episode, w: Wrapped, index: int) -> None:
     w.timers.append(Timer(w.now_ns() + round(p.duration_s * 1e9), recover))
 
 
-def _object_nudge(ep: Episode, w: Wrapped, index: int) -> None:
+def _object_nudge(ep: ArmedFault, w: Wrapped, index: int) -> None:
     p = ep.params
     name = physics.choose_object(w.physics, p.object, w.color)
     details = physics.push_object(w.physics, name, p.dx_m, p.dy_m)
@@ -124,7 +124,7 @@ def _object_nudge(ep: Episode, w: Wrapped, index: int) -> None:
     ep.finish()
 
 
-START: dict[FaultKind, Callable[[Episode, Wrapped, int], None]] = {
+START: dict[FaultKind, Callable[[ArmedFault, Wrapped, int], None]] = {
     FaultKind.FRAME_DROP: _frame_drop,
     FaultKind.DEPTH_BURST: _depth_burst,
     FaultKind.DEPTH_HOLE: _depth_hole,

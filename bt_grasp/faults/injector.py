@@ -17,9 +17,9 @@ from typing import Any, Protocol
 import numpy as np
 
 from bt_grasp.errors import InputError
+from bt_grasp.faults.armed import ArmedFault
 from bt_grasp.faults.camera import FaultyCamera
 from bt_grasp.faults.effects import SERVICE_KINDS, START, Wrapped
-from bt_grasp.faults.episode import Episode
 from bt_grasp.faults.model import FaultKind
 from bt_grasp.faults.plan import Fault, FaultPlan
 from bt_grasp.faults.robot import FaultyRobot
@@ -44,7 +44,7 @@ class _Armed:
     index: int
     entries: int = 0  # entries of the trigger's leaf seen so far
     armed: int = 0  # episodes started (at most fault.count)
-    current: Episode | None = None
+    current: ArmedFault | None = None
 
     def may_arm(self) -> bool:
         return self.armed < self.fault.count and (self.current is None or self.current.done)
@@ -142,7 +142,7 @@ class Injector:
             self._in_after_tick = False
 
     def close(self) -> None:
-        """The episode ended: undo what is still pending (a weakened grip's friction), so a world reused for
+        """The run ended: undo what is still pending (a weakened grip's friction), so a world reused for
         the next episode starts as built."""
         pending, self.wrapped.timers = self.wrapped.timers, []
         for timer in pending:
@@ -173,7 +173,7 @@ class Injector:
                 ep.finish()
 
     @staticmethod
-    def _attempt_over(ep: Episode) -> bool:
+    def _attempt_over(ep: ArmedFault) -> bool:
         """A ``within_attempt`` service fault armed by a leaf whose attempt has ended."""
         if ep.node is None or ep.fault.kind not in SERVICE_KINDS or not ep.params.within_attempt:
             return False
@@ -183,20 +183,20 @@ class Injector:
     def _arm(self, armed: _Armed, node: Any) -> None:
         leaf = None if node is None else node.name
         tick = self._current_tick()
-        episode = Episode(armed.fault, tick, leaf, node, self._record)
-        armed.current = episode
+        arming = ArmedFault(armed.fault, tick, leaf, node, self._record)
+        armed.current = arming
         armed.armed += 1
         log.info("fault %s armed (tick %d%s)", armed.fault.label, tick, f", entering {leaf}" if leaf else "")
-        START[armed.fault.kind](episode, self.wrapped, armed.index)
+        START[armed.fault.kind](arming, self.wrapped, armed.index)
 
-    def _record(self, episode: Episode, details: dict[str, Any]) -> None:
+    def _record(self, arming: ArmedFault, details: dict[str, Any]) -> None:
         self.fired += 1
-        fault = episode.fault
+        fault = arming.fault
         tick = self._current_tick()
         record = {
             **fault.to_dict(),
-            "leaf": episode.leaf,
-            "armed_tick": episode.tick,
+            "leaf": arming.leaf,
+            "armed_tick": arming.tick,
             "firing": self.fired,
             "details": details,
         }

@@ -8,13 +8,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bt_grasp.clock import Clock
-from bt_grasp.faults.episode import Episode
+from bt_grasp.faults.armed import ArmedFault
 from bt_grasp.interfaces import Robot
 
 
 @dataclass
 class _Window:
-    episode: Episode
+    arming: ArmedFault
     until_ns: int
     gripper_too: bool  # a hang also ignores gripper commands; a stall only the arm's
 
@@ -32,15 +32,15 @@ class FaultyRobot:
         self.clock = clock
         self._windows: list[_Window] = []
 
-    def hold(self, episode: Episode, duration_s: float, gripper_too: bool = False) -> None:
-        self._windows.append(_Window(episode, self.clock.now_ns() + round(duration_s * 1e9), gripper_too))
+    def hold(self, arming: ArmedFault, duration_s: float, gripper_too: bool = False) -> None:
+        self._windows.append(_Window(arming, self.clock.now_ns() + round(duration_s * 1e9), gripper_too))
 
     def _blocking(self, gripper: bool) -> _Window | None:
         now = self.clock.now_ns()
         for window in self._windows:
             if now >= window.until_ns:
-                window.episode.finish()
-        self._windows = [w for w in self._windows if not w.episode.done]
+                window.arming.finish()
+        self._windows = [w for w in self._windows if not w.arming.done]
         for window in self._windows:
             if window.gripper_too or not gripper:
                 return window
@@ -69,21 +69,21 @@ class FaultyRobot:
         if window is None:
             self.inner.set_joint_targets(q_rad, qd_rad_s)
             return
-        window.episode.fire(effect="arm targets ignored", until_ns=window.until_ns)
+        window.arming.fire(effect="arm targets ignored", until_ns=window.until_ns)
 
     def open_gripper(self) -> None:
         window = self._blocking(gripper=True)
         if window is None:
             self.inner.open_gripper()
             return
-        window.episode.fire(effect="gripper command ignored", until_ns=window.until_ns)
+        window.arming.fire(effect="gripper command ignored", until_ns=window.until_ns)
 
     def close_gripper(self, force_n: float | None = None) -> None:
         window = self._blocking(gripper=True)
         if window is None:
             self.inner.close_gripper(force_n)
             return
-        window.episode.fire(effect="gripper command ignored", until_ns=window.until_ns)
+        window.arming.fire(effect="gripper command ignored", until_ns=window.until_ns)
 
     def expire(self) -> None:
         """Close windows whose time has passed (called once per tick)."""

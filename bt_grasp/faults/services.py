@@ -6,7 +6,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bt_grasp.behaviours.services import Planner
-from bt_grasp.faults.episode import Episode
+from bt_grasp.faults.armed import ArmedFault
 from bt_grasp.geometry import Mat4
 from bt_grasp.motion.cartesian import CartesianResult
 from bt_grasp.motion.collision import CollisionChecker
@@ -16,24 +16,24 @@ from bt_grasp.motion.planning_scene import PlanningScene
 
 
 class _FailingCalls:
-    """Pending failing calls: each armed episode fails its ``calls`` next calls, oldest episode first."""
+    """Pending failing calls: each armed fault fails its ``calls`` next calls, the oldest first."""
 
     def __init__(self) -> None:
-        self._pending: list[tuple[Episode, list[int]]] = []
+        self._pending: list[tuple[ArmedFault, list[int]]] = []
 
-    def add(self, episode: Episode, calls: int) -> None:
-        self._pending.append((episode, [calls]))
+    def add(self, arming: ArmedFault, calls: int) -> None:
+        self._pending.append((arming, [calls]))
 
-    def take(self, method: str) -> Episode | None:
+    def take(self, method: str) -> ArmedFault | None:
         self._pending = [(e, n) for e, n in self._pending if not e.done]
         if not self._pending:
             return None
-        episode, left = self._pending[0]
+        arming, left = self._pending[0]
         left[0] -= 1
-        episode.fire(effect=f"{method} failed", calls=episode.params.calls)
+        arming.fire(effect=f"{method} failed", calls=arming.params.calls)
         if left[0] <= 0:
-            episode.finish()
-        return episode
+            arming.finish()
+        return arming
 
 
 class FaultyPlanner:
@@ -52,22 +52,22 @@ class FaultyPlanner:
                       ) -> CartesianResult:
         return self.inner.straight_line(q_start, T_base_tcp_goal, scene)
 
-    def _failure(self, episode: Episode) -> PlanResult:
-        status = PlanStatus(episode.params.status)
-        return PlanResult(status=status, message=f"injected fault '{episode.fault.label}'")
+    def _failure(self, arming: ArmedFault) -> PlanResult:
+        status = PlanStatus(arming.params.status)
+        return PlanResult(status=status, message=f"injected fault '{arming.fault.label}'")
 
     def plan_to_pose(self, q_start: NDArray[np.float64], T_base_tcp_goal: Mat4, scene: PlanningScene,
                      options: PlannerOptions | None = None) -> PlanResult:
-        episode = self.failing.take("plan_to_pose")
-        if episode is not None:
-            return self._failure(episode)
+        arming = self.failing.take("plan_to_pose")
+        if arming is not None:
+            return self._failure(arming)
         return self.inner.plan_to_pose(q_start, T_base_tcp_goal, scene, options)
 
     def plan_to_joints(self, q_start: NDArray[np.float64], q_goal: NDArray[np.float64], scene: PlanningScene,
                        options: PlannerOptions | None = None) -> PlanResult:
-        episode = self.failing.take("plan_to_joints")
-        if episode is not None:
-            return self._failure(episode)
+        arming = self.failing.take("plan_to_joints")
+        if arming is not None:
+            return self._failure(arming)
         return self.inner.plan_to_joints(q_start, q_goal, scene, options)
 
 

@@ -10,8 +10,9 @@ from pathlib import Path
 import pytest
 
 from bt_grasp.campaign.out_lock import campaign_lock
-from bt_grasp.campaign.spec import Episode
+from bt_grasp.campaign.spec import PlannedEpisode
 from bt_grasp.campaign.worker import log_path
+from bt_grasp.episode.request import EpisodeRequest
 from bt_grasp.errors import InputError
 
 REPO = Path(__file__).resolve().parents[2]
@@ -69,10 +70,10 @@ def test_item6_a_killed_holder_leaves_no_stale_lock(tmp_path: Path) -> None:
 @pytest.mark.parametrize("hostile", ["../../escaped", "/abs/path", "a/../../b", "..", "x\x00y"])
 def test_item9_kept_log_names_from_campaign_labels_stay_in_the_log_folder(hostile: str, tmp_path: Path) -> None:
     logs = tmp_path / "out" / "logs"
-    episode = Episode(
-        campaign="c", index=0, tree=f"{hostile}/pick.xml", scene=hostile, seed=3, fault_plan=hostile, params=(),
-        tree_file=REPO / "trees/pick.xml", scene_file=REPO / "scenes/tabletop.yaml", calibration_file=None,
-        fault_file=None, inject=(), max_ticks=10, inputs_digest="d",
+    episode = PlannedEpisode(
+        campaign="c", index=0, tree=f"{hostile}/pick.xml", scene=hostile, fault_plan=hostile, params=(),
+        inputs_digest="d",
+        request=EpisodeRequest(tree=REPO / "trees/pick.xml", scene=REPO / "scenes/tabletop.yaml", seed=3, max_ticks=10),
     )
     path = log_path(logs, episode)
     assert path.parent == logs

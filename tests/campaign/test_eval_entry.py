@@ -14,7 +14,7 @@ from typing import Any
 
 import pytest
 
-from bt_grasp.campaign.spec import Episode
+from bt_grasp.campaign.spec import PlannedEpisode
 from bt_grasp.campaign.worker import KeepLogs, Worker
 from bt_grasp.cli.main import main
 
@@ -33,7 +33,7 @@ class InProcessEngine:
 
         self.worker = Worker(stand_in, log_dir, keep)
 
-    def run(self, episodes: Sequence[Episode]) -> Iterator[dict[str, Any]]:
+    def run(self, episodes: Sequence[PlannedEpisode]) -> Iterator[dict[str, Any]]:
         for episode in episodes:
             yield self.worker.run(episode)
 

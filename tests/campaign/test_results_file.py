@@ -12,7 +12,7 @@ import pytest
 
 from bt_grasp.campaign.results import read_rows
 from bt_grasp.campaign.runner import CampaignIncomplete, EpisodeError, run_campaign
-from bt_grasp.campaign.spec import Campaign, Episode, load_campaign
+from bt_grasp.campaign.spec import Campaign, PlannedEpisode, load_campaign
 from bt_grasp.errors import InputError
 
 REPO = Path(__file__).resolve().parents[2]
@@ -27,7 +27,7 @@ def _campaign(tmp_path: Path, seeds: int = 5) -> Campaign:
     return load_campaign(path)
 
 
-def _row(e: Episode) -> dict[str, Any]:
+def _row(e: PlannedEpisode) -> dict[str, Any]:
     return {"episode": e.key, "tree": e.tree, "seed": e.seed, "success": e.seed % 2 == 0}
 
 
@@ -38,7 +38,7 @@ class FakeEngine:
         self.crash_after, self.repeat, self.fail_seed = crash_after, repeat, fail_seed
         self.ran: list[int] = []
 
-    def run(self, episodes: Sequence[Episode]) -> Iterator[dict[str, Any] | EpisodeError]:
+    def run(self, episodes: Sequence[PlannedEpisode]) -> Iterator[dict[str, Any] | EpisodeError]:
         for i, e in enumerate(episodes):
             if self.crash_after is not None and i == self.crash_after:
                 raise KeyboardInterrupt  # Ctrl-C half-way

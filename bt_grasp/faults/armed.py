@@ -10,14 +10,14 @@ from bt_grasp.faults.plan import Fault
 
 
 @dataclass
-class Episode:
-    """A fault armed by its trigger. ``fire`` records the first effect; ``finish`` ends the episode."""
+class ArmedFault:
+    """A fault armed by its trigger. ``fire`` records the first effect; ``finish`` ends it."""
 
     fault: Fault
     tick: int  # the tick during which (or after which) it was armed
     leaf: str | None  # the leaf whose entry armed it (None for a tick trigger)
     node: Any  # that leaf node (None for a tick trigger)
-    on_fire: Callable[[Episode, dict[str, Any]], None]
+    on_fire: Callable[[ArmedFault, dict[str, Any]], None]
     fired: bool = False
     done: bool = False
     details: dict[str, Any] = field(default_factory=dict)
@@ -27,7 +27,7 @@ class Episode:
         return self.fault.params
 
     def fire(self, **details: Any) -> None:
-        """The fault acted on the cell for the first time in this episode: record it (once)."""
+        """The fault acted on the cell for the first time in this arming: record it (once)."""
         if not self.fired:
             self.fired = True
             self.details = details
