@@ -28,6 +28,7 @@ from bt_grasp.scene.run_goal import goal_for_run
 if TYPE_CHECKING:
     from bt_grasp.behaviours.cell import Cell
     from bt_grasp.control.controller import Controller, FaultFirer
+    from bt_grasp.episode.cell_assembly import CellDevices
     from bt_grasp.episode.instruments import TimedPlanner
     from bt_grasp.faults.injector import Injector
     from bt_grasp.faults.physics import PhysicsHook
@@ -147,8 +148,11 @@ class Episode:
             self.tree.root_blackboard.set(key, value)
         if self.inputs.calibration_path is not None:
             self.tree.root_blackboard.set("calibration_file", str(self.inputs.calibration_path))
+        self.devices = self._devices()
+        #: the run's cell and planning statistics: assembled when the run starts (``cell_assembly``)
+        self.cell: Cell
         self.planning: TimedPlanner
-        self.cell = self._build_cell()
+        self._injector: Injector | None = None
         self._ran = False
         self.live: LiveServer | None = None
         #: called with the live view's URL once its server listens (the CLI prints how to connect)
@@ -160,10 +164,10 @@ class Episode:
         for callback in self.on_failure:
             callback(event)
 
-    def _build_cell(self) -> Cell:
+    def _devices(self) -> CellDevices:
+        """The simulated cell's devices (the calibration board mounted on the gripper when a leaf needs it)."""
         from bt_grasp.behaviours.calibration_leaves import needs_calibration_board
-        from bt_grasp.behaviours.cell import make_cell
-        from bt_grasp.episode.instruments import TimedPlanner
+        from bt_grasp.episode.cell_assembly import CellDevices
 
         world = self.world
         board = None
@@ -171,11 +175,7 @@ class Episode:
             from bt_grasp.sim.charuco import mount_calibration_board
 
             board = mount_calibration_board(world)
-        cell = make_cell(world.robot, world.camera, world.clock, self.scene, self.request.seed,
-                         calibration=self.inputs.calibration, board=board)
-        self.planning = TimedPlanner(cell.planner)  # counts the planning the run does (reported only)
-        cell.planner = self.planning
-        return cell
+        return CellDevices(world.robot, world.camera, world.clock, board)
 
     def run(self, on_tick: Sequence[TickCallback] = (), controller: Controller | None = None) -> EpisodeResult:
         """Tick the tree to the end (or ``max_ticks``), judge the goal, write the result; returns it.
@@ -189,13 +189,15 @@ class Episode:
         if self._ran:
             raise RuntimeError("an Episode runs once; prepare a new one (a WarmWorlds source reuses the world)")
         self._ran = True
-        request, world, cell = self.request, self.world, self.cell
+        request, world = self.request, self.world
         judge = Judge(world)
         recorder = self._open_recorder()
         observers: list[TickCallback] = []
         extras = None
         injector: Injector | None = None
         try:
+            cell = self._assemble(recorder, controller)
+            injector = self._injector
             if recorder is not None:
                 from bt_grasp.episode.observers import LogExtras
 
@@ -206,11 +208,6 @@ class Episode:
                 from bt_grasp.episode.observers import RealtimePacer
 
                 observers.append(RealtimePacer(world, request.realtime))
-            if self.inputs.fault_plan is not None or controller is not None:
-                from bt_grasp.faults.injector import install_faults
-                from bt_grasp.faults.plan import FaultPlan
-
-                injector = install_faults(self.inputs.fault_plan or FaultPlan(()), self, recorder)
             for node in self.tree.nodes():
                 node.setup(cell=cell)
 
@@ -300,6 +297,22 @@ class Episode:
                 self.live.close()
         return result
 
+    def _assemble(self, recorder: RunRecorder | None, controller: Controller | None) -> Cell:
+        """The run's cell (``bt_grasp.episode.cell_assembly``): faults installed when a plan is given or an
+        operator may fire them (with no plan nothing changes until one is fired by hand)."""
+        from bt_grasp.episode.cell_assembly import FaultSetting, assemble_cell
+
+        faults = None
+        if self.inputs.fault_plan is not None or controller is not None:
+            from bt_grasp.faults.plan import FaultPlan
+
+            faults = FaultSetting(self.inputs.fault_plan or FaultPlan(()), self.tree, self.physics,
+                                  self.fault_seed_sequence)
+        assembled = assemble_cell(self.devices, self.scene, self.request.seed, self.inputs.calibration,
+                                  recorder=recorder, now_ns=self.world.now_ns, faults=faults)
+        self.cell, self.planning, self._injector = assembled.cell, assembled.planning, assembled.injector
+        return assembled.cell
+
     @property
     def physics(self) -> PhysicsHook:
         """The simulator's hook for physical faults (pushes, a weakened grip)."""
@@ -315,7 +328,6 @@ class Episode:
         request = self.request
         if request.log is None and request.live_port is None:
             return None
-        from bt_grasp.episode.media import RecorderSink
         from bt_grasp.episode.metadata import run_attachments, run_metadata
         from bt_grasp.foxglove.tree_layout import LAYOUT_ATTACHMENT, layout_bytes
         from bt_grasp.recording import topics
@@ -354,7 +366,6 @@ class Episode:
         recorder.write_scene(topics.ROBOT_MODEL, 0, recorder.robot_model_update())
         recorder.write_scene(topics.SCENE, 0, fixture_update(self.scene, recorder.t(0)))
         recorder.write_tree_structure(self.world.now_ns(), tree_structure(self.tree.root))
-        self.cell.media = RecorderSink(recorder, self.world.now_ns)
         return recorder
 
 

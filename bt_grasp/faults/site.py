@@ -42,7 +42,7 @@ class FaultTree(Protocol):
 
 
 class FaultSite(Protocol):
-    """What ``install_faults`` needs of a prepared episode (``bt_grasp.episode.Episode`` provides it)."""
+    """What ``install_faults`` needs of a run (``bt_grasp.episode.cell_assembly`` provides it)."""
 
     @property
     def cell(self) -> FaultableCell: ...

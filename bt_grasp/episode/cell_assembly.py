@@ -1,0 +1,99 @@
+"""The one place a run's cell is assembled: its devices, the services its leaves share, and every wrapper.
+
+A cell (``bt_grasp.behaviours.cell.Cell``) is what robot leaves receive in ``setup(cell=...)``. Whatever the
+devices are (a simulated world's robot and camera, or a real cell's), it is put together here, in this order:
+
+1. the services on the devices (:func:`~bt_grasp.behaviours.cell.make_cell`): the planner seeded from the
+   run's seeds, perception settings from the scene, the calibration if one was loaded, the board if mounted;
+2. the planning instrument (:class:`~bt_grasp.episode.instruments.TimedPlanner`: counts the run's plans for
+   its result; changes nothing);
+3. the log's media sink (pictures the leaves hand to the log), when the run is recorded or watched;
+4. the fault wrappers (camera, robot, planner, kinematics; ``bt_grasp.faults``), when a fault plan is given
+   or an operator may fire faults (an interactive run).
+
+So what ``cell.planner`` is at run time is read here: ``FaultyPlanner(TimedPlanner(MotionPlanner))`` with
+faults, ``TimedPlanner(MotionPlanner)`` without.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from bt_grasp.behaviours.cell import Cell, make_cell
+from bt_grasp.clock import Clock
+from bt_grasp.episode.instruments import TimedPlanner
+from bt_grasp.interfaces import Camera, Robot
+
+if TYPE_CHECKING:
+    from bt_grasp.behaviours.services import CameraCalibration
+    from bt_grasp.faults.injector import Injector
+    from bt_grasp.faults.physics import PhysicsHook
+    from bt_grasp.faults.plan import FaultPlan
+    from bt_grasp.perception.calibration import BoardMount
+    from bt_grasp.recording.writer import RunRecorder
+    from bt_grasp.scene.format import Scene
+    from bt_grasp.tree.loader import LoadedTree
+
+
+@dataclass(frozen=True)
+class CellDevices:
+    """The devices of a run's cell and the clock they keep time by (a simulated world's, or a real cell's)."""
+
+    robot: Robot
+    camera: Camera
+    clock: Clock
+    board: BoardMount | None = None  # the calibration board mounted in the cell (None: none)
+
+
+@dataclass(frozen=True)
+class FaultSetting:
+    """What the fault wrappers need besides the cell: the plan, the tree whose leaf entries trigger faults,
+    the physics hook of the simulator and the run's fault random stream."""
+
+    plan: FaultPlan
+    tree: LoadedTree
+    physics: PhysicsHook
+    seed_sequence: np.random.SeedSequence
+
+
+@dataclass(frozen=True)
+class AssembledCell:
+    cell: Cell
+    planning: TimedPlanner  # the run's planning statistics (its result reports them)
+    injector: Injector | None  # the fault injector, when faults were installed
+
+
+@dataclass(frozen=True)
+class _Site:
+    """``bt_grasp.faults.site.FaultSite`` for :func:`~bt_grasp.faults.injector.install_faults`."""
+
+    cell: Cell
+    tree: LoadedTree
+    physics: PhysicsHook
+    fault_seed_sequence: np.random.SeedSequence
+
+
+def assemble_cell(devices: CellDevices, scene: Scene, seed: int, calibration: CameraCalibration | None, *,
+                  recorder: RunRecorder | None = None, now_ns: Callable[[], int] | None = None,
+                  faults: FaultSetting | None = None) -> AssembledCell:
+    """The run's cell, assembled in the order the module's docstring gives. ``recorder``: the run's log or live
+    view (its media sink stamps pictures with ``now_ns``); ``faults``: install the fault wrappers."""
+    cell = make_cell(devices.robot, devices.camera, devices.clock, scene, seed, calibration=calibration,
+                     board=devices.board)
+    planning = TimedPlanner(cell.planner)
+    cell.planner = planning
+    if recorder is not None:
+        from bt_grasp.episode.media import RecorderSink
+
+        cell.media = RecorderSink(recorder, now_ns or devices.clock.now_ns)
+    injector = None
+    if faults is not None:
+        from bt_grasp.faults.injector import install_faults
+
+        site = _Site(cell, faults.tree, faults.physics, faults.seed_sequence)
+        injector = install_faults(faults.plan, site, recorder)
+    return AssembledCell(cell, planning, injector)
