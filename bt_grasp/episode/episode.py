@@ -40,6 +40,7 @@ if TYPE_CHECKING:
     from bt_grasp.sim.judge import Verdict
     from bt_grasp.sim.world import World
     from bt_grasp.tree.loader import LoadedTree
+    from bt_grasp.tree.records import NodeRecord
     from bt_grasp.tree.runner import FailureEvent, TickRecorder
 
 log = logging.getLogger(__name__)
@@ -448,7 +449,7 @@ class _Both:
     def __init__(self, first: TickRecorder, second: TickRecorder) -> None:
         self.first, self.second = first, second
 
-    def write_tick(self, tick: int, stamp_ns: int, nodes: list[dict[str, Any]], blackboard: Mapping[str, Any],
+    def write_tick(self, tick: int, stamp_ns: int, nodes: Sequence[NodeRecord], blackboard: Mapping[str, Any],
                    robot: Mapping[str, Any] | None = None) -> None:
         self.first.write_tick(tick, stamp_ns, nodes, blackboard, robot)
         self.second.write_tick(tick, stamp_ns, nodes, blackboard, robot)

@@ -7,11 +7,11 @@
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
-from typing import Any
 
 import py_trees
 
 from bt_grasp.tree.node import BtNode
+from bt_grasp.tree.records import NodeSnapshot, TreeNode
 
 
 def _walk(root: py_trees.behaviour.Behaviour) -> list[BtNode]:
@@ -25,10 +25,10 @@ def bt_status_name(node: BtNode) -> str:
     return node.bt_state.value
 
 
-def node_records(root: py_trees.behaviour.Behaviour) -> list[dict[str, Any]]:
+def node_records(root: py_trees.behaviour.Behaviour) -> list[NodeSnapshot]:
     """One dict per node, in uid order: uid, type, name, path, kind, status (py_trees name),
     bt_status (BT.CPP name, including SKIPPED), feedback_message, failure_reason."""
-    records = []
+    records: list[NodeSnapshot] = []
     for node in sorted(_walk(root), key=lambda n: n.bt_uid):
         records.append(
             {
@@ -46,10 +46,10 @@ def node_records(root: py_trees.behaviour.Behaviour) -> list[dict[str, Any]]:
     return records
 
 
-def tree_structure(root: py_trees.behaviour.Behaviour) -> dict[str, Any]:
+def tree_structure(root: py_trees.behaviour.Behaviour) -> TreeNode:
     """The nested structure: uid, type, name, path, kind, attributes (as written), children."""
     assert isinstance(root, BtNode), "tree_structure needs a tree built by bt_grasp.tree"
-    entry: dict[str, Any] = {
+    entry: TreeNode = {
         "uid": root.bt_uid,
         "type": root.bt_type,
         "name": root.name,

@@ -24,6 +24,7 @@ from bt_grasp.interfaces import Stepper
 from bt_grasp.tree.introspect import bt_status_name
 from bt_grasp.tree.loader import LoadedTree
 from bt_grasp.tree.node import BtNode, BtStatus
+from bt_grasp.tree.records import NodeRecord
 from bt_grasp.tree.registry import NodeKind
 
 log = logging.getLogger(__name__)
@@ -34,7 +35,7 @@ class TickRecorder(Protocol):
         self,
         tick: int,
         stamp_ns: int,
-        nodes: list[dict[str, Any]],
+        nodes: Sequence[NodeRecord],
         blackboard: Mapping[str, Any],
         robot: Mapping[str, Any] | None = None,
     ) -> None: ...
@@ -188,12 +189,12 @@ class TreeRunner:
         )
 
 
-def tick_records(nodes: Sequence[BtNode], watch: _TickWatch) -> list[dict[str, Any]]:
+def tick_records(nodes: Sequence[BtNode], watch: _TickWatch) -> list[NodeRecord]:
     """One dict per node (``nodes`` in uid order) as the recorders take them: uid, type, name, path, kind,
     status (what the node returned this tick if it was ticked: a Sequence resets a failed child to IDLE
     afterwards; else its BT.CPP status), failure_reason, ticked, feedback."""
     ticked_now, returned = watch.ticked, watch.returned
-    records = []
+    records: list[NodeRecord] = []
     for node in nodes:
         uid = node.bt_uid
         ticked = uid in ticked_now
