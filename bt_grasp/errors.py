@@ -7,6 +7,7 @@ a key) and the problem, so the command line can print one sentence and exit with
 
 from __future__ import annotations
 
+import difflib
 from pathlib import Path
 
 
@@ -67,8 +68,6 @@ class SimulationError(BtGraspError):
 
 def closest_names(name: str, candidates: list[str] | tuple[str, ...], n: int = 1) -> list[str]:
     """The known names closest to ``name``, best first: a case-insensitive match, else difflib's (cutoff 0.6)."""
-    import difflib
-
     lowered = {c.lower(): c for c in candidates}
     if name.lower() in lowered:
         return [lowered[name.lower()]]

@@ -53,6 +53,7 @@ from bt_grasp.control.state import (
     value_text,
 )
 from bt_grasp.errors import InputError
+from bt_grasp.tree.introspect import bt_status_name
 
 if TYPE_CHECKING:
     from bt_grasp.tree.loader import LoadedTree
@@ -420,8 +421,6 @@ def check_breakpoints(tree: LoadedTree, breakpoints: Sequence[Breakpoint]) -> No
 
 
 def _views(node: Any, depth: int, out: list[NodeView]) -> None:
-    from bt_grasp.tree.introspect import bt_status_name
-
     out.append(NodeView(node.bt_path, node.name, node.bt_type, bt_status_name(node), depth))
     for child in getattr(node, "children", ()):
         _views(child, depth + 1, out)

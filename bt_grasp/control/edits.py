@@ -11,6 +11,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 from bt_grasp.control.commands import BlackboardScalar, CommandError
+from bt_grasp.files.bounded_yaml import scalar_or_text
 from bt_grasp.tree.blackboard import EMPTY, BlackboardTypeError
 from bt_grasp.tree.exceptions import PortValueError, TreeRuntimeError
 from bt_grasp.tree.ports import convert_text
@@ -71,11 +72,7 @@ def set_entry(tree: LoadedTree, key: str, value: BlackboardScalar) -> Any:
         if not typed and spec.type is not object:
             stored, typed = fitted, True
     if not typed and isinstance(value, str) and not ports:
-        from bt_grasp.files.bounded_yaml import (
-            scalar_or_text,  # as ``--set`` reads a value: a YAML scalar, else the text
-        )
-
-        stored = scalar_or_text(value)
+        stored = scalar_or_text(value)  # as ``--set`` reads a value: a YAML scalar, else the text
     entry = blackboard.entry(key)
     before = (entry.value, entry.declared, entry.sequence_id) if entry is not None else None
     try:

@@ -20,6 +20,7 @@ is followed as usual.
 from __future__ import annotations
 
 import os
+import shutil
 import stat
 import tempfile
 from collections.abc import Callable, Sequence
@@ -139,8 +140,6 @@ def write_output_file(path: str | Path, data: bytes | str, flag: str, *, example
 
 def copy_output_file(source: str | Path, path: str | Path, flag: str, *, example: str = "out.txt") -> Path:
     """:func:`write_output_file` with the bytes of the file ``source`` (streamed, not read whole)."""
-    import shutil
-
     def copy(f: BinaryIO) -> None:
         with open(source, "rb") as src:
             shutil.copyfileobj(src, f, 1 << 20)

@@ -38,7 +38,7 @@ from ompl import util as ou
 
 from bt_grasp.geometry import Mat4
 from bt_grasp.motion.budget import WorkBudget
-from bt_grasp.motion.cartesian import CartesianResult
+from bt_grasp.motion.cartesian import CartesianResult, cartesian_path
 from bt_grasp.motion.collision import FINE_RESOLUTION_RAD, CollisionChecker, collision_checker
 from bt_grasp.motion.kinematics import default_kinematics, is_rigid_transform
 from bt_grasp.motion.planning_scene import PlanningScene
@@ -195,8 +195,6 @@ class MotionPlanner:
     def straight_line(self, q_start: NDArray[np.float64], T_base_tcp_goal: Mat4, scene: PlanningScene
                       ) -> CartesianResult:
         """A straight tool line from ``fk(q_start)`` (``bt_grasp.motion.cartesian.cartesian_path``)."""
-        from bt_grasp.motion.cartesian import cartesian_path
-
         return cartesian_path(q_start, T_base_tcp_goal, scene, kin=self.kin)
 
     # --- pose goals ---------------------------------------------------------------------------------

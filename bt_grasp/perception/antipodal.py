@@ -53,6 +53,7 @@ from numpy.typing import NDArray
 from bt_grasp.geometry import Mat4, make_T
 from bt_grasp.perception import results
 from bt_grasp.perception.config import GraspSettings
+from bt_grasp.perception.grasps import synthesize_grasps
 from bt_grasp.perception.object_cloud import ObjectCloud, box_surface, detection_cloud, fitted_surface, voxel_indices
 from bt_grasp.robot_description import MAX_OPENING_M, TCP_TO_FINGERTIP_M
 
@@ -474,8 +475,6 @@ def rank_grasps(
     like the objects seen. ``viewpoint_base_m``: where the camera that saw the target was (orients the visible
     points' normals: :func:`bt_grasp.perception.object_cloud.estimate_normals`).
     """
-    from bt_grasp.perception.grasps import synthesize_grasps
-
     gs = grasp_settings or GraspSettings()
     s = settings or AntipodalSettings(pregrasp_offset_m=gs.pregrasp_offset_m)
     top = synthesize_grasps(target, neighbours, gs)

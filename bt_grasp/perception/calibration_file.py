@@ -30,7 +30,8 @@ from pydantic import Field, model_validator
 
 from bt_grasp.errors import ConfigError
 from bt_grasp.files.config import StrictModel, read_yaml, validate
-from bt_grasp.geometry import Mat4, T_from_pos_quat_wxyz, quat_wxyz
+from bt_grasp.files.output_files import write_output_file
+from bt_grasp.geometry import Mat4, T_from_pos_quat_wxyz, T_from_xyz_rpy, quat_wxyz
 from bt_grasp.interfaces import CameraIntrinsics, Mount
 from bt_grasp.perception.charuco import BoardSpec
 from bt_grasp.scene.format import Scene
@@ -160,8 +161,6 @@ def make_calibration(
 
 def save_calibration(calibration: CalibrationFile, path: str | Path) -> Path:
     """Write the file whole (parents created; ``bt_grasp.files.output_files``); returns its path."""
-    from bt_grasp.files.output_files import write_output_file
-
     data = calibration.model_dump(mode="json")
     header = (f"# bt_grasp hand-eye calibration ({calibration.mount}): maps camera_color_optical_frame "
               f"points into {calibration.parent_frame}\n")
@@ -201,8 +200,6 @@ def mismatch_with_mount(calibration: CalibrationFile, scene: Scene) -> str | Non
         axis = (T_base_world @ [*camera.eye_to_hand.look_at_m, 1.0])[:3] - position
         where = "base frame"
     else:
-        from bt_grasp.geometry import T_from_xyz_rpy
-
         T = T_from_xyz_rpy(np.array(camera.eye_in_hand.xyz_m), np.deg2rad(camera.eye_in_hand.rpy_deg))
         position, axis, where = T[:3, 3], T[:3, 2], f"{camera.eye_in_hand.parent_link} frame"
     T_cal = calibration.T_parent_camera

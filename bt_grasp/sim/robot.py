@@ -18,6 +18,7 @@ from bt_grasp.robot_description import (
     robot_urdf_path,
 )
 from bt_grasp.scene.format import RobotMount
+from bt_grasp.sim.poses import to_pose
 
 ARM_STIFFNESS = 1e4
 ARM_DAMPING = 1e3
@@ -30,8 +31,6 @@ class SimRobot:
     """Implements :class:`bt_grasp.interfaces.Robot` for the SAPIEN articulation."""
 
     def __init__(self, scene: sapien.Scene, mount: RobotMount, T_world_base: NDArray[np.float64]) -> None:
-        from bt_grasp.sim.poses import to_pose
-
         loader = scene.create_urdf_loader()
         loader.fix_root_link = True
         for finger in ("left_finger", "right_finger"):

@@ -10,7 +10,7 @@ import sapien
 
 from bt_grasp.clock import ManualClock
 from bt_grasp.interfaces import Mount
-from bt_grasp.scene.format import Scene, load_scene
+from bt_grasp.scene.format import COLOR_NAMES, Scene, load_scene
 from bt_grasp.scene.layout import draw_layout
 from bt_grasp.sim.camera import SimCamera
 from bt_grasp.sim.conveyor import belts_for, on_supports
@@ -91,8 +91,6 @@ class World:
         half = [table.size_m[0] / 2, table.size_m[1] / 2, table.size_m[2] / 2]
         material = sapien.physx.PhysxMaterial(table.friction, table.friction, 0.0)
         rgb = table.color if not isinstance(table.color, str) else None
-        from bt_grasp.scene.format import COLOR_NAMES
-
         color = [*(rgb or COLOR_NAMES[str(table.color)]), 1.0]
         builder.add_box_collision(half_size=half, material=material)
         builder.add_box_visual(half_size=half, material=sapien.render.RenderMaterial(base_color=color, roughness=0.9))
