@@ -1,8 +1,7 @@
 """The house's rules, executable: floors point one way, and a folder rule for each quarantine.
 
-``docs/architecture.md`` explains them; the practices behind them are in the project's style guide
-(the shape of the house: a package per concern, dependencies one way, ground truth quarantined). Every rule
-here is a folder rule: no file-name exceptions.
+``docs/architecture.md`` explains them (a package per concern, dependencies one way, ground truth
+quarantined). Every rule here is a folder rule: no file-name exceptions.
 
 - **Floors**: every package (and root module) sits on a floor; it imports only from lower floors, never from
   its own floor's other packages nor upwards. So there is no circle between packages, and ``cli/`` is the top.

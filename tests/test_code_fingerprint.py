@@ -31,7 +31,7 @@ def _edit_same_size(path: Path) -> None:
 
 
 @pytest.mark.parametrize("name", ["sim/shaders/gbuffer.frag", "assets/gripper.urdf",
-                                  "foxglove/layouts/bt_grasp.layout.json", "motion/data/bench_plan_labels.json",
+                                  "foxglove/layouts/bt_grasp.layout.json", "bench/data/bench_plan_labels.json",
                                   "geometry.py"])
 def test_changing_a_files_content_changes_the_fingerprint(package: Path, name: str) -> None:
     before = code_fingerprint(package)

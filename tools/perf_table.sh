@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Every row of docs/performance.md's table, measured now on this machine, printed as one table (issue 27).
+# Every row of docs/performance.md's table, measured now on this machine, printed as one table.
 #
 #     tools/perf_table.sh            # about 5-6 minutes on the idle 2-core machine
 #     PY=/path/to/python tools/perf_table.sh

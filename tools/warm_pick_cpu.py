@@ -20,7 +20,7 @@ the wall clock (the floor stays wall time).
 
 Both run with one OpenBLAS thread, as ``bt-grasp`` does. To compare with an older commit, unpack it
 (``git archive OLD | tar -x -C /tmp/old``) and alternate ``PYTHONPATH=/tmp/old python tools/warm_pick_cpu.py ...``
-with this tree's runs; docs/performance.md ("Third pass") has figures taken that way.
+with this tree's runs; the CHANGELOG's "Performance history" has figures taken that way.
 """
 
 from __future__ import annotations

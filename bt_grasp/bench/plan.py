@@ -102,7 +102,7 @@ class BenchReport:
             "traj_duration_s_median": pct([o.traj_duration_s for o in ok], 50),
             "direct_fraction": round(sum(o.direct for o in ok) / len(ok), 4) if ok else 0.0,
             "statuses": dict(sorted(statuses.items())),
-            # over the problems labelled feasible once by a larger-budget search (motion/data/bench_plan_labels.json)
+            # over the problems labelled feasible once by a larger-budget search (bench/data/bench_plan_labels.json)
             "labelled_problems": sum(1 for o in self.outcomes if o.index in labels),
             "feasible_problems": len(feasible),
             "success_over_feasible": round(sum(o.status is PlanStatus.OK for o in feasible) / len(feasible), 4)
@@ -115,7 +115,7 @@ def feasibility_labels(seed: int) -> dict[int, bool]:
     import json
     from importlib.resources import files
 
-    data = json.loads(files("bt_grasp.motion").joinpath("data/bench_plan_labels.json").read_text())
+    data = json.loads(files("bt_grasp.bench").joinpath("data/bench_plan_labels.json").read_text())
     if int(data["seed"]) != seed:
         return {}
     not_proven = set(data["not_proven"])

@@ -4,8 +4,8 @@ numpy and scipy run their linear algebra through OpenBLAS, which starts a thread
 keeps its threads spin-waiting for the next one. A pick makes thousands of tiny calls (IK solves, 3x3
 products) and a few medium ones (perception's RANSAC plane: (N, 3) @ (3, 32) products over ~30k points): on
 two cores the spinning thread takes a core from the physics, the renderer and the other worker, and the
-calls themselves are too small to gain from a second thread. Measured on a warm pick (docs/performance.md,
-"Third pass"): perception's call 0.25 -> 0.11 s of process CPU, the pick's process CPU -20 %, the same tick
+calls themselves are too small to gain from a second thread. Measured on a warm pick (CHANGELOG,
+"Performance history"): perception's call 0.25 -> 0.11 s of process CPU, the pick's process CPU -20 %, the same tick
 stream (fingerprints) with one thread or two.
 
 The command line applies it first thing (``bt_grasp.cli.main``), campaign workers get it in their environment
