@@ -49,6 +49,8 @@ def twin(
                                     help="Render the camera continuously at this rate (0: on request)."),
     control_port: int = typer.Option(30100, "--control-port", min=1024, max=65535,
                                      help="The twin's own port (faults, judge, camera)."),
+    realtime: bool = typer.Option(True, "--realtime/--no-realtime", help="Ask for real-time scheduling of the "
+                                  "controller's cycle, as a robot controller has (refused without the permission)."),
 ) -> int:
     """Serve a scene's simulated cell to the unmodified ur_rtde library and a Robotiq client, in real time."""
     import logging
@@ -69,10 +71,20 @@ def twin(
     sys.setswitchinterval(0.001)  # the controller's thread gets the interpreter within 1 ms of wanting it
     from bt_grasp.sim.twin.config import MODELS, TwinConfig
     from bt_grasp.sim.twin.gripper_models import GripperName
-    from bt_grasp.sim.twin.twin import Twin
+    from bt_grasp.sim.twin.twin import Twin, check_ports_free
+
+    def taken(exc: OSError) -> InputError:
+        return InputError("--host", f"cannot serve on {exc.strerror or exc} (another twin or a robot driver holds "
+                          "the port; give another loopback address such as 127.0.0.2)")
+
+    try:
+        check_ports_free(host, control_port)
+    except OSError as exc:
+        raise taken(exc) from None
 
     config = TwinConfig(host=host, model=MODELS[model.value], gripper=GripperName(gripper.value),
-                        unlock_delay_s=unlock_delay, control_port=control_port)
+                        unlock_delay_s=unlock_delay, control_port=control_port,
+                        realtime_priority=10 if realtime else None)
     if write_cell is not None:
         from bt_grasp.sim.twin.cell_writer import write_cell as write
 
@@ -82,8 +94,8 @@ def twin(
     try:
         the_twin.start()
     except OSError as exc:
-        raise InputError("--host", f"cannot serve on {host}: {exc.strerror or exc} (another twin or a robot driver "
-                         "holds the port; give another loopback address such as 127.0.0.2)") from None
+        the_twin.stop()
+        raise taken(exc) from None
     stop = threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stop.set())

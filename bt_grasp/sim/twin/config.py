@@ -49,6 +49,8 @@ class TwinConfig:
     #: a message begun must be finished within this, on every port
     message_timeout_s: float = 5.0
     control_port: int = CONTROL_PORT
+    #: ask for real-time scheduling of the controller's cycle (SCHED_FIFO priority; None: do not ask)
+    realtime_priority: int | None = 10
 
     @property
     def period_s(self) -> float:

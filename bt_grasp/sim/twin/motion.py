@@ -279,19 +279,22 @@ def axis_angle_matrix(axis: Vec, angle: float) -> NDArray[np.float64]:
 
 def rotation_vector(R: NDArray[np.float64]) -> Vec:
     """The rotation vector (axis * angle, angle in [0, pi]) of a rotation matrix, as UR poses carry it."""
-    cos = max(-1.0, min(1.0, (float(np.trace(R)) - 1.0) / 2.0))
-    angle = math.acos(cos)
-    if angle < 1e-9:
+    w = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    sin = 0.5 * float(np.linalg.norm(w))
+    angle = math.atan2(sin, (float(np.trace(R)) - 1.0) / 2.0)  # exact near 0 and near pi, unlike acos
+    if angle < 1e-12:
         return np.zeros(3)
-    if angle > math.pi - 1e-6:  # near pi the antisymmetric part vanishes: use the diagonal
-        diag = np.clip((np.diag(R) + 1.0) / 2.0, 0.0, None)
-        axis = np.sqrt(diag)
-        i = int(np.argmax(axis))
-        for j in range(3):  # signs from the off-diagonal terms relative to the largest component
-            if j != i:
-                axis[j] = math.copysign(axis[j], R[i, j] + R[j, i])
-        return axis / np.linalg.norm(axis) * angle
-    axis = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]]) / (2 * math.sin(angle))
+    if sin > 1e-6:
+        return w / (2 * sin) * angle
+    # near pi the antisymmetric part vanishes: the axis from the diagonal, signs from the symmetric part
+    axis = np.sqrt(np.clip((np.diag(R) + 1.0) / 2.0, 0.0, None))
+    i = int(np.argmax(axis))
+    for j in range(3):
+        if j != i:
+            axis[j] = math.copysign(axis[j], R[i, j] + R[j, i])
+    axis /= np.linalg.norm(axis)
+    if float(axis @ w) < 0:  # just short of pi the antisymmetric part still tells the axis's sense
+        axis = -axis
     return axis * angle
 
 

@@ -111,14 +111,18 @@ class Protocol:
 class IoLoop:
     """Serves a set of :class:`Protocol` on one host address from one daemon thread."""
 
-    def __init__(self, host: str, protocols: list[Protocol]) -> None:
+    def __init__(self, host: str, protocols: list[Protocol], realtime_priority: int | None = None) -> None:
+        """``realtime_priority``: ask for real-time scheduling of the loop's thread (inputs then reach the
+        controller within its cycle on a busy machine; see :mod:`bt_grasp.sim.twin.realtime`)."""
         self.host = host
+        self.realtime_priority = realtime_priority
         self.protocols = protocols
         self._selector = selectors.DefaultSelector()
         self._listeners: dict[socket.socket, Protocol] = {}
         self._links: dict[socket.socket, Link] = {}
         self._lock = threading.Lock()
         self._refuse_until = 0.0
+        self._spared: tuple[str, ...] = ()
         self._stop = threading.Event()
         self._wake_r, self._wake_w = socket.socketpair()
         self._wake_r.setblocking(False)
@@ -156,6 +160,11 @@ class IoLoop:
             link.close()
             self._forget(link)
         self.close_listeners()
+        with contextlib.suppress(KeyError, ValueError):
+            self._selector.unregister(self._wake_r)
+        self._selector.close()
+        self._wake_r.close()
+        self._wake_w.close()
 
     def close_listeners(self) -> None:
         for sock in list(self._listeners):
@@ -168,11 +177,12 @@ class IoLoop:
         with self._lock:
             return [lk for lk in self._links.values() if port_name is None or lk.port_name == port_name]
 
-    def drop_all(self, refuse_for_s: float) -> int:
+    def drop_all(self, refuse_for_s: float, spare: tuple[str, ...] = ()) -> int:
         """The "dropped connection" fault: close every connection, and close new ones at once for ``refuse_for_s``
-        (as if the cable were out). Returns how many connections were closed."""
+        (as if the cable were out), except on the ports named in ``spare``. Returns how many were closed."""
+        self._spared = spare
         self._refuse_until = time.monotonic() + max(0.0, refuse_for_s)
-        links = self.links()
+        links = [link for link in self.links() if link.port_name not in spare]
         for link in links:
             link.close(None)
         log.warning("fault: dropped %d connections; new ones are refused for %.1f s", len(links), refuse_for_s)
@@ -183,6 +193,9 @@ class IoLoop:
             self._wake_w.send(b"x")
 
     def _run(self) -> None:
+        from bt_grasp.sim.twin.realtime import ask_for_realtime
+
+        ask_for_realtime(self.realtime_priority, "the twin's network thread")
         while not self._stop.is_set():
             try:
                 events = self._selector.select(POLL_S)
@@ -211,7 +224,7 @@ class IoLoop:
         except (BlockingIOError, OSError):
             return
         peer = f"{addr[0]}:{addr[1]}"
-        if time.monotonic() < self._refuse_until:
+        if time.monotonic() < self._refuse_until and proto.name not in self._spared:
             sock.close()  # the "dropped connection" fault is still on
             return
         if len(self.links(proto.name)) >= proto.max_connections:

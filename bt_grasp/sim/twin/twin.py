@@ -9,7 +9,9 @@ control port (faults, verdicts, frames).
 from __future__ import annotations
 
 import logging
+import socket
 import threading
+import time
 from pathlib import Path
 from typing import Any
 
@@ -43,6 +45,19 @@ log = logging.getLogger(__name__)
 
 DEFAULT_CAMERA_HZ = 15.0
 DEFAULT_DROP_S = 1.0
+
+
+def check_ports_free(host: str, control_port: int) -> None:
+    """Raise OSError naming the first of the twin's ports that cannot be bound on ``host`` (before a world is
+    built: a taken address fails in a moment, not after the simulator started)."""
+    for name, port in (("RTDE", RTDE_PORT), ("dashboard", DASHBOARD_PORT), ("script", SCRIPT_PORT),
+                       ("gripper", GRIPPER_PORT), ("control", control_port)):
+        with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+            probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            try:
+                probe.bind((host, port))
+            except OSError as exc:
+                raise OSError(exc.errno, f"{host}:{port} ({name}): {exc.strerror}") from exc
 
 
 class Twin:
@@ -79,8 +94,8 @@ class Twin:
             Protocol("gripper", GRIPPER_PORT, lambda link: GripperSession(link, self.gripper, self.silence), 4,
                      timeout),
             Protocol("control", self.config.control_port, lambda link: ControlSession(link, self), 4, timeout),
-        ])
-        self.loop = RealtimeLoop(self.config.period_s, self._cycle)
+        ], realtime_priority=(self.config.realtime_priority or 0) - 1 or None)
+        self.loop = RealtimeLoop(self.config.period_s, self._cycle, realtime_priority=self.config.realtime_priority)
         self._camera = TwinCamera(str(self.scene_path), self.seed,
                                   None if self.config.gripper == GripperName.BT_GRASP else str(urdf),
                                   self.world.camera.intrinsics, self.world.camera.mount)
@@ -123,7 +138,7 @@ class Twin:
             "runtime_state": state.runtime_state.name, "timestamp_s": round(state.timestamp_s, 6),
             "actual_q": [round(float(v), 6) for v in state.actual_q],
             "gripper_opening_m": round(self.plant.opening_m(), 5),
-            **{k: round(v, 3) for k, v in self.loop.period_stats().items()},
+            **{k: round(v, 3) for k, v in self.loop.period_stats().items()}, "realtime": self.loop.realtime,
             "camera_frames": frames.frames, "camera_render_ms": round(frames.mean_render_ms, 2),
         }
 
@@ -137,7 +152,8 @@ class Twin:
             return "program stopped"
         if fault == TwinFault.DROP_CONNECTIONS:
             span = DEFAULT_DROP_S if seconds is None else seconds
-            return f"{self.io.drop_all(span)} connections dropped, new ones refused for {span:g} s"
+            dropped = self.io.drop_all(span, spare=("control",))  # the twin's own port is not the robot's network
+            return f"{dropped} connections dropped, new ones refused for {span:g} s"
         if fault == TwinFault.GRIPPER_SILENT:
             self.silence.set(True)
             log.warning("fault: the gripper stops answering")
@@ -211,11 +227,14 @@ class Twin:
         return {"camera": "on", "rate_hz": rate}
 
     def _stream_frames(self, rate_hz: float, stop: threading.Event) -> None:
+        """Capture at ``rate_hz`` (or as fast as the renderer goes, if slower), until ``stop``."""
         period = 1.0 / rate_hz
+        deadline = time.monotonic()
         while not stop.is_set():
             try:
                 self.capture()
             except (TimeoutError, OSError, EOFError) as exc:
                 log.warning("the camera stream stopped: %s", exc)
                 return
-            stop.wait(period)
+            deadline = max(deadline + period, time.monotonic())
+            stop.wait(deadline - time.monotonic())
