@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import logging
 import math
+import re
 import socket
 import struct
 import time
@@ -215,3 +216,50 @@ def test_an_oversized_or_unfinished_rtde_package_is_refused_in_one_sentence(capl
     messages = [r.getMessage() for r in caplog.records]
     assert any("an RTDE package of 60000 bytes (type 73); the twin takes 3 to 8192 bytes" in m for m in messages)
     assert any("was not finished (the twin waits 0.3 s)" in m for m in messages)
+
+
+# --- the control port's requests -------------------------------------------------------------------------------
+class TwinStandIn:
+    def __init__(self) -> None:
+        self.calls: list[tuple[str, object]] = []
+
+    def status(self) -> dict[str, object]:
+        return {"robot_mode": "RUNNING"}
+
+    def inject(self, fault: object, seconds: float | None) -> str:
+        self.calls.append(("inject", (fault, seconds)))
+        return "done"
+
+    def judge(self, goal_json: str | None) -> dict[str, object]:
+        self.calls.append(("judge", goal_json))
+        return {"success": False}
+
+    def camera(self, action: str, rate_hz: float | None) -> dict[str, object]:
+        self.calls.append(("camera", (action, rate_hz)))
+        return {}
+
+
+@pytest.mark.parametrize(("line", "error"), [
+    ("", "an empty request"), ("reboot", "unknown request 'reboot'"), ("fault fire", "unknown fault 'fire'"),
+    ("fault drop-connections 9999", "0 to 600 seconds"), ("fault pendant-stop now", "takes no argument"),
+    ("camera on 1000", "0.1 to 60 Hz"), ("camera sideways", "camera takes on [HZ], off or capture"),
+])
+def test_the_control_port_refuses_a_bad_request_in_one_sentence(line: str, error: str) -> None:
+    from bt_grasp.sim.twin.control_port import ControlSession, RequestError
+
+    session = ControlSession(None, TwinStandIn())  # type: ignore[arg-type]
+    with pytest.raises(RequestError, match=re.escape(error)):
+        session._handle(line)
+
+
+def test_the_control_port_passes_good_requests_on() -> None:
+    from bt_grasp.sim.twin.control_port import ControlSession
+    from bt_grasp.sim.twin.faults import TwinFault
+
+    twin = TwinStandIn()
+    session = ControlSession(None, twin)  # type: ignore[arg-type]
+    assert session._handle("fault drop-connections 2.5") == {"fault": "drop-connections", "done": "done"}
+    assert session._handle('judge {"kind": "clear"}') == {"success": False}
+    assert session._handle("camera on 12") == {}
+    assert twin.calls == [("inject", (TwinFault.DROP_CONNECTIONS, 2.5)), ("judge", '{"kind": "clear"}'),
+                          ("camera", ("on", 12.0))]

@@ -58,15 +58,21 @@ def wait_for(condition, timeout_s: float = 2.0) -> float:  # type: ignore[no-unt
     return time.perf_counter() - start
 
 
-def at_home(c: rtde_control.RTDEControlInterface) -> None:
+def recover(c: rtde_control.RTDEControlInterface, r: rtde_receive.RTDEReceiveInterface,
+            d: dashboard_client.DashboardClient) -> None:
+    """Safety normal, the program running, the arm at home: where every test starts (whatever the last left)."""
+    if r.isProtectiveStopped():
+        time.sleep(0.5)  # the twin's --unlock-delay
+        d.unlockProtectiveStop()
+        wait_for(lambda: not r.isProtectiveStopped())
     if not c.isProgramRunning():
         assert c.reuploadScript()
         wait_for(c.isProgramRunning)
     assert c.moveJ(HOME, 1.5, 3.0)
 
 
-def test_movej_and_movel_arrive_within_1_mm_and_0_01_rad(c, r) -> None:  # type: ignore[no-untyped-def]
-    at_home(c)
+def test_movej_and_movel_arrive_within_1_mm_and_0_01_rad(c, r, d) -> None:  # type: ignore[no-untyped-def]
+    recover(c, r, d)
     q1 = np.add(HOME, [0.35, -0.25, 0.3, 0.2, 0.15, 0.4]).tolist()
     assert c.moveJ(q1, 1.05, 1.4)
     joint_error = np.max(np.abs(np.array(r.getActualQ()) - q1))
@@ -91,8 +97,8 @@ def test_movej_and_movel_arrive_within_1_mm_and_0_01_rad(c, r) -> None:  # type:
     assert np.allclose(c.getForwardKinematics(), reached, atol=1e-6)  # the controller's FK of its own joints
 
 
-def test_servoj_streams_track(c, r) -> None:  # type: ignore[no-untyped-def]
-    at_home(c)
+def test_servoj_streams_track(c, r, d) -> None:  # type: ignore[no-untyped-def]
+    recover(c, r, d)
     q0 = np.array(r.getActualQ())
     sent, seen = [], []
     for k in range(150):  # 1.2 s at the controller's period, as ur_rtde's servoJ example streams
@@ -116,8 +122,8 @@ def test_servoj_streams_track(c, r) -> None:  # type: ignore[no-untyped-def]
     assert float(np.max(np.abs(seen_a[25:] - sent_a[25:]))) < 0.05
 
 
-def test_stopj_stops_an_asynchronous_movej(c, r) -> None:  # type: ignore[no-untyped-def]
-    at_home(c)
+def test_stopj_stops_an_asynchronous_movej(c, r, d) -> None:  # type: ignore[no-untyped-def]
+    recover(c, r, d)
     target = np.add(HOME, [1.2, 0, 0, 0, 0, 0]).tolist()
     assert c.moveJ(target, 1.0, 2.0, True)
     wait_for(lambda: abs(r.getActualQd()[0]) > 0.9)
@@ -131,8 +137,8 @@ def test_stopj_stops_an_asynchronous_movej(c, r) -> None:  # type: ignore[no-unt
     assert moving_at > 0.9
 
 
-def test_the_watchdog_stops_the_arm_when_kicks_stop(twin, c, r) -> None:  # type: ignore[no-untyped-def]
-    at_home(c)
+def test_the_watchdog_stops_the_arm_when_kicks_stop(twin, c, r, d) -> None:  # type: ignore[no-untyped-def]
+    recover(c, r, d)
     min_hz = 25.0
     assert c.setWatchdog(min_hz)
     assert c.speedJ([0.25, 0.0, 0.0, 0.0, 0.0, 0.0], 1.0, PERIOD_S)
@@ -151,7 +157,7 @@ def test_the_watchdog_stops_the_arm_when_kicks_stop(twin, c, r) -> None:  # type
 
 
 def test_a_protective_stop_is_seen_by_receive_and_cleared_by_the_dashboard(twin, c, r, d) -> None:  # type: ignore[no-untyped-def]
-    at_home(c)
+    recover(c, r, d)
     assert c.moveJ(np.add(HOME, [1.0, 0, 0, 0, 0, 0]).tolist(), 1.0, 2.0, True)
     wait_for(lambda: abs(r.getActualQd()[0]) > 0.5)
     assert c.triggerProtectiveStop() is False  # ur_rtde returns False: the script was paused inside the call
@@ -173,7 +179,7 @@ def test_a_protective_stop_is_seen_by_receive_and_cleared_by_the_dashboard(twin,
 
 
 def test_unlocking_too_soon_is_refused_as_on_a_robot(twin, c, r, d) -> None:  # type: ignore[no-untyped-def]
-    at_home(c)
+    recover(c, r, d)
     assert twin.control("fault protective-stop")["ok"]
     wait_for(r.isProtectiveStopped)
     with pytest.raises(RuntimeError, match="Cannot unlock protective stop until 5s"):
@@ -186,12 +192,12 @@ def test_unlocking_too_soon_is_refused_as_on_a_robot(twin, c, r, d) -> None:  # 
 
 
 def test_a_collision_the_physics_sees_is_a_protective_stop(twin, c, r, d) -> None:  # type: ignore[no-untyped-def]
-    at_home(c)
+    recover(c, r, d)
     above = [-0.30, 0.10, 0.06, np.pi, 0.0, 0.0]  # base frame: 30 cm in front of the base, clear of the objects
     q = c.getInverseKinematics(above)
     assert c.moveJ(q, 1.5, 3.0)
     assert c.moveL([-0.30, 0.10, -0.03, np.pi, 0.0, 0.0], 0.1, 0.5) is False  # into the table
-    assert r.isProtectiveStopped()
+    wait_for(r.isProtectiveStopped, timeout_s=PERIOD_S + 0.05)  # the receive interface's own connection
     assert r.getActualTCPPose()[2] > 0.015  # the pads stopped on the table top (tips 20 mm beyond the TCP)
     assert "protective stop: collision:" in twin.log() and "hit table" in twin.log()
     time.sleep(0.5)
@@ -202,8 +208,8 @@ def test_a_collision_the_physics_sees_is_a_protective_stop(twin, c, r, d) -> Non
     assert c.moveL(above, 0.25, 1.2)
 
 
-def test_kinematics_queries_and_tcp(c, r) -> None:  # type: ignore[no-untyped-def]
-    at_home(c)
+def test_kinematics_queries_and_tcp(c, r, d) -> None:  # type: ignore[no-untyped-def]
+    recover(c, r, d)
     pose = np.array(r.getActualTCPPose())
     assert np.allclose(c.getTCPOffset(), [0, 0, 0.1745, 0, 0, 0])  # the 2F-85's TCP, set as on the pendant
     q = np.array(c.getInverseKinematics(pose.tolist()))
@@ -227,8 +233,8 @@ def test_kinematics_queries_and_tcp(c, r) -> None:  # type: ignore[no-untyped-de
     assert c.isSteady()
 
 
-def test_the_speed_slider_slows_motion(c, r, twin) -> None:  # type: ignore[no-untyped-def]
-    at_home(c)
+def test_the_speed_slider_slows_motion(c, r, twin, d) -> None:  # type: ignore[no-untyped-def]
+    recover(c, r, d)
     io = rtde_io.RTDEIOInterface(twin.host)
     try:
         away = np.add(HOME, [0.3, 0, 0, 0, 0, 0]).tolist()
@@ -251,7 +257,7 @@ def test_the_speed_slider_slows_motion(c, r, twin) -> None:  # type: ignore[no-u
 
 
 def test_the_dashboard_answers_as_polyscope_3(twin, c, r, d) -> None:  # type: ignore[no-untyped-def]
-    at_home(c)
+    recover(c, r, d)
     assert d.polyscopeVersion() == "3.15.7.106331"
     assert d.robotmode() == "Robotmode: RUNNING"
     assert d.programState() == "PLAYING <unnamed>"
@@ -281,20 +287,20 @@ def test_the_dashboard_answers_as_polyscope_3(twin, c, r, d) -> None:  # type: i
                             ("hello", b"could not understand: 'hello'\n")):
             raw.sendall(line.encode() + b"\n")
             assert reader.readline() == reply
-    at_home(c)
+    recover(c, r, d)
 
 
-def test_a_command_code_the_twin_does_not_run_stops_the_program(twin, c, r) -> None:  # type: ignore[no-untyped-def]
-    at_home(c)
+def test_a_command_code_the_twin_does_not_run_stops_the_program(twin, c, r, d) -> None:  # type: ignore[no-untyped-def]
+    recover(c, r, d)
     path = [[*HOME[:5], 0.2, 0.5, 0.5, 0.0], [*HOME[:5], 0.0, 0.5, 0.5, 0.0]]
     assert c.moveJ(path) is False  # a path is code 45 (MOVE_PATH): its movej lines are URScript
     wait_for(lambda: r.getRuntimeState() == 1)
     assert "unsupported by the twin: 45" in twin.log()
-    at_home(c)
+    recover(c, r, d)
 
 
-def test_the_script_port_refuses_programs_it_does_not_recognise(twin, c, r) -> None:  # type: ignore[no-untyped-def]
-    at_home(c)
+def test_the_script_port_refuses_programs_it_does_not_recognise(twin, c, r, d) -> None:  # type: ignore[no-untyped-def]
+    recover(c, r, d)
     with socket.create_connection((twin.host, 30003), timeout=2) as raw:
         raw.sendall(b'def hello():\n  textmsg("hi")\nend\n')
     time.sleep(0.1)
@@ -302,8 +308,8 @@ def test_the_script_port_refuses_programs_it_does_not_recognise(twin, c, r) -> N
     assert c.isProgramRunning()  # the control script still runs
 
 
-def test_the_upper_register_range_works_too(twin, c, r) -> None:  # type: ignore[no-untyped-def]
-    at_home(c)
+def test_the_upper_register_range_works_too(twin, c, r, d) -> None:  # type: ignore[no-untyped-def]
+    recover(c, r, d)
     flags = rtde_control.RTDEControlInterface.FLAG_UPLOAD_SCRIPT | \
         rtde_control.RTDEControlInterface.FLAG_UPPER_RANGE_REGISTERS
     c.stopScript()  # else the new client's stopScript on register 24 waits 3 s for a script reading register 0
@@ -320,4 +326,4 @@ def test_the_upper_register_range_works_too(twin, c, r) -> None:  # type: ignore
         upper.stopScript()
         upper.disconnect()
         assert c.reconnect()
-    at_home(c)
+    recover(c, r, d)

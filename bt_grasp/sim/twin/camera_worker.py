@@ -55,6 +55,9 @@ class FrameStats:
 
 def _worker(conn: Connection, scene_path: str, seed: int, robot_urdf: str | None, shm_name: str) -> None:
     """The render process: build the world, then pose + render on request until told to stop."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C reaches the whole process group: the twin stops us
     with contextlib.suppress(OSError):
         os.nice(WORKER_NICE)
     from pathlib import Path

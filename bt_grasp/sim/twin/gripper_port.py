@@ -2,9 +2,9 @@
 
 ``GET VAR\\n`` is answered ``VAR n\\n``; ``SET VAR n [VAR n ...]\\n`` is answered ``ack`` (no line end: the C++
 client compares the whole read with ``"ack"``). Several requests in one read are answered in one write, in
-order (``getVars`` sends its ``GET`` lines together and reads once). A line longer than
-:data:`MAX_LINE_BYTES`, a value outside 0..255 or an unknown variable is refused with one logged sentence and
-answered ``?`` (a ``GET``) or ``?`` (a ``SET``), and the connection stays open.
+order (``getVars`` sends its ``GET`` lines together and reads once). A value outside 0..255, an unknown variable
+or a line that is neither request is refused with one logged sentence and answered ``?``; the connection stays
+open. More than :data:`MAX_LINE_BYTES` without a line end closes it.
 
 The "gripper stops answering" fault leaves the connection open and answers nothing.
 """

@@ -12,6 +12,7 @@ import logging
 import socket
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -143,24 +144,27 @@ class Twin:
         }
 
     def inject(self, fault: TwinFault, seconds: float | None = None) -> str:
-        """Produce ``fault`` now; returns what was done, as a sentence."""
-        if fault == TwinFault.PROTECTIVE_STOP:
-            self.controller.protective_stop("injected (the twin's fault protective-stop)")
-            return "protective stop"
-        if fault == TwinFault.PENDANT_STOP:
-            self.controller.stop_program("stopped from the pendant (the twin's fault pendant-stop)")
-            return "program stopped"
-        if fault == TwinFault.DROP_CONNECTIONS:
-            span = DEFAULT_DROP_S if seconds is None else seconds
-            dropped = self.io.drop_all(span, spare=("control",))  # the twin's own port is not the robot's network
-            return f"{dropped} connections dropped, new ones refused for {span:g} s"
-        if fault == TwinFault.GRIPPER_SILENT:
-            self.silence.set(True)
-            log.warning("fault: the gripper stops answering")
-            return "the gripper stops answering"
-        self.silence.set(False)
-        log.info("the gripper answers again")
-        return "the gripper answers again"
+        """Produce ``fault`` now (``seconds``: how long a dropped network stays down); returns what was done."""
+        return _FAULTS[fault](self, seconds)
+
+    def _protective_stop(self, _: float | None) -> str:
+        self.controller.protective_stop("injected (the twin's fault protective-stop)")
+        return "protective stop"
+
+    def _pendant_stop(self, _: float | None) -> str:
+        self.controller.stop_program("stopped from the pendant (the twin's fault pendant-stop)")
+        return "program stopped"
+
+    def _drop_connections(self, seconds: float | None) -> str:
+        span = DEFAULT_DROP_S if seconds is None else seconds
+        dropped = self.io.drop_all(span, spare=("control",))  # the twin's own port is not the robot's network
+        return f"{dropped} connections dropped, new ones refused for {span:g} s"
+
+    def _gripper(self, silent: bool) -> str:
+        self.silence.set(silent)
+        sentence = "the gripper stops answering" if silent else "the gripper answers again"
+        log.warning("fault: %s", sentence)
+        return sentence
 
     def verdict(self, goal: Goal | None = None) -> Verdict:
         """The physics judge's verdict on ``goal`` (None: the scene's goal, or a pick of its default colour)."""
@@ -238,3 +242,13 @@ class Twin:
                 return
             deadline = max(deadline + period, time.monotonic())
             stop.wait(deadline - time.monotonic())
+
+
+#: what each fault of :class:`TwinFault` does to a twin (bt_grasp.sim.twin.faults says what a client sees)
+_FAULTS: dict[TwinFault, Callable[[Twin, float | None], str]] = {
+    TwinFault.PROTECTIVE_STOP: Twin._protective_stop,
+    TwinFault.PENDANT_STOP: Twin._pendant_stop,
+    TwinFault.DROP_CONNECTIONS: Twin._drop_connections,
+    TwinFault.GRIPPER_SILENT: lambda twin, _: twin._gripper(True),
+    TwinFault.GRIPPER_ANSWERS: lambda twin, _: twin._gripper(False),
+}
