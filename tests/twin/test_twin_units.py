@@ -263,3 +263,62 @@ def test_the_control_port_passes_good_requests_on() -> None:
     assert session._handle("camera on 12") == {}
     assert twin.calls == [("inject", (TwinFault.DROP_CONNECTIONS, 2.5)), ("judge", '{"kind": "clear"}'),
                           ("camera", ("on", 12.0))]
+
+
+# --- the control script's handshake, on a stand-in arm ---------------------------------------------------------
+class ArmStandIn:
+    """Moves finish when told to; records what the program asked."""
+
+    def __init__(self) -> None:
+        self.calls: list[str] = []
+        self.moving = Handle()
+
+    def movej(self, q: object, accel: float, speed: float) -> Handle:
+        self.calls.append(f"movej a={accel} v={speed}")
+        self.moving = Handle()
+        return self.moving
+
+    def stopj(self, decel: float) -> Handle:
+        self.calls.append(f"stopj {decel}")
+        return Handle(done=True)
+
+    def set_tcp(self, pose: object) -> None:
+        self.calls.append("set_tcp")
+
+
+class Handle:
+    def __init__(self, done: bool = False) -> None:
+        self.done = done
+
+
+def test_the_script_handshake_ready_process_done_clear() -> None:
+    from bt_grasp.sim.twin.script_program import ControlProgram, ProgramEnd
+
+    arm = ArmStandIn()
+    out_int, out_double = [0] * 48, [0.0] * 48
+    program = ControlProgram(arm, 0, out_int, out_double)  # type: ignore[arg-type]
+    assert out_int[0] == 1 and out_int[2] == 1 * 65536  # ready; async progress: finished (count 1, op 0)
+    ints, doubles = [0] * 48, [0.0] * 48
+    ints[0], ints[1], doubles[6], doubles[7] = 1, 0, 1.05, 1.4  # movej, synchronous
+    program.step(ints, doubles)
+    assert arm.calls == ["movej a=1.4 v=1.05"] and out_int[0] == 1  # blocked inside movej: not done yet
+    program.step(ints, doubles)
+    assert out_int[0] == 1
+    arm.moving.done = True
+    program.step(ints, doubles)
+    assert out_int[0] == 2  # done
+    program.step(ints, doubles)
+    assert arm.calls == ["movej a=1.4 v=1.05"]  # the same command is not run twice
+    ints[0] = 0  # the client clears the register
+    program.step(ints, doubles)
+    assert out_int[0] == 1
+    ints[0], ints[1] = 1, 1  # asynchronous: done at once, progress "running" with a new operation id
+    program.step(ints, doubles)
+    assert out_int[0] == 2 and out_int[2] & 32768 and out_int[2] >> 24 == 1
+    arm.moving.done = True
+    ints[0] = 0
+    program.step(ints, doubles)
+    assert not out_int[2] & 32768  # the operation finished
+    ints[0] = 6  # force mode: a real-time code the twin does not run
+    with pytest.raises(ProgramEnd, match="unsupported by the twin: 6"):
+        program.step(ints, doubles)

@@ -27,7 +27,7 @@ from bt_grasp.sim.twin.arm import TwinArm
 from bt_grasp.sim.twin.config import TwinConfig
 from bt_grasp.sim.twin.control_script import ControlScript
 from bt_grasp.sim.twin.kinematics import UrKinematics
-from bt_grasp.sim.twin.motion import T_to_pose
+from bt_grasp.sim.twin.motion import MotionError, T_to_pose
 from bt_grasp.sim.twin.plant import Plant
 from bt_grasp.sim.twin.robotiq import Robotiq2F85
 from bt_grasp.sim.twin.rtde_types import REGISTER_COUNT
@@ -86,7 +86,11 @@ class Controller:
                     self.stop_program(str(end))
             dt = self.plant.dt_s
             for _ in range(self.steps_per_cycle):
-                q, qd = self.arm.advance(dt, self.speed_fraction)
+                try:
+                    q, qd = self.arm.advance(dt, self.speed_fraction)
+                except MotionError as exc:  # a movel met a pose without a solution on its way
+                    self.stop_program(f"the motion failed: {exc}")
+                    q, qd = self.arm.advance(dt, self.speed_fraction)
                 self.plant.set_joint_targets(q, qd)
                 self.plant.step()
             if self.gripper is not None:

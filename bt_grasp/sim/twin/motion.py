@@ -122,12 +122,15 @@ class JointMove(Motion):
 class LinearMove(Motion):
     """``movel``: the tool moves on a straight line (orientation by the shortest rotation) on one trapezoid over
     the path length, joints from inverse kinematics near the previous step. ``ik(T, q_near)`` returns None when
-    a pose has no solution; every pose along the line is checked before the first step (nothing moves when one
-    fails)."""
+    a pose has no solution. Poses along the line (every 2 cm, at most 12, the ends included) are checked before
+    the first step, so nothing moves toward an end out of reach; a pose between them without a solution raises
+    :class:`MotionError` during the motion (the program then stops, as a controller's movel fails)."""
 
     scaled = True
-    #: spacing of the pre-check along the line (m, rad)
-    CHECK_STEP = 0.005
+    #: spacing of the pre-check along the line (m, rad), and at most this many poses (an IK costs ~0.6 ms: the
+    #: check must fit in the controller's 8 ms cycle, or the cycle that starts a movel runs late)
+    CHECK_STEP = 0.02
+    MAX_CHECKS = 12
 
     def __init__(self, q_start: Vec, T_start: Mat4, T_goal: Mat4, speed: float, accel: float,
                  ik: Callable[[Mat4, Vec], Vec | None]) -> None:
@@ -141,7 +144,7 @@ class LinearMove(Motion):
         self.profile = _profile(length if length > 1e-6 else self.angle, speed, accel)
         self.total = self.profile.distance
         self.t = 0.0
-        steps = max(2, int(max(length, self.angle) / self.CHECK_STEP) + 1)
+        steps = min(self.MAX_CHECKS, max(2, int(max(length, self.angle) / self.CHECK_STEP) + 1))
         q = self.q
         for s in np.linspace(0.0, 1.0, steps):
             found = ik(self.pose_at(float(s)), q)
