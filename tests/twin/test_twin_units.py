@@ -322,3 +322,23 @@ def test_the_script_handshake_ready_process_done_clear() -> None:
     ints[0] = 6  # force mode: a real-time code the twin does not run
     with pytest.raises(ProgramEnd, match="unsupported by the twin: 6"):
         program.step(ints, doubles)
+
+
+@pytest.mark.parametrize(("code", "register", "what"), [(9, 0, "speedj's joint speeds"), (29, 2, "set_tcp's pose"),
+                                                        (34, 0, "stopj's deceleration"),
+                                                        (1, 6, "must be positive numbers")])
+def test_a_register_holding_nan_stops_the_program_not_the_controller(code: int, register: int, what: str) -> None:
+    from bt_grasp.sim.twin.arm import TwinArm
+    from bt_grasp.sim.twin.kinematics import UrKinematics
+    from bt_grasp.sim.twin.script_program import ControlProgram, ProgramEnd
+
+    q0 = np.array([0.0, -1.9, 1.9, -1.57, -1.57, 0.0])
+    arm = TwinArm(UrKinematics(), q0, np.eye(4), lambda: (q0, np.zeros(6)), lambda _: None, lambda *_: None)
+    program = ControlProgram(arm, 0, [0] * 48, [0.0] * 48)
+    ints, doubles = [0] * 48, [0.0] * 48
+    ints[0] = code
+    doubles[:8] = [*q0, 1.0, 1.0]
+    doubles[register] = float("nan")
+    with pytest.raises(ProgramEnd, match=re.escape(what)):
+        program.step(ints, doubles)
+    assert np.all(np.isfinite(arm.advance(0.002, 1.0)[0]))

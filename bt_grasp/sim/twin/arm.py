@@ -9,6 +9,7 @@ UR poses in the controller's ``base`` frame of the current TCP (``set_tcp``); ki
 from __future__ import annotations
 
 import logging
+import math
 from collections.abc import Callable
 
 import numpy as np
@@ -33,6 +34,20 @@ log = logging.getLogger(__name__)
 Vec = NDArray[np.float64]
 #: a joint speed below this (rad/s) on every joint is "steady" (URScript's is_steady)
 STEADY_RAD_S = 0.005
+
+
+def finite(values: object, what: str) -> Vec:
+    """``values`` as floats, or MotionError naming ``what`` (a client's registers may hold NaN or infinity)."""
+    array = np.asarray(values, dtype=float)
+    if not np.all(np.isfinite(array)):
+        raise MotionError(f"{what}: {np.round(array, 6).tolist()} is not a finite number")
+    return array
+
+
+def positive(value: float, what: str) -> float:
+    if not (math.isfinite(value) and value > 0):
+        raise MotionError(f"{what} must be a positive number, got {value!r}")
+    return float(value)
 
 
 class Handle:
@@ -104,6 +119,7 @@ class TwinArm:
         return self.kin.ik(T, self.T_flange_tcp, q_near)
 
     def movel(self, pose: Vec, accel: float, speed: float) -> Handle:
+        pose = finite(pose, "movel's pose")
         q0 = self.motion.q
         T0 = self.kin.T_base_tcp(q0, self.T_flange_tcp)
         return self._start(LinearMove(q0, T0, pose_to_T(pose), speed, accel, self._ik))
@@ -114,20 +130,23 @@ class TwinArm:
 
     def servoj(self, q: Vec, servo_time_s: float) -> None:
         q = self._check_joints(q, "servoj")
+        servo_time_s = positive(servo_time_s, "servoj's time")
         if not isinstance(self.motion, ServoMove):
             self.motion = ServoMove(self.motion.q)
         self.motion.retarget(q, servo_time_s)
 
     def speedj(self, qd: Vec, accel: float) -> None:
+        qd, accel = finite(qd, "speedj's joint speeds"), positive(accel, "speedj's acceleration")
         if not isinstance(self.motion, SpeedMove):
             self.motion = SpeedMove(self.motion.q, self.motion.qd)
-        self.motion.retarget(np.asarray(qd, dtype=float), accel)
+        self.motion.retarget(qd, accel)
 
     def stopj(self, decel: float) -> Handle:
-        return self._start(Decelerate.joint(self.motion.q, self.motion.qd, decel))
+        return self._start(Decelerate.joint(self.motion.q, self.motion.qd, positive(decel, "stopj's deceleration")))
 
     def stopl(self, decel: float) -> Handle:
         """``stopl(a)``: the tool's speed falls at ``a`` m/s^2 (the joints slow together to match)."""
+        decel = positive(decel, "stopl's deceleration")
         q, qd = self.motion.q, self.motion.qd
         h = 1e-3
         v_tcp = np.linalg.norm(self.kin.T_base_tcp(q + qd * h, self.T_flange_tcp)[:3, 3]
@@ -138,26 +157,27 @@ class TwinArm:
         self._on_protective_stop(reason)
 
     def set_tcp(self, pose: Vec) -> None:
-        self.T_flange_tcp = pose_to_T(pose)
+        self.T_flange_tcp = pose_to_T(finite(pose, "set_tcp's pose"))
         log.info("TCP set to %s", np.round(np.asarray(pose, dtype=float), 5).tolist())
 
     def tcp_offset(self) -> Vec:
         return T_to_pose(self.T_flange_tcp)
 
     def set_payload(self, mass_kg: float, cog_m: Vec) -> None:
-        self.payload_kg, self.payload_cog_m = float(mass_kg), np.asarray(cog_m, dtype=float)
+        self.payload_kg = float(finite(mass_kg, "set_payload's mass"))
+        self.payload_cog_m = finite(cog_m, "set_payload's centre of gravity")
 
     def inverse_kin(self, pose: Vec, q_near: Vec | None) -> Vec | None:
-        near = self._actual()[0] if q_near is None else np.asarray(q_near, dtype=float)
-        return self.kin.ik_pose(np.asarray(pose, dtype=float), self.T_flange_tcp, near)
+        near = self._actual()[0] if q_near is None else finite(q_near, "get_inverse_kin's qnear")
+        return self.kin.ik_pose(finite(pose, "get_inverse_kin's pose"), self.T_flange_tcp, near)
 
     def forward_kin(self, q: Vec | None, tcp: Vec | None) -> Vec:
-        joints = self._actual()[0] if q is None else np.asarray(q, dtype=float)
-        T_tcp = self.T_flange_tcp if tcp is None else pose_to_T(tcp)
+        joints = self._actual()[0] if q is None else finite(q, "get_forward_kin's joints")
+        T_tcp = self.T_flange_tcp if tcp is None else pose_to_T(finite(tcp, "get_forward_kin's TCP"))
         return self.kin.tcp_pose(joints, T_tcp)
 
     def pose_trans(self, p_from: Vec, p_from_to: Vec) -> Vec:
-        return pose_trans(p_from, p_from_to)
+        return pose_trans(finite(p_from, "pose_trans"), finite(p_from_to, "pose_trans"))
 
     def flange_pose(self) -> Vec:
         return T_to_pose(self.kin.T_base_flange(self._actual()[0]))

@@ -91,6 +91,10 @@ class Controller:
                 except MotionError as exc:  # a movel met a pose without a solution on its way
                     self.stop_program(f"the motion failed: {exc}")
                     q, qd = self.arm.advance(dt, self.speed_fraction)
+                if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):  # never reaches the drives
+                    self.stop_program("the commanded motion was not finite")
+                    self.arm.hold_actual()
+                    q, qd = self.arm.advance(dt, self.speed_fraction)
                 self.plant.set_joint_targets(q, qd)
                 self.plant.step()
             if self.gripper is not None:

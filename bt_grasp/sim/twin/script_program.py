@@ -181,7 +181,7 @@ class ControlProgram:
         try:
             if handler is not None:
                 handler(self)
-        except MotionError as exc:
+        except (MotionError, ValueError) as exc:  # URScript's runtime errors: the program stops, not the controller
             raise ProgramEnd(f"the program stopped on command {cmd}: {exc}") from exc
         if cmd == Code.STOP_SCRIPT:
             raise ProgramEnd("the client stopped the control script (stopScript)")
