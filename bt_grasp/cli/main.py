@@ -37,6 +37,7 @@ COMMAND_MODULES: dict[str, tuple[str, ...]] = {
     "eval": ("eval_cmd",),
     "resident": ("resident_cmd",),
     "detector": ("detector_cmd",),
+    "twin": ("twin_cmd",),
 }
 
 

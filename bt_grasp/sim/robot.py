@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import sapien
@@ -30,12 +31,15 @@ FINGER_CLOSED_TARGET_M = -0.01  # beyond the joint's closed limit, so the force 
 class SimRobot:
     """Implements :class:`bt_grasp.interfaces.Robot` for the SAPIEN articulation."""
 
-    def __init__(self, scene: sapien.Scene, mount: RobotMount, T_world_base: NDArray[np.float64]) -> None:
+    def __init__(self, scene: sapien.Scene, mount: RobotMount, T_world_base: NDArray[np.float64],
+                 urdf_path: Path | None = None) -> None:
+        """``urdf_path``: another robot description with the same link names (the twin's gripper models); None:
+        bt_grasp's own."""
         loader = scene.create_urdf_loader()
         loader.fix_root_link = True
         for finger in ("left_finger", "right_finger"):
             loader.set_link_material(finger, mount.finger_friction, mount.finger_friction, 0.0)
-        self.articulation = loader.load(str(robot_urdf_path()))
+        self.articulation = loader.load(str(urdf_path or robot_urdf_path()))
         self.articulation.set_name("ur5")
         self.articulation.set_root_pose(to_pose(T_world_base))
         joints = {j.name: j for j in self.articulation.get_active_joints()}

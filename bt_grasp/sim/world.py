@@ -41,8 +41,10 @@ class World:
     """
 
     def __init__(
-        self, scene_config: Scene, seed: int, *, camera_mount: str | None = None, source: str | Path = "scene"
+        self, scene_config: Scene, seed: int, *, camera_mount: str | None = None, source: str | Path = "scene",
+        robot_urdf: Path | None = None,
     ) -> None:
+        """``robot_urdf``: the robot with another gripper (``bt_grasp.sim.twin.gripper_models``); None: bt_grasp's."""
         self.config = scene_config
         self._seed_streams(seed)
         self.clock = ManualClock()
@@ -52,7 +54,7 @@ class World:
         self.scene.set_timestep(physics.timestep_s)
         sapien.physx.get_scene_config()  # touch: scene config applies to scenes created after a change
         self._build_table()
-        self.robot = SimRobot(self.scene, scene_config.robot, scene_config.T_world_base())
+        self.robot = SimRobot(self.scene, scene_config.robot, scene_config.T_world_base(), robot_urdf)
         self.fixtures = {f.name: build_fixture(self.scene, f) for f in scene_config.fixtures}
         self.belts = belts_for(self.scene, scene_config.fixtures)
         layout = draw_layout(scene_config, self._object_rng)  # the seeded subset and rest poses (none: no draw)
