@@ -1,0 +1,194 @@
+"""Recordings against the simulator they were made from (``bt-grasp camera compare``; issue 39, done-when 1).
+
+For each scene and seed: ``camera record`` writes a recording, ``perceive REC`` (with the scene's calibration, and an
+eye-in-hand recording's tool poses) and ``perceive --scene S --seed N`` perceive the same frames, and the two reports
+are compared object by object: the same count and classes, centroids within :data:`CENTROID_TOLERANCE_MM`, the top
+grasp within :data:`GRASP_TOLERANCE_MM` and :data:`GRASP_TOLERANCE_DEG`. The recording's depth, played back and
+aligned by ``rs.align``, is compared with the simulator's own colour-aligned depth of the same moment (what a run
+perceives) on the pixels valid in both: with the noise model (two independent noise draws, one in each imager) and
+without it (the geometry alone: the depth imager's intrinsics and pose, and the alignment), the median of the latter
+within :data:`DEPTH_TOLERANCE_MM`.
+"""
+
+from __future__ import annotations
+
+import math
+import tempfile
+from collections.abc import Iterable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from bt_grasp.detector.kinds import DetectorKind
+from bt_grasp.geometry import rotation_angle_rad
+from bt_grasp.perception.calibration_file import calibration_for_scene
+from bt_grasp.scene.format import Scene, load_scene
+from bt_grasp.sensing.perceive_run import PerceiveRequest, PerceiveSummary, run_perceive
+from bt_grasp.sensing.record_scene import record_scene
+from bt_grasp.sensing.source_spec import SourceSpec
+
+CENTROID_TOLERANCE_MM = 1.0
+GRASP_TOLERANCE_MM = 1.0
+GRASP_TOLERANCE_DEG = 1.0
+DEPTH_TOLERANCE_MM = 2.0
+
+
+@dataclass(frozen=True)
+class DepthStats:
+    """Recorded-and-aligned depth minus the simulator's colour-aligned depth, on pixels valid in both."""
+
+    median_abs_mm: float
+    median_mm: float
+    p95_abs_mm: float
+    valid_both: float  # fraction of the picture valid in both
+    valid_recorded: float  # fraction valid in the aligned recording
+    valid_simulated: float
+
+    def as_json(self) -> dict[str, float]:
+        return {"median_abs_mm": self.median_abs_mm, "median_mm": self.median_mm, "p95_abs_mm": self.p95_abs_mm,
+                "valid_both": self.valid_both, "valid_recorded": self.valid_recorded,
+                "valid_simulated": self.valid_simulated}
+
+
+def depth_stats(recorded: NDArray[np.float32], simulated: NDArray[np.float32]) -> DepthStats:
+    both = (recorded > 0) & (simulated > 0)
+    diff = (recorded[both].astype(np.float64) - simulated[both].astype(np.float64)) * 1000.0
+    if diff.size == 0:
+        return DepthStats(math.inf, math.inf, math.inf, 0.0, float((recorded > 0).mean()),
+                          float((simulated > 0).mean()))
+    return DepthStats(float(np.median(np.abs(diff))), float(np.median(diff)), float(np.percentile(np.abs(diff), 95)),
+                      float(both.mean()), float((recorded > 0).mean()), float((simulated > 0).mean()))
+
+
+@dataclass(frozen=True)
+class CaseResult:
+    scene: str
+    seed: int
+    objects_recorded: int
+    objects_simulated: int
+    same_classes: bool
+    centroid_mm: float  # the largest centroid difference
+    grasp_mm: float  # the largest top-grasp position difference
+    grasp_deg: float  # the largest top-grasp rotation difference
+    depth_noisy: DepthStats
+    depth_noise_free: DepthStats
+    classes: tuple[str, ...]
+
+    @property
+    def passed(self) -> bool:
+        return (self.objects_recorded == self.objects_simulated and self.same_classes
+                and self.centroid_mm <= CENTROID_TOLERANCE_MM and self.grasp_mm <= GRASP_TOLERANCE_MM
+                and self.grasp_deg <= GRASP_TOLERANCE_DEG
+                and self.depth_noise_free.median_abs_mm <= DEPTH_TOLERANCE_MM)
+
+    def as_json(self) -> dict[str, object]:
+        return {"scene": self.scene, "seed": self.seed, "objects_recorded": self.objects_recorded,
+                "objects_simulated": self.objects_simulated, "same_classes": self.same_classes,
+                "classes": list(self.classes), "centroid_mm": self.centroid_mm, "grasp_mm": self.grasp_mm,
+                "grasp_deg": self.grasp_deg, "depth_noisy": self.depth_noisy.as_json(),
+                "depth_noise_free": self.depth_noise_free.as_json(), "passed": self.passed}
+
+
+@dataclass(frozen=True)
+class CompareReport:
+    cases: tuple[CaseResult, ...]
+
+    @property
+    def all_pass(self) -> bool:
+        return all(c.passed for c in self.cases)
+
+    def as_json(self) -> dict[str, object]:
+        return {"cases": [c.as_json() for c in self.cases], "all_pass": self.all_pass,
+                "tolerances": {"centroid_mm": CENTROID_TOLERANCE_MM, "grasp_mm": GRASP_TOLERANCE_MM,
+                               "grasp_deg": GRASP_TOLERANCE_DEG, "depth_median_mm": DEPTH_TOLERANCE_MM}}
+
+    def lines(self) -> list[str]:
+        out = [f"{'scene':12} {'seed':>4} {'objects':>8} {'classes':>8} {'centroid':>9} {'grasp':>14} "
+               f"{'depth noise-free':>17} {'depth noisy':>18} result",
+               f"{'':12} {'':>4} {'rec/sim':>8} {'':>8} {'max mm':>9} {'max mm / deg':>14} "
+               f"{'median |d| mm':>17} {'median |d|, d mm':>18}"]
+        for c in self.cases:
+            out.append(f"{c.scene:12} {c.seed:>4} {c.objects_recorded:>3}/{c.objects_simulated:<4} "
+                       f"{'same' if c.same_classes else 'DIFFER':>8} {c.centroid_mm:9.4f} "
+                       f"{c.grasp_mm:7.4f}/{c.grasp_deg:6.4f} {c.depth_noise_free.median_abs_mm:17.3f} "
+                       f"{c.depth_noisy.median_abs_mm:9.3f},{c.depth_noisy.median_mm:8.3f} "
+                       f"{'pass' if c.passed else 'FAIL'}")
+        out.append(f"{sum(c.passed for c in self.cases)} of {len(self.cases)} cases pass (centroids <= "
+                   f"{CENTROID_TOLERANCE_MM} mm, top grasp <= {GRASP_TOLERANCE_MM} mm and {GRASP_TOLERANCE_DEG} deg, "
+                   f"noise-free aligned depth median <= {DEPTH_TOLERANCE_MM} mm)")
+        return out
+
+
+def _objects_compared(a: PerceiveSummary, b: PerceiveSummary) -> tuple[int, int, bool, float, float, float,
+                                                                      tuple[str, ...]]:
+    count_a = sum(len(f.objects) for f in a.reports)
+    count_b = sum(len(f.objects) for f in b.reports)
+    same = len(a.reports) == len(b.reports)
+    centroid = grasp_mm = grasp_deg = 0.0
+    classes: list[str] = []
+    for fa, fb in zip(a.reports, b.reports, strict=False):
+        if len(fa.objects) != len(fb.objects):
+            same = False
+            continue
+        for oa, ob in zip(fa.objects, fb.objects, strict=True):
+            classes.append(oa.name)
+            if (oa.class_name, oa.label, oa.shape_class) != (ob.class_name, ob.label, ob.shape_class):
+                same = False
+            centroid = max(centroid, 1000 * float(np.linalg.norm(np.subtract(oa.centroid_m, ob.centroid_m))))
+            if bool(oa.grasps) != bool(ob.grasps):
+                same = False
+            elif oa.grasps:
+                ga, gb = oa.grasps[0].T_frame_tcp, ob.grasps[0].T_frame_tcp
+                grasp_mm = max(grasp_mm, 1000 * float(np.linalg.norm(ga[:3, 3] - gb[:3, 3])))
+                grasp_deg = max(grasp_deg, math.degrees(rotation_angle_rad(ga[:3, :3], gb[:3, :3])))
+    return count_a, count_b, same, centroid, grasp_mm, grasp_deg, tuple(classes)
+
+
+def _recorded_depth(path: Path, count: int) -> list[NDArray[np.float32]]:
+    from bt_grasp.hardware.realsense_open import open_recording
+
+    out = []
+    with open_recording(path) as camera:
+        for _ in range(count):
+            frame = camera.capture()
+            if frame is None:
+                break
+            out.append(frame.depth_m)
+    return out
+
+
+def _depth(scene_path: Path, config: Scene, seed: int, frames: int, out: Path) -> DepthStats:
+    """Record ``config`` (its noise model as it is), play the recording back, compare its aligned depth with the
+    simulator's colour-aligned depth of the same frames (all frames' pixels together)."""
+    simulated: list[NDArray[np.float32]] = []
+    record_scene(scene_path, seed, out, frames, config=config,
+                 on_frame=lambda raw: simulated.append(raw.aligned_depth_m))
+    recorded = _recorded_depth(out, frames)
+    return depth_stats(np.concatenate([r.ravel() for r in recorded]), np.concatenate([s.ravel() for s in simulated]))
+
+
+def compare_case(scene_path: Path, seed: int, frames: int, detector: DetectorKind, folder: Path) -> CaseResult:
+    config = load_scene(scene_path)
+    calibration, _ = calibration_for_scene(config, scene_path, None)
+    name = scene_path.stem
+    recording = folder / f"{name}_{seed}.db3"
+    noisy = _depth(scene_path, config, seed, frames, recording)
+    quiet = config.model_copy(update={"camera": config.camera.model_copy(
+        update={"noise": config.camera.noise.model_copy(update={"enabled": False})})})
+    noise_free = _depth(scene_path, quiet, seed, frames, folder / f"{name}_{seed}_noise_free.db3")
+    from_file = run_perceive(PerceiveRequest(SourceSpec.recording(recording), calibration, detector, frames))
+    from_scene = run_perceive(PerceiveRequest(SourceSpec.simulated(scene_path, seed), None, detector, frames))
+    count_a, count_b, same, centroid, grasp_mm, grasp_deg, classes = _objects_compared(from_file, from_scene)
+    return CaseResult(name, seed, count_a, count_b, same, centroid, grasp_mm, grasp_deg, noisy, noise_free, classes)
+
+
+def compare_cases(scenes: Iterable[Path], seeds: Iterable[int], frames: int, detector: DetectorKind,
+                  folder: Path | None = None) -> CompareReport:
+    seeds = list(seeds)
+    with tempfile.TemporaryDirectory(prefix="bt-grasp-compare-") as tmp:
+        where = Path(folder) if folder is not None else Path(tmp)
+        where.mkdir(parents=True, exist_ok=True)
+        cases = tuple(compare_case(Path(scene), seed, frames, detector, where) for scene in scenes for seed in seeds)
+    return CompareReport(cases)
