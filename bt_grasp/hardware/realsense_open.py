@@ -82,10 +82,10 @@ def choose_device(context: Any, serial: str | None) -> Any:
     if serial:
         if serial not in serials:
             raise DeviceError("--device", f"no RealSense device with serial number {serial} is connected "
-                              f"(connected: {', '.join(serials)})")
+                              f"(connected: {', '.join(sorted(serials))})")
         return devices[serials.index(serial)]
     if len(devices) > 1:
-        raise DeviceError("--device", f"{len(devices)} RealSense devices are connected ({', '.join(serials)}); "
+        raise DeviceError("--device", f"{len(devices)} RealSense devices are connected ({', '.join(sorted(serials))}); "
                           "name one: --device SERIAL")
     return devices[0]
 

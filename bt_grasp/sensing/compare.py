@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 import tempfile
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -46,10 +46,48 @@ class DepthStats:
     valid_recorded: float  # fraction valid in the aligned recording
     valid_simulated: float
 
+    def as_json(self) -> dict[str, float | None]:
+        values = {"median_abs_mm": self.median_abs_mm, "median_mm": self.median_mm, "p95_abs_mm": self.p95_abs_mm,
+                  "valid_both": self.valid_both, "valid_recorded": self.valid_recorded,
+                  "valid_simulated": self.valid_simulated}
+        return {k: (v if math.isfinite(v) else None) for k, v in values.items()}  # strict JSON has no infinity
+
+
+#: distance bins of the measured depth noise, m
+NOISE_BINS_M = ((0.3, 0.5), (0.5, 0.7), (0.7, 0.9), (0.9, 1.1), (1.1, 1.3))
+
+
+@dataclass(frozen=True)
+class NoiseBin:
+    """The noise the recording path delivers at one distance: aligned noisy minus aligned noise-free depth."""
+
+    low_m: float
+    high_m: float
+    pixels: int
+    rms_mm: float  # after dropping differences over 5 times the model's sigma (edge dropouts, align's fills)
+    median_mm: float  # the bias rs.align's nearest-wins fill leaves on noisy depth
+    model_rms_mm: float  # the noise model's sigma at the bin's middle distance
+
     def as_json(self) -> dict[str, float]:
-        return {"median_abs_mm": self.median_abs_mm, "median_mm": self.median_mm, "p95_abs_mm": self.p95_abs_mm,
-                "valid_both": self.valid_both, "valid_recorded": self.valid_recorded,
-                "valid_simulated": self.valid_simulated}
+        return {"low_m": self.low_m, "high_m": self.high_m, "pixels": float(self.pixels), "rms_mm": self.rms_mm,
+                "median_mm": self.median_mm, "model_rms_mm": self.model_rms_mm}
+
+
+def noise_bins(noisy: NDArray[np.float32], quiet: NDArray[np.float32], model_rms_m: Callable[[float], float]
+               ) -> tuple[NoiseBin, ...]:
+    both = (noisy > 0) & (quiet > 0)
+    z, diff = quiet[both].astype(np.float64), (noisy[both].astype(np.float64) - quiet[both].astype(np.float64))
+    out = []
+    for low, high in NOISE_BINS_M:
+        sigma = model_rms_m(0.5 * (low + high))
+        sel = (z >= low) & (z < high)
+        d = diff[sel]
+        d = d[np.abs(d) <= 5 * sigma]
+        if d.size < 100:
+            continue
+        out.append(NoiseBin(low, high, int(d.size), float(np.sqrt(np.mean(d ** 2)) * 1000),
+                            float(np.median(d) * 1000), sigma * 1000))
+    return tuple(out)
 
 
 def depth_stats(recorded: NDArray[np.float32], simulated: NDArray[np.float32]) -> DepthStats:
@@ -75,6 +113,7 @@ class CaseResult:
     depth_noisy: DepthStats
     depth_noise_free: DepthStats
     classes: tuple[str, ...]
+    noise: tuple[NoiseBin, ...] = ()
 
     @property
     def passed(self) -> bool:
@@ -88,7 +127,8 @@ class CaseResult:
                 "objects_simulated": self.objects_simulated, "same_classes": self.same_classes,
                 "classes": list(self.classes), "centroid_mm": self.centroid_mm, "grasp_mm": self.grasp_mm,
                 "grasp_deg": self.grasp_deg, "depth_noisy": self.depth_noisy.as_json(),
-                "depth_noise_free": self.depth_noise_free.as_json(), "passed": self.passed}
+                "depth_noise_free": self.depth_noise_free.as_json(), "noise": [b.as_json() for b in self.noise],
+                "passed": self.passed}
 
 
 @dataclass(frozen=True)
@@ -99,8 +139,22 @@ class CompareReport:
     def all_pass(self) -> bool:
         return all(c.passed for c in self.cases)
 
+    def noise_by_distance(self) -> tuple[NoiseBin, ...]:
+        """Every case's noise bins pooled (RMS weighted by pixels; the median is the pixel-weighted mean of the
+        cases' medians)."""
+        pooled = []
+        for low, high in NOISE_BINS_M:
+            bins = [b for c in self.cases for b in c.noise if (b.low_m, b.high_m) == (low, high)]
+            n = sum(b.pixels for b in bins)
+            if n:
+                rms = math.sqrt(sum(b.pixels * b.rms_mm ** 2 for b in bins) / n)
+                median = sum(b.pixels * b.median_mm for b in bins) / n
+                pooled.append(NoiseBin(low, high, n, rms, median, bins[0].model_rms_mm))
+        return tuple(pooled)
+
     def as_json(self) -> dict[str, object]:
         return {"cases": [c.as_json() for c in self.cases], "all_pass": self.all_pass,
+                "noise_by_distance": [b.as_json() for b in self.noise_by_distance()],
                 "tolerances": {"centroid_mm": CENTROID_TOLERANCE_MM, "grasp_mm": GRASP_TOLERANCE_MM,
                                "grasp_deg": GRASP_TOLERANCE_DEG, "depth_median_mm": DEPTH_TOLERANCE_MM}}
 
@@ -115,6 +169,11 @@ class CompareReport:
                        f"{c.grasp_mm:7.4f}/{c.grasp_deg:6.4f} {c.depth_noise_free.median_abs_mm:17.3f} "
                        f"{c.depth_noisy.median_abs_mm:9.3f},{c.depth_noisy.median_mm:8.3f} "
                        f"{'pass' if c.passed else 'FAIL'}")
+        pooled = self.noise_by_distance()
+        if pooled:
+            out.append("depth noise through the recording path (aligned noisy minus aligned noise-free), all cases:")
+            out.extend(f"  {b.low_m:.1f}-{b.high_m:.1f} m: RMS {b.rms_mm:.2f} mm (model {b.model_rms_mm:.2f} mm), "
+                       f"median {b.median_mm:+.2f} mm, {b.pixels} pixels" for b in pooled)
         out.append(f"{sum(c.passed for c in self.cases)} of {len(self.cases)} cases pass (centroids <= "
                    f"{CENTROID_TOLERANCE_MM} mm, top grasp <= {GRASP_TOLERANCE_MM} mm and {GRASP_TOLERANCE_DEG} deg, "
                    f"noise-free aligned depth median <= {DEPTH_TOLERANCE_MM} mm)")
@@ -159,14 +218,15 @@ def _recorded_depth(path: Path, count: int) -> list[NDArray[np.float32]]:
     return out
 
 
-def _depth(scene_path: Path, config: Scene, seed: int, frames: int, out: Path) -> DepthStats:
+def _depth(scene_path: Path, config: Scene, seed: int, frames: int, out: Path
+           ) -> tuple[DepthStats, NDArray[np.float32]]:
     """Record ``config`` (its noise model as it is), play the recording back, compare its aligned depth with the
-    simulator's colour-aligned depth of the same frames (all frames' pixels together)."""
+    simulator's colour-aligned depth of the same frames (all frames' pixels together); also the aligned depth."""
     simulated: list[NDArray[np.float32]] = []
     record_scene(scene_path, seed, out, frames, config=config,
                  on_frame=lambda raw: simulated.append(raw.aligned_depth_m))
-    recorded = _recorded_depth(out, frames)
-    return depth_stats(np.concatenate([r.ravel() for r in recorded]), np.concatenate([s.ravel() for s in simulated]))
+    recorded = np.concatenate([r.ravel() for r in _recorded_depth(out, frames)])
+    return depth_stats(recorded, np.concatenate([s.ravel() for s in simulated])), recorded
 
 
 def compare_case(scene_path: Path, seed: int, frames: int, detector: DetectorKind, folder: Path) -> CaseResult:
@@ -174,14 +234,19 @@ def compare_case(scene_path: Path, seed: int, frames: int, detector: DetectorKin
     calibration, _ = calibration_for_scene(config, scene_path, None)
     name = scene_path.stem
     recording = folder / f"{name}_{seed}.db3"
-    noisy = _depth(scene_path, config, seed, frames, recording)
+    noisy, noisy_depth = _depth(scene_path, config, seed, frames, recording)
     quiet = config.model_copy(update={"camera": config.camera.model_copy(
         update={"noise": config.camera.noise.model_copy(update={"enabled": False})})})
-    noise_free = _depth(scene_path, quiet, seed, frames, folder / f"{name}_{seed}_noise_free.db3")
+    noise_free, quiet_depth = _depth(scene_path, quiet, seed, frames, folder / f"{name}_{seed}_noise_free.db3")
+    from bt_grasp.sim.noise import depth_rms_m
+
+    model = config.camera.noise
+    bins = noise_bins(noisy_depth, quiet_depth, lambda z: float(depth_rms_m(z, model)))
     from_file = run_perceive(PerceiveRequest(SourceSpec.recording(recording), calibration, detector, frames))
     from_scene = run_perceive(PerceiveRequest(SourceSpec.simulated(scene_path, seed), None, detector, frames))
     count_a, count_b, same, centroid, grasp_mm, grasp_deg, classes = _objects_compared(from_file, from_scene)
-    return CaseResult(name, seed, count_a, count_b, same, centroid, grasp_mm, grasp_deg, noisy, noise_free, classes)
+    return CaseResult(name, seed, count_a, count_b, same, centroid, grasp_mm, grasp_deg, noisy, noise_free, classes,
+                      bins)
 
 
 def compare_cases(scenes: Iterable[Path], seeds: Iterable[int], frames: int, detector: DetectorKind,

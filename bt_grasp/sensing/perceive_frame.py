@@ -59,27 +59,32 @@ class Perceiver:
             # as DetectorLeaf loads the shipped model: decoded down to the tentative score
             self._learned = LearnedDetector.load(model_path("", None), imgsz=None, conf=TENTATIVE_SCORE)
         self._q_home = np.asarray(scene.robot.home_q_rad, dtype=np.float64)
+        from bt_grasp.perception.camera_frame import table_config
+
+        #: the settings without a calibration: the region of interest around the table frame's origin
+        self._table_config = table_config(config)
 
     def perceive(self, frame: RGBDFrame, placement: Placement | None) -> FramePerception:
         if placement is None:
             result = PerceptionResult(PerceptionStatus.NO_POINTS, message="no table plane in the frame (no "
                                       "calibration: the frame itself must show the table)")
             return FramePerception(frame, None, result, ())
-        result = self._objects(frame, placement.T_pipeline_camera)
+        config = self.config if placement.calibrated else self._table_config
+        result = self._objects(frame, placement.T_pipeline_camera, config)
         grasps = tuple(self._grasps(det, result, placement) for det in result.others)
         return FramePerception(frame, placement, result, grasps)
 
-    def _objects(self, frame: RGBDFrame, T: Mat4) -> PerceptionResult:
+    def _objects(self, frame: RGBDFrame, T: Mat4, config: PerceptionConfig) -> PerceptionResult:
         from bt_grasp.behaviours.fixture_mask import without_fixtures
         from bt_grasp.perception.pipeline import perceive
 
         if self._learned is None:
-            result = perceive(frame, T, self.config, None)
+            result = perceive(frame, T, config, None)
         else:
             from bt_grasp.perception.learned import join_boxes
 
             found = self._learned.detect(frame.color)
-            result = join_boxes(perceive(frame, T, self.config), found.boxes, frame, T, self.config, None)
+            result = join_boxes(perceive(frame, T, config), found.boxes, frame, T, config, None)
             result = replace(result, timings_ms={**result.timings_ms, "detector_network": found.network_ms,
                                                  "detector_decode": found.decode_ms})
         return without_fixtures(result, self.scene)

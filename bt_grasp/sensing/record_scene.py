@@ -54,12 +54,14 @@ def record_scene(scene: str | Path, seed: int, out: str | Path, frames: int = 1,
     """Record ``frames`` frames of the scene's simulated D435 into ``out`` (see the module docstring). ``config``:
     the scene already loaded (or changed: a comparison without the noise model); ``on_frame``: sees each frame
     recorded."""
+    from bt_grasp.hardware.realsense_lib import pyrealsense2
     from bt_grasp.hardware.software_d435 import SoftwareD435
     from bt_grasp.sensing.scene_camera import simulated_d435, streams_of, tool_pose
 
     if frames < 1:
         raise InputError("--frames", f"a recording holds at least one frame, not {frames}")
     out = check_recording_output(out)
+    pyrealsense2("writing a RealSense recording")  # before the simulator is built
     sim = simulated_d435(scene, seed, mount, config)
     actual_mount = sim.world.camera_mount
     partial = out.with_name(f".{out.stem}.partial.db3")
