@@ -202,6 +202,9 @@ class RealSenseCamera:
             with contextlib.suppress(RuntimeError):  # stopped already (a device unplugged)
                 self._pipeline.stop()
             self._pipeline = None
+            self._playback = None
+            self._filters = []  # the processing blocks go with the pipeline that fed them
+            self._ended = True
 
     def __enter__(self) -> RealSenseCamera:
         return self

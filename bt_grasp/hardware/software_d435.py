@@ -52,6 +52,10 @@ class D435Streams:
     name: str = SIMULATED_NAME
 
 
+def _ignore(event: Any) -> None:
+    return None
+
+
 def rs_intrinsics(rs: Any, i: CameraIntrinsics, model: Any) -> Any:
     """``rs.intrinsics`` of a pinhole camera (zero distortion coefficients, the given model)."""
     out = rs.intrinsics()
@@ -107,8 +111,15 @@ class SoftwareD435:
 
     def add_to(self, context: Any) -> None:
         """Make the device one of ``context``'s devices (found by serial number; see the module docstring)."""
-        context.set_devices_changed_callback(lambda event: self._kept.append(event.get_new_devices()))
+        kept = self._kept
+        context.set_devices_changed_callback(lambda event: kept.append(event.get_new_devices()))
         self.device.add_to(context)
+
+    def release(self, context: Any) -> None:
+        """After the pipeline that read it stopped: the context's notification no longer reaches this device, and the
+        device lists kept for it are let go."""
+        context.set_devices_changed_callback(_ignore)
+        self._kept.clear()
 
     # -- recorded --------------------------------------------------------------------------------------------------
 

@@ -17,6 +17,7 @@ import tempfile
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -28,6 +29,10 @@ from bt_grasp.scene.format import Scene, load_scene
 from bt_grasp.sensing.perceive_run import PerceiveRequest, PerceiveSummary, run_perceive
 from bt_grasp.sensing.record_scene import record_scene
 from bt_grasp.sensing.source_spec import SourceSpec
+
+if TYPE_CHECKING:
+    from bt_grasp.perception.results import Detection
+    from bt_grasp.sim.simulated_d435 import D435Frame
 
 CENTROID_TOLERANCE_MM = 1.0
 GRASP_TOLERANCE_MM = 1.0
@@ -114,6 +119,7 @@ class CaseResult:
     depth_noise_free: DepthStats
     classes: tuple[str, ...]
     noise: tuple[NoiseBin, ...] = ()
+    alignment: AlignmentEffect | None = None
 
     @property
     def passed(self) -> bool:
@@ -128,6 +134,7 @@ class CaseResult:
                 "classes": list(self.classes), "centroid_mm": self.centroid_mm, "grasp_mm": self.grasp_mm,
                 "grasp_deg": self.grasp_deg, "depth_noisy": self.depth_noisy.as_json(),
                 "depth_noise_free": self.depth_noise_free.as_json(), "noise": [b.as_json() for b in self.noise],
+                "alignment": self.alignment.as_json() if self.alignment else None,
                 "passed": self.passed}
 
 
@@ -169,6 +176,16 @@ class CompareReport:
                        f"{c.grasp_mm:7.4f}/{c.grasp_deg:6.4f} {c.depth_noise_free.median_abs_mm:17.3f} "
                        f"{c.depth_noisy.median_abs_mm:9.3f},{c.depth_noisy.median_mm:8.3f} "
                        f"{'pass' if c.passed else 'FAIL'}")
+        effects = [c.alignment for c in self.cases if c.alignment is not None and c.alignment.matched]
+        if effects:
+            out.append("what the depth imager's offset and rs.align do to perception, noise-free (recording minus the "
+                       "simulator's own aligned depth), all cases: "
+                       f"centroids {np.median([e.centroid_median_mm for e in effects]):.2f} mm median, "
+                       f"{max(e.centroid_max_mm for e in effects):.2f} mm at most; footprints "
+                       f"{np.median([e.footprint_median_mm for e in effects]):+.2f} mm, heights "
+                       f"{np.median([e.height_median_mm for e in effects]):+.2f} mm (medians of the cases' medians); "
+                       f"{sum(e.objects_recorded for e in effects)} objects seen in the recordings, "
+                       f"{sum(e.objects_simulated for e in effects)} in the simulator's depth")
         pooled = self.noise_by_distance()
         if pooled:
             out.append("depth noise through the recording path (aligned noisy minus aligned noise-free), all cases:")
@@ -219,14 +236,77 @@ def _recorded_depth(path: Path, count: int) -> list[NDArray[np.float32]]:
 
 
 def _depth(scene_path: Path, config: Scene, seed: int, frames: int, out: Path
-           ) -> tuple[DepthStats, NDArray[np.float32]]:
+           ) -> tuple[DepthStats, NDArray[np.float32], list[D435Frame]]:
     """Record ``config`` (its noise model as it is), play the recording back, compare its aligned depth with the
-    simulator's colour-aligned depth of the same frames (all frames' pixels together); also the aligned depth."""
-    simulated: list[NDArray[np.float32]] = []
-    record_scene(scene_path, seed, out, frames, config=config,
-                 on_frame=lambda raw: simulated.append(raw.aligned_depth_m))
+    simulator's colour-aligned depth of the same frames (all frames' pixels together); also the aligned depth and
+    the simulator's frames."""
+    simulated: list[D435Frame] = []
+    record_scene(scene_path, seed, out, frames, config=config, on_frame=simulated.append)
     recorded = np.concatenate([r.ravel() for r in _recorded_depth(out, frames)])
-    return depth_stats(recorded, np.concatenate([s.ravel() for s in simulated])), recorded
+    own = np.concatenate([s.aligned_depth_m.ravel() for s in simulated])
+    return depth_stats(recorded, own), recorded, simulated
+
+
+@dataclass(frozen=True)
+class AlignmentEffect:
+    """What the depth imager's offset and ``rs.align`` do to perception, without noise: the objects perceived in
+    the recording against those perceived in the simulator's own colour-aligned depth of the same frames (matched
+    by nearest centroid, within 3 cm)."""
+
+    objects_recorded: int
+    objects_simulated: int
+    matched: int
+    centroid_max_mm: float
+    centroid_median_mm: float
+    footprint_median_mm: float  # recorded minus simulated length and width, median (align's fill widens objects)
+    height_median_mm: float
+
+    def as_json(self) -> dict[str, float | None]:
+        values = {"objects_recorded": float(self.objects_recorded), "objects_simulated": float(self.objects_simulated),
+                  "matched": float(self.matched), "centroid_max_mm": self.centroid_max_mm,
+                  "centroid_median_mm": self.centroid_median_mm, "footprint_median_mm": self.footprint_median_mm,
+                  "height_median_mm": self.height_median_mm}
+        return {k: (v if math.isfinite(v) else None) for k, v in values.items()}
+
+
+def _alignment_effect(scene_path: Path, config: Scene, recording: Path, simulated: list[D435Frame],
+                      calibration: Path | None, detector: DetectorKind) -> AlignmentEffect:
+    from bt_grasp.interfaces import Mount, RGBDFrame
+    from bt_grasp.perception.config import PerceptionConfig
+    from bt_grasp.sensing.open_source import open_source
+    from bt_grasp.sensing.perceive_frame import Perceiver
+    from bt_grasp.sensing.scene_camera import tool_pose
+
+    from_file = run_perceive(PerceiveRequest(SourceSpec.recording(recording), calibration, detector, len(simulated)))
+    recorded = [o for f in from_file.reports for o in f.objects]
+    opened = open_source(SourceSpec.recording(recording), calibration)  # the placer, the source's intrinsics
+    opened.close()
+    intrinsics = opened.camera.intrinsics
+    poses = {raw.stamp_ns: tool_pose(config, raw.q_rad, raw.stamp_ns) for raw in simulated}
+    placer = opened.placer
+    if placer.calibration is not None and placer.calibration.mount == Mount.EYE_IN_HAND:
+        from bt_grasp.sensing.placement import FramePlacer
+
+        placer = FramePlacer(placer.calibration, placer.calibration_path, poses.get, "simulated arm")
+    perceiver = Perceiver(PerceptionConfig.for_scene(config), config, detector)
+    own: list[Detection] = []
+    for raw in simulated:
+        frame = RGBDFrame(raw.color, raw.aligned_depth_m, intrinsics, raw.stamp_ns, opened.camera.mount)
+        seen = perceiver.perceive(frame, placer.place(frame, perceiver.config))
+        own.extend(seen.result.others)
+    pairs = []
+    for obj in recorded:
+        best = min(own, key=lambda d: float(np.linalg.norm(np.subtract(d.centroid_base_m, obj.centroid_m))),
+                   default=None)
+        if best is not None and np.linalg.norm(np.subtract(best.centroid_base_m, obj.centroid_m)) < 0.03:
+            pairs.append((obj, best))
+    if not pairs:
+        return AlignmentEffect(len(recorded), len(own), 0, math.nan, math.nan, math.nan, math.nan)
+    offsets = [1000 * float(np.linalg.norm(np.subtract(d.centroid_base_m, o.centroid_m))) for o, d in pairs]
+    footprint = [1000 * (o.size_m[i] - d.size_m[i]) for o, d in pairs for i in (0, 1)]
+    height = [1000 * (o.size_m[2] - d.size_m[2]) for o, d in pairs]
+    return AlignmentEffect(len(recorded), len(own), len(pairs), max(offsets), float(np.median(offsets)),
+                           float(np.median(footprint)), float(np.median(height)))
 
 
 def compare_case(scene_path: Path, seed: int, frames: int, detector: DetectorKind, folder: Path) -> CaseResult:
@@ -234,10 +314,13 @@ def compare_case(scene_path: Path, seed: int, frames: int, detector: DetectorKin
     calibration, _ = calibration_for_scene(config, scene_path, None)
     name = scene_path.stem
     recording = folder / f"{name}_{seed}.db3"
-    noisy, noisy_depth = _depth(scene_path, config, seed, frames, recording)
+    noisy, noisy_depth, _ = _depth(scene_path, config, seed, frames, recording)
     quiet = config.model_copy(update={"camera": config.camera.model_copy(
         update={"noise": config.camera.noise.model_copy(update={"enabled": False})})})
-    noise_free, quiet_depth = _depth(scene_path, quiet, seed, frames, folder / f"{name}_{seed}_noise_free.db3")
+    quiet_recording = folder / f"{name}_{seed}_noise_free.db3"
+    noise_free, quiet_depth, quiet_frames = _depth(scene_path, quiet, seed, frames, quiet_recording)
+    alignment = _alignment_effect(scene_path, quiet, quiet_recording, quiet_frames, calibration,
+                                  detector)
     from bt_grasp.sim.noise import depth_rms_m
 
     model = config.camera.noise
@@ -246,7 +329,7 @@ def compare_case(scene_path: Path, seed: int, frames: int, detector: DetectorKin
     from_scene = run_perceive(PerceiveRequest(SourceSpec.simulated(scene_path, seed), None, detector, frames))
     count_a, count_b, same, centroid, grasp_mm, grasp_deg, classes = _objects_compared(from_file, from_scene)
     return CaseResult(name, seed, count_a, count_b, same, centroid, grasp_mm, grasp_deg, noisy, noise_free, classes,
-                      bins)
+                      bins, alignment)
 
 
 def compare_cases(scenes: Iterable[Path], seeds: Iterable[int], frames: int, detector: DetectorKind,

@@ -141,4 +141,7 @@ class SceneD435Camera:
         return self.camera.capture()
 
     def close(self) -> None:
+        """Stop the pipeline, then let go of the software device before its context, the context's notification
+        first (pyrealsense2 calls it from its own thread: it must not outlive what it reaches)."""
         self.camera.close()
+        self.device.release(self._context)
