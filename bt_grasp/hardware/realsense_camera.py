@@ -6,7 +6,8 @@ One class for a live device and for a recording, as in librealsense itself: both
 1. waits for a frame set holding a depth and a colour frame neither of which was used before, taken together
    (their device timestamps within half a frame period: the pipeline's syncer also hands out sets that pair a new
    frame with the other stream's previous one); none within ``timeout_ms`` of wall time is a dropped frame (None),
-   and so is the end of a recording;
+   and so is the end of a recording (known from the playback's status; a file's frames are awaited up to
+   :data:`PLAYBACK_TIMEOUT_MS`);
 2. runs the depth post-processing filters of the settings (``bt_grasp.hardware.realsense_settings``);
 3. aligns depth to colour with the library's own ``rs.align(rs.stream.color)``: depth then lies in the colour
    picture's pixels, with the colour imager's intrinsics, as :class:`bt_grasp.interfaces.RGBDFrame` wants it;
@@ -37,6 +38,10 @@ log = logging.getLogger(__name__)
 
 #: while a recording plays, wait this long at a time, checking between waits whether it ended
 _PLAYBACK_POLL_MS = 100
+#: a recording is read, not streamed: its next frame comes when the file reader gets to it (not in real time), so
+#: its end is known from the playback's status, and only a reader stuck this long counts as a dropped frame (a
+#: 1 s limit lost a whole recording's frames once on this 2-core machine shared by several test runs)
+PLAYBACK_TIMEOUT_MS = 30_000
 
 
 @dataclass(frozen=True)
@@ -141,12 +146,13 @@ class RealSenseCamera:
     def _next_pair(self) -> tuple[Any, int] | None:
         if self._ended:
             return None
-        timeout_s = self._settings.timeout_ms / 1000.0
-        deadline = time.monotonic() + timeout_s
+        timeout_ms = self._settings.timeout_ms if self._playback is None else max(self._settings.timeout_ms,
+                                                                                   PLAYBACK_TIMEOUT_MS)
+        deadline = time.monotonic() + timeout_ms / 1000.0
         while True:
             remaining_ms = int((deadline - time.monotonic()) * 1000)
             if remaining_ms <= 0:
-                log.info("%s: no frame within %d ms (a dropped frame)", self.source, self._settings.timeout_ms)
+                log.info("%s: no frame within %d ms (a dropped frame)", self.source, timeout_ms)
                 return None
             wait_ms = min(remaining_ms, _PLAYBACK_POLL_MS) if self._playback is not None else remaining_ms
             ok, frames = self._pipeline.try_wait_for_frames(wait_ms)

@@ -55,6 +55,7 @@ def poses_path(recording: str | Path) -> Path:
 
 def write_poses(path: str | Path, poses: Iterable[ToolPose]) -> Path:
     """Write the poses file whole (``bt_grasp.output_files``: never half-written)."""
+    # deferred: written only when a recording is complete
     from bt_grasp.output_files import write_output_file
 
     text = "".join(pose.to_line() + "\n" for pose in poses)

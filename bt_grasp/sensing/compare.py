@@ -24,9 +24,13 @@ from numpy.typing import NDArray
 
 from bt_grasp.detector.kinds import DetectorKind
 from bt_grasp.geometry import rotation_angle_rad
+from bt_grasp.interfaces import Mount, RGBDFrame
 from bt_grasp.perception.calibration_file import calibration_for_scene
 from bt_grasp.scene.format import Scene, load_scene
+from bt_grasp.sensing.open_source import open_source
+from bt_grasp.sensing.perceive_frame import Perceiver
 from bt_grasp.sensing.perceive_run import PerceiveRequest, PerceiveSummary, run_perceive
+from bt_grasp.sensing.placement import FramePlacer
 from bt_grasp.sensing.record_scene import record_scene
 from bt_grasp.sensing.source_spec import SourceSpec
 
@@ -223,6 +227,7 @@ def _objects_compared(a: PerceiveSummary, b: PerceiveSummary) -> tuple[int, int,
 
 
 def _recorded_depth(path: Path, count: int) -> list[NDArray[np.float32]]:
+    # deferred: pyrealsense2 only when a RealSense source is asked for
     from bt_grasp.hardware.realsense_open import open_recording
 
     out = []
@@ -242,7 +247,10 @@ def _depth(scene_path: Path, config: Scene, seed: int, frames: int, out: Path
     the simulator's frames."""
     simulated: list[D435Frame] = []
     record_scene(scene_path, seed, out, frames, config=config, on_frame=simulated.append)
-    recorded = np.concatenate([r.ravel() for r in _recorded_depth(out, frames)])
+    played = _recorded_depth(out, frames)
+    if len(played) != len(simulated):
+        raise RuntimeError(f"{out}: {len(played)} of the {len(simulated)} frames recorded came back")
+    recorded = np.concatenate([r.ravel() for r in played])
     own = np.concatenate([s.aligned_depth_m.ravel() for s in simulated])
     return depth_stats(recorded, own), recorded, simulated
 
@@ -271,10 +279,10 @@ class AlignmentEffect:
 
 def _alignment_effect(scene_path: Path, config: Scene, recording: Path, simulated: list[D435Frame],
                       calibration: Path | None, detector: DetectorKind) -> AlignmentEffect:
-    from bt_grasp.interfaces import Mount, RGBDFrame
+    # deferred: open3d (~1 s) only when a frame is perceived
     from bt_grasp.perception.config import PerceptionConfig
-    from bt_grasp.sensing.open_source import open_source
-    from bt_grasp.sensing.perceive_frame import Perceiver
+
+    # deferred: the simulator only when a scene is asked for
     from bt_grasp.sensing.scene_camera import tool_pose
 
     from_file = run_perceive(PerceiveRequest(SourceSpec.recording(recording), calibration, detector, len(simulated)))
@@ -285,8 +293,6 @@ def _alignment_effect(scene_path: Path, config: Scene, recording: Path, simulate
     poses = {raw.stamp_ns: tool_pose(config, raw.q_rad, raw.stamp_ns) for raw in simulated}
     placer = opened.placer
     if placer.calibration is not None and placer.calibration.mount == Mount.EYE_IN_HAND:
-        from bt_grasp.sensing.placement import FramePlacer
-
         placer = FramePlacer(placer.calibration, placer.calibration_path, poses.get, "simulated arm")
     perceiver = Perceiver(PerceptionConfig.for_scene(config), config, detector)
     own: list[Detection] = []
@@ -321,6 +327,7 @@ def compare_case(scene_path: Path, seed: int, frames: int, detector: DetectorKin
     noise_free, quiet_depth, quiet_frames = _depth(scene_path, quiet, seed, frames, quiet_recording)
     alignment = _alignment_effect(scene_path, quiet, quiet_recording, quiet_frames, calibration,
                                   detector)
+    # deferred: the simulator (sapien) only when a scene is asked for
     from bt_grasp.sim.noise import depth_rms_m
 
     model = config.camera.noise

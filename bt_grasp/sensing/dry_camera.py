@@ -21,7 +21,7 @@ from bt_grasp.clock import ManualClock
 from bt_grasp.errors import InputError
 from bt_grasp.hardware.realsense_settings import RealSenseSettings
 from bt_grasp.interfaces import Mount
-from bt_grasp.robot_description import MAX_OPENING_M
+from bt_grasp.robot_description import ARM_JOINTS, MAX_OPENING_M
 from bt_grasp.sensing.open_source import OpenedSource, open_source
 from bt_grasp.sensing.source_spec import SourceKind, SourceSpec
 
@@ -37,8 +37,6 @@ class HomeArm:
 
     @property
     def joint_names(self) -> tuple[str, ...]:
-        from bt_grasp.robot_description import ARM_JOINTS
-
         return tuple(ARM_JOINTS)
 
     def joint_positions(self) -> NDArray[np.float64]:
@@ -77,6 +75,7 @@ class CameraDryRun:
 def open_camera_cell(spec: SourceSpec, calibration: Path | None, clock: ManualClock,
                      settings: RealSenseSettings = RealSenseSettings()) -> CameraDryRun:
     """Open the source and build the cell (see the module docstring); InputError for a wrist camera's source."""
+    # deferred: the leaves' package (py_trees) only when a tree or its view geometry is needed
     from bt_grasp.behaviours.cell import make_cell
 
     if spec.kind is SourceKind.SCENE:

@@ -70,12 +70,14 @@ def open_source(spec: SourceSpec, calibration: Path | None, settings: RealSenseS
         tool_pose, poses_name = poses.get, str(sidecar)
     placer = FramePlacer(cal, calibration, tool_pose, poses_name)
     if spec.kind is SourceKind.RECORDING:
+        # deferred: pyrealsense2 only when a RealSense source is asked for
         from bt_grasp.hardware.realsense_open import open_recording
 
         assert spec.path is not None
         camera = open_recording(spec.path, settings, mount)
         default_frames: int | None = None
     else:
+        # deferred: pyrealsense2 only when a RealSense source is asked for
         from bt_grasp.hardware.realsense_open import open_device
 
         camera = open_device(spec.serial or None, settings, mount)
@@ -89,6 +91,7 @@ def open_source(spec: SourceSpec, calibration: Path | None, settings: RealSenseS
 
 
 def _open_scene(spec: SourceSpec, calibration: Path | None, settings: RealSenseSettings) -> OpenedSource:
+    # deferred: the simulator only when a scene is asked for
     from bt_grasp.sensing.scene_camera import SceneD435Camera
 
     assert spec.scene is not None

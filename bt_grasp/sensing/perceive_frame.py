@@ -21,7 +21,7 @@ from bt_grasp.detector.kinds import DetectorKind, model_path
 from bt_grasp.geometry import Mat4
 from bt_grasp.interfaces import RGBDFrame
 from bt_grasp.perception.config import GraspSettings, PerceptionConfig
-from bt_grasp.perception.results import GraspResult, GraspStatus, PerceptionResult, PerceptionStatus
+from bt_grasp.perception.results import Detection, GraspResult, GraspStatus, PerceptionResult, PerceptionStatus
 from bt_grasp.scene.format import Scene
 from bt_grasp.sensing.placement import Placement
 
@@ -53,12 +53,16 @@ class Perceiver:
         self.grasp_settings = grasp_settings or GraspSettings()
         self._learned: LearnedDetector | None = None
         if detector is DetectorKind.LEARNED:
+            # deferred: onnxruntime only for the learned detector
             from bt_grasp.detector.inference import LearnedDetector
+
+            # deferred: open3d (~1 s) only when a frame is perceived
             from bt_grasp.perception.learned import TENTATIVE_SCORE
 
             # as DetectorLeaf loads the shipped model: decoded down to the tentative score
             self._learned = LearnedDetector.load(model_path("", None), imgsz=None, conf=TENTATIVE_SCORE)
         self._q_home = np.asarray(scene.robot.home_q_rad, dtype=np.float64)
+        # deferred: open3d (~1 s) only when a frame is perceived
         from bt_grasp.perception.camera_frame import table_config
 
         #: the settings without a calibration: the region of interest around the table frame's origin
@@ -75,12 +79,16 @@ class Perceiver:
         return FramePerception(frame, placement, result, grasps)
 
     def _objects(self, frame: RGBDFrame, T: Mat4, config: PerceptionConfig) -> PerceptionResult:
+        # deferred: the leaves' package (py_trees) only when a tree or its view geometry is needed
         from bt_grasp.behaviours.fixture_mask import without_fixtures
+
+        # deferred: open3d (~1 s) only when a frame is perceived
         from bt_grasp.perception.pipeline import perceive
 
         if self._learned is None:
             result = perceive(frame, T, config, None)
         else:
+            # deferred: open3d (~1 s) only when a frame is perceived
             from bt_grasp.perception.learned import join_boxes
 
             found = self._learned.detect(frame.color)
@@ -90,13 +98,14 @@ class Perceiver:
         return without_fixtures(result, self.scene)
 
     def _grasps(self, target: object, result: PerceptionResult, placement: Placement) -> GraspResult:
+        # deferred: open3d (~1 s) only when a frame is perceived
         from bt_grasp.perception.antipodal import rank_grasps
-        from bt_grasp.perception.results import Detection
 
         assert isinstance(target, Detection)
         if not placement.calibrated:
             return rank_grasps(target, result.others, self.grasp_settings,
                                viewpoint_base_m=tuple(float(v) for v in placement.T_pipeline_camera[:3, 3]))
+        # deferred: pinocchio and OMPL only when grasps are tested for reach or planned
         from bt_grasp.motion.planning_scene import fixture_boxes
 
         fixtures = [(box.T_base_shape, box.size_m) for box in fixture_boxes(self.scene)]
@@ -109,6 +118,7 @@ class Perceiver:
 
     def _reachable(self, T_grasp: NDArray[np.float64], T_pregrasp: NDArray[np.float64]) -> bool:
         """PlanGrasp's reach test from the home pose: the pre-grasp, then the grasp from there, have IK solutions."""
+        # deferred: pinocchio and OMPL only when grasps are tested for reach or planned
         from bt_grasp.motion.kinematics import default_kinematics
 
         kin = default_kinematics()

@@ -80,6 +80,7 @@ class PerceiveLog:
         rec.write_log(stamp, "INFO", "perceive", f"frame {report.index}: {report.status}: {report.message}")
 
     def _points(self, stamp: int, seen: FramePerception, T_out_camera: Mat4, frame_id: str) -> None:
+        # deferred: open3d (~1 s) only when a frame is perceived
         from bt_grasp.perception.cloud import depth_to_cloud, to_base
 
         frame = seen.frame

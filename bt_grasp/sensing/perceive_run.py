@@ -66,6 +66,7 @@ def _run(opened: OpenedSource, request: PerceiveRequest, on_frame: Callable[[Fra
     frames = request.frames if request.frames is not None else opened.default_frames
     writer = None
     if request.log is not None:
+        # deferred: the MCAP writer only with --log
         from bt_grasp.sensing.perceive_log import PerceiveLog
 
         metadata = {"command": "perceive", "source": request.source.describe(), "frame_id": frame_id,

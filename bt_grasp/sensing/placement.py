@@ -93,6 +93,7 @@ class FramePlacer:
         identity = np.eye(4)
         calibration = self.calibration
         if calibration is None:
+            # deferred: open3d (~1 s) only when a frame is perceived
             from bt_grasp.perception.camera_frame import pipeline_pose, table_frame
 
             T_camera_table = table_frame(frame, config)

@@ -39,6 +39,7 @@ class SceneRecording:
 
 def check_recording_output(out: str | Path) -> Path:
     """``--out``: a ``.db3`` path bt_grasp may write (pyrealsense2 2.59's recorder writes no other format)."""
+    # deferred: written only when a recording is complete
     from bt_grasp.output_files import check_output_file
 
     out = Path(out)
@@ -54,8 +55,13 @@ def record_scene(scene: str | Path, seed: int, out: str | Path, frames: int = 1,
     """Record ``frames`` frames of the scene's simulated D435 into ``out`` (see the module docstring). ``config``:
     the scene already loaded (or changed: a comparison without the noise model); ``on_frame``: sees each frame
     recorded."""
+    # deferred: pyrealsense2 only when a RealSense source is asked for
     from bt_grasp.hardware.realsense_lib import pyrealsense2
+
+    # deferred: pyrealsense2 only when a RealSense source is asked for
     from bt_grasp.hardware.software_d435 import SoftwareD435
+
+    # deferred: the simulator only when a scene is asked for
     from bt_grasp.sensing.scene_camera import simulated_d435, streams_of, tool_pose
 
     if frames < 1:

@@ -42,7 +42,10 @@ SETTLE_TICKS = 10
 def survey_joints(scene: Scene) -> NDArray[np.float64]:
     """The arm's joints at the survey view of an eye-in-hand camera (``LookAt view="workspace"``), from home, with
     the scene's nominal camera mount (installation data). ValueError when out of reach (a scene file's mistake)."""
+    # deferred: the leaves' package (py_trees) only when a tree or its view geometry is needed
     from bt_grasp.behaviours.viewing import SURVEY_DISTANCE_M, SURVEY_PULL_M, tool_pose_for_view
+
+    # deferred: pinocchio and OMPL only when grasps are tested for reach or planned
     from bt_grasp.motion.kinematics import default_kinematics
 
     mount = scene.camera.eye_in_hand
@@ -62,6 +65,7 @@ def survey_joints(scene: Scene) -> NDArray[np.float64]:
 def tool_pose(scene: Scene, q_rad: NDArray[np.float64], stamp_ns: int) -> ToolPose:
     """The eye-in-hand camera's parent link in the base frame at joints ``q_rad`` (the arm's forward kinematics,
     as a real controller reports it)."""
+    # deferred: pinocchio and OMPL only when grasps are tested for reach or planned
     from bt_grasp.motion.kinematics import default_kinematics
 
     link = scene.camera.eye_in_hand.parent_link
@@ -73,7 +77,10 @@ def simulated_d435(scene_path: str | Path, seed: int, mount: Mount | None = None
                    config: Scene | None = None) -> SimulatedD435:
     """The simulated cell's two imagers, ready for the first frame (see the module docstring); ``config``: the
     scene already loaded from ``scene_path`` (else it is loaded). Imports the simulator."""
+    # deferred: the simulator (sapien) only when a scene is asked for
     from bt_grasp.sim.simulated_d435 import SimulatedD435
+
+    # deferred: the simulator (sapien) only when a scene is asked for
     from bt_grasp.sim.world import World
 
     config = config if config is not None else load_scene(scene_path)
@@ -86,6 +93,7 @@ def simulated_d435(scene_path: str | Path, seed: int, mount: Mount | None = None
 
 def streams_of(sim: SimulatedD435, serial: str = SIMULATED_SERIAL) -> D435Streams:
     """The software device's streams for the simulated D435."""
+    # deferred: the simulator (sapien) only when a scene is asked for
     from bt_grasp.sim.simulated_d435 import FPS
 
     color: CameraIntrinsics = sim.world.camera.intrinsics
@@ -101,8 +109,13 @@ class SceneD435Camera:
 
     def __init__(self, scene_path: str | Path, seed: int, mount: Mount | None = None,
                  settings: RealSenseSettings = RealSenseSettings()) -> None:
+        # deferred: pyrealsense2 only when a RealSense source is asked for
         from bt_grasp.hardware.realsense_lib import pyrealsense2
+
+        # deferred: pyrealsense2 only when a RealSense source is asked for
         from bt_grasp.hardware.realsense_open import open_device
+
+        # deferred: the simulator (sapien) only when a scene is asked for
         from bt_grasp.sim.simulated_d435 import FPS
 
         rs = pyrealsense2("--scene (the simulated D435 is read through pyrealsense2)")
