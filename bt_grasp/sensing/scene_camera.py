@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bt_grasp.geometry import T_from_xyz_rpy, inv
-from bt_grasp.hardware.realsense_camera import RealSenseCamera
+from bt_grasp.hardware.realsense_camera import PLAYBACK_TIMEOUT_MS, RealSenseCamera
 from bt_grasp.hardware.realsense_settings import RealSenseSettings
 from bt_grasp.hardware.software_d435 import D435Streams, SoftwareD435
 from bt_grasp.hardware.tool_poses import ToolPose
@@ -127,7 +127,11 @@ class SceneD435Camera:
         self._context = rs.context()
         self.device.add_to(self._context)
         c = streams.color
-        live = dataclasses.replace(settings, width_px=c.width_px, height_px=c.height_px, fps=FPS, settle_frames=0)
+        # no auto exposure to settle; and each frame is pushed before it is waited for, so it always comes: the wall
+        # clock may not decide a simulated run's outcome, and the timeout only guards against a stuck library
+        timeout_ms = max(settings.timeout_ms, PLAYBACK_TIMEOUT_MS)
+        live = dataclasses.replace(settings, width_px=c.width_px, height_px=c.height_px, fps=FPS, settle_frames=0,
+                                   timeout_ms=timeout_ms)
         self.camera: RealSenseCamera = open_device(SIMULATED_SERIAL, live, self.sim.world.camera_mount,
                                                    self._context)
         self.tool_poses: dict[int, ToolPose] = {}
