@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import io
 import json
-from contextlib import ExitStack
 from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -216,26 +215,20 @@ def run_cmd(
         rules = tuple(parse_outcome(text) for text in outcome)
         plan = DryRunPlan(rules, random_seed, catalog, known_reason_names(registry))
         entries = parse_assignments(set_)
+        substitutions = _parse_substitutions(substitute)
         if calibration is not None and camera is None:
             raise InputError("--calibration", "is the camera's calibration: give it with --camera")
-        with ExitStack() as stack:
-            real: frozenset[str] = frozenset()
-            cell = None
-            if camera is not None:
-                from bt_grasp.sensing.dry_camera import REAL_LEAVES, open_camera_cell
-                from bt_grasp.sensing.source_spec import parse_camera_option
-
-                source = open_camera_cell(parse_camera_option(camera), calibration, clock)
-                stack.callback(source.close)
-                real, cell = REAL_LEAVES, source.cell
-            tree = load_dry(file, registry, plan, substitutions=_parse_substitutions(substitute), clock=clock,
-                            real=real)
+        if camera is None:
+            tree = load_dry(file, registry, plan, substitutions=substitutions, clock=clock)
             for key, value in entries.items():
                 tree.root_blackboard.set(key, value)
-            if cell is not None:
-                for node in tree.nodes():
-                    node.setup(cell=cell)
             result = run_dry(tree, clock, max_ticks, 1.0 / tick_hz)
+        else:
+            from bt_grasp.sensing.dry_camera import dry_run_on_camera
+            from bt_grasp.sensing.source_spec import parse_camera_option
+
+            result = dry_run_on_camera(file, registry, plan, parse_camera_option(camera), calibration, clock,
+                                       max_ticks, 1.0 / tick_hz, substitutions=substitutions, entries=entries)
     except InputError as exc:
         raise _fail(exc) from None
     status = result.status

@@ -11,8 +11,10 @@ and run for real in every dry run. A wrist camera is refused: its frames were ta
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -24,6 +26,10 @@ from bt_grasp.interfaces import Mount
 from bt_grasp.robot_description import ARM_JOINTS, MAX_OPENING_M
 from bt_grasp.sensing.open_source import OpenedSource, open_source
 from bt_grasp.sensing.source_spec import SourceKind, SourceSpec
+
+if TYPE_CHECKING:
+    from bt_grasp.tree.dry_run import DryRunPlan, DryRunResult
+    from bt_grasp.tree.registry import NodeRegistry
 
 #: robot leaves that run for real on the camera's frames (every other robot leaf stays a stand-in)
 REAL_LEAVES = frozenset({"Perceive", "PerceiveAll", "PlanGrasp"})
@@ -91,3 +97,23 @@ def open_camera_cell(spec: SourceSpec, calibration: Path | None, clock: ManualCl
     cell = make_cell(arm, opened.camera, clock, scene, 0, calibration=opened.placer.calibration)
     cell.perception_config = opened.perception_config
     return CameraDryRun(opened, cell)
+
+
+def dry_run_on_camera(file: Path, registry: NodeRegistry, plan: DryRunPlan, spec: SourceSpec, calibration: Path | None,
+                      clock: ManualClock, max_ticks: int, dt_s: float, *, substitutions: Mapping[str, str],
+                      entries: Mapping[str, object]) -> DryRunResult:
+    """Open the source, load ``file`` as a dry run with :data:`REAL_LEAVES` real and set up with the cell, set the
+    blackboard ``entries``, tick it (``bt_grasp.tree.dry_run.run_dry``), close the source."""
+    # deferred: the tree package (py_trees) only when a tree runs
+    from bt_grasp.tree.dry_run import load_dry, run_dry
+
+    source = open_camera_cell(spec, calibration, clock)
+    try:
+        tree = load_dry(file, registry, plan, substitutions=substitutions, clock=clock, real=REAL_LEAVES)
+        for key, value in entries.items():
+            tree.root_blackboard.set(key, value)
+        for node in tree.nodes():
+            node.setup(cell=source.cell)
+        return run_dry(tree, clock, max_ticks, dt_s)
+    finally:
+        source.close()
