@@ -26,12 +26,3 @@ def pyrealsense2(what: str = "a RealSense camera") -> ModuleType:
     except ImportError:
         raise RealSenseUnavailable(what) from None
     return rs
-
-
-def available() -> bool:
-    """Whether pyrealsense2 can be imported (imports it)."""
-    try:
-        pyrealsense2()
-    except RealSenseUnavailable:
-        return False
-    return True

@@ -65,12 +65,6 @@ def _check_color_format(rs: Any, profile: Any, source: str | Path, pipeline: Any
         raise RecordingError(source, f"streams colour as {fmt}; bt_grasp reads {', '.join(COLOR_FORMATS)}")
 
 
-def connected_serials(context: Any) -> list[str]:
-    rs = pyrealsense2()
-    return [str(d.get_info(rs.camera_info.serial_number)) for d in context.query_devices()
-            if d.supports(rs.camera_info.serial_number)]
-
-
 def choose_device(context: Any, serial: str | None) -> Any:
     """The device with ``serial`` (or the only one when None) among ``context``'s; DeviceError otherwise."""
     rs = pyrealsense2("a live RealSense camera")
