@@ -35,7 +35,7 @@ FLOORS: dict[str, int] = {
     "behaviours": 5, "recording": 5, "control": 5,  # robot leaves; MCAP logs; the control API
     "faults": 6, "sim": 6, "hardware": 6, "nodes": 6,  # wrappers; the simulator; real devices; the node API
     "foxglove": 7,  # the viewer front end (live server, control bridge, layouts)
-    "episode": 8,  # composes one run
+    "episode": 8, "sensing": 8,  # composes one run; perception on a camera source (no motion)
     "campaign": 9, "resident": 9,  # many episodes; the warm resident process
     "bench": 10,  # developer benchmarks (may read ground truth)
     "cli": 11,  # parses and prints

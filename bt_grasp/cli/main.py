@@ -38,6 +38,8 @@ COMMAND_MODULES: dict[str, tuple[str, ...]] = {
     "resident": ("resident_cmd",),
     "detector": ("detector_cmd",),
     "twin": ("twin_cmd",),
+    "perceive": ("perceive_cmd",),
+    "camera": ("camera_cmd",),
 }
 
 
@@ -95,6 +97,10 @@ def main(argv: list[str] | None = None) -> int:
         from bt_grasp.cli.run_cmd import fill_optional_values
 
         args = fill_optional_values(args)
+    if args[:1] and args[0] in ("perceive", "camera"):  # --device [SERIAL]
+        from bt_grasp.cli.device_option import fill_device_value
+
+        args = fill_device_value(args)
     try:
         rv = app(args=args, standalone_mode=False, prog_name="bt-grasp")  # also names the completion variable
     except BtGraspError as exc:  # its text may quote a file or a peer: control characters are shown, not obeyed

@@ -187,12 +187,19 @@ def run_cmd(
         False, "--json", help="Print one JSON object: status, ticks, blackboard, walk (per tick, the statuses)."
     ),
     leaves: list[str] = leaves_option(),
+    camera: str | None = typer.Option(
+        None, "--camera", help="Run Perceive, PerceiveAll and PlanGrasp for real on this RealSense recording (one "
+        "frame per capture) or device[:SERIAL], the arm at home; every other robot leaf stays a stand-in."
+    ),
+    calibration: Path | None = typer.Option(None, "--calibration", help="With --camera: the camera's calibration."),
+    set_: list[str] = typer.Option([], "--set", help="Blackboard entry KEY=VALUE before the first tick."),
 ) -> None:
     """Tick a tree with a simulated clock until it finishes, every robot leaf replaced by a stand-in (SUCCESS
     unless --outcome or --random say otherwise); print the statuses of the nodes each tick walked; exit 0 on
-    SUCCESS, 1 otherwise."""
+    SUCCESS, 1 otherwise. With --camera the perception leaves run on a camera's frames."""
     from bt_grasp.behaviours.stand_ins import RobotStandIns
     from bt_grasp.clock import ManualClock
+    from bt_grasp.episode.request import parse_assignments
     from bt_grasp.tree.dry_run import DryRunPlan, format_walk, known_reason_names, load_dry, parse_outcome, run_dry
     from bt_grasp.tree.node import BtStatus
     from bt_grasp.tree.values import display
@@ -207,8 +214,21 @@ def run_cmd(
         registry, catalog = tree_registry(leaves), RobotStandIns()
         rules = tuple(parse_outcome(text) for text in outcome)
         plan = DryRunPlan(rules, random_seed, catalog, known_reason_names(registry))
-        tree = load_dry(file, registry, plan, substitutions=_parse_substitutions(substitute), clock=clock)
-        result = run_dry(tree, clock, max_ticks, 1.0 / tick_hz)
+        entries = parse_assignments(set_)
+        substitutions = _parse_substitutions(substitute)
+        if calibration is not None and camera is None:
+            raise InputError("--calibration", "is the camera's calibration: give it with --camera")
+        if camera is None:
+            tree = load_dry(file, registry, plan, substitutions=substitutions, clock=clock)
+            for key, value in entries.items():
+                tree.root_blackboard.set(key, value)
+            result = run_dry(tree, clock, max_ticks, 1.0 / tick_hz)
+        else:
+            from bt_grasp.sensing.dry_camera import dry_run_on_camera
+            from bt_grasp.sensing.source_spec import parse_camera_option
+
+            result = dry_run_on_camera(file, registry, plan, parse_camera_option(camera), calibration, clock,
+                                       max_ticks, 1.0 / tick_hz, substitutions=substitutions, entries=entries)
     except InputError as exc:
         raise _fail(exc) from None
     status = result.status

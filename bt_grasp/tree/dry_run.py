@@ -202,25 +202,27 @@ class StandIn(Leaf):
         return Status.SUCCESS
 
 
-def stand_in_spec(spec: NodeSpec, plan: DryRunPlan) -> NodeSpec:
-    """``spec`` with a stand-in factory (same name, kind, ports and ``needs_robot``). A robot leaf is always
-    a stand-in; any other leaf only where an outcome rule names it (its type, name or path)."""
+def stand_in_spec(spec: NodeSpec, plan: DryRunPlan, real: frozenset[str] = frozenset()) -> NodeSpec:
+    """``spec`` with a stand-in factory (same name, kind, ports and ``needs_robot``). A robot leaf is a stand-in
+    unless its type is in ``real``; any other leaf only where an outcome rule names it (its type, name or path)."""
     original = spec.factory
     assert original is not None
+    robot = spec.needs_robot and spec.name not in real
 
     def factory(ctx: NodeContext) -> Any:
-        if spec.needs_robot or plan.rule_for(spec.name, ctx.name, ctx.path) is not None:
+        if robot or plan.rule_for(spec.name, ctx.name, ctx.path) is not None:
             return StandIn(ctx, plan, spec)
         return original(ctx)
 
     return dataclasses.replace(spec, factory=factory)
 
 
-def dry_registry(registry: NodeRegistry, plan: DryRunPlan) -> NodeRegistry:
-    """A registry whose robot leaves are stand-ins (and, when the plan has rules, the leaves they name);
-    every other node type, the scripting enums and the failure reasons as in ``registry``."""
+def dry_registry(registry: NodeRegistry, plan: DryRunPlan, real: frozenset[str] = frozenset()) -> NodeRegistry:
+    """A registry whose robot leaves are stand-ins, but those whose type is in ``real`` (the caller sets them up
+    with what they need, e.g. ``tree run --dry --camera``'s perception leaves), and, when the plan has rules, the
+    leaves they name; every other node type, the scripting enums and the failure reasons as in ``registry``."""
     specs = [
-        stand_in_spec(s, plan) if s.kind in _LEAF_KINDS and (s.needs_robot or plan.rules) else s
+        stand_in_spec(s, plan, real) if s.kind in _LEAF_KINDS and (s.needs_robot or plan.rules) else s
         for s in registry.specs()
     ]
     dry = NodeRegistry(specs, registry.enums, registry.reasons())
@@ -324,14 +326,16 @@ def load_dry(
     *,
     substitutions: Mapping[str, str] | None = None,
     clock: ManualClock | None = None,
+    real: frozenset[str] = frozenset(),
 ) -> LoadedTree:
-    """Load ``path`` with robot leaves as stand-ins, plus the other leaves the plan's rules name. A rule
-    that names no leaf of the tree, or a reason the leaf does not declare: InputError (one sentence)."""
+    """Load ``path`` with robot leaves as stand-ins (but the types in ``real``), plus the other leaves the plan's
+    rules name. A rule that names no leaf of the tree, or a reason the leaf does not declare: InputError (one
+    sentence)."""
     for rule in plan.rules:
         reason = rule.outcome.reason
         if reason is not None and plan.known_reasons and reason not in plan.known_reasons:
             raise InputError(f"--outcome '{rule.text}'", f"{reason} is not a failure reason bt_grasp knows")
-    tree = load_tree(path, dry_registry(registry, plan), substitutions=substitutions, clock=clock)
+    tree = load_tree(path, dry_registry(registry, plan, real), substitutions=substitutions, clock=clock)
     _check_rules(tree, plan)
     return tree
 
