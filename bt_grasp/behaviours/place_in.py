@@ -19,10 +19,11 @@ import numpy as np
 
 from bt_grasp.behaviours.place import _HELD_PORTS, _PlaceBase
 from bt_grasp.behaviours.pose import Pose
+from bt_grasp.behaviours.reasons import MOTION_REASONS, FailureReason
 from bt_grasp.geometry import Mat4, inv, make_T, rot_z
 from bt_grasp.motion.place_orientation import PlaceYaw, wrap_rad
 from bt_grasp.scene.fixtures import Container
-from bt_grasp.tree.registry import PortDirection, PortSpec, leaf
+from bt_grasp.tree.node_api import action, inout_port, input_port
 
 if TYPE_CHECKING:
     from bt_grasp.motion.free_area import HeldShape, Resting
@@ -55,19 +56,21 @@ def _fixture_problem(scene: Scene, name: str) -> str | None:
     return None
 
 
-@leaf(
-    None,
-    name="PlaceIn",
+@action(
     ports=[
-        PortSpec("fixture", PortDirection.INPUT, str, description="the tray or bin to set the object down in"),
-        PortSpec("margin", PortDirection.INPUT, float, DEFAULT_MARGIN_M, "each object's footprint grown by this "
-                 "on every side (what perception does not see of it), m"),
-        PortSpec("wall_margin", PortDirection.INPUT, float, DEFAULT_WALL_MARGIN_M, "the held object's footprint "
-                 "this far from the walls at least, m"),
+        input_port("fixture", str, description="the tray or bin to set the object down in", required=True),
+        input_port("margin", float, DEFAULT_MARGIN_M, "each object's footprint grown by this on every side (what "
+                   "perception does not see of it), m"),
+        input_port("wall_margin", float, DEFAULT_WALL_MARGIN_M, "the held object's footprint this far from the walls "
+                   "at least, m"),
         *[p for p in _HELD_PORTS if p.name not in _SKIP],
-        PortSpec("placed", PortDirection.INOUT, object, "{placed}", "the objects this tree set down in trays or "
-                 "bins (the camera's object lists leave them out): where the floor is taken; this one is added"),
+        inout_port("placed", object, "the objects this tree set down in trays or bins (the camera's object lists leave "
+                   "them out): where the floor is taken; this one is added", default="{placed}"),
     ],
+    reasons=(
+        FailureReason.BAD_INPUT, FailureReason.NOT_HOLDING, FailureReason.PLACE_BLOCKED, FailureReason.DROPPED,
+        FailureReason.TIMEOUT, *MOTION_REASONS,
+    ),
     needs_robot=True,
 )
 class PlaceIn(_PlaceBase):
@@ -82,11 +85,11 @@ class PlaceIn(_PlaceBase):
         """A literal fixture the scene lacks, or that is not a container, is a load error."""
         if self.ports.key("fixture") is not None:
             return None
-        problem = _fixture_problem(scene, str(self.ports.get("fixture")))
+        problem = _fixture_problem(scene, self.ports.require("fixture", str))
         return f"PlaceIn {problem}" if problem else None
 
     def _container(self) -> Container | str:
-        name = str(self.input("fixture"))
+        name = self.ports.require("fixture", str)
         problem = _fixture_problem(self.cell.scene, name)
         if problem is not None:
             return problem
@@ -114,8 +117,8 @@ class PlaceIn(_PlaceBase):
         resting = [self._resting(d, T_base_box) for d in self._placed_before()]
         shape = self._held_shape(held, T_tcp_obj)
         base_in_box = inv(T_base_box)[:2, 3]
-        margin = self.input_float("margin")
-        spots = free_spots(floor, resting, shape, margin_m=margin, wall_margin_m=self.input_float("wall_margin"),
+        margin, wall_margin = self.ports.require("margin", float), self.ports.require("wall_margin", float)
+        spots = free_spots(floor, resting, shape, margin_m=margin, wall_margin_m=wall_margin,
                            clearance_m=GRIPPER_CLEARANCE_M,
                            far_from_xy=(float(base_in_box[0]), float(base_in_box[1])), limit=MAX_SPOTS)
         if not spots:

@@ -132,12 +132,12 @@ class Blackboard:
 
     def declare(self, key: str, kind: type | None = None) -> None:
         """Create an empty entry (BT.CPP creates one for every ``{key}`` port when it builds a tree) declared
-        with the port's type: a scalar, or an application type with ``from_port_text`` (BT.CPP's strongly
-        typed ports; ``object`` declares nothing). A second port of another type raises BlackboardTypeError,
-        except on an entry declared ``str`` first: BT.CPP lets any port read text (``convertFromString``),
-        and the entry stays text."""
+        with the port's type: a scalar or an application class (BT.CPP's strongly typed ports; ``object``
+        declares nothing). A second port of another type raises BlackboardTypeError, except on an entry
+        declared ``str`` first: BT.CPP lets any port read text (``convertFromString``), and the entry stays
+        text."""
         entry = self.create_entry(key)
-        if kind not in _SCALARS and not _is_text_type(kind):
+        if kind is None or kind is object:
             return
         if entry.declared is None:
             entry.declared = kind
@@ -213,11 +213,6 @@ class Blackboard:
 
     def __repr__(self) -> str:
         return f"Blackboard({self.items()!r})"
-
-
-def _is_text_type(kind: type | None) -> bool:
-    """An application port type converted from text (``registry.is_text_port_type``)."""
-    return kind is not None and callable(getattr(kind, "from_port_text", None))
 
 
 def _fit(key: str, value: Any, entry: Entry) -> Any:

@@ -37,12 +37,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
 
-from py_trees.common import Status
-
 from bt_grasp.clock import ManualClock
 from bt_grasp.errors import InputError
 from bt_grasp.tree.context import NodeContext
-from bt_grasp.tree.leaf import Leaf
+from bt_grasp.tree.leaf_node import Leaf
 from bt_grasp.tree.loader import LoadedTree, load_tree
 from bt_grasp.tree.node import BtNode, BtStatus
 from bt_grasp.tree.registry import NodeKind, NodeRegistry, NodeSpec, PortDirection, PortSpec
@@ -185,21 +183,21 @@ class StandIn(Leaf):
         self.outcome = self._draw()
         self.running_left = self.outcome.running_ticks
 
-    def update(self) -> Status:
+    def update(self) -> BtStatus:
         if self.running_left > 0:
             self.running_left -= 1
-            return Status.RUNNING
+            return BtStatus.RUNNING
         if self.outcome.kind is OutcomeKind.FAILURE:
             declared = self.original.failure_reasons
             reason = self.outcome.reason or (declared[0] if declared else None)
             if reason is None:  # a leaf that declares no reason (Script) fails as it would: without one
                 self.feedback_message = f"stand-in for {self.name} was told to fail"
-                return Status.FAILURE
+                return BtStatus.FAILURE
             return self.fail(reason, f"stand-in for {self.name} was told to fail with {reason}")
         for port in self.original.ports:
             if port.direction is not PortDirection.INPUT and self.ports.has(port.name) and self.ports.key(port.name):
                 self.ports.set(port.name, self.plan.catalog.placeholder(self.original, port))
-        return Status.SUCCESS
+        return BtStatus.SUCCESS
 
 
 def stand_in_spec(spec: NodeSpec, plan: DryRunPlan) -> NodeSpec:
@@ -223,9 +221,7 @@ def dry_registry(registry: NodeRegistry, plan: DryRunPlan) -> NodeRegistry:
         stand_in_spec(s, plan) if s.kind in _LEAF_KINDS and (s.needs_robot or plan.rules) else s
         for s in registry.specs()
     ]
-    dry = NodeRegistry(specs, registry.enums, registry.reasons())
-    dry.origins = dict(registry.origins)
-    return dry
+    return registry.with_specs(specs)
 
 
 def known_reason_names(registry: NodeRegistry) -> frozenset[str]:
