@@ -6,6 +6,7 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from bt_grasp.behaviours.base import RobotLeaf
+from bt_grasp.behaviours.calibration_job import CalibrationJob
 from bt_grasp.behaviours.reasons import FailureReason
 from bt_grasp.errors import ConfigError
 from bt_grasp.tree.node_api import Status, action, input_port, output_port
@@ -23,6 +24,7 @@ class LoadCalibration(RobotLeaf):
     """Load the camera calibration from a file; FAILURE (CALIBRATION_MISSING) when it cannot be used."""
 
     def update(self) -> Status:
+        # deferred: OpenCV comes with it; a tree loads and validates without it
         from bt_grasp.perception.calibration_file import load_calibration
 
         file = self.ports.get("file", str) or ""
@@ -53,8 +55,6 @@ class Calibrate(RobotLeaf):
     """Hand-eye calibration: move the ChArUco board through diverse views, capture, solve; one view per step."""
 
     def initialise(self) -> None:
-        from bt_grasp.behaviours.calibration_job import CalibrationJob
-
         self.job = CalibrationJob(self.cell, self.ports.require("poses", int))
 
     def update(self) -> Status:
@@ -69,6 +69,7 @@ class Calibrate(RobotLeaf):
         self.ports.set("calibration", outcome.calibration)
         file = self.ports.get("file", str) or ""
         if file:
+            # deferred: OpenCV comes with it; a tree loads and validates without it
             from bt_grasp.perception.calibration_file import save_calibration
 
             save_calibration(outcome.calibration, Path(str(file)))

@@ -114,6 +114,7 @@ class FollowTarget(RobotLeaf):
 
     # --- measuring -----------------------------------------------------------------------------------
     def _measure(self, t_s: float) -> BlobMeasurement | None:
+        # deferred: Open3D and OpenCV come with it; a tree loads and validates without them
         from bt_grasp.perception.tracking import Footprint, measure_blob
 
         track = self._track

@@ -13,24 +13,30 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bt_grasp.behaviours.base import RobotLeaf
+from bt_grasp.behaviours.grasp_plan import GraspPlan
 from bt_grasp.behaviours.gripper import empty_below_m, planned_width_m
+from bt_grasp.behaviours.hang import HeldObject, lift_rise_m
 from bt_grasp.behaviours.motion_job import MotionJob, PathFailure, PathFn, Segment
+from bt_grasp.behaviours.perceive import camera_pose
 from bt_grasp.behaviours.reasons import MOTION_REASONS, FailureReason
 from bt_grasp.defaults import DEFAULT_LIFT_HEIGHT_M
+from bt_grasp.geometry import make_T, rot_z
+from bt_grasp.perception.antipodal import AntipodalSettings, near_same, rank_grasps, sampled_grasps
+from bt_grasp.perception.results import GraspCandidate
 from bt_grasp.tree.node_api import Status, action, input_port, output_port
 
 if TYPE_CHECKING:
-    from bt_grasp.behaviours.grasp_plan import GraspPlan
     from bt_grasp.motion.cartesian import CartesianStatus
     from bt_grasp.motion.planner import PlanResult, PlanStatus
     from bt_grasp.motion.planning_scene import Box, PlanningScene
-    from bt_grasp.perception.results import Detection, GraspCandidate
+    from bt_grasp.perception.results import Detection
 
 #: a tool pose computed from the current one (e.g. straight up from it)
 PoseFn = Callable[[NDArray[np.float64]], NDArray[np.float64]]
 
 def plan_reason(status: PlanStatus) -> FailureReason:
     """The leaf's failure reason for a planner status (motion is imported late: it loads pinocchio)."""
+    # deferred: OMPL, pinocchio and coal come with it; a tree loads and validates without them
     from bt_grasp.motion.planner import PlanStatus
 
     reasons = {
@@ -42,6 +48,7 @@ def plan_reason(status: PlanStatus) -> FailureReason:
 
 
 def cartesian_reason(status: CartesianStatus) -> FailureReason:
+    # deferred: pinocchio and coal come with it; a tree loads and validates without them
     from bt_grasp.motion.cartesian import CartesianStatus
 
     reasons = {
@@ -58,7 +65,7 @@ def plan_failure(result: PlanResult) -> PathFailure:
 
 
 def detection_box(detection: Detection, name: str, margin_m: float = 0.005) -> Box:
-    from bt_grasp.geometry import make_T, rot_z
+    # deferred: scipy comes with it; a tree loads and validates without it
     from bt_grasp.motion.planning_scene import Box
 
     length, width, height = detection.size_m
@@ -69,6 +76,7 @@ def detection_box(detection: Detection, name: str, margin_m: float = 0.005) -> B
 def planning_scene(
     leaf: RobotLeaf, target: Detection | None = None, objects: Sequence[Detection] = (), allow_target: bool = False
 ) -> PlanningScene:
+    # deferred: scipy comes with it; a tree loads and validates without it
     from bt_grasp.motion.planning_scene import PlanningScene
 
     obstacles = []
@@ -159,6 +167,7 @@ def cartesian_fn(leaf: RobotLeaf, T_goal_fn: PoseFn, scene: PlanningScene) -> Pa
     """A straight tool line from the current pose to ``T_goal_fn(T_now)``."""
 
     def compute(q: NDArray[np.float64]) -> NDArray[np.float64] | PathFailure:
+        # deferred: pinocchio and coal come with it; a tree loads and validates without them
         from bt_grasp.motion.cartesian import cartesian_path
 
         kin = leaf.cell.kinematics
@@ -275,18 +284,16 @@ class PlanGrasp(RobotLeaf):
 
     def _rank(self) -> Status | None:
         """Synthesise and rank the candidates (first tick); a FAILURE status when there is nothing to try."""
-        from bt_grasp.perception.antipodal import rank_grasps
-
         target = self.input_detection("target")
         if target is None:
             return self.fail(FailureReason.NO_DETECTION, "no target on the blackboard: run Perceive first")
         self._target: Detection = target
         self._objects: tuple[Detection, ...] = self.input_detections("objects")
         self._q = self.cell.robot.joint_positions()
+        # deferred: scipy comes with it; a tree loads and validates without it
         from bt_grasp.motion.planning_scene import fixture_boxes
 
         fixtures = [(box.T_base_shape, box.size_m) for box in fixture_boxes(self.cell.scene)]
-        from bt_grasp.behaviours.perceive import camera_pose
 
         # where the camera saw the target from (eye-in-hand: the arm has not moved since Perceive)
         T_base_camera = camera_pose(self.cell)
@@ -313,7 +320,6 @@ class PlanGrasp(RobotLeaf):
         if self._extended:
             return False
         self._extended = True
-        from bt_grasp.perception.antipodal import AntipodalSettings, near_same, sampled_grasps
 
         assert self._candidates is not None
         settings = AntipodalSettings(pregrasp_offset_m=self.cell.grasp_settings.pregrasp_offset_m)
@@ -335,8 +341,6 @@ class PlanGrasp(RobotLeaf):
         return bool(pre.ok and kin.ik(T_grasp, pre.q).ok)
 
     def _try(self, rank: int, candidate: GraspCandidate) -> GraspPlan | None:
-        from bt_grasp.behaviours.grasp_plan import GraspPlan
-
         kin, q = self.cell.kinematics, self._q
         pre = kin.ik(candidate.T_base_tcp_pregrasp, q)
         if not pre.ok:
@@ -377,9 +381,6 @@ class Approach(_MovingLeaf):
     a top-down grasp, sideways for a side grasp; the pre-grasp lies back along -approach)."""
 
     def segments(self) -> list[Segment] | Status:
-        from bt_grasp.behaviours.grasp_plan import GraspPlan
-        from bt_grasp.perception.results import GraspCandidate
-
         grasp = self.ports.get("grasp")
         if not isinstance(grasp, GraspPlan | GraspCandidate):
             return self.fail(FailureReason.BAD_INPUT, "no grasp on the blackboard: run PlanGrasp first")
@@ -432,8 +433,6 @@ class Lift(_MovingLeaf):
     higher line is out of reach or blocked, the tool rises ``height`` alone."""
 
     def segments(self) -> list[Segment] | Status:
-        from bt_grasp.behaviours.hang import HeldObject, lift_rise_m
-
         grasp = self.ports.get("grasp")
         self._empty_below = empty_below_m(planned_width_m(grasp))
         height = self.ports.require("height", float)
@@ -446,6 +445,7 @@ class Lift(_MovingLeaf):
             None if target.points_base_m is None else np.asarray(target.points_base_m, dtype=float),
             planned_width_m(grasp) or 0.0)
         rise = lift_rise_m(height, None if T_grasp is None else np.asarray(T_grasp, dtype=float), held)
+        # deferred: scipy comes with it; a tree loads and validates without it
         from bt_grasp.motion.planning_scene import PlanningScene
 
         scene = PlanningScene.from_scene(self.cell.scene)
@@ -484,6 +484,7 @@ class Retreat(_MovingLeaf):
 
     def segments(self) -> list[Segment] | Status:
         height = self.ports.require("height", float)
+        # deferred: scipy comes with it; a tree loads and validates without it
         from bt_grasp.motion.planning_scene import PlanningScene
 
         return [Segment("retreat", cartesian_fn(self, straight_up(height), PlanningScene.from_scene(self.cell.scene)))]
@@ -494,6 +495,7 @@ class MoveHome(_MovingLeaf):
     """Plan and move to the scene's home configuration."""
 
     def segments(self) -> list[Segment] | Status:
+        # deferred: scipy comes with it; a tree loads and validates without it
         from bt_grasp.motion.planning_scene import PlanningScene
 
         home = np.asarray(self.cell.scene.robot.home_q_rad, dtype=float)
@@ -513,6 +515,7 @@ class MoveAbove(_MovingLeaf):
     """Plan and move the tool, pointing down, above a point of the table (e.g. to set an object aside)."""
 
     def segments(self) -> list[Segment] | Status:
+        # deferred: scipy comes with it; a tree loads and validates without it
         from bt_grasp.motion.planning_scene import PlanningScene
 
         T = np.eye(4)

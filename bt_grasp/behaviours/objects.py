@@ -204,6 +204,7 @@ def check_detector_classes(nodes: Iterable[BtNode]) -> None:
             problem = (f"class '{wanted}' asked, but every perceiving leaf of the tree uses the geometric "
                        f"detector, which names no classes (give PerceiveAll detector=\"learned\")")
         else:
+            # deferred: OpenCV comes with it; a tree loads and validates without it
             from bt_grasp.detector.model import ModelError
 
             try:

@@ -65,6 +65,7 @@ class DetectorLeaf(RobotLeaf):
         self.literal_model: LearnedDetector | None = None
         literal = all(self.ports.key(p) is None for p in ("detector", "model", "imgsz"))
         if literal and parse_detector(self.ports.require("detector", str)) is DetectorKind.LEARNED:
+            # deferred: OpenCV comes with it; a tree loads and validates without it
             from bt_grasp.detector.model import ModelError
 
             model, imgsz = self.ports.require("model", str), self.ports.require("imgsz", int)
@@ -74,11 +75,13 @@ class DetectorLeaf(RobotLeaf):
                 raise PortValueError(f"port 'model': {exc.message}") from None
 
     def _model(self, text: str, imgsz: int, from_tree: bool) -> LearnedDetector:
+        # deferred: OpenCV comes with it (onnxruntime once a model runs); a tree loads and validates without it
         from bt_grasp.detector.inference import LearnedDetector
 
         path = model_path(text, self.ctx.source if from_tree else None)
         key = (path, imgsz)
         if key not in self._models:
+            # deferred: Open3D and OpenCV come with it; a tree loads and validates without them
             from bt_grasp.perception.learned import TENTATIVE_SCORE
 
             # decoded down to the tentative score: the join decides what a box under the sure score may name
@@ -106,6 +109,7 @@ def perceive_once(leaf: RobotLeaf, color: str | None, accept_empty: bool = False
     """Capture + pipeline: the leaf's FAILURE status, or the (successful) PerceptionResult. With
     ``accept_empty`` a table with nothing on it is a result (no detections), not a failure, and so (with a
     learned ``detector``) is a table whose objects the detector named none of."""
+    # deferred: Open3D and OpenCV come with it; a tree loads and validates without them
     from bt_grasp.perception.pipeline import perceive
 
     cell = leaf.cell
@@ -123,6 +127,7 @@ def perceive_once(leaf: RobotLeaf, color: str | None, accept_empty: bool = False
     if detector is None:
         result = perceive(frame, T_base_camera, config, color or None)
     else:
+        # deferred: Open3D and OpenCV come with it; a tree loads and validates without them
         from bt_grasp.perception.learned import join_boxes
 
         found = detector.detect(frame.color)

@@ -16,12 +16,14 @@ It then runs, one control period per tick:
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from bt_grasp.behaviours.base import RobotLeaf
+from bt_grasp.behaviours.fixture_mask import inside_fixture
 from bt_grasp.behaviours.grasp_plan import MOVED_RAD, GraspPose
 from bt_grasp.behaviours.gripper import EMPTY_WIDTH_M, GRASP_FORCE_N
 from bt_grasp.behaviours.motion_job import MotionJob, PathFailure, PathFn, Segment
@@ -40,13 +42,13 @@ from bt_grasp.behaviours.reasons import MOTION_REASONS, FailureReason
 from bt_grasp.geometry import Mat4, inv, make_T, rot_z
 from bt_grasp.motion.place_orientation import PlaceYaw, footprint_kind, footprint_turns_rad, place_yaws
 from bt_grasp.robot_description import MAX_OPENING_M, TCP_LINK
+from bt_grasp.scene.format import Scene, place_xy_problem
 from bt_grasp.tree.node_api import Status, action, inout_port, input_port
 
 if TYPE_CHECKING:
     from bt_grasp.behaviours.cell import Cell
     from bt_grasp.motion.planning_scene import Shape
     from bt_grasp.perception.results import Detection
-    from bt_grasp.scene.format import Scene
 
 #: the tool points down: tcp z along base -z
 R_DOWN = np.diag([1.0, -1.0, -1.0])
@@ -194,6 +196,7 @@ class _PlaceBase(RobotLeaf):
 
     def _setup_motion(self) -> Status | None:
         """Read the ports, build the planning scenes and the ordered place orientations (tried in update)."""
+        # deferred: scipy comes with it; a tree loads and validates without it
         from bt_grasp.motion.planning_scene import PlanningScene
 
         grasp, held = self.ports.get("grasp"), self.ports.get("held")
@@ -267,6 +270,7 @@ class _PlaceBase(RobotLeaf):
         planner, options = self.cell.planner, self.cell.planner_options
         failures: list[PathFailure] = []
         plan = planner.plan_to_pose(self._q_start, pre, self._carry_scene, options)
+        # deferred: OMPL, pinocchio and coal come with it; a tree loads and validates without them
         from bt_grasp.motion.planner import PlanStatus
 
         if plan.status is PlanStatus.GOAL_IN_COLLISION:
@@ -383,7 +387,6 @@ class _PlaceBase(RobotLeaf):
     @staticmethod
     def _blocked_if_collision(fn: PathFn) -> PathFn:
         """A target that collides with what is seen there is an occupied target: PLACE_BLOCKED."""
-
         def compute(q: NDArray[np.float64]) -> NDArray[np.float64] | PathFailure:
             out = fn(q)
             if isinstance(out, PathFailure) and out.reason is FailureReason.COLLISION:
@@ -466,9 +469,6 @@ class _PlaceBase(RobotLeaf):
         longer reports it): the held detection moved to where the robot released it, turned as it was."""
         if self.ports.key("placed") is None:
             return
-        from dataclasses import replace
-
-        from bt_grasp.behaviours.fixture_mask import inside_fixture
 
         held = self.ports.get("held")
         assert self._T_place is not None and is_detection(held)
@@ -512,7 +512,6 @@ class Place(_PlaceBase):
         """A literal pose off the table or out of reach is a load error (checked before the run)."""
         if self.ports.key("pose") is not None:
             return None
-        from bt_grasp.scene.format import place_xy_problem
 
         pose = self.ports.require("pose", Pose)
         T = np.asarray(scene.T_world_base()) @ np.array([pose.x_m, pose.y_m, 0.0, 1.0])
@@ -567,6 +566,7 @@ class MoveTo(_MovingLeaf):
     FAILURE: IK_UNREACHABLE, PLAN_FAILED, COLLISION, TRACKING_ERROR, BAD_INPUT."""
 
     def segments(self) -> list[Segment] | Status:
+        # deferred: scipy comes with it; a tree loads and validates without it
         from bt_grasp.motion.planning_scene import PlanningScene
 
         pose = self.ports.get("pose")

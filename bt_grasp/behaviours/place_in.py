@@ -21,12 +21,12 @@ from bt_grasp.behaviours.place import _HELD_PORTS, _PlaceBase
 from bt_grasp.behaviours.pose import Pose
 from bt_grasp.behaviours.reasons import MOTION_REASONS, FailureReason
 from bt_grasp.geometry import Mat4, inv, make_T, rot_z
+from bt_grasp.motion.free_area import Floor, HeldShape, Resting, ToolPart, free_spots
 from bt_grasp.motion.place_orientation import PlaceYaw, wrap_rad
 from bt_grasp.scene.fixtures import Container
 from bt_grasp.tree.node_api import action, inout_port, input_port
 
 if TYPE_CHECKING:
-    from bt_grasp.motion.free_area import HeldShape, Resting
     from bt_grasp.motion.planning_scene import Shape
     from bt_grasp.perception.results import Detection
     from bt_grasp.scene.format import Scene
@@ -107,7 +107,6 @@ class PlaceIn(_PlaceBase):
 
     def orientations(self, pose: Pose, held: Detection, T_tcp_obj: Mat4, surface_z_m: float
                      ) -> list[tuple[PlaceYaw, Mat4]] | str:
-        from bt_grasp.motion.free_area import Floor, free_spots
 
         container = self._container()
         assert not isinstance(container, str)  # target_pose checked it
@@ -141,6 +140,7 @@ class PlaceIn(_PlaceBase):
         stands 12 mm beyond its round footprint at the corners (the can's descent met the wall it was clear of)."""
         if held.shape != "round":
             return super().held_model(held, T_tcp_obj, margin_m)
+        # deferred: scipy comes with it; a tree loads and validates without it
         from bt_grasp.motion.planning_scene import Cylinder
 
         radius = max(float(held.size_m[0]), float(held.size_m[1])) / 2 + margin_m / 2
@@ -149,8 +149,6 @@ class PlaceIn(_PlaceBase):
     @staticmethod
     def _resting(placed: Detection, T_base_box: Mat4) -> Resting:
         """An object set down before, in the container's frame (its perceived footprint and height)."""
-        from bt_grasp.motion.free_area import Resting
-
         local = inv(T_base_box) @ np.array([*placed.centroid_base_m[:2], 0.0, 1.0])
         yaw = float(placed.yaw_rad) - math.atan2(T_base_box[1, 0], T_base_box[0, 0])
         return Resting((float(local[0]), float(local[1])), yaw, (float(placed.size_m[0]), float(placed.size_m[1])),
@@ -159,7 +157,7 @@ class PlaceIn(_PlaceBase):
     def _held_shape(self, held: Detection, T_tcp_obj: Mat4) -> HeldShape:
         """The held object's footprint and the open gripper's boxes in its resting frame (the middle of its
         footprint on the surface, x along its length): where the grasp puts them."""
-        from bt_grasp.motion.free_area import HeldShape, ToolPart
+        # deferred: pinocchio and coal come with it; a tree loads and validates without them
         from bt_grasp.motion.gripper_shape import gripper_boxes
 
         length, width, height = (float(v) for v in held.size_m)

@@ -23,7 +23,7 @@ from bt_grasp.behaviours.base import RobotLeaf
 from bt_grasp.behaviours.motion_job import Segment
 from bt_grasp.behaviours.motion_leaves import _MovingLeaf, plan_to_pose_fn
 from bt_grasp.behaviours.reasons import MOTION_REASONS, FailureReason
-from bt_grasp.geometry import inv, make_T, rot_z
+from bt_grasp.geometry import T_from_xyz_rpy, inv, make_T, rot_z
 from bt_grasp.interfaces import Mount
 from bt_grasp.tree.node_api import Status, action, input_port
 
@@ -104,7 +104,7 @@ class LookAt(_MovingLeaf):
         if point is None:
             return f"view '{view}' is neither 'workspace' nor a point 'x;y;z' in the base frame"
         distance = self.ports.get("distance", float) or CLOSE_DISTANCE_M
-        from bt_grasp.geometry import T_from_xyz_rpy
+        # deferred: pinocchio and coal come with it; a tree loads and validates without them
         from bt_grasp.motion.kinematics import ArmKinematics
 
         mount = scene.camera.eye_in_hand
@@ -118,6 +118,7 @@ class LookAt(_MovingLeaf):
         return None
 
     def segments(self) -> list[Segment] | Status:
+        # deferred: scipy comes with it; a tree loads and validates without it
         from bt_grasp.motion.planning_scene import PlanningScene
 
         calibration = self.cell.calibration

@@ -6,8 +6,8 @@ from typing import TYPE_CHECKING, NoReturn
 
 import py_trees
 
-from bt_grasp.tree.exceptions import DeclarationError, TreeRuntimeError
-from bt_grasp.tree.node import BtNode, BtStatus
+from bt_grasp.tree.exceptions import TreeRuntimeError
+from bt_grasp.tree.node import BtNode, BtStatus, as_behaviour
 
 if TYPE_CHECKING:
     from bt_grasp.clock import Clock
@@ -30,16 +30,12 @@ class Control(BtNode, py_trees.composites.Composite):
     blackboard: Blackboard
 
     def __init__(self, ctx: NodeContext) -> None:
-        py_trees.composites.Composite.__init__(self, ctx.name, list(ctx.children))
+        py_trees.composites.Composite.__init__(self, ctx.name, [as_behaviour(child) for child in ctx.children])
         self._bt_bind(ctx)
         self.ports = ctx.ports
         self.clock = ctx.clock
         self.blackboard = ctx.blackboard
-        self.child_nodes: list[BtNode] = []
-        for child in ctx.children:
-            if not isinstance(child, BtNode):
-                raise DeclarationError(f"{ctx.path}: a control's children must be bt_grasp nodes")
-            self.child_nodes.append(child)
+        self.child_nodes: list[BtNode] = list(ctx.children)
 
     def tick_child(self, index: int) -> BtStatus:
         """Tick child ``index`` (BT.CPP's ``children_nodes_[index]->executeTick()``) and return its status."""

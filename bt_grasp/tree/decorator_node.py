@@ -6,8 +6,8 @@ from typing import TYPE_CHECKING
 
 import py_trees
 
-from bt_grasp.tree.exceptions import DeclarationError, TreeRuntimeError
-from bt_grasp.tree.node import BtNode, BtStatus
+from bt_grasp.tree.exceptions import TreeRuntimeError
+from bt_grasp.tree.node import BtNode, BtStatus, as_behaviour
 
 if TYPE_CHECKING:
     from bt_grasp.clock import Clock
@@ -31,13 +31,11 @@ class Decorator(BtNode, py_trees.decorators.Decorator):
 
     def __init__(self, ctx: NodeContext) -> None:
         (child,) = ctx.children
-        py_trees.decorators.Decorator.__init__(self, ctx.name, child)
+        py_trees.decorators.Decorator.__init__(self, ctx.name, as_behaviour(child))
         self._bt_bind(ctx)
         self.ports = ctx.ports
         self.clock = ctx.clock
         self.blackboard = ctx.blackboard
-        if not isinstance(child, BtNode):
-            raise DeclarationError(f"{ctx.path}: a decorator's child must be a bt_grasp node")
         self.child: BtNode = child
 
     def update(self) -> py_trees.common.Status:  # pragma: no cover - py_trees never calls it here

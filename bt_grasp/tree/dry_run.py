@@ -35,7 +35,7 @@ import random
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Protocol
 
 from bt_grasp.clock import ManualClock
 from bt_grasp.errors import InputError
@@ -52,7 +52,7 @@ _SYNTAX = "NAME=success, NAME=failure[:REASON] or NAME=running:N"
 class StandInCatalog(Protocol):
     """What the application knows about its robot leaves' outputs, for their stand-ins."""
 
-    def placeholder(self, spec: NodeSpec, port: PortSpec) -> Any:
+    def placeholder(self, spec: NodeSpec, port: PortSpec) -> object:
         """The value a stand-in writes to an output port on SUCCESS (typed like the real leaf's)."""
         ...
 
@@ -60,7 +60,7 @@ class StandInCatalog(Protocol):
 class TypedPlaceholders:
     """A catalog that knows nothing about particular leaves: placeholders by port type only."""
 
-    def placeholder(self, spec: NodeSpec, port: PortSpec) -> Any:
+    def placeholder(self, spec: NodeSpec, port: PortSpec) -> object:
         return type_placeholder(port, spec.name)
 
 
@@ -75,10 +75,10 @@ class StandInValue:
         return f"<{self.port} from a {self.leaf} stand-in>"
 
 
-def type_placeholder(port: PortSpec, leaf: str = "") -> Any:
+def type_placeholder(port: PortSpec, leaf: str = "") -> object:
     """A value of the port's type: 0, 0.0, False, ``""``, the type's ``from_port_text("0;0")``, else (an
     ``object`` port) a :class:`StandInValue`."""
-    simple: dict[type, Any] = {int: 0, float: 0.0, bool: False, str: ""}
+    simple: dict[type, object] = {int: 0, float: 0.0, bool: False, str: ""}
     if port.type in simple:
         return simple[port.type]
     parse = getattr(port.type, "from_port_text", None)
@@ -206,7 +206,7 @@ def stand_in_spec(spec: NodeSpec, plan: DryRunPlan) -> NodeSpec:
     original = spec.factory
     assert original is not None
 
-    def factory(ctx: NodeContext) -> Any:
+    def factory(ctx: NodeContext) -> BtNode:
         if spec.needs_robot or plan.rule_for(spec.name, ctx.name, ctx.path) is not None:
             return StandIn(ctx, plan, spec)
         return original(ctx)
@@ -268,7 +268,7 @@ class TickWalk:
     status: str
     runs: list[list[Step]] = field(default_factory=list)
 
-    def as_json(self) -> dict[str, Any]:
+    def as_json(self) -> dict[str, object]:
         return {
             "tick": self.tick,
             "status": self.status,
@@ -310,7 +310,7 @@ class DryRunResult:
     status: BtStatus
     ticks: int
     walk: list[TickWalk]
-    blackboard: dict[str, Any]
+    blackboard: dict[str, object]
 
 
 def load_dry(

@@ -81,11 +81,11 @@ class Leaf(BtNode):
         """One attempt starts (the leaf was not RUNNING): BT.CPP's ``onStart``."""
 
     @abc.abstractmethod
-    def update(self) -> BtStatus:  # type: ignore[override]  # BT.CPP's statuses, not py_trees'
+    def update(self) -> BtStatus:
         """One tick of work: RUNNING, SUCCESS, FAILURE or SKIPPED (BT.CPP's ``tick``/``onRunning``); a leaf
         class without it cannot be built (a load error naming the plugin)."""
 
-    def terminate(self, new_status: BtStatus) -> None:  # type: ignore[override]  # BT.CPP's statuses
+    def terminate(self, new_status: BtStatus) -> None:
         """After a completed update (SUCCESS or FAILURE), or with IDLE when halted while RUNNING
         (BT.CPP's ``onHalted``)."""
 

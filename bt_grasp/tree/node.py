@@ -368,6 +368,14 @@ class BtNode(PyTreesBehaviour):
         return f"<{self.bt_type} {self.bt_path!r} uid={self.bt_uid} {self.bt_state.value}>"
 
 
+def as_behaviour(node: BtNode) -> py_trees.behaviour.Behaviour:
+    """A bt_grasp node as py_trees' own type, for py_trees' constructors (it is one at run time; the type checker
+    sees :class:`PyTreesBehaviour`)."""
+    if not isinstance(node, py_trees.behaviour.Behaviour):  # pragma: no cover - BtNode's base is Behaviour
+        raise TypeError(f"{node!r} is not a py_trees behaviour")
+    return node
+
+
 def describe(node: py_trees.behaviour.Behaviour) -> str:
     """``Type 'path'`` for messages."""
     return f"{getattr(node, 'bt_type', type(node).__name__)} {getattr(node, 'bt_path', node.name)!r}"
