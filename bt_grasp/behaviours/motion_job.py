@@ -49,6 +49,7 @@ class MotionJob:
         self._executed_q: list[NDArray[np.float64]] = []
 
     def update(self) -> bool | PathFailure | None:
+        # deferred: ruckig comes with it; a tree loads and validates without it
         from bt_grasp.motion.executor import ExecStatus
 
         if self.executor is None:
@@ -85,7 +86,10 @@ class MotionJob:
             self.executor = None
 
     def _start(self, name: str, path: NDArray[np.float64]) -> TrajectoryExecutor:
+        # deferred: ruckig comes with it; a tree loads and validates without it
         from bt_grasp.motion.executor import TrajectoryExecutor
+
+        # deferred: ruckig comes with it; a tree loads and validates without it
         from bt_grasp.motion.trajectory import time_parametrize
 
         limits = self.cell.motion_limits
