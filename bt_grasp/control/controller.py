@@ -21,7 +21,7 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable, Mapping, Sequence
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Protocol
 
 from bt_grasp.control.breakpoints import SOURCE, BreakKind, Breakpoint
 from bt_grasp.control.commands import (
@@ -53,6 +53,7 @@ from bt_grasp.control.state import (
     value_text,
 )
 from bt_grasp.errors import InputError
+from bt_grasp.files.json_types import JsonValue
 from bt_grasp.tree.introspect import bt_status_name
 
 if TYPE_CHECKING:
@@ -71,12 +72,12 @@ Failure = tuple[str, str, str | None, str]
 class InterventionSink(Protocol):
     """Where interventions are recorded (``RunRecorder.write_intervention``)."""
 
-    def write_intervention(self, stamp_ns: int, record: Mapping[str, Any]) -> None: ...
+    def write_intervention(self, stamp_ns: int, record: Mapping[str, object]) -> None: ...
 
 
 #: fires a fault of the catalogue now: (kind, params, tick) -> a sentence saying what fired; CommandError when
 #: the kind or the parameters are wrong
-FaultFirer = Callable[[str, Mapping[str, Any], int], str]
+FaultFirer = Callable[[str, Mapping[str, JsonValue], int], str]
 
 
 class Controller:
@@ -272,7 +273,7 @@ class Controller:
 
     def _intervene(self, command: Command, source: Source) -> None:
         tree = self._attached()
-        recorded = command_to_json(command)
+        recorded: dict[str, object] = {**command_to_json(command)}  # a value as stored may be no JSON yet
         if isinstance(command, SetBlackboard):
             stored = set_entry(tree, command.key, command.value)
             recorded["value"] = stored
@@ -420,7 +421,7 @@ def check_breakpoints(tree: LoadedTree, breakpoints: Sequence[Breakpoint]) -> No
             raise InputError(SOURCE, problem)
 
 
-def _views(node: Any, depth: int, out: list[NodeView]) -> None:
+def _views(node: BtNode, depth: int, out: list[NodeView]) -> None:
     out.append(NodeView(node.bt_path, node.name, node.bt_type, bt_status_name(node), depth))
     for child in getattr(node, "children", ()):
         _views(child, depth + 1, out)
