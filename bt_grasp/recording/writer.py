@@ -71,6 +71,8 @@ UR5_JOINT_NAMES: tuple[str, ...] = (
     "wrist_1_joint", "wrist_2_joint", "wrist_3_joint",
 )
 _LEAF_KINDS = ("Action", "Condition")  # NodeKind values of leaves
+#: how a log's chunks are compressed
+Compression = Literal["zstd", "lz4", "none"]
 _COMPRESSION = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}
 _MEDIA_TYPES = {".xml": "application/xml", ".yaml": "application/yaml", ".yml": "application/yaml",
                 ".json": "application/json", ".txt": "text/plain", ".urdf": "application/xml"}
@@ -155,7 +157,7 @@ class RunRecorder:
         metadata: Mapping[str, str],
         attachments: Mapping[str, bytes] | None = None,
         wall_clock: Callable[[], int] = time.time_ns,
-        compression: Literal["zstd", "lz4", "none"] = "zstd",
+        compression: Compression = "zstd",
         chunk_size: int = 4 * 1024 * 1024,
         image_format: Literal["jpeg", "png"] = "jpeg",
         jpeg_quality: int = 90,
