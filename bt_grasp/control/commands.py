@@ -21,7 +21,6 @@ from dataclasses import dataclass, field
 
 from bt_grasp.control.breakpoints import Breakpoint, parse_breakpoint
 from bt_grasp.errors import BtGraspError, InputError
-from bt_grasp.files.json_types import JsonObject, JsonValue
 
 #: what may be written to the blackboard from a front end (as ``--set``): text is converted by the ports
 BlackboardScalar = str | int | float | bool
@@ -111,7 +110,7 @@ class FireFault:
     (checked as a fault plan's are)."""
 
     kind: str
-    params: Mapping[str, JsonValue] = field(default_factory=dict)
+    params: Mapping[str, object] = field(default_factory=dict)  # JSON from a front end, YAML scalars from a prompt
 
 
 @dataclass(frozen=True)
@@ -143,10 +142,10 @@ def is_intervention(command: Command) -> bool:
     return type(command) in INTERVENTION_KINDS
 
 
-def command_to_json(command: Command) -> JsonObject:
-    """The command as a JSON object: ``{"kind": ..., <fields>}``."""
+def command_to_json(command: Command) -> dict[str, object]:
+    """The command as a JSON object: ``{"kind": ..., <fields>}`` (a fault's parameters as given)."""
     kind = INTERVENTION_KINDS.get(type(command)) or _WATCHING_KINDS[type(command)]
-    out: JsonObject = {"kind": kind}
+    out: dict[str, object] = {"kind": kind}
     if isinstance(command, Step):
         out["n"] = command.n
     elif isinstance(command, SetBreakpoint):

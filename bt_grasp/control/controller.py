@@ -53,7 +53,6 @@ from bt_grasp.control.state import (
     value_text,
 )
 from bt_grasp.errors import InputError
-from bt_grasp.files.json_types import JsonValue
 from bt_grasp.tree.introspect import bt_status_name
 
 if TYPE_CHECKING:
@@ -77,7 +76,7 @@ class InterventionSink(Protocol):
 
 #: fires a fault of the catalogue now: (kind, params, tick) -> a sentence saying what fired; CommandError when
 #: the kind or the parameters are wrong
-FaultFirer = Callable[[str, Mapping[str, JsonValue], int], str]
+FaultFirer = Callable[[str, Mapping[str, object], int], str]
 
 
 class Controller:
@@ -273,7 +272,7 @@ class Controller:
 
     def _intervene(self, command: Command, source: Source) -> None:
         tree = self._attached()
-        recorded: dict[str, object] = {**command_to_json(command)}  # a value as stored may be no JSON yet
+        recorded = command_to_json(command)
         if isinstance(command, SetBlackboard):
             stored = set_entry(tree, command.key, command.value)
             recorded["value"] = stored

@@ -22,7 +22,6 @@ from bt_grasp.episode.request import BlackboardValue, EpisodeRequest
 from bt_grasp.episode.result import ChainStep, EpisodeResult, Judged, interrupted_result
 from bt_grasp.episode.worlds import FreshWorlds, WorldSource
 from bt_grasp.errors import InputError
-from bt_grasp.files.json_types import JsonValue
 from bt_grasp.scene.goals import Goal, PickGoal
 from bt_grasp.scene.run_goal import goal_for_run
 
@@ -476,7 +475,7 @@ def _fault_firer(injector: Injector) -> FaultFirer:
     from bt_grasp.control.commands import CommandError
     from bt_grasp.faults.plan import fault_now
 
-    def fire(kind: str, params: Mapping[str, JsonValue], tick: int) -> str:
+    def fire(kind: str, params: Mapping[str, object], tick: int) -> str:
         try:
             fault = fault_now(kind, params, tick, "fault")
             injector.fire_now(fault, tick)

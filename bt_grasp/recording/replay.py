@@ -11,13 +11,20 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Iterator
-from dataclasses import asdict, dataclass, replace
+from dataclasses import dataclass, replace
 
 from bt_grasp.errors import InputError
 from bt_grasp.files.json_types import JsonObject
 from bt_grasp.recording.messages import LoggedTreeNode
 from bt_grasp.recording.reader import NodeInfo, NodeUpdate, RunLog, message_to_jsonable
-from bt_grasp.recording.replay_shapes import AnnotatedNode, LeafState, ReplaySummary, TickView, TopicRecord
+from bt_grasp.recording.replay_shapes import (
+    AnnotatedNode,
+    FaultMarkJson,
+    LeafState,
+    ReplaySummary,
+    TickView,
+    TopicRecord,
+)
 
 _RECOVERY_LIMIT = 6
 
@@ -262,6 +269,10 @@ class FaultMark:
     target: str
     effect: str
 
+    def as_json(self) -> FaultMarkJson:
+        return {"tick": self.tick, "stamp_ns": self.stamp_ns, "label": self.label, "kind": self.kind,
+                "target": self.target, "effect": self.effect}
+
     def text(self) -> str:
         """``frame_drop@Perceive#1 (frame_drop) on pick/Perceive: no frame``"""
         kind = f" ({self.kind})" if self.kind and self.kind != self.label else ""
@@ -363,7 +374,7 @@ def tree_at(run: RunLog, tick: int) -> AnnotatedNode:
 def tick_view(run: RunLog, tick: int) -> TickView:
     record = run.tick_record(tick)
     tree = tree_at(run, tick)
-    faults = [asdict(mark) for mark in fault_marks(run) if mark.tick == tick]  # those that fired in this tick
+    faults = [mark.as_json() for mark in fault_marks(run) if mark.tick == tick]  # those that fired in this tick
     return {"tick": tick, "stamp_ns": record.stamp_ns if record else None, "tree": tree,
             "blackboard": run.blackboard_at(tick), "robot": run.robot_at(tick), "faults": faults}
 

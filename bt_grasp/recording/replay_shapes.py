@@ -69,6 +69,17 @@ class AnnotatedNode(TypedDict):
     children: list[AnnotatedNode]
 
 
+class FaultMarkJson(TypedDict):
+    """``replay.FaultMark`` as JSON (its fields, in their order)."""
+
+    tick: int
+    stamp_ns: int
+    label: str
+    kind: str
+    target: str
+    effect: str
+
+
 class TickView(TypedDict):
     """``replay.tick_view``: everything recorded of one tick."""
 
@@ -77,7 +88,7 @@ class TickView(TypedDict):
     tree: AnnotatedNode
     blackboard: JsonObject
     robot: LoggedJointState | None
-    faults: list[dict[str, object]]  # the faults that fired in this tick (``replay.FaultMark`` fields)
+    faults: list[FaultMarkJson]  # the faults that fired in this tick
 
 
 class TopicRecord(TypedDict):
