@@ -36,7 +36,7 @@ def campaign_file(tmp_path: Path) -> Path:
 
 def test_campaign_checks_and_episodes_carry_the_leaves(campaign_file: Path) -> None:
     campaign = load_campaign(campaign_file, leaves=(str(PLUGIN),))
-    assert [e.leaves for e in campaign.episodes()] == [(str(PLUGIN),), (str(PLUGIN),)]
+    assert [e.request.leaves for e in campaign.episodes()] == [(str(PLUGIN),), (str(PLUGIN),)]
 
 
 def test_eval_run_without_the_plugin_names_the_campaign_and_node(
