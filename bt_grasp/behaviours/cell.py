@@ -107,7 +107,7 @@ def make_cell(
     seed (``bt_grasp.seeds``), perception from the scene."""
     # deferred: OMPL, pinocchio and coal come with it; a tree loads and validates without them
     from bt_grasp.motion.kinematics import ArmKinematics, SeededKinematics
-    from bt_grasp.motion.planner import PlannerOptions
+    from bt_grasp.motion.planner import PlannerOptions  # deferred: as above
 
     seeds = RunSeeds(seed)
 
