@@ -74,6 +74,12 @@ class Cell:
     the cell (None: no board; ``Calibrate`` fails). Fault injectors replace ``robot``, ``camera``,
     ``planner``, ``kinematics`` and ``calibration`` with wrappers of the same Protocols.
     Build one with :func:`make_cell` (the run's settings) or directly (tests).
+
+    ``perception_latency_s`` is the seam through which perception's delay reaches the tree: a capture's detections
+    are handed to the tree that long after the frame's timestamp, on ``clock`` (:meth:`detections_ready_ns`). A
+    simulated run takes it from its scene (the world computes in no simulated time, so the delay must be paid
+    explicitly); a real cell keeps 0, or its cell file's value: there the time perception takes passes on the
+    wall clock by itself, and ``now - frame.stamp_ns`` is the real latency (frame stamps on the cell's clock).
     """
 
     robot: Robot
@@ -92,6 +98,16 @@ class Cell:
     board: BoardMount | None = None
     media: MediaSink = field(default_factory=NullSink)
     workdir: Path = Path(".")
+    perception_latency_s: float = 0.0
+
+    def detections_ready_ns(self, frame_stamp_ns: int) -> int:
+        """When the detections of a frame stamped ``frame_stamp_ns`` reach the tree (the cell's clock): the
+        frame's stamp plus the declared latency, and never before now (0 latency: now, whatever the stamp's
+        clock)."""
+        now = self.clock.now_ns()
+        if self.perception_latency_s <= 0:
+            return now
+        return max(now, int(frame_stamp_ns) + round(self.perception_latency_s * 1e9))
 
     @property
     def seeds(self) -> RunSeeds:
@@ -102,9 +118,10 @@ class Cell:
 def make_cell(
     robot: Robot, camera: Camera, clock: Clock, scene: Scene, seed: int,
     calibration: CameraCalibration | None = None, board: BoardMount | None = None,
+    perception_latency_s: float = 0.0,
 ) -> Cell:
     """A cell with the run's settings: the planner and the kinematics' IK restarts on their streams of the run's
-    seed (``bt_grasp.seeds``), perception from the scene."""
+    seed (``bt_grasp.seeds``), perception from the scene; detections delayed by ``perception_latency_s``."""
     # deferred: OMPL, pinocchio and coal come with it; a tree loads and validates without them
     from bt_grasp.motion.kinematics import ArmKinematics, SeededKinematics
     from bt_grasp.motion.planner import PlannerOptions  # deferred: as above
@@ -122,4 +139,5 @@ def make_cell(
         kinematics=SeededKinematics(ArmKinematics(), seeds.integer(Stream.IK)),
         calibration=calibration,
         board=board,
+        perception_latency_s=float(perception_latency_s),
     )

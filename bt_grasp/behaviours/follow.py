@@ -3,7 +3,9 @@
 One control period per tick (100 Hz of simulated time); a camera measurement every 1/rate s of simulated
 time (15 Hz by default, a D435's colour stream at a modest rate). The first measurement is a full
 perception (plane, clusters, geometry: the object's size and yaw) unless a previous FollowTarget handed its
-``track`` over; later ones are the light colour-blob tracker (``bt_grasp.perception.tracking``). The law is
+``track`` over; later ones are the light colour-blob tracker (``bt_grasp.perception.tracking``). Every
+measurement reaches the track the cell's perception latency after its frame was taken, stamped with the
+frame's time (``Cell.detections_ready_ns``); until the first one has, the arm holds still. The law is
 position-based visual servoing: a PID on the tcp's position error with the target's velocity fed forward
 (see ``servo.py`` for why), turned into joint position + velocity targets through the kinematic model.
 
@@ -21,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bt_grasp.behaviours.base import RobotLeaf
-from bt_grasp.behaviours.perceive import camera_pose, perceive_once
+from bt_grasp.behaviours.perceive import InFlight, camera_pose
 from bt_grasp.behaviours.reasons import FailureReason
 from bt_grasp.behaviours.servo import Gains, PidLaw, TargetTrack, grasp_yaw, rotate_towards
 from bt_grasp.geometry import make_T, rot_z
@@ -70,6 +72,9 @@ class FollowTarget(RobotLeaf):
     def initialise(self) -> None:
         self._early: Status | None = None
         self._track: TargetTrack | None = None
+        self._starting: InFlight | None = None
+        #: measurements on their way to the track: (ready_ns, frame time s, centre, measurement)
+        self._arriving: list[tuple[int, float, NDArray[np.float64], BlobMeasurement]] = []
         gain = self.ports.require
         self._pid = PidLaw(Gains(gain("kp", float), gain("ki", float), gain("kd", float)))
         self._last_capture_s = float("-inf")
@@ -88,6 +93,7 @@ class FollowTarget(RobotLeaf):
         if isinstance(previous, TargetTrack) and previous.color == color and previous.samples:
             self._track = previous
         else:
+            self._starting = InFlight()
             self._early = self._start_track(color)
         q = self.cell.robot.joint_positions()
         T = self.cell.kinematics.fk(q)
@@ -95,21 +101,32 @@ class FollowTarget(RobotLeaf):
         self._x_ref = T[:3, 3].copy()  # the commanded tcp position, integrated from the commanded velocity
         self._q_cmd = q.copy()
         if self._track is not None:
-            yaw_now = float(np.arctan2(T[1, 0], T[0, 0]))
-            self._R_goal = rot_z(grasp_yaw(self._track, yaw_now)) @ np.diag([1.0, -1.0, -1.0])
+            self._aim_tool()
+
+    def _aim_tool(self) -> None:
+        """The tool's goal orientation: closing across the track's narrow side, the nearer of the two yaws."""
+        assert self._track is not None
+        T = self.cell.kinematics.fk(self.cell.robot.joint_positions())
+        yaw_now = float(np.arctan2(T[1, 0], T[0, 0]))
+        self._R_goal = rot_z(grasp_yaw(self._track, yaw_now)) @ np.diag([1.0, -1.0, -1.0])
 
     def _start_track(self, color: str) -> Status | None:
-        """A full perception to find the target and learn its size and yaw."""
-        result = perceive_once(self, color)
+        """A full perception to find the target and learn its size and yaw: RUNNING while its detections are on
+        their way (the arm holds still), its FAILURE, or None once the track has started."""
+        assert self._starting is not None
+        result = self._starting.poll(self, color)
         if isinstance(result, Status):
-            return result
+            return None if result is Status.RUNNING else result
+        seen_s = self._starting.seen_ns * 1e-9
         det = result.best
         assert det is not None
         self._track = TargetTrack(color=color, height_m=float(det.size_m[2]), yaw_rad=float(det.yaw_rad),
                                   length_m=float(det.size_m[0]), width_m=float(det.size_m[1]),
                                   round=det.shape == "round")
-        self._track.add(self.now_s(), np.asarray(det.centroid_base_m, dtype=float))
-        self._last_capture_s = self.now_s()
+        self._track.add(seen_s, np.asarray(det.centroid_base_m, dtype=float))
+        self._last_capture_s = seen_s
+        self._starting = None
+        self._aim_tool()
         return None
 
     # --- measuring -----------------------------------------------------------------------------------
@@ -123,6 +140,7 @@ class FollowTarget(RobotLeaf):
         frame = self.cell.camera.capture()
         if frame is None or T_base_camera is None:
             return None
+        ready_ns = self.cell.detections_ready_ns(frame.stamp_ns)
         self._measurements += 1
         if self._measurements % _FRAME_LOG_EVERY == 1:
             self.cell.media.frame(frame, T_base_camera)
@@ -141,21 +159,37 @@ class FollowTarget(RobotLeaf):
             return None
         if track.areas and m.area_px < _MIN_AREA_RATIO * float(np.median(track.areas)):
             return None
-        track.areas.append(m.area_px)
-        track.add(t_s, centre)
-        return m
+        self._arriving.append((ready_ns, t_s, centre, m))
+        return self._arrived()
+
+    def _arrived(self) -> BlobMeasurement | None:
+        """Hand the measurements whose time has come to the track (stamped with their frames' times); the last
+        of them, if any."""
+        track, now_ns, last = self._track, self.cell.clock.now_ns(), None
+        assert track is not None
+        while self._arriving and self._arriving[0][0] <= now_ns:
+            _, t_s, centre, last = self._arriving.pop(0)
+            track.areas.append(last.area_px)
+            track.add(t_s, centre)
+        return last
 
     # --- the loop ------------------------------------------------------------------------------------
     def update(self) -> Status:
         if self._early is not None:
             return self._early
+        if self._track is None:  # the first full perception is on its way: the arm holds still
+            self._early = self._start_track(self.ports.get("color", str) or "")
+            if self._early is not None:
+                return self._early
+            if self._track is None:
+                return Status.RUNNING
         track = self._track
         assert track is not None
         t = self.now_s()
-        measurement = None
+        measurement = self._arrived()
         if t - self._last_capture_s >= 1.0 / self.ports.require("rate", float) - 1e-9:
             self._last_capture_s = t
-            measurement = self._measure(t)
+            measurement = self._measure(t) or measurement
         if t - track.last_time_s > self.ports.require("lost_after", float):
             self._stop()
             return self.fail(FailureReason.TARGET_LOST,

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, TypeGuard
 import numpy as np
 
 from bt_grasp.behaviours.base import RobotLeaf
-from bt_grasp.behaviours.perceive import DETECTOR_PORTS, DetectorLeaf, perceive_once
+from bt_grasp.behaviours.perceive import DETECTOR_PORTS, DetectorLeaf
 from bt_grasp.behaviours.pose import Pose
 from bt_grasp.behaviours.reasons import PERCEPTION_REASONS, FailureReason
 from bt_grasp.detector.kinds import DetectorKind, parse_detector
@@ -112,10 +112,9 @@ class PerceiveAll(DetectorLeaf):
         detector = self.detector_now()
         if isinstance(detector, Status):
             return detector
-        result = (perceive_once(self, None, accept_empty=True) if detector is None
-                  else perceive_once(self, None, accept_empty=True, detector=detector))
+        result = self.in_flight.poll(self, None, accept_empty=True, detector=detector)
         if isinstance(result, Status):
-            return result
+            return result  # RUNNING while the detections are on their way (the cell's latency), or FAILURE
         objects = tuple(result.others)
         self.ports.set("objects", objects)
         self.feedback_message = f"{len(objects)} object(s): " + ", ".join(class_of(d) or d.label for d in objects)

@@ -6,11 +6,16 @@ pipeline alone) or ``learned`` (a YOLO-OBB model's oriented boxes by class, join
 ``detector="learned"`` with a literal ``model`` is loaded and checked when the tree is loaded: a file that is not an
 OBB export, or an ``imgsz`` it does not take, is a load error naming the tree file's line. onnxruntime is imported
 only then (or at the first tick, for a model named on the blackboard).
+
+Every capture's detections reach the tree the cell's perception latency after the frame was taken
+(``Cell.detections_ready_ns``; 0.1 s of simulated time in a simulated run by default): the leaves capture and run
+the pipeline at their first tick (:func:`capture`), hold the result while RUNNING (:class:`InFlight`) and hand it
+over (:func:`delivered`) at the first tick at or after that time. With no latency all of it is one tick.
 """
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -57,10 +62,12 @@ def camera_pose(cell: Cell) -> NDArray[np.float64] | None:
 
 class DetectorLeaf(RobotLeaf):
     """A leaf that perceives with the detector its ports name (``DETECTOR_PORTS``); keeps each learned model it
-    loaded (one onnxruntime session per model and input size)."""
+    loaded (one onnxruntime session per model and input size). ``in_flight`` holds its capture until the
+    detections reach the tree (the cell's perception latency)."""
 
     def __init__(self, ctx: NodeContext) -> None:
         super().__init__(ctx)
+        self.in_flight = InFlight()
         self._models: dict[tuple[Path, int], LearnedDetector] = {}
         #: the learned detector the tree file names literally, loaded and checked with the tree (else None)
         self.literal_model: LearnedDetector | None = None
@@ -74,6 +81,12 @@ class DetectorLeaf(RobotLeaf):
                 self.literal_model = self._model(model, imgsz, True)
             except ModelError as exc:
                 raise PortValueError(f"port 'model': {exc.message}") from None
+
+    def initialise(self) -> None:
+        self.in_flight.reset()
+
+    def terminate(self, new_status: Status) -> None:
+        self.in_flight.reset()
 
     def _model(self, text: str, imgsz: int, from_tree: bool) -> LearnedDetector:
         # deferred: OpenCV comes with it (onnxruntime once a model runs); a tree loads and validates without it
@@ -105,11 +118,21 @@ class DetectorLeaf(RobotLeaf):
         return self._model(model, self.ports.require("imgsz", int), self.ports.key("model") is None)
 
 
-def perceive_once(leaf: RobotLeaf, color: str | None, accept_empty: bool = False,
-                  detector: LearnedDetector | None = None) -> Status | PerceptionResult:
-    """Capture + pipeline: the leaf's FAILURE status, or the (successful) PerceptionResult. With
-    ``accept_empty`` a table with nothing on it is a result (no detections), not a failure, and so (with a
-    learned ``detector``) is a table whose objects the detector named none of."""
+@dataclass(frozen=True)
+class Captured:
+    """One capture's perception on its way to the tree: what the pipeline found in the frame, and when the tree
+    may see it (``Cell.detections_ready_ns``: the frame's stamp plus the cell's perception latency)."""
+
+    result: PerceptionResult
+    T_base_camera: NDArray[np.float64]
+    ready_ns: int
+    learned: bool  # a learned detector's boxes were joined in
+    seen_ns: int = 0  # when the frame was taken, on the cell's clock (a simulated frame's stamp)
+
+
+def capture(leaf: RobotLeaf, color: str | None, detector: LearnedDetector | None = None) -> Status | Captured:
+    """Capture one frame and run the pipeline on it: the leaf's FAILURE status for what is known at once (no
+    calibration, no frame, an unknown colour), else the result with the time it reaches the tree."""
     # deferred: Open3D and OpenCV come with it; a tree loads and validates without them
     from bt_grasp.perception.pipeline import perceive
 
@@ -117,6 +140,7 @@ def perceive_once(leaf: RobotLeaf, color: str | None, accept_empty: bool = False
     T_base_camera = camera_pose(cell)
     if T_base_camera is None:
         return leaf.fail(FailureReason.CALIBRATION_MISSING, "no camera calibration loaded")
+    seen_ns = cell.clock.now_ns()
     frame: RGBDFrame | None = cell.camera.capture()
     if frame is None:
         return leaf.fail(FailureReason.NO_FRAME, "the camera returned no frame")
@@ -138,12 +162,49 @@ def perceive_once(leaf: RobotLeaf, color: str | None, accept_empty: bool = False
         result = replace(result, timings_ms={**result.timings_ms, "detector_network": found.network_ms,
                                              "detector_decode": found.decode_ms})
     result = without_fixtures(result, cell.scene)
-    cell.media.perception(result, T_base_camera)
-    if accept_empty and (result.status.value == "no_objects" or (detector is not None and result.others)):
+    return Captured(result, T_base_camera, cell.detections_ready_ns(frame.stamp_ns), detector is not None, seen_ns)
+
+
+def delivered(leaf: RobotLeaf, captured: Captured, accept_empty: bool = False) -> Status | PerceptionResult:
+    """What the tree learns when a capture's detections arrive: the (successful) PerceptionResult, or the leaf's
+    FAILURE status. With ``accept_empty`` a table with nothing on it is a result (no detections), not a failure,
+    and so (with a learned detector) is a table whose objects the detector named none of."""
+    result = captured.result
+    leaf.cell.media.perception(result, captured.T_base_camera)
+    if accept_empty and (result.status.value == "no_objects" or (captured.learned and result.others)):
         return result
     if not result.ok:
         return leaf.fail(FailureReason.NO_DETECTION, f"{result.status.value}: {result.message}")
     return result
+
+
+class InFlight:
+    """A leaf's capture whose detections have not reached the tree yet (the cell's perception latency).
+
+    ``poll`` captures at its first call, then answers RUNNING until the detections are ready, then what they
+    say; with no latency all of it happens in one call (one tick). ``reset`` forgets a capture (a new attempt,
+    or the leaf was halted)."""
+
+    def __init__(self) -> None:
+        self.captured: Captured | None = None
+        #: when the frame of the last delivered capture was taken (the cell's clock)
+        self.seen_ns = 0
+
+    def reset(self) -> None:
+        self.captured = None
+
+    def poll(self, leaf: RobotLeaf, color: str | None, accept_empty: bool = False,
+             detector: LearnedDetector | None = None) -> Status | PerceptionResult:
+        if self.captured is None:
+            started = capture(leaf, color, detector)
+            if isinstance(started, Status):
+                return started
+            self.captured = started
+        if leaf.cell.clock.now_ns() < self.captured.ready_ns:
+            return Status.RUNNING
+        captured, self.captured = self.captured, None
+        self.seen_ns = captured.seen_ns
+        return delivered(leaf, captured, accept_empty)
 
 
 @action(
@@ -166,9 +227,9 @@ class Perceive(DetectorLeaf):
         detector = self.detector_now()
         if isinstance(detector, Status):
             return detector
-        result = perceive_once(self, self.ports.get("color", str) or "", detector=detector)
+        result = self.in_flight.poll(self, self.ports.get("color", str) or "", detector=detector)
         if isinstance(result, Status):
-            return result
+            return result  # RUNNING while the detections are on their way, or FAILURE
         best = result.best
         if best is None:
             return self.fail(FailureReason.NO_DETECTION, "the pipeline succeeded with no detection")
@@ -184,10 +245,21 @@ class Perceive(DetectorLeaf):
 
 @condition(ports=[_COLOR], reasons=PERCEPTION_REASONS, needs_robot=True)
 class ObjectVisible(RobotLeaf):
-    """SUCCESS when the camera sees an object (of the colour) on the table."""
+    """SUCCESS when the camera sees an object (of the colour) on the table (RUNNING while the capture's
+    detections are on their way: the cell's perception latency)."""
+
+    def __init__(self, ctx: NodeContext) -> None:
+        super().__init__(ctx)
+        self.in_flight = InFlight()
+
+    def initialise(self) -> None:
+        self.in_flight.reset()
+
+    def terminate(self, new_status: Status) -> None:
+        self.in_flight.reset()
 
     def update(self) -> Status:
-        result = perceive_once(self, self.ports.get("color", str) or "")
+        result = self.in_flight.poll(self, self.ports.get("color", str) or "")
         if isinstance(result, Status):
             return result
         self.feedback_message = f"{len(result.detections)} object(s) visible"

@@ -13,7 +13,7 @@ R = FailureReason
 
 #: what a planned, executed motion may fail with (bt_grasp.behaviours.motion_job)
 MOTION_REASONS: tuple[FailureReason, ...] = (R.IK_UNREACHABLE, R.COLLISION, R.PLAN_FAILED, R.TRACKING_ERROR)
-#: what one capture and detection may fail with (bt_grasp.behaviours.perceive.perceive_once)
+#: what one capture and detection may fail with (bt_grasp.behaviours.perceive.capture and delivered)
 PERCEPTION_REASONS: tuple[FailureReason, ...] = (R.CALIBRATION_MISSING, R.NO_FRAME, R.BAD_INPUT, R.NO_DETECTION)
 
 __all__ = ["MOTION_REASONS", "PERCEPTION_REASONS", "FailureReason", "Reason", "ReasonLike", "reason_name"]

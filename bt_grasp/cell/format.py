@@ -59,6 +59,9 @@ class Camera(StrictModel):
     serial: str | None = None  # a RealSense's serial number (kind realsense)
     path: str | None = None  # a recording, relative to the cell file (kind recording)
     address: Host | None = None  # the twin's address (kind twin)
+    #: a delay added on the cell's clock after a frame's timestamp before its detections reach the tree, s; 0: none
+    #: (a live camera's frames carry their real delay: the time perception takes passes on the wall clock)
+    perception_latency_s: Annotated[float, Field(ge=0, le=2.0)] = 0.0
 
 
 class Plane(StrictModel):

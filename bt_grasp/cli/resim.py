@@ -151,6 +151,7 @@ def _resimulate(log_path: Path, workdir: Path, leaves: tuple[str, ...] = ()) -> 
         raise LogFileError(log_path, f"the run used --leaves {' '.join(recorded_leaves)}; pass them again with "
                            "--leaves (a log never loads code by itself)")
     recorded_interventions = _interventions(log_path, run.interventions)
+    latency = _recorded_latency(log_path, meta)
     new_log = workdir / "resim.mcap"
     request = EpisodeRequest(
         tree=tree,
@@ -166,6 +167,7 @@ def _resimulate(log_path: Path, workdir: Path, leaves: tuple[str, ...] = ()) -> 
         argv=("bt-grasp", "replay", str(log_path), "--resim"),
         leaves=leaves,
         log_epoch_ns=log_epoch_ns(os.environ),
+        perception_latency_s=latency,
     )
     controller = None
     if recorded_interventions:
@@ -200,6 +202,24 @@ def _recorded_int(log_path: Path, meta: dict[str, str], key: str, default: str, 
     if not (text.isascii() and text.isdigit() and len(text) < 20 and low <= int(text) <= high):
         raise LogFileError(log_path, f"its run metadata '{key}' is {text[:40]!r}, not an integer from {low} to {high}")
     return int(text)
+
+
+#: the longest perception latency a log may name, s (a scene's own limit)
+MAX_LATENCY_S = 2.0
+
+
+def _recorded_latency(log_path: Path, meta: dict[str, str]) -> float:
+    """The perception latency the run paid: its metadata's, 0 for a log made before latency was paid (those runs
+    handed a capture's detections to the tree in the tick it was taken)."""
+    text = meta.get("perception_latency_s", "0") or "0"
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not 0.0 <= value <= MAX_LATENCY_S:
+        raise LogFileError(log_path, f"its run metadata 'perception_latency_s' is {text[:40]!r}, not a number of "
+                                     f"seconds from 0 to {MAX_LATENCY_S:g}")
+    return value
 
 
 def _recorded_blackboard(log_path: Path, meta: dict[str, str]) -> dict[str, BlackboardValue]:

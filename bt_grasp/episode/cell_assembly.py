@@ -41,12 +41,18 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True)
 class CellDevices:
-    """The devices of a run's cell and the clock they keep time by (a simulated world's, or a real cell's)."""
+    """The devices of a run's cell and the clock they keep time by (a simulated world's, or a real cell's).
+
+    ``perception_latency_s``: how long after a frame's timestamp its detections reach the tree, paid on ``clock``
+    (``Cell.detections_ready_ns``). A simulated world's is its scene's (``Scene.latency_s``): its clock stands
+    still while perception computes. A real cell's is 0 (or its cell file's ``camera.perception_latency_s``): the
+    time perception takes passes on the wall clock by itself."""
 
     robot: Robot
     camera: Camera
     clock: Clock
     board: BoardMount | None = None  # the calibration board mounted in the cell (None: none)
+    perception_latency_s: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -83,7 +89,7 @@ def assemble_cell(devices: CellDevices, scene: Scene, seed: int, calibration: Ca
     """The run's cell, assembled in the order the module's docstring gives. ``recorder``: the run's log or live
     view (its media sink stamps pictures with ``now_ns``); ``faults``: install the fault wrappers."""
     cell = make_cell(devices.robot, devices.camera, devices.clock, scene, seed, calibration=calibration,
-                     board=devices.board)
+                     board=devices.board, perception_latency_s=devices.perception_latency_s)
     planning = TimedPlanner(cell.planner)
     cell.planner = planning
     if recorder is not None:

@@ -176,7 +176,9 @@ class Episode:
             from bt_grasp.sim.charuco import mount_calibration_board
 
             board = mount_calibration_board(world)
-        return CellDevices(world.robot, world.camera, world.clock, board)
+        latency = self.request.perception_latency_s
+        return CellDevices(world.robot, world.camera, world.clock, board,
+                           perception_latency_s=self.scene.latency_s if latency is None else latency)
 
     def run(self, on_tick: Sequence[TickCallback] = (), controller: Controller | None = None) -> EpisodeResult:
         """Tick the tree to the end (or ``max_ticks``), judge the goal, write the result; returns it.

@@ -28,6 +28,7 @@ def git_commit() -> str:
 def run_metadata(request: EpisodeRequest, scene: Scene, tree: LoadedTree, calibration: Path | None,
                  goal: Goal) -> dict[str, str]:
     r = request
+    latency = scene.latency_s if r.perception_latency_s is None else r.perception_latency_s
     return {
         "seed": str(r.seed),
         "tree_file": str(r.tree),
@@ -44,6 +45,9 @@ def run_metadata(request: EpisodeRequest, scene: Scene, tree: LoadedTree, calibr
         "git_commit": git_commit(),
         "main_tree": tree.main_tree,
         "leaves": ";".join(r.leaves),
+        # what the run paid between a frame's timestamp and its detections (replay --resim pays it again; a log
+        # without it was made before latency was paid: 0)
+        "perception_latency_s": repr(float(latency)),
     }
 
 

@@ -49,6 +49,10 @@ class EpisodeRequest:
     realtime: float | None = None
     #: users' own nodes: ``--leaves`` plugin files or modules, loaded after the installed entry points
     leaves: tuple[str, ...] = ()
+    #: the perception latency to pay, s (``bt_grasp.behaviours.cell.Cell.perception_latency_s``); None: the
+    #: scene's (``Scene.latency_s``). ``replay --resim`` gives a log's recorded value (0 for a log made before
+    #: latency was paid)
+    perception_latency_s: float | None = None
     #: the log's time origin fixed (ns since 1970, from ``SOURCE_DATE_EPOCH``): the log then holds no wall-clock
     #: reading, so the same request writes the same bytes (``bt_grasp.recording.reproducible``); None: now
     log_epoch_ns: int | None = None

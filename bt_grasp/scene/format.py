@@ -15,6 +15,7 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import Field, model_validator
 
+from bt_grasp.defaults import DEFAULT_PERCEPTION_LATENCY_S
 from bt_grasp.errors import ConfigError
 from bt_grasp.files.config import KeyPath, StrictModel, read_yaml, validate
 from bt_grasp.scene.colors import COLOR_NAMES
@@ -29,7 +30,7 @@ log = logging.getLogger(__name__)
 #: the scene file format this bt_grasp writes and reads (a file without ``version`` is version 1)
 SCENE_VERSION = 2
 #: keys that need ``version: 2``
-_V2_KEYS = ("goal", "fixtures", "calibration", "object_gap_m", "choose", "packages")
+_V2_KEYS = ("goal", "fixtures", "calibration", "object_gap_m", "choose", "packages", "perception_latency_s")
 #: a top-down place is planned only this far (horizontally) from the robot base, m
 TOP_DOWN_REACH_M = 0.80
 
@@ -161,6 +162,9 @@ class Scene(StrictModel):
     #: (version 2) folders of the packages URDF objects name in ``package://NAME/...`` mesh paths, relative to
     #: this file (else found beside the URDF: bt_grasp.scene.urdf_object)
     packages: dict[PackageName, Annotated[str, Field(min_length=1)]] | None = None
+    #: (version 2) how long after a frame's timestamp its detections reach the tree, s of simulated time; None:
+    #: the package's default (``bt_grasp.defaults.DEFAULT_PERCEPTION_LATENCY_S``)
+    perception_latency_s: Annotated[float, Field(ge=0, le=2.0)] | None = None
 
     @model_validator(mode="after")
     def _unique_names(self) -> Scene:
@@ -169,6 +173,11 @@ class Scene(StrictModel):
         if dupes:
             raise ValueError(f"object and fixture names must be unique; repeated: {', '.join(dupes)}")
         return self
+
+    @property
+    def latency_s(self) -> float:
+        """The perception latency a simulated run of this scene pays: its own, else the package's default."""
+        return DEFAULT_PERCEPTION_LATENCY_S if self.perception_latency_s is None else float(self.perception_latency_s)
 
     def fixture(self, name: str) -> Fixture | None:
         return next((f for f in self.fixtures if f.name == name), None)

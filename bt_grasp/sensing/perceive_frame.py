@@ -1,6 +1,6 @@
 """One frame through the perception pipeline and grasp ranking, as a tree's leaves do it (no motion).
 
-:class:`Perceiver` makes the calls ``PerceiveAll`` makes (``bt_grasp.behaviours.perceive.perceive_once``: the
+:class:`Perceiver` makes the calls ``PerceiveAll`` makes (``bt_grasp.behaviours.perceive.capture``: the
 pipeline, the learned detector's boxes joined with it, fixtures removed) and, for every object seen, the ranking
 ``PlanGrasp`` starts from (``bt_grasp.perception.antipodal.rank_grasps`` with the same settings, the same reach test
 from the scene's home pose and the camera's position as viewpoint), so a tree run on the same frame chooses from the

@@ -9,6 +9,7 @@ import itertools
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 from behaviour_fakes import FakeRobot, fake_cell
 
@@ -40,15 +41,16 @@ def _walk(path: Path, views: list[tuple[Detection, ...]], monkeypatch: pytest.Mo
     """Tick the tree, PerceiveAll seeing the next of ``views`` at each look (an empty table after the last);
     the other robot leaves are stand-ins. Returns the final status, every tick's node states and the objects
     SelectObject chose, in order."""
-    from bt_grasp.behaviours import objects as leaves
+    from bt_grasp.behaviours import perceive
 
     looks = iter(views)
 
-    def fake_perceive(leaf: Any, color: str | None, accept_empty: bool = False) -> PerceptionResult:
+    def fake_capture(leaf: Any, color: str | None, detector: Any = None) -> perceive.Captured:
         seen = next(looks, ())
-        return PerceptionResult(PerceptionStatus.OK if seen else PerceptionStatus.NO_OBJECTS, seen[:1], others=seen)
+        result = PerceptionResult(PerceptionStatus.OK if seen else PerceptionStatus.NO_OBJECTS, seen[:1], others=seen)
+        return perceive.Captured(result, np.eye(4), 0, False)
 
-    monkeypatch.setattr(leaves, "perceive_once", fake_perceive)
+    monkeypatch.setattr(perceive, "capture", fake_capture)
     clock = ManualClock()
     # the round's own check whether a failed place left something in the fingers
     # and the end's check that nothing is left in the fingers (nothing is, once a place succeeded)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
 import pytest
 from behaviour_fakes import FakeRobot, fake_cell
 
@@ -127,18 +128,17 @@ def test_fixture_pose_unknown_name_from_the_blackboard_fails_bad_input() -> None
 
 
 def test_perceive_all_lists_every_object_and_an_empty_table_is_an_empty_list(monkeypatch: pytest.MonkeyPatch) -> None:
-    from bt_grasp.behaviours import objects as leaves
+    from bt_grasp.behaviours import perceive
 
     results = iter([
         PerceptionResult(PerceptionStatus.OK, OBJECTS[:1], others=OBJECTS),
         PerceptionResult(PerceptionStatus.NO_OBJECTS),
     ])
 
-    def fake_perceive(leaf: Any, color: str | None, accept_empty: bool = False) -> Any:
-        assert accept_empty
-        return next(results)
+    def fake_capture(leaf: Any, color: str | None, detector: Any = None) -> Any:
+        return perceive.Captured(next(results), np.eye(4), 0, False)
 
-    monkeypatch.setattr(leaves, "perceive_once", fake_perceive)
+    monkeypatch.setattr(perceive, "capture", fake_capture)
     status, tree = run('<PerceiveAll objects="{all}"/>')
     assert status == "SUCCESS" and tree.blackboard_values()["all"] == OBJECTS
     assert tree.tick().value == "SUCCESS" and tree.blackboard_values()["all"] == ()
