@@ -113,6 +113,17 @@ class Robot(Protocol):
         ...
 
 
+class Encoder(Protocol):
+    """A conveyor belt's incremental encoder, as a cell reads it: whole counts of the belt's travel since the run
+    started (they grow as the belt runs its direction), ``counts_per_m`` of them per metre; one count is its
+    quantisation. The simulator counts the belt's own drive motion (``bt_grasp.sim.conveyor.BeltEncoder``)."""
+
+    @property
+    def counts_per_m(self) -> float: ...
+
+    def counts(self) -> int: ...
+
+
 class Stepper(Protocol):
     """Advances the world by whole physics steps; the only way time passes in a run."""
 

@@ -17,6 +17,7 @@ camera draws more noise, and a fault plan with one more fault leaves the grasps 
 | ``GRASPS`` | antipodal grasp sampling on an object's cloud |
 | ``PERCEPTION`` | the table plane's RANSAC |
 | ``IK`` | the random restarts of IK queries the leaves make themselves (a release pose, a servo step) |
+| ``BELT_FEED`` | a conveyor's feed: which objects enter, when, where across the belt, their yaw and rest pose |
 
 The order is part of what makes a seed reproduce a run: streams are only ever appended, never reordered.
 ``docs/architecture.md`` ("The seed path") says how to add one.
@@ -42,6 +43,7 @@ class Stream(enum.IntEnum):
     GRASPS = 6
     PERCEPTION = 7
     IK = 8
+    BELT_FEED = 9
 
 
 #: the largest value :meth:`RunSeeds.integer` returns (libraries that take a 32-bit seed: OMPL)

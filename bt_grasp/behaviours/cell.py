@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 
 from bt_grasp.behaviours.services import CameraCalibration, MediaSink, NullSink, Planner
 from bt_grasp.clock import Clock
-from bt_grasp.interfaces import Camera, Robot
+from bt_grasp.interfaces import Camera, Encoder, Robot
 from bt_grasp.perception.config import GraspSettings, PerceptionConfig
 from bt_grasp.scene.format import Scene
 from bt_grasp.seeds import RunSeeds, Stream
@@ -99,6 +99,8 @@ class Cell:
     media: MediaSink = field(default_factory=NullSink)
     workdir: Path = Path(".")
     perception_latency_s: float = 0.0
+    #: the conveyors' encoders, by the fixture's name (a belt the scene or cell declares one for)
+    encoders: dict[str, Encoder] = field(default_factory=dict)
 
     def detections_ready_ns(self, frame_stamp_ns: int) -> int:
         """When the detections of a frame stamped ``frame_stamp_ns`` reach the tree (the cell's clock): the

@@ -7,9 +7,11 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 
 from bt_grasp.behaviours import (
+    belt,
     calibration_leaves,
     follow,
     gripper,
+    intercept,
     motion_leaves,
     objects,
     perceive,
@@ -59,6 +61,9 @@ NODES: tuple[type[BtNode], ...] = (
     place.MoveTo,
     viewing.LookAt,
     follow.FollowTarget,
+    belt.BeltWaitPose,
+    belt.TrackOnBelt,
+    intercept.InterceptPick,
     LoopObjects,
 )
 

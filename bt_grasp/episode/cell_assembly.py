@@ -17,8 +17,8 @@ faults, ``TimedPlanner(MotionPlanner)`` without.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -26,7 +26,7 @@ import numpy as np
 from bt_grasp.behaviours.cell import Cell, make_cell
 from bt_grasp.clock import Clock
 from bt_grasp.episode.instruments import TimedPlanner
-from bt_grasp.interfaces import Camera, Robot
+from bt_grasp.interfaces import Camera, Encoder, Robot
 
 if TYPE_CHECKING:
     from bt_grasp.behaviours.services import CameraCalibration
@@ -53,6 +53,7 @@ class CellDevices:
     clock: Clock
     board: BoardMount | None = None  # the calibration board mounted in the cell (None: none)
     perception_latency_s: float = 0.0
+    encoders: Mapping[str, Encoder] = field(default_factory=dict)  # conveyors' encoders by fixture name
 
 
 @dataclass(frozen=True)
@@ -90,6 +91,7 @@ def assemble_cell(devices: CellDevices, scene: Scene, seed: int, calibration: Ca
     view (its media sink stamps pictures with ``now_ns``); ``faults``: install the fault wrappers."""
     cell = make_cell(devices.robot, devices.camera, devices.clock, scene, seed, calibration=calibration,
                      board=devices.board, perception_latency_s=devices.perception_latency_s)
+    cell.encoders = dict(devices.encoders)
     planning = TimedPlanner(cell.planner)
     cell.planner = planning
     if recorder is not None:

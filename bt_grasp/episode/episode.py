@@ -178,7 +178,8 @@ class Episode:
             board = mount_calibration_board(world)
         latency = self.request.perception_latency_s
         return CellDevices(world.robot, world.camera, world.clock, board,
-                           perception_latency_s=self.scene.latency_s if latency is None else latency)
+                           perception_latency_s=self.scene.latency_s if latency is None else latency,
+                           encoders=world.encoders)
 
     def run(self, on_tick: Sequence[TickCallback] = (), controller: Controller | None = None) -> EpisodeResult:
         """Tick the tree to the end (or ``max_ticks``), judge the goal, write the result; returns it.

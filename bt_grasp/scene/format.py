@@ -19,6 +19,7 @@ from bt_grasp.defaults import DEFAULT_PERCEPTION_LATENCY_S
 from bt_grasp.errors import ConfigError
 from bt_grasp.files.config import KeyPath, StrictModel, read_yaml, validate
 from bt_grasp.scene.colors import COLOR_NAMES
+from bt_grasp.scene.conveyor import Conveyor
 from bt_grasp.scene.fixtures import CONTAINER_KINDS, Fixture
 from bt_grasp.scene.goals import Goal, PickGoal, PlaceGoal, SortGoal, StackGoal
 from bt_grasp.scene.objects import Choose, SceneObject
@@ -210,11 +211,15 @@ def load_scene(path: str | Path) -> Scene:
     scene = validate(Scene, data, path, lines)
     check_references(scene, path, lines)
     check_choose(scene, path, lines)
-    if any(o.is_mesh for o in scene.objects):
+    feeds = [(i, f.feed.objects) for i, f in enumerate(scene.fixtures) if isinstance(f, Conveyor) and f.feed]
+    if any(o.is_mesh for o in scene.objects) or any(o.is_mesh for _, objects in feeds for o in objects):
         from bt_grasp.scene.meshes import attach_geometry  # trimesh is imported only for scenes with meshes
 
-        attach_geometry(scene.objects, max(scene.table.size_m[0], scene.table.size_m[1]), path, lines,
-                        _package_folders(scene, path, lines))
+        table = max(scene.table.size_m[0], scene.table.size_m[1])
+        packages = _package_folders(scene, path, lines)
+        attach_geometry(scene.objects, table, path, lines, packages)
+        for i, objects in feeds:  # a conveyor's feed: the templates of the objects that enter during the run
+            attach_geometry(objects, table, path, lines, packages, where=("fixtures", i, "feed", "objects"))
         _note_objects_beyond_the_gripper(scene)
     return scene
 

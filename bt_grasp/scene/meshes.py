@@ -44,23 +44,25 @@ DEGENERATE_TOL_M = 1e-6
 
 
 def attach_geometry(objects: Sequence[SceneObject], table_size_m: float, source: str | Path,
-                    lines: dict[KeyPath, int], packages: Mapping[str, Path] | None = None) -> None:
+                    lines: dict[KeyPath, int], packages: Mapping[str, Path] | None = None,
+                    where: KeyPath = ("objects",)) -> None:
     """Read every mesh/URDF object's files (relative to ``source``, the scene file) and attach the result;
     ``table_size_m`` (the table's largest side) bounds an object's size; ``packages`` maps ``package://`` names
-    to folders (the scene's ``packages:``)."""
+    to folders (the scene's ``packages:``); ``where``: the key of the objects' list in the file (errors name its
+    lines)."""
     folder = Path(source).parent
     for i, obj in enumerate(objects):
         if not obj.is_mesh:
             continue
-        key = ("objects", i, obj.shape)
-        line = lines.get(key, lines.get(("objects", i)))
+        key = (*where, i, obj.shape)
+        line = lines.get(key, lines.get((*where, i)))
         if obj.shape == "mesh":
             assert obj.mesh is not None
             geometry = read_mesh_object(folder / obj.mesh, obj.scale_xyz, source, line, obj.name)
         else:
             assert obj.urdf is not None
             geometry = read_urdf_object(folder / obj.urdf, obj.scale_xyz, source, line, obj.name, packages)
-        _check_size(geometry, table_size_m, source, lines.get(("objects", i, "scale"), line), obj.name)
+        _check_size(geometry, table_size_m, source, lines.get((*where, i, "scale"), line), obj.name)
         obj.with_geometry(geometry)
 
 

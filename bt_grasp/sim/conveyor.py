@@ -5,17 +5,28 @@ resting on a slat are carried by contact friction exactly as by a real belt (the
 faster than friction allows, they can be held back by a gripper). The slats run along the belt; a slat that
 has left the downstream end by one pitch goes back under the upstream end, as a real belt's return run
 does, so the chain never ends. Nothing touches the objects but physics.
+
+A belt's encoder (:class:`BeltEncoder`) counts the belt's own travel, as an encoder on its drive does: whole
+counts, never an object's pose. A belt's feed (:class:`BeltFeed`) sets the objects of the scene's ``feed`` down
+on the belt at its upstream end when the belt has run the drawn distance: each is a new body, standing at rest
+where it enters (primitives exactly resting, meshes dropped from 2 mm), which the belt then accelerates by
+friction as a real belt does an item dropped on it; none is moved by code after that.
 """
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
+
 import numpy as np
 import sapien
 
-from bt_grasp.scene.conveyor import SLAT_PITCH_M, SLAT_THICKNESS_M
+from bt_grasp.geometry import make_T, rot_z
+from bt_grasp.scene.conveyor import SLAT_PITCH_M, SLAT_THICKNESS_M, Feed
 from bt_grasp.scene.fixtures import Conveyor
+from bt_grasp.scene.layout import draw_rest
 from bt_grasp.sim.fixtures import BUILDERS, FIXTURE_FRICTION
-from bt_grasp.sim.objects import PlacedObject
+from bt_grasp.sim.objects import PlacedObject, resting_z_m
 from bt_grasp.sim.poses import to_pose
 
 #: gap between neighbouring slats, m
@@ -95,6 +106,68 @@ class ConveyorBelt:
         self.travel_m = 0.0
         for k, entity in enumerate(self.slats):
             entity.set_pose(self._pose(k, 0.0))
+
+
+class BeltEncoder:
+    """Implements :class:`bt_grasp.interfaces.Encoder` from the belt's own motion: the whole counts of its travel."""
+
+    def __init__(self, belt: ConveyorBelt) -> None:
+        assert belt.spec.encoder is not None
+        self._belt = belt
+        self.counts_per_m = float(belt.spec.encoder.counts_per_m)
+
+    def counts(self) -> int:
+        return math.floor(self._belt.travel_m * self.counts_per_m + 1e-9)
+
+
+@dataclass(frozen=True)
+class Entry:
+    """One object of a feed: it enters once the belt has run ``travel_m``, set down as ``placed`` says."""
+
+    travel_m: float
+    placed: PlacedObject
+
+
+def draw_entries(spec: Conveyor, feed: Feed, rng: np.random.Generator) -> list[Entry]:
+    """Every entry of a feed, drawn from the run's ``BELT_FEED`` stream in order: per entry its spacing behind the
+    one before (none for the first), its template, its place across the belt, its yaw and (a mesh set down
+    ``stable`` or ``any_stable``) its rest pose."""
+    entries: list[Entry] = []
+    travel = spec.speed_m_s * feed.first_s  # the belt's travel when the first enters (it runs at a constant speed)
+    T_world_fixture = spec.T_world_fixture()
+    along = -spec.sign * (spec.length_m / 2 - feed.entry_m)  # on the fixture's x axis, from its centre
+    for k in range(feed.count):
+        if k:
+            travel += float(rng.uniform(*feed.spacing_m))
+        template = feed.objects[int(rng.integers(len(feed.objects)))]
+        across = float(rng.uniform(*feed.across_m))
+        yaw = np.deg2rad(spec.yaw_deg + float(rng.uniform(*feed.yaw_deg)))
+        R_rest = draw_rest(template, rng) if template.is_mesh and template.rest_pose != "modelled" else None
+        xy = (T_world_fixture @ np.array([along, across, 0.0, 1.0]))[:2]
+        T = make_T(rot_z(yaw), [float(xy[0]), float(xy[1]), resting_z_m(template, spec.surface_z_m, R_rest)])
+        if R_rest is not None:
+            T[:3, :3] = T[:3, :3] @ R_rest
+        entries.append(Entry(travel, PlacedObject(template.model_copy(update={"name": f"{template.name}_{k}"}), T)))
+    return entries
+
+
+class BeltFeed:
+    """The entries of one belt's feed still to come; :meth:`due` hands over those whose travel the belt has run."""
+
+    def __init__(self, belt: ConveyorBelt, rng: np.random.Generator) -> None:
+        assert belt.spec.feed is not None
+        self._belt = belt
+        self._coming = draw_entries(belt.spec, belt.spec.feed, rng)
+
+    def due(self) -> list[PlacedObject]:
+        out = []
+        while self._coming and self._belt.travel_m >= self._coming[0].travel_m - 1e-12:
+            out.append(self._coming.pop(0).placed)
+        return out
+
+    @property
+    def remaining(self) -> int:
+        return len(self._coming)
 
 
 def belts_for(scene: sapien.Scene, fixtures: tuple[object, ...]) -> list[ConveyorBelt]:

@@ -125,7 +125,13 @@ class Judge:
         return object_extent(spec, self._oracle.T_world_object(name))
 
     def rises(self) -> dict[str, float]:
-        """How far each object's centre rose since the start of the run."""
+        """How far each object's centre rose since the start of the run (since it entered, for an object a
+        conveyor's feed set down during the run)."""
+        for name, T in self._world.entered.items():
+            if name not in self._start_z:
+                spec = self._world.config.object_spec(name)
+                assert spec is not None
+                self._start_z[name] = object_extent(spec, T).center_m[2]
         return {n: self.extent(n).center_m[2] - z for n, z in self._start_z.items()}
 
     def object_poses(self) -> dict[str, list[list[float]]]:

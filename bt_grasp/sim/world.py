@@ -14,7 +14,7 @@ from bt_grasp.scene.format import COLOR_NAMES, Scene, load_scene
 from bt_grasp.scene.layout import draw_layout
 from bt_grasp.seeds import RunSeeds, Stream
 from bt_grasp.sim.camera import SimCamera
-from bt_grasp.sim.conveyor import belts_for, on_supports
+from bt_grasp.sim.conveyor import BeltEncoder, BeltFeed, belts_for, on_supports
 from bt_grasp.sim.device import create_scene
 from bt_grasp.sim.fixtures import build_fixture
 from bt_grasp.sim.objects import PlacedObject, build_object, draw_poses
@@ -64,6 +64,12 @@ class World:
             layout.objects, self._object_rng, 0.0, str(source), scene_config.object_gap_m, layout.rest
         ), scene_config.fixtures)
         self.objects = {p.spec.name: build_object(self.scene, p) for p in self.placed}
+        #: the conveyors' encoders by fixture name (``bt_grasp.interfaces.Encoder``), for the cell's devices
+        self.encoders = {b.spec.name: BeltEncoder(b) for b in self.belts if b.spec.encoder is not None}
+        feed_rng = self.seeds.generator(Stream.BELT_FEED)  # one stream for every feed, in fixture order
+        self.feeds = [BeltFeed(b, feed_rng) for b in self.belts if b.spec.feed is not None]
+        #: objects that entered during the run (a conveyor's feed): name -> T_world_object as set down
+        self.entered: dict[str, np.ndarray] = {}
         self._build_lights()
         mount = self.camera_mount
         parent = None
@@ -159,12 +165,25 @@ class World:
         """Advance physics by n steps of dt (the robot's controller runs before each)."""
         dt_ns = round(self.dt_s * 1e9)
         for _ in range(n):
+            for feed in self.feeds:
+                for placed in feed.due():
+                    self._enter(placed)
             self.robot.before_physics_step()
             for belt in self.belts:
                 belt.before_step(self.dt_s)
             self.scene.step()
             self.clock.advance_ns(dt_ns)
         self._physics_steps += n
+
+    def _enter(self, placed: PlacedObject) -> None:
+        """A feed's object enters: a new body set down where it was drawn, one of the run's objects from now on
+        (the oracle, the judge and the camera see it; ``config.objects`` names it)."""
+        name = placed.spec.name
+        self.objects[name] = build_object(self.scene, placed)
+        self.placed.append(placed)
+        self.config = self.config.model_copy(update={"objects": (*self.config.objects, placed.spec)})
+        self.entered[name] = placed.T_world_object
+        log.debug("%s entered at %.3f s", name, self.clock.now_s())
 
     def step_tick(self) -> None:
         """Advance one control period (one behaviour-tree tick)."""

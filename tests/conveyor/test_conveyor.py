@@ -16,7 +16,7 @@ from bt_grasp.perception.tracking import Footprint, _top_centre_from_hits
 from bt_grasp.scene.format import load_scene
 
 REPO = Path(__file__).resolve().parents[2]
-SCENE = REPO / "scenes/conveyor.yaml"
+SCENE = REPO / "scenes/conveyor_follow.yaml"
 
 
 def _scene_with(tmp_path: Path, old: str, new: str) -> Path:
@@ -118,19 +118,20 @@ def test_the_belt_carries_objects_by_friction_at_its_speed() -> None:
 @pytest.mark.sim
 @pytest.mark.slow
 @pytest.mark.parametrize("scene", ["conveyor.yaml", "conveyor_eye_in_hand.yaml"])
-def test_pick_from_the_conveyor_succeeds_by_physics_and_logs_the_servo(scene: str, tmp_path: Path) -> None:
+def test_pick_from_the_conveyor_succeeds_by_physics_and_logs_the_intercept(scene: str, tmp_path: Path) -> None:
     from bt_grasp.episode import EpisodeRequest, run_episode
     from bt_grasp.recording.reader import open_log
 
     log = tmp_path / "conveyor.mcap"
     request = EpisodeRequest(tree=REPO / "trees/pick_from_conveyor.xml", scene=REPO / "scenes" / scene, seed=2,
-                             log=log, blackboard={"color": "red", "lift_height": 0.15})
+                             log=log)
     result = run_episode(request)
     assert result.success, result
     run = open_log(log)
-    servo = [e for e in run.events if e.get("kind") == "servo"]
-    assert servo and {"follow", "descend", "hold"} <= {e["payload"]["leaf"] for e in servo}
-    assert any("meas_x_m" in e["payload"] for e in servo)
+    phases = [e["payload"]["phase"] for e in run.events if e.get("kind") == "servo"
+              and e["payload"].get("leaf") == "intercept"]
+    assert [p for i, p in enumerate(phases) if i == 0 or p != phases[i - 1]] == [
+        "approach", "descend", "close", "lift", "done"]
 
 
 def test_the_benchmark_changes_only_the_belt_speed(tmp_path: Path) -> None:

@@ -21,7 +21,7 @@ sort_by_color.xml           sort_by_color.yaml              every red object on 
 clear_table.xml             clear_table.yaml                no object left in the work area: each on the bin's floor
 calibrate.xml               tabletop.yaml                   the calibration file written by the run is within
                                                             2 mm / 0.2 deg of the true camera pose; nothing tipped
-follow_conveyor.xml         conveyor.yaml                   median tracking error <= 5 mm after convergence (the
+follow_conveyor.xml         conveyor_follow.yaml            median tracking error <= 5 mm after convergence (the
                                                             ``bench follow`` measurement, reused), the box travelled
                                                             on the belt at its speed
 ==========================  ==============================  ====================================================
@@ -253,7 +253,7 @@ CASES: dict[str, Case] = {
     "sort_by_color.xml": Case("sort_by_color.yaml", 0, check_sort_by_color),
     "clear_table.xml": Case("clear_table.yaml", 0, check_clear_table),
     "calibrate.xml": Case("tabletop.yaml", 0, check_calibrate, blackboard=(("calibration_out", CALIBRATION_OUT),)),
-    "follow_conveyor.xml": Case("conveyor.yaml", 0, check_follow_conveyor, FOLLOW_TICKS, (("color", "red"),)),
+    "follow_conveyor.xml": Case("conveyor_follow.yaml", 0, check_follow_conveyor, FOLLOW_TICKS, (("color", "red"),)),
 }
 
 #: shipped trees run end to end on the simulator by another test (path::name), with success by physics
