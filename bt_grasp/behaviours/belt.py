@@ -57,16 +57,17 @@ class _OnBelt(RobotLeaf):
 
 def nominal_window(leaf: RobotLeaf, axis: BeltAxis, hover_m: float) -> tuple[float, float, NDArray[np.float64]] | None:
     """The reach along the belt's centre line of a top-down grasp (tool x downstream) at the nominal height and of
-    the pose ``hover_m`` above it, walked from the belt's point nearest the robot: (lo, hi, its configurations),
-    or None when the arm reaches none of the belt."""
+    the pose ``hover_m`` above it, walked from the belt's point nearest the robot with the scene's home posture's
+    configuration family: (lo, hi, its configurations), or None when the arm reaches none of the belt."""
     # deferred: ruckig and pinocchio come with it; a tree loads and validates without them
-    from bt_grasp.motion.intercept import BeltGrasp, reach_window, tool_down
+    from bt_grasp.motion.intercept import BeltGrasp, InterceptSettings, reach_window, tool_down
 
     yaw = float(np.arctan2(axis.direction[1], axis.direction[0]))
     grasp = BeltGrasp(np.zeros(3), tool_down(np.zeros(3), yaw)[:3, :3], 0.05)
     nearest = float(np.clip(axis.along(np.zeros(3)), 0.0, axis.length_m))  # the belt's point nearest the base
+    home = np.asarray(leaf.cell.scene.robot.home_q_rad, dtype=float)
     window = reach_window(leaf.cell.kinematics, lambda s: axis.point(s, 0.0, axis.surface_z_m + NOMINAL_GRASP_Z_M),
-                          grasp, hover_m, leaf.cell.robot.joint_positions(), axis.length_m, nearest)
+                          grasp, hover_m, home, axis.length_m, nearest, InterceptSettings().max_reach_m)
     if window.empty:
         return None
     return window.lo, window.hi, window.q
@@ -175,7 +176,7 @@ class BeltWaitPose(_OnBelt):
         input_port("min_detections", int, 4, "detections of the object before it is handed over"),
         input_port("rate", float, 15.0, "frames per second while an object is tracked (simulated time)"),
         input_port("idle_rate", float, 5.0, "frames per second while none is"),
-        input_port("lead", float, 0.5, "the object must be this long of belt travel from leaving the reach, "
+        input_port("lead", float, 1.0, "the object must be this long of belt travel from leaving the reach, "
                    "beyond what an intercept rides with it, s"),
         input_port("timeout", float, 30.0, "NO_DETECTION after this long with no object to hand over, s"),
         output_port("target", object, "the object tracked (for InterceptPick)", default="{belt_target}"),

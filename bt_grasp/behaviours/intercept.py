@@ -67,6 +67,8 @@ SETTLED_TICKS = 3
 SETTLED_M = 0.0003
 #: ... but no sooner than this after the command, s
 MIN_CLOSE_S = 0.08
+#: a commanded joint moves at most this far in a tick while riding with the object (more: another arm branch), rad
+MAX_STEP_RAD = 0.3
 #: halting: the arm is brought to rest over about this long, s
 STOP_TIME_S = 0.1
 
@@ -96,6 +98,10 @@ class InterceptPick(RobotLeaf):
 
         self._early: Status | None = None
         self._phase = _APPROACH
+        self._t_arrive = self._t_close = self._grasped_at = 0.0
+        self._t_lift: float | None = None
+        self._blend = np.zeros(3)
+        self._last_width, self._still = 0.0, 0
         self._approach: Approach | None = None
         self._planner: InterceptPlanner | None = None
         self._grasp: BeltGrasp | None = None
@@ -154,7 +160,8 @@ class InterceptPick(RobotLeaf):
         tool_along = axis.along(self.cell.kinematics.fk(self._q_cmd)[:3, 3])
         for grasp in grasps:
             window = reach_window(self.cell.kinematics, lambda s: axis.point(s, track.across_m, z), grasp,
-                                  self.settings.hover_m, self._q_cmd, axis.length_m, tool_along)
+                                  self.settings.hover_m, self._q_cmd, axis.length_m, tool_along,
+                                  self.settings.max_reach_m)
             if window.empty:
                 continue
             planner = InterceptPlanner(self.cell.kinematics, grasp, window, self.settings, axis.along)
@@ -218,7 +225,7 @@ class InterceptPick(RobotLeaf):
         s, grasp = self.settings, self._grasp
         assert grasp is not None
         tau = t_s - self._t_arrive
-        lift_start = getattr(self, "_t_lift", None)
+        lift_start = self._t_lift
         if lift_start is None:  # descending, then closing at the grasp
             rise = s.hover_m * (1.0 - quintic(tau / s.descend_s))
             blend = self._blend * (1.0 - quintic(tau / BLEND_S))
@@ -241,10 +248,12 @@ class InterceptPick(RobotLeaf):
         T_now, T_next = self._tool_pose(t_cmd), self._tool_pose(t_cmd + self.dt)
         q = nearest_ik(kin, T_now, self._q_cmd)
         q_next = None if q is None else nearest_ik(kin, T_next, q)
-        if q is None or q_next is None or float(np.max(np.abs(q - self._q_cmd))) > 0.3:
+        jump = float("inf") if q is None else float(np.max(np.abs(q - self._q_cmd)))
+        if q is None or q_next is None or jump > MAX_STEP_RAD:
             self._stop()
-            return self.fail(INTERCEPT_MISSED, f"the arm cannot follow the object any further ({self._phase}): it "
-                             "has left the reach")
+            why = "no arm configuration reaches it" if q is None or q_next is None else \
+                f"following it would turn a joint {jump:.2f} rad in one tick"
+            return self.fail(INTERCEPT_MISSED, f"the arm cannot follow the object any further ({self._phase}): {why}")
         self._command(q, (q_next - q) / self.dt)
         tau = now - self._t_arrive
         if self._phase == _DESCEND and tau >= s.descend_s:
@@ -252,7 +261,8 @@ class InterceptPick(RobotLeaf):
             self._phase, self._t_close, self._last_width, self._still = _CLOSE, now, robot.gripper_width_m(), 0
         elif self._phase == _CLOSE:
             return self._closing(now)
-        elif self._phase == _LIFT and now - self._t_lift >= max(s.lift_s, s.slow_after_s + s.slow_s):
+        elif self._phase == _LIFT and self._t_lift is not None and \
+                now - self._t_lift >= max(s.lift_s, s.slow_after_s + s.slow_s):
             self._phase = _DONE
             self._finish(now)
             return Status.SUCCESS

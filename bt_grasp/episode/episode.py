@@ -22,7 +22,7 @@ from bt_grasp.episode.request import BlackboardValue, EpisodeRequest
 from bt_grasp.episode.result import ChainStep, EpisodeResult, Judged, interrupted_result
 from bt_grasp.episode.worlds import FreshWorlds, WorldSource
 from bt_grasp.errors import InputError
-from bt_grasp.scene.goals import Goal, PickGoal
+from bt_grasp.scene.goals import CollectGoal, Goal, PickGoal
 from bt_grasp.scene.run_goal import goal_for_run
 
 if TYPE_CHECKING:
@@ -407,9 +407,12 @@ def _close_log(recorder: RunRecorder, path: Path | None) -> None:
 
 
 def goal_entries(goal: Goal) -> dict[str, BlackboardValue]:
-    """What a goal tells trees that read ``{color}`` and ``{lift_height}`` (the request's blackboard wins)."""
+    """What a goal tells trees that read ``{color}`` and ``{lift_height}`` (a pick), or ``{count}`` (a collect) (the
+    request's blackboard wins)."""
     if isinstance(goal, PickGoal):
         return {"color": goal.color or "", "lift_height": goal.height_m}
+    if isinstance(goal, CollectGoal):
+        return {"count": goal.count}
     return {}
 
 

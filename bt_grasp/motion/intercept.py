@@ -59,6 +59,8 @@ class InterceptSettings:
     step_s: float = 0.02  # arrival times tried
     margin_m: float = 0.03  # the match stays this far inside the reach window
     clearance_m: float = 0.015  # the approach's tcp never goes lower than the arrival height minus this
+    max_reach_m: float = 0.78  # the ride stays this close to the robot's base axis horizontally (a stretched arm's
+    # joints move fast for a little tool motion: at 0.84 m the descent's IK jumped)
 
     def match_travel_s(self) -> float:
         """How long the tool moves at the belt's speed during the match, at most (its slowing counts half)."""
@@ -139,16 +141,18 @@ def nearest_ik(kin: KinematicModel, T: Mat4, q_ref: Vec, *, near_rad: float = 0.
 
 
 def reach_window(kin: KinematicModel, point_at: Callable[[float], Vec], grasp: BeltGrasp, hover_m: float,
-                 q_ref: Vec, length_m: float, start_along_m: float) -> ReachWindow:
+                 q_ref: Vec, length_m: float, start_along_m: float, max_reach_m: float = 0.78) -> ReachWindow:
     """The stretch of belt around ``start_along_m`` where the grasp (of an object whose centroid is
     ``point_at(along)``) and its hover pose are both reachable, walking the arm's configurations from ``q_ref``
-    outwards without a branch change."""
+    outwards without a branch change, and the grasp no further than ``max_reach_m`` from the base's z axis."""
     samples = np.arange(0.0, length_m + 1e-9, _WINDOW_STEP_M)
     k0 = int(np.argmin(np.abs(samples - start_along_m)))
     q_at: dict[int, Vec] = {}
 
     def ok(k: int, seed: Vec, first: bool = False) -> Vec | None:
         centroid = point_at(float(samples[k]))
+        if float(np.hypot(*grasp.T_at(centroid)[:2, 3])) > max_reach_m:
+            return None
         q_hover = nearest_ik(kin, grasp.T_at(centroid, hover_m), seed)
         if q_hover is None or (not first and float(np.max(np.abs(q_hover - seed))) > _BRANCH_JUMP_RAD):
             return None

@@ -7,8 +7,9 @@ Kinds (the ``kind`` key selects one)::
     goal: {kind: stack, object: red_box, on: blue_box}             # resting centred on another object
     goal: {kind: sort, rules: [{color: red, into: left_tray}, {color: blue, into: right_tray}]}
     goal: {kind: clear, into: bin}                                 # every object placed into the bin
+    goal: {kind: collect, into: bin, count: 3}                     # at least 3 objects placed into the bin
 
-Placed objects (place, stack, sort, clear into a container) must be released (not touching the fingers),
+Placed objects (place, stack, sort, clear or collect into a container) must be released (not touching the fingers),
 upright within :data:`UPRIGHT_DEG`, still for :data:`STILL_S` of simulated time after release, and set down,
 not dropped (fallen less than :data:`MAX_DROP_M` after the fingers opened). The judge in ``bt_grasp.sim``
 checks these with the simulator's ground truth; the pipeline never reads them.
@@ -96,5 +97,14 @@ class ClearGoal(StrictModel):
     into: Name | None = None
 
 
-Goal = Annotated[PickGoal | PlaceGoal | StackGoal | SortGoal | ClearGoal, Field(discriminator="kind")]
-GOAL_KINDS: tuple[str, ...] = ("pick", "place", "stack", "sort", "clear")
+class CollectGoal(StrictModel):
+    """At least ``count`` objects are placed inside ``into`` (which ones does not matter: objects a conveyor's feed
+    brings keep coming, and those not taken pass by)."""
+
+    kind: Literal["collect"]
+    into: Name
+    count: Annotated[int, Field(ge=1, le=1000)]  # a feed holds at most 1,000 objects
+
+
+Goal = Annotated[PickGoal | PlaceGoal | StackGoal | SortGoal | ClearGoal | CollectGoal, Field(discriminator="kind")]
+GOAL_KINDS: tuple[str, ...] = ("pick", "place", "stack", "sort", "clear", "collect")

@@ -19,7 +19,7 @@ import numpy as np
 from bt_grasp.geometry import Mat4
 from bt_grasp.interfaces import Mount
 from bt_grasp.scene.fixtures import Container
-from bt_grasp.scene.goals import ClearGoal, Goal, PickGoal, PlaceGoal, SortGoal, StackGoal
+from bt_grasp.scene.goals import ClearGoal, CollectGoal, Goal, PickGoal, PlaceGoal, SortGoal, StackGoal
 from bt_grasp.sim.judge_view import Extent, object_extent
 from bt_grasp.sim.oracle import GroundTruthOracle
 from bt_grasp.sim.placement import Placement, PlacementTracker
@@ -276,6 +276,22 @@ def _check_clear_into(judge: Judge, goal: Goal) -> Verdict:
     return _in_container(judge, goal, {n: goal.into for n in judge._oracle.object_names()})
 
 
+def _check_collect(judge: Judge, goal: Goal) -> Verdict:
+    """At least ``count`` objects placed inside the container (released, upright, resting, set down, on its floor)."""
+    assert isinstance(goal, CollectGoal)
+    box = judge._world.config.fixture(goal.into)
+    placed = []
+    for name in judge._oracle.object_names():
+        extent = judge.extent(name)
+        inside = (isinstance(box, Container) and box.contains_xy(extent.center_xy_m)
+                  and extent.bottom_z_m <= box.surface_z_m + 0.01)
+        if inside and not judge.placement(name).problems():
+            placed.append(name)
+    detail = f"{len(placed)} of {goal.count} placed in {goal.into}" + (f": {', '.join(placed)}" if placed else "")
+    return Verdict(goal, (Condition(Criterion.IN_CONTAINER, len(placed) >= goal.count, detail),),
+                   objects_in_workspace=judge.objects_in_workspace())
+
+
 #: goal kind -> its checker (a new kind adds one line here)
 _CHECKS: dict[str, Callable[[Judge, Goal], Verdict]] = {
     "pick": _check_pick,
@@ -284,6 +300,7 @@ _CHECKS: dict[str, Callable[[Judge, Goal], Verdict]] = {
     "place": _check_place,
     "stack": _check_stack,
     "sort": _check_sort,
+    "collect": _check_collect,
 }
 
 
