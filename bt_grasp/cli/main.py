@@ -27,6 +27,7 @@ INTERRUPTED = 130  # the exit code of a command Ctrl-C ended (128 + SIGINT)
 #: ~30-60 ms of every command); anything else (``--help``, ``--version``, no command, a mistyped one, shell
 #: completion) imports them all. ``tests/test_cli_import_cost.py`` checks the table against the modules.
 COMMAND_MODULES: dict[str, tuple[str, ...]] = {
+    "init": ("init_cmd",),
     "scene": ("scene_cmd",),
     "demo": ("demo_cmd",),
     "run": ("run_cmd",),
