@@ -152,7 +152,7 @@ def _scene(data: Any, path: Path) -> None:
     from bt_grasp.files.config import read_yaml, validate
     from bt_grasp.scene.format import Scene, check_choose, check_references, load_scene
 
-    whole = isinstance(data, dict) and ("objects" in data and ("table" in data or "calibration" in data)
+    whole = isinstance(data, dict) and (("objects" in data and ("table" in data or "calibration" in data))
                                         or "name" in data)
     if not whole:
         base = yaml.safe_load((REPO / "scenes/tabletop.yaml").read_text())
