@@ -252,6 +252,10 @@ void registerModels(BT::BehaviorTreeFactory& factory, const std::string& path)
   const auto models = nlohmann::json::parse(file);
   for(const auto& model : models)
   {
+    if(factory.builders().count(model.at("id").get<std::string>()) != 0)
+    {
+      continue;  // a node someone registered is that node, not a stand-in
+    }
     BT::TreeNodeManifest manifest;
     const std::string kind = model.at("kind").get<std::string>();
     manifest.type = kind == "Condition" ? BT::NodeType::CONDITION : BT::NodeType::ACTION;
