@@ -18,8 +18,8 @@ from bt_grasp.behaviours.objects import fixture_pose
 from bt_grasp.behaviours.pose import Pose
 from bt_grasp.behaviours.reasons import FailureReason
 from bt_grasp.perception.results import Detection
-from bt_grasp.tree.stand_in import StandIn, StandInRefusal, type_placeholder
 from bt_grasp.tree.registry import PortSpec
+from bt_grasp.tree.stand_in import StandIn, StandInRefusal, type_placeholder
 
 if TYPE_CHECKING:
     from bt_grasp.scene.format import Scene

@@ -371,7 +371,7 @@ def stubs_cmd(
         write_output_file(out, text, "--out", example="my_nodes.py")
     except InputError as exc:
         raise _fail(exc) from None
-    typer.echo(f"wrote {count} stand-ins to {out} (load it with --leaves {out})")
+    typer.echo(f"wrote {count} stand-in{'s' * (count != 1)} to {out} (load it with --leaves {out})")
 
 
 @tree_app.command("models")

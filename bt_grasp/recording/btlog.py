@@ -197,7 +197,10 @@ def write_walk_btlog(path: str | Path, structure: TreeNode, main_tree: str, star
     target = Path(path)
     if target.suffix != ".btlog":
         raise InputError("--export-btlog", f"{target} must end in .btlog (Groot2 opens only that)")
-    xml = tree_xml(logged_structure(structure), main_tree)
+    try:
+        xml = tree_xml(logged_structure(structure), main_tree)
+    except NotExportable as exc:
+        raise InputError("--export-btlog", f"the tree cannot be exported as .btlog: {exc}") from None
     for move in moves:
         if not 0 <= move.timestamp_us <= _MAX_TIME_US:
             raise InputError("--export-btlog", f"a transition at {move.timestamp_us} µs lies outside the .btlog "

@@ -27,6 +27,7 @@ last of two equal keys, and reads a negative or fractional delay as a whole numb
 
 from __future__ import annotations
 
+import bisect
 import json
 import re
 from dataclasses import dataclass
@@ -42,6 +43,8 @@ from bt_grasp.tree.scripting import Program, parse_script
 MAX_RULES_BYTES = 1 << 20
 #: objects within objects: the format needs 3
 MAX_DEPTH = 8
+#: rules (and configs) a file may hold: each node of a tree is matched against every rule
+MAX_RULES = 10_000
 #: the longest delay a config may ask for: BT.CPP reads it as an ``int`` of milliseconds
 MAX_DELAY_MS = (1 << 31) - 1
 
@@ -128,9 +131,10 @@ class _Reader:
         self.source = source
         self.pos = 0
         self._strings = json.JSONDecoder(strict=True)
+        self._newlines = [i for i, char in enumerate(text) if char == "\n"]  # once: a line is then a bisection
 
     def line(self, pos: int | None = None) -> int:
-        return self.text.count("\n", 0, self.pos if pos is None else pos) + 1
+        return bisect.bisect_left(self._newlines, self.pos if pos is None else pos) + 1
 
     def fail(self, problem: str, pos: int | None = None) -> InputError:
         return InputError(self.source, f"not valid JSON: {problem}", where=self.line(pos))
@@ -162,6 +166,8 @@ class _Reader:
         if match and match.end() > self.pos:
             self.pos = match.end()
             text = match.group()
+            if len(text) > 40:  # Python refuses to read integers of thousands of digits; no rule needs one
+                raise self.fail(f"a number of {len(text)} characters")
             return Located(float(text) if match.group(1) or match.group(2) else int(text), line)
         for word, literal in _LITERALS.items():
             if self.text.startswith(word, self.pos):
@@ -173,7 +179,8 @@ class _Reader:
         try:  # at a '"': the standard decoder reads exactly this string
             text, self.pos = self._strings.raw_decode(self.text, self.pos)
         except json.JSONDecodeError as exc:
-            raise self.fail(exc.msg, exc.pos) from None
+            problem = "a control character inside text" if exc.msg.startswith("Invalid control") else exc.msg
+            raise self.fail(problem, exc.pos) from None
         if not isinstance(text, str):  # pragma: no cover - a value starting with '"' is a string
             raise self.fail("expected text")
         return text
@@ -318,7 +325,10 @@ def parse_rules_text(text: str, source: str) -> RuleFile:
                 raise InputError(source, "a TestNodeConfig has an empty name", where=line)
             configs[name] = _config(source, name, line, value)
     rules = []
-    for key, line, value in _members(source, sections["SubstitutionRules"][1], "SubstitutionRules"):
+    members = _members(source, sections["SubstitutionRules"][1], "SubstitutionRules")
+    if len(members) > MAX_RULES or len(configs) > MAX_RULES:
+        raise InputError(source, f"holds more than {MAX_RULES:,} rules or TestNodeConfigs", where=top.line)
+    for key, line, value in members:
         target = _text(source, value, f"the rule '{key}'")
         if not key:
             raise InputError(source, "a rule has an empty key (a node's name, type or path pattern)", where=line)

@@ -31,6 +31,11 @@ _TYPE_NAMES = {int: "int", float: "float", bool: "bool", str: "str", object: "ob
 _DEFAULTS = {int: "0", float: "0.0", bool: "False", str: '""'}
 
 
+def _safe(text: str) -> str:
+    """A file name as the generated file's comments show it: only characters that cannot end a docstring."""
+    return "".join(c if c.isalnum() or c in "._-" else "_" for c in text)
+
+
 def _class_name(node_id: str) -> str:
     if node_id.isidentifier() and not keyword.iskeyword(node_id) and node_id != "bt":
         return node_id
@@ -59,8 +64,8 @@ def _node_text(spec: NodeSpec, model: ModelDecl) -> list[str]:
     ports = [_port_line(p) for p in spec.ports]
     head = [f"@bt.{decorator}(ports=[", *ports, "])"] if ports else [f"@bt.{decorator}()"]
     body = [f"class {_class_name(spec.name)}(bt.Leaf):",
-            f'    """Stand-in for {spec.name} ({Path(model.source).name}:{model.line}): SUCCESS, each output port '
-            'written its type\'s default."""', "", "    def update(self) -> bt.Status:"]
+            f'    """Stand-in for {spec.name} ({_safe(Path(model.source).name)}:{model.line}): SUCCESS, each output '
+            'port written its type\'s default."""', "", "    def update(self) -> bt.Status:"]
     for port in spec.ports:
         if port.direction is PortDirection.INPUT:
             continue
@@ -85,7 +90,7 @@ def stubs_text(models: Iterable[ModelDecl], source: str) -> tuple[str, int]:
     specs = model_specs(models, lambda name: False, None)
     by_id = {m.node_id: m for m in reversed(models)}
     others = sorted({m.node_id for m in models if m.kind not in STANDS_IN_FOR and m.kind != "SubTree"})
-    lines = [f'"""Stand-ins for the actions and conditions of {source}, written by `bt-grasp tree stubs`.',
+    lines = [f'"""Stand-ins for the actions and conditions of {_safe(source)}, written by `bt-grasp tree stubs`.',
              "",
              "Each node is declared with its model's ports and succeeds, writing each output port its type's "
              "default;",

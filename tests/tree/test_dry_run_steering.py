@@ -210,6 +210,13 @@ BAD_RULES = {
     '{"SubstitutionRules": [1, 2]}': ":1: SubstitutionRules must be a JSON object, got a list",
     '{"SubstitutionRules": {"Plan": "A"},}': ":1: not valid JSON: expected a key in double quotes",
     "[" * 100: ":1: not valid JSON: nested deeper than 8 levels",
+    '{"SubstitutionRules": {"Plan": ' + "9" * 5000 + "}}": ":1: not valid JSON: a number of 5000 characters",
+    '{"SubstitutionRules": {' + ", ".join(f'"k{i}": "AlwaysSuccess"' for i in range(10_001)) + "}}":
+        ":1: holds more than 10,000 rules or TestNodeConfigs",
+    '{"TestNodeConfigs": {"A": {"return_status_script": "x :="}}, "SubstitutionRules": {}}':
+        ":1: TestNodeConfig 'A': return_status_script: script 'x :=': expected an operand (got 'end of script') at "
+        "column 5",
+    '{"SubstitutionRules": {"Plan\x07": "A"}}': ":1: not valid JSON: a control character inside text",
 }
 
 
