@@ -21,7 +21,7 @@ from bt_grasp.errors import TreeFileError
 from bt_grasp.files.bounded_io import read_user_file
 from bt_grasp.files.search_path import SHIPPED_TREES, TREE_PATH_VARIABLE, find_named_file, looked_in
 from bt_grasp.tree.blackboard import Blackboard
-from bt_grasp.tree.builder import TreeBuilder, validate_document
+from bt_grasp.tree.builder import NodeReplacer, TreeBuilder, validate_document
 from bt_grasp.tree.formats.document import Document, IncludeDecl, IncludeLink
 from bt_grasp.tree.formats.xml_format import read_xml
 from bt_grasp.tree.formats.yaml_format import read_yaml
@@ -154,6 +154,8 @@ class LoadedTree:
     sources: dict[str, str] = field(default_factory=dict)
     status: BtStatus = BtStatus.IDLE
     ticks: int = 0
+    #: the ``substitutions`` patterns that replaced at least one node
+    substituted: frozenset[str] = frozenset()
 
     def tick(self) -> BtStatus:
         """One control period, as BT.CPP's ``tickOnce``: a completed root is reset to IDLE first, then the root
@@ -208,16 +210,25 @@ def build_tree(
     *,
     substitutions: Mapping[str, str] | None = None,
     clock: Clock | None = None,
+    replacer: NodeReplacer | None = None,
 ) -> LoadedTree:
-    """Check ``document`` completely, then build its main tree."""
+    """Check ``document`` completely, then build its main tree (``replacer``: BT.CPP's substitution rules, see
+    :class:`bt_grasp.tree.builder.NodeReplacer`)."""
     rules = parse_rules(substitutions, registry)
     main = validate_document(document, registry)
     clock = clock or ManualClock()
     root_blackboard = Blackboard()
-    builder = TreeBuilder(document, registry, clock, rules)
+    builder = TreeBuilder(document, registry, clock, rules, replacer)
     root = builder.build(main, root_blackboard)
     logger.debug("built %s from %s", main, document.source)
-    return LoadedTree(root, root_blackboard, main, document, clock, dict(document.texts))
+    return LoadedTree(root, root_blackboard, main, document, clock, dict(document.texts),
+                      substituted=frozenset(builder.substituted))
+
+
+def read_tree_file(path: str | Path) -> Document:
+    """A tree file's declarations, every include merged (bounded reads), nothing checked against a registry."""
+    display = str(path)
+    return read_document(_read_bytes(Path(path), display), display)
 
 
 def load_tree(
@@ -236,9 +247,7 @@ def load_tree(
         substitutions: ``{"Perceive": "AlwaysSuccess", "Approach*": "Running:3"}`` (see ``substitution``)
         clock: simulated time for Timeout, Delay and Sleep (a new ``ManualClock`` when None)
     """
-    display = str(path)
-    document = read_document(_read_bytes(Path(path), display), display)
-    return build_tree(document, registry, substitutions=substitutions, clock=clock)
+    return build_tree(read_tree_file(path), registry, substitutions=substitutions, clock=clock)
 
 
 def load_tree_from_string(

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 from bt_grasp.errors import TreeFileError, did_you_mean
 from bt_grasp.tree.builtins import REMOVED_V3_NAMES
-from bt_grasp.tree.exceptions import PortValueError, ScriptSyntaxError, TreeRuntimeError
+from bt_grasp.tree.exceptions import PortValueError, ScriptSyntaxError, TreeRuntimeError, UnknownNodes
 from bt_grasp.tree.formats.document import Document, ModelDecl, NodeDecl
 from bt_grasp.tree.node import POST_CONDITIONS, PRE_CONDITIONS, Conditions
 from bt_grasp.tree.ports import PortValue, blackboard_key
@@ -70,6 +70,16 @@ def _unknown_node(decl: NodeDecl, registry: NodeRegistry, document: Document) ->
         return decl.error(f"'{type_id}' is a BehaviorTree.CPP 3.x node; version 4 calls it {REMOVED_V3_NAMES[type_id]}")
     if type_id in document.trees:
         return decl.error(f"'{type_id}' is a BehaviorTree; use it as <SubTree ID=\"{type_id}\"/>")
+    model = next((m for m in document.models if m.node_id == type_id and m.kind != "SubTree"), None)
+    if model is not None:
+        where = f"{model.source}:{model.line}"
+        if model.kind in ("Action", "Condition"):
+            return decl.error(f"unknown node '{type_id}': the TreeNodesModel at {where} declares it, but no plugin "
+                              "gives its code (`bt-grasp tree run --dry` stands in for it; `bt-grasp tree stubs` "
+                              "writes a plugin to start from)")
+        return decl.error(f"unknown node '{type_id}': the TreeNodesModel at {where} declares it a {model.kind}, whose "
+                          "behaviour only its code knows: give it with --leaves (a dry run stands in for actions and "
+                          "conditions only)")
     hint = did_you_mean(type_id, list(registry.names()))
     return decl.error(f"unknown node '{type_id}'{hint}")
 
@@ -126,6 +136,27 @@ def _named(spec: NodeSpec, name: str) -> str:
         return ""
     what = f": {port.description}" if port.description else ""
     return f"; did you mean '{name}' ({port.direction.value}{what})?"
+
+
+def check_known_nodes(document: Document, registry: NodeRegistry) -> None:
+    """Every node type the document's trees name is registered: else one :class:`TreeFileError` (one unknown
+    node) or :class:`UnknownNodes` (every unknown node, in file order, each at its file and line)."""
+    problems: list[TreeFileError] = []
+
+    def walk(decl: NodeDecl) -> None:
+        if decl.type_id != "SubTree":
+            spec = registry.get(decl.type_id)
+            if spec is None or spec.kind is NodeKind.SUBTREE:
+                problems.append(_unknown_node(decl, registry, document))
+        for child in decl.children:
+            walk(child)
+
+    for tree in document.trees.values():
+        walk(tree.root)
+    if len(problems) == 1:
+        raise problems[0]
+    if problems:
+        raise UnknownNodes(problems)
 
 
 def resolve_node(decl: NodeDecl, registry: NodeRegistry, document: Document) -> ResolvedNode:
