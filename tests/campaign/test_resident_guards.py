@@ -234,9 +234,9 @@ def test_item2_a_folder_inside_one_others_can_rename_in_is_refused(tmp_path: Pat
     _one_sentence(proc, "writable by others without the sticky bit")
     assert list(folder.iterdir()) == []
     open_to_all.chmod(0o1777)  # sticky, as /tmp: others cannot rename what is not theirs
-    from bt_grasp.resident.protocol import _unsafe_ancestor
+    from bt_grasp.files.private_folder import unsafe_ancestor
 
-    assert _unsafe_ancestor(folder) is None
+    assert unsafe_ancestor(folder) is None
 
 
 @pytest.mark.parametrize("content", [b"", b"short"])
