@@ -127,16 +127,14 @@ def object_model(geometry: MeshGeometry) -> bytes:
     its visual file, else its collision mesh, else that mesh's convex hull, else its bounding box."""
     import trimesh
 
-    from bt_grasp.files.bounded_io import read_user_file
-    from bt_grasp.scene.meshes import MAX_MESH_BYTES
-
     vertices, faces = geometry.vertices_m, geometry.faces
     candidates: list[tuple[str, Any, Any]] = []
+    drawn = next((v for v in geometry.visuals if v.sources), None)
     if geometry.visual_vertices_m is not None:
         candidates.append(("visual", *geometry.visual_mesh_m()))
-    elif geometry.visual_path != geometry.collision_path:
-        try:
-            data = read_user_file(geometry.visual_path, MAX_MESH_BYTES)
+    elif geometry.visual_path != geometry.collision_path and drawn is not None:
+        try:  # the bytes read and checked when the scene loaded: the file is not opened again
+            data = drawn.sources[0][1]
             visual: Any = trimesh.load(io.BytesIO(data), file_type=geometry.visual_path.suffix.lower()[1:],
                                   process=False, force="mesh")
             candidates.append(("visual", np.asarray(visual.vertices) * np.asarray(geometry.scale), visual.faces))
