@@ -22,9 +22,12 @@ import hashlib
 import io
 import json
 import math
+import os
 import resource
+import shutil
 import subprocess
 import sys
+import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -158,8 +161,7 @@ class ObbModel:
                 raise ModelError(path, f"takes {input_hw[0]}x{input_hw[1]} images, not the "
                                        f"{wanted[0]}x{wanted[1]} asked for (re-export it at that size)")
         checked = check_graph(graph, inputs[0].name, input_hw, path)
-        import onnxruntime as ort
-
+        ort = _onnxruntime()
         options = _session_options(ort, threads)
         try:
             session = ort.InferenceSession(checked, sess_options=options, providers=["CPUExecutionProvider"])
@@ -194,6 +196,26 @@ class ObbModel:
                                              f"[1, {4 + len(self.names) + 1}, anchors]")
         found = decode(output, self.names, geometry, conf=conf, iou=iou)
         return found if wanted is None else [d for d in found if d.class_id in wanted]
+
+
+def _onnxruntime() -> Any:
+    """onnxruntime, imported with ``TMPDIR`` pointing at a private folder that is removed afterwards: its telemetry
+    library writes a ``.ses`` file into ``TMPDIR`` when it is imported (onnxruntime 1.32, on Linux), a file in
+    the user's temporary folder that nothing asked for."""
+    if "onnxruntime" in sys.modules:
+        return sys.modules["onnxruntime"]
+    private = tempfile.mkdtemp(prefix="bt_grasp_ort_")
+    before = os.environ.get("TMPDIR")
+    os.environ["TMPDIR"] = private
+    try:
+        import onnxruntime
+    finally:
+        if before is None:
+            os.environ.pop("TMPDIR", None)
+        else:
+            os.environ["TMPDIR"] = before
+        shutil.rmtree(private, ignore_errors=True)
+    return onnxruntime
 
 
 def _session_options(ort: Any, threads: int) -> Any:
@@ -314,8 +336,7 @@ def _child_limits() -> None:
 
 def first_inference_here() -> None:
     """The child's side of :func:`first_inference`: a header line and the model on stdin."""
-    import onnxruntime as ort
-
+    ort = _onnxruntime()
     stream = io.BytesIO(sys.stdin.buffer.read())
     header = json.loads(stream.readline())
     height, width = header["hw"]
