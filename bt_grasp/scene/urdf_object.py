@@ -266,8 +266,15 @@ def _numbers(text: str | None, count: int, what: str, path: Path, element: Any, 
     except ValueError:
         values = ()
     if len(values) != count or not all(np.isfinite(v) for v in values):
-        raise ConfigError(path, f"<{element.tag}> {what} '{text}' must be {count} numbers", where=_line(element))
+        raise ConfigError(path, f"<{element.tag}> {what} {_quoted(text)} must be {count} numbers",
+                          where=_line(element))
     return values
+
+
+def _quoted(text: str | None) -> str:
+    """An attribute's text as a sentence quotes it: at most 80 characters of it."""
+    shown = "" if text is None else text
+    return repr(shown if len(shown) <= 80 else shown[:77] + "...")
 
 
 def _origin(element: Any, path: Path) -> np.ndarray:
@@ -285,7 +292,7 @@ def _rgba(material: Any, path: Path) -> tuple[float, float, float, float] | None
         return None
     values = _numbers(color.get("rgba"), 4, "rgba", path, color, "")
     if not all(0.0 <= v <= 1.0 for v in values):
-        raise ConfigError(path, f"<color> rgba '{color.get('rgba')}' must be four numbers from 0 to 1",
+        raise ConfigError(path, f"<color> rgba {_quoted(color.get('rgba'))} must be four numbers from 0 to 1",
                           where=_line(color))
     return (values[0], values[1], values[2], values[3])
 
@@ -340,6 +347,6 @@ def _mass(link: Any, path: Path) -> float | None:
     except ValueError:
         value = float("nan")
     if not (np.isfinite(value) and value > 0):
-        raise ConfigError(path, f"link mass is {mass.get('value')!r}; a mass must be a positive number of kg",
+        raise ConfigError(path, f"link mass is {_quoted(mass.get('value'))}; a mass must be a positive number of kg",
                           where=_line(mass))
     return value
