@@ -394,11 +394,11 @@ def renderer_copy(found: MeshFiles) -> tuple[tuple[str, bytes], ...]:
     (:attr:`MeshFiles.unstageable`)."""
     if found.unstageable:
         return ()
+    kinds = {name: ref.kind for ref, name in found.read.items()}
     out: list[tuple[str, bytes]] = []
     for name, data in found.files.items():
-        suffix = Path(name).suffix.lower()
-        if name == found.main:
-            suffix = found.path.suffix.lower()
+        # a file is rewritten as what it was read as (a material file is one whatever its name ends with)
+        suffix = found.path.suffix.lower() if name == found.main else {"material": ".mtl"}.get(kinds.get(name, ""), "")
         out.append((name, _rewritten(name, data, suffix, found)))
     return tuple(out)
 

@@ -74,3 +74,13 @@ def test_names_that_leave_the_folder_are_never_opened(tmp_path: Path) -> None:
     assert set(copy) == {"a.obj", "a.mtl"}
     for text in copy.values():  # the renderer's copy names nothing outside: unknown statements are left out too
         assert b"/etc" not in text and b".." not in text and b"http" not in text and b"C:" not in text
+
+
+def test_a_material_file_of_any_name_is_rewritten_as_one(tmp_path: Path) -> None:
+    """A material file not named .mtl is still a material file to the renderer: its names are rewritten too."""
+    (tmp_path / "m.txt").write_text("newmtl m\nmap_Kd /etc/passwd\nmap_Ks ok.png\n")
+    (tmp_path / "ok.png").write_bytes(_png(2, 2, 2))
+    obj = tmp_path / "a.obj"
+    obj.write_text("mtllib m.txt\nv 0 0 0\n")
+    copy = dict(renderer_copy(_read(obj)))
+    assert b"/etc" not in copy["m.txt"] and b"map_Ks ok.png" in copy["m.txt"]
