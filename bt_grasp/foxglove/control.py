@@ -352,7 +352,8 @@ def _bool(value: Any) -> bool:
 
 
 def _int(value: Any) -> int:
-    if isinstance(value, bool) or not isinstance(value, int | float) or value != int(value):
+    if isinstance(value, bool) or not isinstance(value, int | float) or (
+            isinstance(value, float) and not math.isfinite(value)) or value != int(value):
         raise CommandError(f"it takes a whole number of ticks, got {_shown(value)}")
     return int(value)
 

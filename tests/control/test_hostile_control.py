@@ -38,6 +38,19 @@ def test_finding5_a_command_message_with_nan_or_infinity_is_refused(value: str) 
     assert "finite" in answer.problems[0] and "\n" not in answer.problems[0], answer.problems[0]
 
 
+@pytest.mark.parametrize("name", ["run.step", "run.paused", "run.stop", "run.restart", "choose.object", "fault.fire",
+                                  "bb.lift_height", "breakpoints"])
+@pytest.mark.parametrize("value", [math.nan, math.inf, -math.inf, 1e308, 10**30])
+def test_finding5_every_parameter_refuses_nan_and_infinity_in_one_sentence(name: str, value: float) -> None:
+    """Found by the fuzz suite's control surface: `run.step` set to infinity was an OverflowError out of the
+    viewer's request (int(inf))."""
+    control, _ = _attached()
+    answer = FoxgloveControl(control).set_parameters({name: value})
+    for command in answer.sent:  # what went through is finite and bounded
+        assert all(not isinstance(v, float) or math.isfinite(v) for v in vars(command).values()), command
+    assert len(answer.problems) <= 1 and all("\n" not in p for p in answer.problems), answer
+
+
 def test_finding5_the_one_validation_holds_for_every_way_a_command_is_made() -> None:
     for bad in (math.nan, math.inf, -math.inf):
         with pytest.raises(CommandError, match="finite"):
