@@ -441,7 +441,9 @@ class Runner:
     def _start(self) -> subprocess.Popen[str]:
         env = dict(os.environ, PYTHONPATH=str(REPO) + os.pathsep + os.environ.get("PYTHONPATH", ""),
                    TMPDIR=str(self.tmp), MPLBACKEND="Agg", BT_GRASP_CACHE_DIR=str(self.own / "cache"),
-                   BT_GRASP_RESIDENT_DIR=str(self.own / "resident"))
+                   BT_GRASP_RESIDENT_DIR=str(self.own / "resident"),
+                   BT_GRASP_DECOMPOSITION_LIMIT_S="3")  # a damaged mesh can need CoACD: past 3 s one sentence
+
         return subprocess.Popen([sys.executable, str(Path(__file__).resolve()), "--worker"], stdin=subprocess.PIPE,
                                 stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, env=env, cwd=self.cwd)
 

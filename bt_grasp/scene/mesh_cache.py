@@ -59,9 +59,11 @@ CONVEX_VOLUME_TOL = 0.01
 MAX_PIECES = 64
 #: decomposing a mesh of more triangles than this is announced as a warning (it can take minutes)
 LONG_DECOMPOSITION_FACES = 2000
-#: the most triangles the convex decomposition takes, and how long and how much memory it may use
+#: the most triangles the convex decomposition takes, and how long (``BT_GRASP_DECOMPOSITION_LIMIT_S`` sets another
+#: limit: the fuzz suite's 3 s) and how much memory it may use
 MAX_DECOMPOSITION_FACES = 200_000
 DECOMPOSITION_LIMIT_S = 900.0
+DECOMPOSITION_LIMIT_ENV = "BT_GRASP_DECOMPOSITION_LIMIT_S"
 DECOMPOSITION_MEMORY_BYTES = 4 << 30
 #: the most convex parts a cache entry may hold (64 pieces of at most 16 parts each)
 MAX_CACHED_PARTS = MAX_PIECES * 16
@@ -222,19 +224,28 @@ def decompose(vertices: np.ndarray, faces: np.ndarray, params: CoacdParams) -> l
     np.savez(buffer, allow_pickle=False, vertices=np.asarray(vertices, dtype=float),
              faces=np.asarray(faces, dtype=np.int64), params=np.asarray(json.dumps(params.__dict__)))
     code = "from bt_grasp.scene.mesh_cache import decompose_here; decompose_here()"
+    limit_s = _decomposition_limit_s()
     try:
         proc = subprocess.run([sys.executable, "-c", code], input=buffer.getvalue(), capture_output=True,
-                              timeout=DECOMPOSITION_LIMIT_S, preexec_fn=_child_limits, check=False,
+                              timeout=limit_s, preexec_fn=_child_limits, check=False,
                               env={**os.environ, "OPENBLAS_NUM_THREADS": "1"})
     except subprocess.TimeoutExpired:
-        raise DecompositionError(f"took more than {DECOMPOSITION_LIMIT_S:g} seconds and was stopped: simplify "
-                                 "the mesh, or give a convex collision mesh or one of convex pieces") from None
+        raise DecompositionError(f"took more than {limit_s:g} seconds and was stopped: simplify the mesh, or give a "
+                                 "convex collision mesh or one of convex pieces") from None
     if proc.returncode != 0:
         last = (proc.stderr.decode("utf-8", "replace").strip().splitlines() or ["no detail"])[-1][:200]
         raise DecompositionError(f"failed (exit {proc.returncode}, past its "
                                  f"{DECOMPOSITION_MEMORY_BYTES >> 30} GiB memory limit or: {last})")
     with np.load(io.BytesIO(proc.stdout), allow_pickle=False) as data:
         return [np.asarray(data[f"part_{i}"], dtype=float) for i in range(int(data["count"]))]
+
+
+def _decomposition_limit_s() -> float:
+    try:
+        value = float(os.environ.get(DECOMPOSITION_LIMIT_ENV, "") or DECOMPOSITION_LIMIT_S)
+    except ValueError:
+        return DECOMPOSITION_LIMIT_S
+    return value if 0 < value <= DECOMPOSITION_LIMIT_S else DECOMPOSITION_LIMIT_S
 
 
 def _child_limits() -> None:
