@@ -24,8 +24,8 @@ PEAK_LIMIT = 1 << 30
 
 def hostile_315_byte_model(path: Path, *, data_dependent: bool = False) -> Path:
     """A YOLO-OBB-looking model (one image input [1, 3, 320, 320], one output [1, 6, anchors]) whose output is a
-    ConstantOfShape of 1 x 6 x 275,000,000 floats: 6.6 GB at its first inference (207 bytes; the finding's was 315,
-    built the same way). ``data_dependent``: the shape is
+    ConstantOfShape of 1 x 6 x 275,000,000 floats: 6.6 GB at its first inference (315 bytes, as the finding's, its
+    description padding it). ``data_dependent``: the shape is
     computed from the picture's values instead, so no shape inference can bound it."""
     if data_dependent:
         nodes = [helper.make_node("ReduceMax", ["images"], ["peak"], keepdims=0),
@@ -46,6 +46,10 @@ def hostile_315_byte_model(path: Path, *, data_dependent: bool = False) -> Path:
     model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 18)])
     model.ir_version = 9
     helper.set_model_props(model, {"names": str(NAMES)})
+    if not data_dependent:  # padded to the finding's 315 bytes with a description
+        model.doc_string = "x" * (315 - len(model.SerializeToString()) - 3)
+        while len(model.SerializeToString()) < 315:
+            model.doc_string += "x"
     path.write_bytes(model.SerializeToString())
     return path
 
@@ -64,7 +68,7 @@ def test_finding8_the_315_byte_model_is_refused_in_one_sentence(data_dependent: 
     """A 315-byte model allocated 6.6 GB at run time and failed inside onnxruntime with a traceback; `detector
     check` accepted it."""
     model = hostile_315_byte_model(tmp_path / "bomb.onnx", data_dependent=data_dependent)
-    assert model.stat().st_size < 400
+    assert model.stat().st_size == 315 or data_dependent
     proc = _check(model, tmp_path)
     lines = [line for line in proc.stderr.splitlines() if line.strip()]
     assert proc.returncode == 2 and len(lines) == 1 and "Traceback" not in proc.stderr, proc.stderr[-3000:]
