@@ -610,7 +610,16 @@ def _fuzz_part(indices: range, seed: int, corpus: Corpus, root: Path) -> Outcome
                 print(f"{root.name}: {done} cases, {outcome.counts['failed']} failed", file=sys.stderr, flush=True)
     finally:
         runner.close()
+        _end_resident(root / "resident")
     return outcome
+
+
+def _end_resident(folder: Path) -> None:
+    """A worker that died leaves its resident running (its own session): end it by the pid its lock records."""
+    with contextlib.suppress(OSError, ValueError):
+        pid = int((folder / "resident.lock").read_text().strip())
+        if b"bt_grasp.resident.server" in Path(f"/proc/{pid}/cmdline").read_bytes():
+            os.kill(pid, signal.SIGKILL)
 
 
 def _remove(folder: Path) -> None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import hashlib
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 from typing import Literal
 
@@ -35,10 +36,17 @@ class VisualPart:
     faces: np.ndarray | None = None
     sources: tuple[tuple[str, bytes], ...] = ()
 
+    @cached_property
+    def _sources_digest(self) -> str:
+        digest = hashlib.sha256()
+        for name, data in self.sources:
+            digest.update(f"{name}\0{len(data)}\0".encode())
+            digest.update(data)
+        return digest.hexdigest()
+
     def _identity(self) -> tuple[object, ...]:
         return (self.path, self.scale, self.primitive, self.dims_m, self.rgba,
-                tuple(np.round(np.asarray(self.T_object_part, dtype=float), 12).ravel()),
-                tuple((name, hashlib.sha256(data).hexdigest()) for name, data in self.sources))
+                tuple(np.round(np.asarray(self.T_object_part, dtype=float), 12).ravel()), self._sources_digest)
 
 
 @dataclass(frozen=True, eq=False)
