@@ -29,7 +29,7 @@ SHORT_TREE = ('<root BTCPP_format="4" main_tree_to_execute="T"><BehaviorTree ID=
               "</BehaviorTree></root>")
 
 MESH_KINDS = ("obj_names", "gltf_buffers", "glb_chunks", "ply_header", "stl_count", "dae_images", "mesh_bytes",
-              "scale", "texture_picture")
+              "scale", "texture_picture", "pieces")
 URDF_KINDS = ("chain", "links", "numbers", "xml", "mesh_names")
 CACHE_KINDS = ("volume", "parts", "archive", "folder")
 MODEL_KINDS = ("shape_bomb", "protobuf_bytes", "metadata", "external_data", "special_file")
@@ -112,9 +112,11 @@ def _scene(folder: Path, mesh: str, shape: str = "mesh", scale: str = "") -> Pat
 
 
 def _box_gltf() -> tuple[dict[str, Any], bytes]:
+    """A 4 cm box as a glTF document with its one buffer."""
     import trimesh
+    from trimesh.exchange.gltf import export_gltf
 
-    files = trimesh.creation.box(extents=(0.04, 0.04, 0.04)).export(file_type="gltf")
+    files = export_gltf(trimesh.Scene(trimesh.creation.box(extents=(0.04, 0.04, 0.04))), merge_buffers=True)
     document = json.loads(files["model.gltf"])
     return document, files[document["buffers"][0]["uri"]]
 
@@ -207,6 +209,19 @@ def make_mesh(kind: str, rng: random.Random, folder: Path, trap: dict[str, Path]
         scale = rng.choice(["1e308", "-1e308", "1e-308", "5e-324", "[1e308, 1, 1]", "[1, 0, 1]", ".nan", ".inf",
                             "1e400", "[1, 1]"])
         return ["scene", "validate", str(_scene(folder, "part.obj", scale=scale))]
+    if kind == "pieces":  # many objects, or one mesh placed by many nodes
+        n = rng.choice([300, 1001, 50_000])
+        if rng.random() < 0.5:
+            lines = [f"o p{i}\nv {i * 1e-5} 0 0\nv {i * 1e-5} 0.01 0\nv {i * 1e-5} 0 0.01\n"
+                     f"f {3 * i + 1} {3 * i + 2} {3 * i + 3}" for i in range(n)]
+            (folder / "part.obj").write_text("\n".join(lines) + "\n")
+            return ["scene", "validate", str(_scene(folder, "part.obj"))]
+        document, buffer = _box_gltf()
+        (folder / document["buffers"][0]["uri"]).write_bytes(buffer)
+        document["nodes"] = [{"mesh": 0, "translation": [0, 0, i * 1e-5]} for i in range(min(n, 5000))]
+        document["scenes"] = [{"nodes": list(range(len(document["nodes"])))}]
+        (folder / "part.gltf").write_text(json.dumps(document))
+        return ["scene", "validate", str(_scene(folder, "part.gltf"))]
     # texture_picture: a texture that is a bomb, not a picture, or cut
     (folder / "part.obj").write_text("mtllib part.mtl\nusemtl m\nvt 0 0\n" + BOX_OBJ)
     (folder / "part.mtl").write_text("newmtl m\nKd 1 1 1\nmap_Kd tex.png\n")

@@ -46,6 +46,10 @@ from bt_grasp.files.safe_path import check_relative_name, join_under
 #: 5 million passed validation, then sat in the convex decomposition for ever)
 MAX_MESH_FACES = 2_000_000
 MAX_MESH_VERTICES = 2_000_000
+#: the most pieces (an OBJ's objects, groups and material switches, a glTF's meshes, primitives and nodes, a COLLADA
+#: file's geometries and nodes) a mesh may have: an 18 MB OBJ of 200,000 one-triangle objects kept trimesh busy past
+#: 5 minutes
+MAX_MESH_PIECES = 1000
 #: the most files one mesh may name (materials, textures, buffers, counted together), and their total size
 MAX_NAMED_FILES = 64
 MAX_NAMED_BYTES = 256 << 20
@@ -299,6 +303,11 @@ def _gltf_document(data: bytes, suffix: str, error: ErrorFactory) -> tuple[dict[
         raise error("is not a glTF file (its JSON cannot be read)") from None
     if not isinstance(document, dict):
         raise error("is not a glTF file (its JSON is not an object)")
+    meshes = _list(document.get("meshes"))
+    pieces = len(_list(document.get("nodes"))) + sum(
+        len(_list(m.get("primitives"))) if isinstance(m, dict) else 1 for m in meshes)
+    if pieces > MAX_MESH_PIECES:
+        raise error(f"has {pieces:,} nodes and primitives, more than the {MAX_MESH_PIECES:,} pieces a mesh may have")
     for index, accessor in enumerate(_list(document.get("accessors"))):
         count = accessor.get("count") if isinstance(accessor, dict) else None
         if isinstance(count, int) and not 0 <= count <= 3 * MAX_MESH_FACES:
@@ -332,10 +341,13 @@ def check_counts(path: Path, data: bytes, error: ErrorFactory) -> None:
     """Refuse a mesh whose face or vertex statements (or declared counts) exceed :data:`MAX_MESH_FACES` /
     :data:`MAX_MESH_VERTICES`, or whose declared counts need more bytes than the file holds, before it is parsed."""
     suffix = path.suffix.lower()
-    faces = vertices = 0
+    faces = vertices = pieces = 0
     if suffix == ".obj":
         faces = data.count(b"\nf ") + data.startswith(b"f ") + data.count(b"\nf\t")
         vertices = data.count(b"\nv ") + data.startswith(b"v ") + data.count(b"\nv\t")
+        pieces = sum(data.count(b"\n" + key) + data.startswith(key) for key in (b"o ", b"g ", b"usemtl"))
+    elif suffix == ".dae":
+        pieces = data.count(b"<geometry") + data.count(b"<node")
     elif suffix == ".stl":  # binary when its declared count fits its length exactly (trimesh's own test)
         declared = struct.unpack_from("<I", data, 80)[0] if len(data) >= 84 else -1
         faces = declared if 84 + 50 * declared == len(data) else data.count(b"endfacet")
@@ -353,6 +365,9 @@ def check_counts(path: Path, data: bytes, error: ErrorFactory) -> None:
     if faces > MAX_MESH_FACES:
         raise error(f"has at least {faces:,} triangles, more than the {MAX_MESH_FACES:,} a mesh may have "
                     "(simplify it first)")
+    if pieces > MAX_MESH_PIECES:
+        raise error(f"has {pieces:,} pieces (objects, groups, material switches, geometries, nodes), more than the "
+                    f"{MAX_MESH_PIECES:,} a mesh may have")
     if vertices > MAX_MESH_VERTICES:
         raise error(f"has at least {vertices:,} vertices, more than the {MAX_MESH_VERTICES:,} a mesh may have "
                     "(simplify it first)")

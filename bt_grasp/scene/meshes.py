@@ -30,6 +30,7 @@ from bt_grasp.files.bounded_io import MAX_MESH_BYTES, read_user_file
 from bt_grasp.files.config import KeyPath
 from bt_grasp.scene.mesh_files import (
     MAX_MESH_FACES,
+    MAX_MESH_PIECES,
     MAX_MESH_VERTICES,
     MeshFiles,
     checked_resolver,
@@ -302,11 +303,17 @@ def _parse_mesh(data: bytes, path: Path, source: str | Path, line: int | None, n
         resolver = checked_resolver(files)
         options: dict[str, Any] = {"split_objects": True, "group_material": False} if suffix == ".obj" else {}
         loaded = trimesh.load(io.BytesIO(data), file_type=suffix[1:], resolver=resolver, process=False, **options)
-        geometries = loaded.dump() if isinstance(loaded, trimesh.Scene) else [loaded]
-        pieces = [g for g in geometries if isinstance(g, trimesh.Trimesh) and len(g.faces) and len(g.vertices)]
+        instanced = _instanced(loaded) if isinstance(loaded, trimesh.Scene) else (0, 0)
+        if instanced[0] <= MAX_MESH_PIECES and instanced[1] <= MAX_MESH_FACES:
+            geometries = loaded.dump() if isinstance(loaded, trimesh.Scene) else [loaded]
+            pieces = [g for g in geometries if isinstance(g, trimesh.Trimesh) and len(g.faces) and len(g.vertices)]
     except Exception as exc:  # any parser failure of a third-party format reader is bad input here
         raise ConfigError(source, f"object '{name}': mesh file '{path}' cannot be read as a mesh "
                           f"({type(exc).__name__})", where=line) from None
+    if instanced[0] > MAX_MESH_PIECES or instanced[1] > MAX_MESH_FACES:  # a scene's nodes instance its meshes
+        raise ConfigError(source, f"object '{name}': mesh file '{path}' places {instanced[0]:,} pieces of "
+                          f"{instanced[1]:,} triangles in all, more than the {MAX_MESH_PIECES:,} pieces and "
+                          f"{MAX_MESH_FACES:,} triangles a mesh may have", where=line)
     if not pieces:
         raise ConfigError(source, f"object '{name}': mesh file '{path}' holds no triangles (an empty mesh)",
                           where=line)
@@ -325,6 +332,18 @@ def _parse_mesh(data: bytes, path: Path, source: str | Path, line: int | None, n
     rgb = next((c for c in (_material_rgb(p) for p in pieces) if c is not None), None)
     mesh = pieces[0] if len(pieces) == 1 else trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
     return mesh, tuple(len(p.faces) for p in pieces), rgb
+
+
+def _instanced(scene: Any) -> tuple[int, int]:
+    """The pieces a trimesh scene places and their triangles, each instance counted (before it is copied out)."""
+    pieces = faces = 0
+    for node in scene.graph.nodes_geometry:
+        pieces += 1
+        geometry = scene.geometry.get(scene.graph[node][1])
+        faces += len(getattr(geometry, "faces", ()))
+        if pieces > MAX_MESH_PIECES:
+            break
+    return pieces, faces
 
 
 def _check_spans_a_volume(vertices: np.ndarray, path: Path, source: str | Path, line: int | None, name: str) -> None:

@@ -396,3 +396,31 @@ def test_finding11_a_fifo_or_dev_zero_as_a_urdf_mesh_is_not_a_regular_file(speci
     proc = _bt(["scene", "validate", str(_scene(tmp_path, "part.urdf", shape="urdf"))], tmp_path, timeout=60)
     line = _one_sentence(proc)
     assert "does not exist" not in line and ("not a regular file" in line or "outside" in line), line
+
+
+def test_finding11_a_mesh_of_200000_pieces_is_refused_before_it_is_parsed(tmp_path: Path) -> None:
+    """Found while fixing finding 11: an 18 MB OBJ of 200,000 one-triangle objects kept trimesh busy past 5 minutes
+    (the face cap does not see it: it holds 200,000 triangles)."""
+    lines = [f"o p{i}\nv {i * 1e-6} 0 0\nv {i * 1e-6} 0.01 0\nv {i * 1e-6} 0 0.01\n"
+             f"f {3 * i + 1} {3 * i + 2} {3 * i + 3}" for i in range(200_000)]
+    (tmp_path / "part.obj").write_text("\n".join(lines) + "\n")
+    proc = _bt(["scene", "validate", str(_scene(tmp_path))], tmp_path, timeout=60)
+    _one_sentence(proc, "part.obj", "200,000 pieces")
+
+
+def test_finding11_a_gltf_that_places_one_mesh_900_times_is_counted_before_it_is_copied(tmp_path: Path) -> None:
+    """Found while fixing finding 11: a glTF's nodes may place one mesh many times; trimesh copies each instance
+    out (900 of 81,920 triangles: 74 million), so the instances are counted first."""
+    import trimesh
+
+    files = trimesh.Scene(trimesh.creation.icosphere(subdivisions=6, radius=0.01)).export(file_type="gltf")
+    document = json.loads(files["model.gltf"])
+    mesh = next(n["mesh"] for n in document["nodes"] if "mesh" in n)
+    document["nodes"] = [{"mesh": mesh, "translation": [0, 0, i * 1e-4]} for i in range(900)]
+    document["scenes"] = [{"nodes": list(range(900))}]
+    for name, data in files.items():
+        if name != "model.gltf":
+            (tmp_path / name).write_bytes(data)
+    (tmp_path / "part.gltf").write_text(json.dumps(document))
+    proc = _bt(["scene", "validate", str(_scene(tmp_path, "part.gltf"))], tmp_path, timeout=120)
+    _one_sentence(proc, "part.gltf", "900 pieces")
