@@ -43,11 +43,18 @@ def read_rows(path: Path, *, repair: bool = False) -> list[dict[str, Any]]:
     return [row for _, row in _numbered_rows(path, data[:end])]
 
 
+#: the longest row a results file may hold (bt_grasp writes about 1-2 KB a row)
+MAX_ROW_BYTES = 1 << 20
+
+
 def _numbered_rows(path: Path, data: bytes) -> list[tuple[int, dict[str, Any]]]:
     rows = []
     for number, line in enumerate(data.splitlines(), start=1):
         if not line.strip():
             continue
+        if len(line) > MAX_ROW_BYTES:
+            raise InputError(path, f"a row of {len(line):,} bytes, more than the {MAX_ROW_BYTES:,} a row may be",
+                             number)
         try:
             row = json.loads(line.decode("utf-8"))
         except UnicodeDecodeError as exc:

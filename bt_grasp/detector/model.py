@@ -49,6 +49,9 @@ MAX_INPUT_SIDE = 4096
 #: the largest tensor a model's graph may hold once its input is fixed: a YOLO-OBB export at 1536 px holds at most
 #: about 230 MB in one tensor (its first convolution's output), the 320 px model shipped here 1.6 MB
 MAX_TENSOR_BYTES = 256 << 20
+#: the most nodes a model's graphs may hold (a YOLO-OBB export has a few hundred to a few thousand): shape inference's
+#: time grows with them
+MAX_MODEL_NODES = 50_000
 #: the address space and time the first inference of a model may use, in a child process
 FIRST_INFERENCE_MEMORY_BYTES = 2 << 30
 FIRST_INFERENCE_TIMEOUT_S = 120.0
@@ -265,7 +268,11 @@ def check_graph(model: Any, input_name: str, input_hw: tuple[int, int], path: Pa
     import onnx
     from onnx import TensorProto, helper
 
-    for g in _graphs(model.graph):
+    graphs = _graphs(model.graph)
+    nodes = sum(len(g.node) for g in graphs)
+    if nodes > MAX_MODEL_NODES:
+        raise ModelError(path, f"has {nodes:,} nodes, more than the {MAX_MODEL_NODES:,} a model may have")
+    for g in graphs:
         tensors = list(g.initializer) + [a.t for n in g.node for a in n.attribute if a.HasField("t")]
         if any(t.data_location == TensorProto.EXTERNAL for t in tensors):
             raise ModelError(path, "keeps weights in external data files; give one self-contained .onnx file")
