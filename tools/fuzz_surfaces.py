@@ -259,10 +259,11 @@ def make_urdf(kind: str, rng: random.Random, folder: Path, trap: dict[str, Path]
             f'<robot name="r"><link name="{"n" * 1_000_000}">{visual}</link></robot>',
             "<robot", "\x00\xff\xfe", "<notrobot/>"])
     else:  # mesh_names
+        # a URDF may name meshes anywhere, links followed (the user's own file, docs/security.md): never the trap
         name = rng.choice([_hostile_name(rng, trap, folder), "/dev/zero", "package://../../etc",
-                           "package://x/" + "../" * 4 + "etc/passwd", "file:///dev/zero"])
-        if name == str(trap["secret"]) or name.endswith(trap["secret"].name) or name.startswith("file://" + "/"):
-            name = "/dev/zero"  # a URDF may name meshes anywhere (the user's own file): not the trap
+                           "package://x/" + "../" * 4 + "etc/passwd", "file:///dev/zero", str(trap["fifo"])])
+        if trap["secret"].name in name or name in ("link.png", "ok.png"):
+            name = "/dev/zero"
         text = f'<robot name="r"><link name="a"><visual><geometry><mesh filename="{name}"/></geometry></visual>' \
                "</link></robot>"
     (folder / "part.urdf").write_text(text)
