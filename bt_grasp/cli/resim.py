@@ -12,13 +12,14 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import tempfile
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from bt_grasp.errors import LogFileError
+from bt_grasp.errors import InputError, LogFileError
 from bt_grasp.files.safe_path import check_relative_name, join_under
 from bt_grasp.scene.goals import Goal
 
@@ -108,7 +109,12 @@ def resimulate(log_path: Path, keep_log: Path | None = None, leaves: tuple[str, 
     with tempfile.TemporaryDirectory(prefix="bt_grasp_resim_") as tmp, \
             confined_to(Path(tmp), "a log's tree, scene, calibration and fault plan may name only the files the log "
                                    "carries, so this run cannot be re-simulated"):
-        report = _resimulate(log_path, Path(tmp), leaves)
+        try:
+            report = _resimulate(log_path, Path(tmp), leaves)
+        except InputError as exc:  # a file the log carries, named as the log names it (its folder is gone)
+            if exc.source == str(log_path):
+                raise
+            raise LogFileError(log_path, f"cannot be re-simulated: {_in_log(exc.message, tmp)}") from None
         if keep_log is not None:
             from bt_grasp.files.output_files import copy_output_file
 
@@ -116,6 +122,13 @@ def resimulate(log_path: Path, keep_log: Path | None = None, leaves: tuple[str, 
         else:
             report.new_log = ""
     return report
+
+
+def _in_log(sentence: str, workdir: str) -> str:
+    """A sentence about the files of a re-simulation's work folder, with each named as the log names it."""
+    sentence = re.sub(re.escape(workdir) + r"/([^\s':,()]*)", lambda m: "the log's " + os.path.normpath(m.group(1)),
+                      sentence)
+    return sentence.replace(workdir, "the log's files")
 
 
 def _resimulate(log_path: Path, workdir: Path, leaves: tuple[str, ...] = ()) -> ResimReport:

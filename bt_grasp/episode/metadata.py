@@ -11,6 +11,7 @@ from pathlib import Path
 from bt_grasp.episode.request import EpisodeRequest
 from bt_grasp.episode.result import goal_json
 from bt_grasp.errors import InputError
+from bt_grasp.files.bounded_io import read_user_file
 from bt_grasp.files.safe_path import check_relative_name
 from bt_grasp.process.environment import versions_line
 from bt_grasp.scene.format import Scene
@@ -92,9 +93,9 @@ def run_attachments(request: EpisodeRequest, tree: LoadedTree, calibration: Path
     names = tree_attachment_names(tree)
     for name, text in tree.sources.items():
         files[names.get(name, f"tree/{Path(name).name}")] = text.encode()
-    files[f"scene/{request.scene.name}"] = request.scene.read_bytes()
+    files[f"scene/{request.scene.name}"] = read_user_file(request.scene)  # bounded, as when they were loaded
     if calibration is not None:
-        files[f"calibration/{calibration.name}"] = calibration.read_bytes()
+        files[f"calibration/{calibration.name}"] = read_user_file(calibration)
     if request.faults is not None:
-        files[f"faults/{request.faults.name}"] = request.faults.read_bytes()
+        files[f"faults/{request.faults.name}"] = read_user_file(request.faults)
     return files

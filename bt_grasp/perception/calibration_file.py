@@ -169,12 +169,13 @@ def save_calibration(calibration: CalibrationFile, path: str | Path) -> Path:
     return write_output_file(path, text, "--out", example="calibration.yaml")
 
 
-def load_calibration(path: str | Path, mount: str | None = None) -> CalibrationFile:
+def load_calibration(path: str | Path, mount: str | None = None, *, quote: bool = True) -> CalibrationFile:
     """Read and validate a calibration file; ConfigError (file:line: problem) on any problem, including a
-    calibration made for another camera mount than ``mount`` (when given)."""
+    calibration made for another camera mount than ``mount`` (when given). ``quote=False``: the sentence quotes
+    nothing of the file (a leaf reads the file a blackboard entry names, which a viewer may have set)."""
     expected_mount = mount
     data, lines = read_yaml(path)
-    calibration = validate(CalibrationFile, data, path, lines)
+    calibration = validate(CalibrationFile, data, path, lines, quote=quote)
     if expected_mount is not None and calibration.mount != expected_mount:
         raise ConfigError(
             path,

@@ -25,6 +25,7 @@ from pathlib import Path
 import defusedxml.ElementTree as SafeET
 
 from bt_grasp.errors import InputError, LogFileError
+from bt_grasp.files.bounded_io import MAX_RESULTS_BYTES, read_user_file
 from bt_grasp.files.json_types import JsonObject, JsonValue
 from bt_grasp.files.output_files import write_output_file
 from bt_grasp.recording.messages import LoggedTreeNode
@@ -225,10 +226,7 @@ def _xml_nodes(xml: str, path: Path) -> dict[int, dict[str, str]]:
 def read_btlog(path: str | Path) -> BtLog:
     """Parse a BT.CPP 4 FileLogger2 file; raises ``LogFileError`` for anything else."""
     p = Path(path)
-    try:
-        data = p.read_bytes()
-    except OSError as exc:
-        raise LogFileError(p, f"cannot be read: {exc.strerror or exc}") from exc
+    data = read_user_file(p, MAX_RESULTS_BYTES, error=LogFileError)  # a regular file, at most 1 GB
     if not data.startswith(MAGIC):
         raise LogFileError(p, "is not a BT.CPP FileLogger2 file (no BTCPP4-FileLogger2 header)")
     offset = len(MAGIC)
