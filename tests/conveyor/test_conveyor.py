@@ -134,6 +134,22 @@ def test_pick_from_the_conveyor_succeeds_by_physics_and_logs_the_intercept(scene
         "approach", "descend", "close", "lift", "done"]
 
 
+@pytest.mark.sim
+@pytest.mark.slow
+def test_sort_from_the_conveyor_puts_objects_in_the_bin_by_physics(tmp_path: Path) -> None:
+    from bt_grasp.episode import EpisodeRequest, run_episode
+
+    # two objects, not the scene's four: the same tree and belt, half the simulated time
+    scene = tmp_path / "conveyor_sort_2.yaml"
+    text = (REPO / "scenes/conveyor_sort.yaml").read_text()
+    assert "goal: {kind: collect, into: bin, count: 4}" in text
+    scene.write_text(text.replace("count: 4}", "count: 2}").replace(
+        "calibration: tabletop.calibration.yaml", f"calibration: {REPO / 'scenes/tabletop.calibration.yaml'}"))
+    result = run_episode(EpisodeRequest(tree=REPO / "trees/sort_from_conveyor.xml", scene=scene, seed=1))
+    assert result.success, result
+    assert "2 of 2 placed in bin" in str(result.judged.to_json())
+
+
 def test_the_benchmark_changes_only_the_belt_speed(tmp_path: Path) -> None:
     from bt_grasp.bench.follow import scene_at_speed
 

@@ -99,6 +99,7 @@ class StandInWorld:
         self.t_ns = 0
         self.dt_s = 0.002
         self.steps_per_tick = 5
+        self.entered: dict[str, object] = {}  # no conveyor feed
 
     def now_ns(self) -> int:
         return self.t_ns

@@ -261,7 +261,9 @@ ELSEWHERE: dict[str, str] = {
     "pick_eye_in_hand.xml": "tests/eye_in_hand/test_look_at.py::"
                             "test_eye_in_hand_pick_xml_and_yaml_twins_succeed_and_tick_identically",
     "pick_from_conveyor.xml": "tests/conveyor/test_conveyor.py::"
-                              "test_pick_from_the_conveyor_succeeds_by_physics_and_logs_the_servo",
+                              "test_pick_from_the_conveyor_succeeds_by_physics_and_logs_the_intercept",
+    "sort_from_conveyor.xml": "tests/conveyor/test_conveyor.py::"
+                              "test_sort_from_the_conveyor_puts_objects_in_the_bin_by_physics",
     "clear_household.xml": "tests/perception/test_clear_household_sim.py::"
                            "test_clear_household_puts_every_object_in_the_bin",
     "pick_class.xml": "tests/behaviours/test_pick_class_sim.py::test_pick_class_xml_picks_the_mug_by_class",
