@@ -179,10 +179,15 @@ def follow(
                                    help="Also pick from the conveyor this many seeds per speed (eye-to-hand)."),
     pick_mount: Mount = typer.Option(Mount.EYE_TO_HAND, "--pick-mount", help="Camera mount of the pick episodes."),
     first_seed: int = typer.Option(0, "--first-seed", min=0, help="First seed of the pick episodes."),
+    table: bool = typer.Option(False, "--table", help="Issue 45's rows instead of --speeds' picks: eye-to-hand at "
+                               "10, 20, 30, 50 cm/s, eye-in-hand at 20, household at 30, picks per minute into a "
+                               "bin at 30 cm/s; --pick-seeds seeds each (default 4)."),
+    rows: str = typer.Option("", "--rows", help="With --table: only the rows whose names contain one of these "
+                             "comma-separated words (e.g. 'eye-in-hand,household')."),
     as_json: bool = typer.Option(False, "--json", help="Print exactly one JSON object."),
 ) -> None:
     """Visual following on the conveyor: tracking error against the simulator's truth, and the pick rate."""
-    from bt_grasp.bench.follow import run_conveyor_pick_bench, run_tracking_bench
+    from bt_grasp.bench.follow import ISSUE_ROWS, issue_table, run_conveyor_pick_bench, run_tracking_bench
     from bt_grasp.errors import InputError
 
     try:
@@ -190,16 +195,30 @@ def follow(
     except ValueError:
         raise InputError("--speeds", f"expected numbers separated by commas, got '{speeds}'") from None
     mount_list = mounts.split(",")  # checked by the parser (MOUNT_LIST): each one a key of SCENES
+    only = [w.strip() for w in rows.split(",") if w.strip()]
+    if only and not table:
+        raise InputError("--rows", "selects rows of --table; add --table")
+    unknown = [w for w in only if not any(w in what for what, *_ in ISSUE_ROWS)]
+    if unknown:
+        raise InputError("--rows", f"no row of the table is named by '{unknown[0]}' (rows: "
+                         f"{'; '.join(what for what, *_ in ISSUE_ROWS)})")
     repo = Path.cwd()
     say = None if as_json else typer.echo
     summary: dict[str, object] = {}
     if seeds:
         summary["tracking"] = run_tracking_bench(repo, speed_list, seeds, mount_list, progress=say)
-    if pick_seeds:
+    if table:
+        summary["table"] = issue_table(repo, pick_seeds or 4, first_seed, only, progress=say)
+    elif pick_seeds:
         summary["picks"] = [run_conveyor_pick_bench(repo, v, pick_seeds, pick_mount.value, first_seed=first_seed,
                                                     progress=say) for v in speed_list]
     summary["machine"] = machine_description()
     typer.echo(json.dumps(summary, indent=None if as_json else 1))
+    if table and not as_json:
+        for row in summary["table"]:  # type: ignore[attr-defined]
+            failures = ", ".join(f"{k} x{v}" for k, v in row["failures"].items()) or "-"
+            rate = f", {row['picks_per_min_median']:.1f} picks/min (median)" if "picks_per_min_median" in row else ""
+            typer.echo(f"{row['row']}: {row['successes']}/{row['episodes']}{rate}; failures: {failures}")
 
 
 def register(app: typer.Typer) -> None:
