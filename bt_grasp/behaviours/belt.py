@@ -173,11 +173,12 @@ class BeltWaitPose(_OnBelt):
     ports=[
         _BELT,
         input_port("color", str, "", "only objects of this colour name (empty: any object)"),
-        input_port("min_detections", int, 4, "detections of the object before it is handed over"),
+        input_port("min_detections", int, 0, "detections of the object before it is handed over (0: 4, 3 on a belt "
+                   "faster than 35 cm/s)"),
         input_port("rate", float, 15.0, "frames per second while an object is tracked (simulated time)"),
-        input_port("idle_rate", float, 5.0, "frames per second while none is"),
-        input_port("lead", float, 1.0, "the object must be this long of belt travel from leaving the reach, "
-                   "beyond what an intercept rides with it, s"),
+        input_port("idle_rate", float, 0.0, "frames per second while none is (0: 5, 15 on a belt faster than 35 cm/s)"),
+        input_port("lead", float, 0.0, "the object must be this long of belt travel from leaving the reach, "
+                   "beyond what an intercept rides with it, s (0: 1.0, 0.3 on a belt faster than 35 cm/s)"),
         input_port("timeout", float, 30.0, "NO_DETECTION after this long with no object to hand over, s"),
         output_port("target", object, "the object tracked (for InterceptPick)", default="{belt_target}"),
     ],
@@ -199,19 +200,25 @@ class TrackOnBelt(_OnBelt):
         axis = belt_axis(self.cell.scene, belt)
         self.watch = BeltWatch(axis, belt.name, self.ports.get("color", str) or "")
         # deferred: ruckig comes with it; a tree loads and validates without it
-        from bt_grasp.motion.intercept import InterceptSettings
+        from bt_grasp.motion.intercept import FAST_BELT_M_S, InterceptSettings
 
-        settings = InterceptSettings()
+        settings = InterceptSettings.for_belt(axis.nominal_speed_m_s)
+        # a fast belt leaves the arm less time: objects are looked for at the tracking rate and handed over sooner
+        # (the encoder carries the track), and the approach is given what the arm needs, not a second more
+        fast = abs(axis.nominal_speed_m_s) > FAST_BELT_M_S
+        self._min_detections = self.ports.require("min_detections", int) or (3 if fast else 4)
+        self._idle_rate = self.ports.require("idle_rate", float) or (15.0 if fast else 5.0)
+        lead = self.ports.require("lead", float) or (0.3 if fast else 1.0)
         window = nominal_window(self, axis, settings.hover_m)
         self._latest_along = -1.0 if window is None else window[1] - settings.margin_m - abs(
-            axis.nominal_speed_m_s) * (settings.match_travel_s() + self.ports.require("lead", float))
+            axis.nominal_speed_m_s) * (settings.match_travel_s() + lead)
         self._started = self.now_s()
 
     def update(self) -> Status:
         if self._early is not None:
             return self._early
         watch = self.watch
-        rate = self.ports.require("rate", float) if watch.tracks else self.ports.require("idle_rate", float)
+        rate = self.ports.require("rate", float) if watch.tracks else self._idle_rate
         watch.step(self, rate)
         now = self.now_s()
         ready = [t for t in watch.tracks if self._ready(t, now)]
@@ -229,5 +236,5 @@ class TrackOnBelt(_OnBelt):
         return Status.RUNNING
 
     def _ready(self, track: BeltTrack, now_s: float) -> bool:
-        return (track.detections >= self.ports.require("min_detections", int)
+        return (track.detections >= self._min_detections
                 and track.predict(now_s).along_m <= self._latest_along)

@@ -82,7 +82,8 @@ _APPROACH, _DESCEND, _CLOSE, _LIFT, _DONE = "approach", "descend", "close", "lif
         input_port("lift", float, 0.15, "how far the object rises off the belt, m"),
         input_port("rate", float, 15.0, "frames per second while the object is watched (simulated time)"),
         input_port("hover", float, 0.08, "the tool arrives this far above its grasp pose, m"),
-        input_port("descend", float, 0.4, "the descent from there to the grasp, riding with the belt, s"),
+        input_port("descend", float, 0.0, "the descent from there to the grasp, riding with the belt, s (0: 0.4, "
+                   "0.25 on a belt faster than 35 cm/s)"),
         output_port("grasp", object, "the grasp as it closed (its tool pose and width)", default="{grasp}"),
         output_port("held", object, "the object's detection where it was grasped", default="{target}"),
     ],
@@ -110,8 +111,9 @@ class InterceptPick(RobotLeaf):
             self._early = self.fail(FailureReason.BAD_INPUT, "'target' is not a tracked object: run TrackOnBelt first")
             return
         self.watch, self.track = target.watch, target.track
-        self.settings = InterceptSettings(hover_m=self.ports.require("hover", float),
-                                          descend_s=self.ports.require("descend", float))
+        self.settings = InterceptSettings.for_belt(self.track.axis.nominal_speed_m_s,
+                                                   hover_m=self.ports.require("hover", float),
+                                                   descend_s=self.ports.require("descend", float))
         self.dt = 1.0 / self.cell.scene.physics.control_rate_hz
         q = self.cell.robot.joint_positions()
         self._q_cmd = q.copy()
