@@ -16,7 +16,7 @@ tick:
    at contact the tool moves exactly with the belt); what the approach's end missed of the latest estimate is
    taken up over the first 0.2 s;
 3. **close**: the fingers close with ``force`` N while the tool keeps riding with the object, until their width
-   settles (at most 0.4 s);
+   settles (at most 0.4 s; 0.25 s on a belt faster than 35 cm/s, whose descent is 0.25 s too);
 4. **lift**: the tool rises by ``lift`` m while it slows from the belt's speed to rest (once the object is clear of
    the belt).
 
