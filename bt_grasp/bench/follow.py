@@ -144,7 +144,9 @@ def run_conveyor_pick_bench(repo: Path, speed_m_s: float, seeds: int, mount: str
                 key = f"{result.reason}@{result.failed_leaf}"
                 reasons[key] = reasons.get(key, 0) + 1
             if progress is not None:
-                progress(f"{mount} {speed_m_s * 100:.0f} cm/s seed {seed}: {result.success} {result.reason or ''}")
+                where = f" ({Path(scene_file).stem})" if scene_file else ""
+                progress(f"{mount}{where} {speed_m_s * 100:.0f} cm/s seed {seed}: {result.success} "
+                         f"{result.reason or ''}")
     return {"mount": mount, "speed_cm_s": round(speed_m_s * 100, 1), "episodes": seeds, "successes": ok,
             "success_rate": ok / max(seeds, 1), "failures": reasons, "first_seed": first_seed,
             "perception_latency_s": latency, "elapsed_s": time.perf_counter() - t0}
