@@ -29,6 +29,7 @@ import yaml
 
 from bt_grasp.episode.episode import Episode
 from bt_grasp.episode.request import EpisodeRequest
+from bt_grasp.episode.result import EpisodeResult
 from bt_grasp.tree.loader import LoadedTree
 
 SCENES = {"eye-to-hand": "scenes/conveyor.yaml", "eye-in-hand": "scenes/conveyor_eye_in_hand.yaml"}
@@ -141,15 +142,22 @@ def run_conveyor_pick_bench(repo: Path, speed_m_s: float, seeds: int, mount: str
             result = Episode(request).run()
             ok += int(result.success)
             if not result.success:
-                key = f"{result.reason}@{result.failed_leaf}"
+                key = _failure(result)
                 reasons[key] = reasons.get(key, 0) + 1
             if progress is not None:
                 where = f" ({Path(scene_file).stem})" if scene_file else ""
                 progress(f"{mount}{where} {speed_m_s * 100:.0f} cm/s seed {seed}: {result.success} "
-                         f"{result.reason or ''}")
+                         f"{'' if result.success else _failure(result)}")
     return {"mount": mount, "speed_cm_s": round(speed_m_s * 100, 1), "episodes": seeds, "successes": ok,
             "success_rate": ok / max(seeds, 1), "failures": reasons, "first_seed": first_seed,
             "perception_latency_s": latency, "elapsed_s": time.perf_counter() - t0}
+
+
+def _failure(result: EpisodeResult) -> str:
+    """A failure's key: the failed leaf's reason, or the judge's unmet condition when the tree succeeded."""
+    if result.reason is None:  # the tree succeeded; the judge did not (e.g. the object rose 12 of 15 cm)
+        return f"GOAL_NOT_MET ({result.judged.failed_condition})"
+    return f"{result.reason}@{result.failed_leaf}"
 
 
 def _latency(scene: Path) -> float:
@@ -178,11 +186,11 @@ def run_sort_bench(repo: Path, speed_m_s: float, seeds: int, first_seed: int = 0
             if result.success:
                 rates.append(goal.count / result.sim_time_s * 60.0)
             else:
-                key = f"{result.reason}@{result.failed_leaf}"
+                key = _failure(result)
                 reasons[key] = reasons.get(key, 0) + 1
             if progress is not None:
                 progress(f"into a bin {speed_m_s * 100:.0f} cm/s seed {seed}: {result.success} "
-                         f"{result.reason or ''} {result.sim_time_s:.1f} s")
+                         f"{'' if result.success else _failure(result)} {result.sim_time_s:.1f} s")
     return {"mount": "eye-to-hand", "speed_cm_s": round(speed_m_s * 100, 1), "episodes": seeds, "successes": ok,
             "success_rate": ok / max(seeds, 1), "failures": reasons, "first_seed": first_seed,
             "objects_per_episode": goal.count, "picks_per_min_median": _pct(rates, 50),
