@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from bt_grasp.behaviours.attempts import AttemptMemory
 from bt_grasp.behaviours.services import CameraCalibration, MediaSink, NullSink, Planner
 from bt_grasp.clock import Clock
 from bt_grasp.interfaces import Camera, Robot
@@ -72,7 +73,8 @@ class Cell:
     ``calibration`` is filled by ``LoadCalibration``/``Calibrate`` (or ``--calibration``); leaves that need
     the camera pose fail with CALIBRATION_MISSING until then. ``board`` is the calibration board mounted in
     the cell (None: no board; ``Calibrate`` fails). Fault injectors replace ``robot``, ``camera``,
-    ``planner``, ``kinematics`` and ``calibration`` with wrappers of the same Protocols.
+    ``planner``, ``kinematics`` and ``calibration`` with wrappers of the same Protocols. ``attempts`` is the
+    run's memory of what it tried (grasps, placements) and how each ended, which the leaves consult.
     Build one with :func:`make_cell` (the run's settings) or directly (tests).
     """
 
@@ -91,6 +93,8 @@ class Cell:
     calibration: CameraCalibration | None = None
     board: BoardMount | None = None
     media: MediaSink = field(default_factory=NullSink)
+    #: the run's memory of its grasp and placement attempts (``bt_grasp.behaviours.attempts``)
+    attempts: AttemptMemory = field(default_factory=AttemptMemory)
     workdir: Path = Path(".")
 
     @property

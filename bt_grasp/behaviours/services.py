@@ -17,6 +17,7 @@ from bt_grasp.geometry import Mat4
 from bt_grasp.interfaces import RGBDFrame
 
 if TYPE_CHECKING:  # types only: importing motion/perception costs ~1 s (pinocchio, open3d)
+    from bt_grasp.behaviours.attempts import Attempt
     from bt_grasp.motion.cartesian import CartesianResult
     from bt_grasp.motion.collision import CollisionChecker
     from bt_grasp.motion.kinematics import KinematicModel
@@ -82,6 +83,10 @@ class MediaSink(Protocol):
         """One control step of a visual-servoing leaf: its measurement, error and command (numbers by name)."""
         ...
 
+    def attempt(self, attempt: Attempt) -> None:
+        """A grasp or placement attempt that ended (the log's ``/bt/attempts``)."""
+        ...
+
 
 class NullSink:
     """A MediaSink that keeps nothing (a run without a log, a test)."""
@@ -103,4 +108,7 @@ class NullSink:
         return None
 
     def servo(self, name: str, values: Mapping[str, float | bool | str]) -> None:
+        return None
+
+    def attempt(self, attempt: Attempt) -> None:
         return None

@@ -250,6 +250,9 @@ class Episode:
                 if recorder is not None:
                     recorder.write_result(world.now_ns(), interrupted_result(ticked[0], world.now_ns(), request.seed))
                 raise
+            unfinished = cell.attempts.finish(outcome.ticks)  # an attempt still going when the run ended
+            if unfinished is not None:
+                cell.media.attempt(unfinished)
             # a placement goal's "resting for 1 s after release" needs the world to run on a little
             for _ in range(judge.settle_ticks(self.inputs.goal)):
                 world.step_tick()

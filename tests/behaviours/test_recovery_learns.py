@@ -1,0 +1,147 @@
+"""Recovery that learns within a run (issue 46), tick by tick with stand-ins (no simulator).
+
+The shipped recovery tree (``trees/pick_with_recovery.xml``, its LoadCalibration left out: the cell is
+calibrated) runs against a robot stand-in that follows its joint targets at once, the real kinematics and
+planner, and a camera that returns the perception tests' synthetic RGB-D frames of a red 5 cm box:
+
+- a failed grasp is not repeated: the fingers close on nothing at every attempt (GRASP_EMPTY), and no two of
+  the grasps the tree makes are the same attempt (within 5 mm and 10 degrees, a grasp and its twin with the
+  closing direction reversed being one);
+- a grasp that stalled in contact rules out its neighbours and the next attempt changes family: the arm stops
+  on the way down (TRACKING_ERROR in Approach's descent); the next grasp is not from above and lies more than
+  15 mm or 20 degrees from the stalled one, and it lifts the box (a 10 cm tall one: a side grasp's wrist clears
+  the table).
+
+Each of these fails on the code before issue 46: the tree's recovery sets ``skip := 0`` after both failures, so
+PlanGrasp ranked the same candidates again and took the first.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+from behaviour_fakes import FakeRobot, fake_cell
+from numpy.typing import NDArray
+from perception_synth import DEFAULT_T_BASE_CAMERA, Box, render
+
+from bt_grasp.behaviours import robot_registry
+from bt_grasp.clock import ManualClock
+from bt_grasp.interfaces import Mount, RGBDFrame
+from bt_grasp.tree.loader import LoadedTree, load_tree_from_string
+
+REPO = Path(__file__).resolve().parents[2]
+HOME = np.array([0.0, -1.9, 1.9, -1.57, -1.57, 0.0])
+
+
+class Camera:
+    mount = Mount.EYE_TO_HAND
+
+    def __init__(self, frame: RGBDFrame) -> None:
+        self.frame = frame
+
+    def capture(self) -> RGBDFrame:
+        return self.frame
+
+
+class Calibration:
+    mount = "eye-to-hand"
+    tool_link = "tool0"
+
+    def T_base_camera_at(self, T_base_tool: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
+        return DEFAULT_T_BASE_CAMERA
+
+
+class StallingRobot(FakeRobot):
+    """Follows its joint targets at once, except while ``frozen`` (the arm stopped against something)."""
+
+    frozen = False
+
+    def set_joint_targets(self, q_rad: NDArray[np.float64], qd_rad_s: NDArray[np.float64] | None = None) -> None:
+        if not self.frozen:
+            super().set_joint_targets(q_rad, qd_rad_s)
+
+
+def _shipped_pick_with_recovery(robot: FakeRobot, clock: ManualClock, height_m: float = 0.05) -> LoadedTree:
+    text = (REPO / "trees" / "pick_with_recovery.xml").read_text()
+    text = text.replace('<LoadCalibration file="{calibration_file}"/>', "")  # the cell is calibrated
+    tree = load_tree_from_string(text, robot_registry(installed=False), clock=clock)
+    cell = fake_cell(robot, clock)
+    cell.camera = Camera(render([Box((0.45, 0.0), (0.05, 0.05, height_m))]))
+    cell.calibration = Calibration()
+    for node in tree.nodes():
+        node.setup(cell=cell)
+    tree.root_blackboard.set("color", "red")
+    tree.root_blackboard.set("lift_height", 0.1)
+    return tree
+
+
+def _gap(T_a: NDArray[np.float64], T_b: NDArray[np.float64]) -> tuple[float, float]:
+    """(mm, deg) between two tool poses, a pose and its twin (half a turn about the approach axis) being one."""
+    twin = np.diag([-1.0, -1.0, 1.0])
+    angles = [math.degrees(math.acos(float(np.clip((np.trace(T_a[:3, :3].T @ R) - 1) / 2, -1, 1))))
+              for R in (T_b[:3, :3], T_b[:3, :3] @ twin)]
+    return float(np.linalg.norm(T_a[:3, 3] - T_b[:3, 3])) * 1e3, min(angles)
+
+
+def _run(tree: LoadedTree, robot: StallingRobot, clock: ManualClock, stall_first_descent: bool = False,
+         max_ticks: int = 8000) -> tuple[str, list[NDArray[np.float64]], list[str]]:
+    """Tick to the end; the tool poses of the grasps Approach started, in order, and the failure reasons."""
+    grasps: list[NDArray[np.float64]] = []
+    reasons: list[str] = []
+    approach = tree.find("Approach")
+    stalled = False
+    status = "RUNNING"
+    for _ in range(max_ticks):
+        before = approach.bt_state.value
+        status = tree.tick().value
+        if approach.bt_state.value == "RUNNING" and before != "RUNNING":
+            grasps.append(np.asarray(tree.root_blackboard.get("grasp").T_base_tcp_grasp, dtype=float))
+        if stall_first_descent and not stalled and approach.feedback_message == "descend":
+            robot.frozen = stalled = True  # the fingers met something on the way down
+        if robot.frozen and approach.bt_state.value != "RUNNING":
+            robot.frozen = False
+        reason = tree.root_blackboard.get("failure_reason", None)
+        if reason and (not reasons or reasons[-1] != reason):
+            reasons.append(str(reason))
+        if status != "RUNNING":
+            break
+        robot.step()
+        clock.advance_s(0.01)
+    return status, grasps, reasons
+
+
+def test_a_failed_grasp_is_not_repeated() -> None:
+    # every attempt: Perceive (the box), PlanGrasp, Approach, Grasp -> GRASP_EMPTY (the fingers close on nothing),
+    # Recover's regrasp branch (open, retreat, home, skip := 0); the grasps made must all differ
+    clock, robot = ManualClock(), StallingRobot(object_width_m=0.0)
+    robot.q = HOME.copy()
+    tree = _shipped_pick_with_recovery(robot, clock)
+    status, grasps, reasons = _run(tree, robot, clock)
+    assert status == "FAILURE"
+    assert "GRASP_EMPTY" in reasons
+    assert len(grasps) >= 2
+    for i, a in enumerate(grasps):
+        for b in grasps[i + 1:]:
+            mm, deg = _gap(a, b)
+            assert mm > 5.0 or deg > 10.0, f"a grasp repeated ({mm:.1f} mm, {deg:.1f} deg from an earlier one)"
+
+
+def test_a_stalled_grasp_excludes_its_neighbours_and_the_next_attempt_changes_family() -> None:
+    # attempt 1: a top-down grasp; the arm stops on the way down (TRACKING_ERROR in Approach's descent);
+    # Recover's rehome branch (back off, open, home, skip := 0); attempt 2: another family (not from above), more
+    # than 15 mm or 20 degrees from the stalled grasp; the box is held (5 cm between the fingers) and lifted.
+    # The box stands 10 cm tall: a side grasp's wrist clears the table
+    clock, robot = ManualClock(), StallingRobot(object_width_m=0.05)
+    robot.q = HOME.copy()
+    tree = _shipped_pick_with_recovery(robot, clock, height_m=0.10)
+    status, grasps, reasons = _run(tree, robot, clock, stall_first_descent=True)
+    assert reasons[0] == "TRACKING_ERROR"
+    assert status == "SUCCESS"
+    assert len(grasps) == 2
+    first, second = grasps
+    assert -first[2, 2] > math.cos(math.radians(30))  # the stalled grasp came from above
+    assert -second[2, 2] < math.cos(math.radians(30)), "the next attempt is a grasp from above again"
+    mm, deg = _gap(first, second)
+    assert mm > 15.0 or deg > 20.0
