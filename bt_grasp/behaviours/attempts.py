@@ -264,9 +264,11 @@ class Attempt:
     def failed(self) -> bool:
         return self.outcome not in (Outcome.SUCCEEDED, Outcome.UNFINISHED, Outcome.SKIPPED)
 
-    def poses(self) -> tuple[Mat4, ...]:
-        """Every tool pose this attempt tried: the one it moved to, or every blocked one."""
-        return self.blocked if self.blocked and not self.moved else (self.T_base_tcp,)
+    def failed_poses(self) -> tuple[Mat4, ...]:
+        """The tool poses this attempt found not to work: every orientation found blocked before the arm moved,
+        and the one it moved to when it failed there."""
+        moved_to = (self.T_base_tcp,) if self.moved and self.failed else ()
+        return self.blocked + moved_to
 
     def describe(self) -> str:
         what = f"{self.kind.value} #{self.index} on {self.object.describe()}"
@@ -364,7 +366,7 @@ class AttemptMemory:
                           blocked=tuple(np.asarray(b, dtype=float) for b in blocked),
                           every_turn_blocked=every_turn_blocked, excluded=tuple(excluded), moved=moved)
         self.attempts.append(attempt)
-        self.grip_blocked = every_turn_blocked and reason is not None
+        self.grip_blocked = every_turn_blocked and not moved and reason is not None
         return attempt
 
     def skipped(self, kind: AttemptKind, leaf: str, tick: int, obj: Detection, T_base_tcp: Mat4,
@@ -443,9 +445,9 @@ class AttemptMemory:
         the same grip found it blocked, or failed there, before."""
         r = self.rules
         for a in self.on(held, AttemptKind.PLACE):
-            if not a.failed or a.T_tcp_object is None or not within(a.T_tcp_object, grip, r.same_m, r.same_deg):
+            if a.T_tcp_object is None or not within(a.T_tcp_object, grip, r.same_m, r.same_deg):
                 continue
-            for T in a.poses():
+            for T in a.failed_poses():
                 d, ang = pose_gap(T, T_release)
                 if d <= r.same_m and ang <= r.same_deg:
                     return Exclusion(what, a.index, "repeat", f"with this grip the same release ({d * 1e3:.0f} mm, "
@@ -506,28 +508,28 @@ def _seen(value: JsonValue) -> ObjectSeen | None:
 
 
 def _repeats(earlier: JsonObject, later: JsonObject, r: AttemptRules) -> bool:
-    if earlier.get("kind") != later.get("kind") or earlier.get("outcome") in ("SUCCEEDED", "UNFINISHED", "SKIPPED"):
+    if earlier.get("kind") != later.get("kind") or earlier.get("outcome") in ("UNFINISHED", "SKIPPED"):
         return False
+    if earlier.get("outcome") == "SUCCEEDED" and (earlier.get("kind") != AttemptKind.PLACE.value
+                                                  or not _blocked(earlier)):
+        return False  # (a placement that worked may still have found orientations blocked first)
     if later.get("outcome") == Outcome.SKIPPED.value:  # a notice that nothing was tried
         return False
     a, b = _seen(earlier.get("object")), _seen(later.get("object"))
     if a is None or b is None or not a.same_as(b):
         return False
-    later_T = _matrix(later.get("T_base_tcp"))
-    if later_T is None:
+    later_T, earlier_T = _matrix(later.get("T_base_tcp")), _matrix(earlier.get("T_base_tcp"))
+    if later_T is None or earlier_T is None:
         return False
-    later_poses = [later_T]
+    later_poses, earlier_poses = [later_T], [earlier_T]
     if later.get("kind") == AttemptKind.PLACE.value:
         ga, gb = _matrix(earlier.get("T_tcp_object")), _matrix(later.get("T_tcp_object"))
         if ga is None or gb is None or not within(ga, gb, r.same_m, r.same_deg):
             return False
-        blocked = _blocked(later)
-        if blocked and not later.get("moved"):
-            later_poses = blocked
-    earlier_T = _matrix(earlier.get("T_base_tcp"))
-    earlier_poses = _blocked(earlier)
-    if earlier.get("moved") or not earlier_poses:
-        earlier_poses = [earlier_T] if earlier_T is not None else []
+        # what each tried: the orientations found blocked, and the one it moved to (failed, for the earlier)
+        later_poses = _blocked(later) + ([later_T] if later.get("moved") else [])
+        failed_there = earlier.get("moved") and earlier.get("outcome") != Outcome.SUCCEEDED.value
+        earlier_poses = _blocked(earlier) + ([earlier_T] if failed_there else [])
     stalled = earlier.get("outcome") == Outcome.STALLED.value and earlier.get("kind") == AttemptKind.GRASP.value
     same_family = earlier.get("family") == later.get("family")
     for Te in earlier_poses:

@@ -15,6 +15,7 @@ from bt_grasp.behaviours import (
     perceive,
     place,
     place_in,
+    regrasp,
     viewing,
 )
 from bt_grasp.errors import TreeFileError
@@ -56,6 +57,9 @@ NODES: tuple[type[BtNode], ...] = (
     place.Place,
     place.PlaceOn,
     place_in.PlaceIn,
+    regrasp.GripBlocksPlace,
+    regrasp.SetDown,
+    regrasp.PlanRegrasp,
     place.MoveTo,
     viewing.LookAt,
     follow.FollowTarget,

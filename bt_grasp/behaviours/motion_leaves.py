@@ -234,23 +234,24 @@ class _MovingLeaf(RobotLeaf):
 _GRASP = input_port("grasp", object, "{grasp}", "the grasp to approach (from PlanGrasp)")
 
 
-@action(
-    ports=[
-        input_port("target", object, "{target}", "the detection to grasp"),
-        input_port("objects", object, "{objects}", "every object seen (obstacles)"),
-        output_port("grasp", object, "the first reachable ranked candidate, with its planned approach (a GraspPlan)",
-                    default="{grasp}"),
-        input_port("skip", int, 0, "skip this many of the best candidates"),
-        input_port("change_family_after", int, 2, "after this many failed grasps of one family (top, side, "
-                   "long_axis, rim) on the target, the other families' candidates go first; one grasp that stalled "
-                   "in contact is enough (0: never)"),
-    ],
-    reasons=(
-        FailureReason.NO_DETECTION, FailureReason.NOTHING_TO_GRASP, FailureReason.IK_UNREACHABLE,
-        FailureReason.PLAN_FAILED,
-    ),
-    needs_robot=True,
+#: PlanGrasp's ports (PlanRegrasp adds its own to them)
+PLAN_GRASP_PORTS = (
+    input_port("target", object, "{target}", "the detection to grasp"),
+    input_port("objects", object, "{objects}", "every object seen (obstacles)"),
+    output_port("grasp", object, "the first reachable ranked candidate, with its planned approach (a GraspPlan)",
+                default="{grasp}"),
+    input_port("skip", int, 0, "skip this many of the best candidates"),
+    input_port("change_family_after", int, 2, "after this many failed grasps of one family (top, side, "
+               "long_axis, rim) on the target, the other families' candidates go first; one grasp that stalled "
+               "in contact is enough (0: never)"),
 )
+PLAN_GRASP_REASONS = (
+    FailureReason.NO_DETECTION, FailureReason.NOTHING_TO_GRASP, FailureReason.IK_UNREACHABLE,
+    FailureReason.PLAN_FAILED,
+)
+
+
+@action(ports=PLAN_GRASP_PORTS, reasons=PLAN_GRASP_REASONS, needs_robot=True)
 class PlanGrasp(RobotLeaf):
     """Rank grasps of the target (:func:`bt_grasp.perception.antipodal.rank_grasps`: the footprint's top-down
     ones, or for a tall object side grasps sampled from its cloud first) and keep the first whose whole

@@ -81,6 +81,9 @@ class PlaceIn(_PlaceBase):
     name from the blackboard the scene lacks, or not a container).
     """
 
+    def covers_every_turn(self) -> bool:
+        return True  # the spots tried are every way the container takes the object with this grip (the best 24)
+
     def check_scene(self, scene: Scene) -> str | None:
         """A literal fixture the scene lacks, or that is not a container, is a load error."""
         if self.ports.key("fixture") is not None:
