@@ -145,3 +145,139 @@ def test_a_stalled_grasp_excludes_its_neighbours_and_the_next_attempt_changes_fa
     assert -second[2, 2] < math.cos(math.radians(30)), "the next attempt is a grasp from above again"
     mm, deg = _gap(first, second)
     assert mm > 15.0 or deg > 20.0
+
+
+# --- regrasp to place ------------------------------------------------------------------------------------------
+
+#: the held box (base frame): 6 x 4 x 4 cm, lying along x; the place target, and the neighbour beside it
+HELD_AT, PLACE_AT = (0.40, 0.15), (0.45, -0.15)
+
+
+class PadsMeetANeighbour:
+    """The real planner, except that at the place target a tool closing along the base y axis (within 30
+    degrees) collides: what a neighbour 2 cm beside the target on each side along y does to the open pads.
+    Every plan, straight line and configuration check of such a release fails; anything else is the planner's."""
+
+    def __init__(self, planner: object, kinematics: object) -> None:
+        self.planner, self.kinematics = planner, kinematics
+
+    @staticmethod
+    def blocked(T: NDArray[np.float64]) -> bool:
+        near = math.dist(T[:2, 3], PLACE_AT) < 0.05 and T[2, 3] < 0.25
+        return near and abs(float(T[1, 1])) > math.cos(math.radians(30))
+
+    def plan_to_pose(self, q_start: NDArray[np.float64], T: NDArray[np.float64], scene: object,
+                     options: object = None) -> object:
+        from bt_grasp.motion.planner import PlanResult, PlanStatus
+
+        if self.blocked(np.asarray(T)):
+            return PlanResult(status=PlanStatus.GOAL_IN_COLLISION, message="the pads meet the neighbour (stand-in)")
+        return self.planner.plan_to_pose(q_start, T, scene, options)  # type: ignore[attr-defined]
+
+    def plan_to_joints(self, q_start: NDArray[np.float64], q_goal: NDArray[np.float64], scene: object,
+                       options: object = None) -> object:
+        from bt_grasp.motion.planner import PlanResult, PlanStatus
+
+        if self.blocked(self.kinematics.fk(q_goal)):  # type: ignore[attr-defined]
+            return PlanResult(status=PlanStatus.GOAL_IN_COLLISION, message="the pads meet the neighbour (stand-in)")
+        return self.planner.plan_to_joints(q_start, q_goal, scene, options)  # type: ignore[attr-defined]
+
+    def straight_line(self, q_start: NDArray[np.float64], T: NDArray[np.float64], scene: object) -> object:
+        from bt_grasp.motion.cartesian import CartesianResult, CartesianStatus
+
+        if self.blocked(np.asarray(T)):
+            return CartesianResult(CartesianStatus.COLLISION, message="the pads meet the neighbour (stand-in)")
+        return self.planner.straight_line(q_start, T, scene)  # type: ignore[attr-defined]
+
+    def checker(self, scene: object, margin_m: float) -> object:
+        real, kin, blocked = self.planner.checker(scene, margin_m), self.kinematics, self.blocked  # type: ignore[attr-defined]
+
+        class Checker:
+            def is_valid(self, q: NDArray[np.float64]) -> bool:
+                return not blocked(kin.fk(q)) and bool(real.is_valid(q))  # type: ignore[attr-defined]
+
+        return Checker()
+
+
+class SetDownCamera:
+    """Shows the box where SetDown left it (the blackboard's set_down_pose), else where it was picked."""
+
+    mount = Mount.EYE_TO_HAND
+
+    def __init__(self) -> None:
+        self.tree: LoadedTree | None = None
+
+    def capture(self) -> RGBDFrame:
+        assert self.tree is not None
+        pose = self.tree.root_blackboard.get("set_down_pose", None)
+        xy, yaw = (HELD_AT, 0.0) if pose is None else ((pose.x_m, pose.y_m), math.radians(pose.yaw_deg or 0.0))
+        return render([Box(xy, (0.06, 0.04, 0.04), yaw)])
+
+
+PLACE_PROBE = """
+  <BehaviorTree ID="Probe">
+    <SubTree ID="PlaceObject" _autoremap="true"/>
+  </BehaviorTree>
+</root>"""
+
+
+def test_a_place_blocked_for_every_yaw_leads_to_a_regrasp() -> None:
+    # The box is held across its narrow side (the pads close along base y). Place at PLACE_AT: both of its
+    # footprint's turns (0 and 180 deg) keep the pads along y, where they meet the neighbours: PLACE_BLOCKED
+    # for every yaw, before the arm moves. RegraspToPlace: SetDown in free space, look, PlanRegrasp keeps only a
+    # grip whose placement is reachable (across the long side: the pads along x), grasp, lift; the next
+    # attempt places it. On the code before issue 46 Place was tried three times the same way and failed.
+    from bt_grasp.behaviours.grasp_plan import GraspPlan
+    from bt_grasp.behaviours.pose import Pose
+    from bt_grasp.perception.antipodal import rank_grasps
+    from bt_grasp.perception.results import Detection
+
+    clock, robot = ManualClock(), StallingRobot(object_width_m=0.04)
+    text = (REPO / "trees" / "lib" / "place.xml").read_text()
+    text = text.replace('<root BTCPP_format="4">', '<root BTCPP_format="4" main_tree_to_execute="Probe">')
+    tree = load_tree_from_string(text.replace("</root>", PLACE_PROBE), robot_registry(installed=False), clock=clock)
+    cell = fake_cell(robot, clock)
+    cell.planner = PadsMeetANeighbour(cell.planner, cell.kinematics)  # type: ignore[assignment]
+    camera = SetDownCamera()
+    camera.tree = tree
+    cell.camera, cell.calibration = camera, Calibration()
+    for node in tree.nodes():
+        node.setup(cell=cell)
+    held = Detection(label="red", pixel_box=(0, 0, 10, 10), centroid_base_m=(*HELD_AT, 0.02),
+                     size_m=(0.06, 0.04, 0.04), yaw_rad=0.0, point_count=500, confidence=1.0)
+    narrow = next(c for c in rank_grasps(held).candidates if abs(c.T_base_tcp_grasp[1, 1]) > 0.9)
+    # the arm holds it 10 cm up, the fingers closed on it
+    T_up = np.array(narrow.T_base_tcp_grasp, dtype=float)
+    T_up[2, 3] += 0.10
+    robot.q = cell.kinematics.ik(T_up, HOME).q
+    robot.close_gripper()
+    for _ in range(20):
+        robot.step()
+    grasp = GraspPlan(narrow, robot.q.copy(), np.stack([robot.q, robot.q]), held, (held,))
+    for key, value in (("grasp", grasp), ("target", held), ("objects", (held,)), ("lift_height", 0.1),
+                       ("place_pose", Pose(*PLACE_AT))):
+        tree.root_blackboard.set(key, value)
+    statuses: dict[str, list[str]] = {"SetDown": [], "PlanRegrasp": []}
+    status = "RUNNING"
+    present = {n.name for n in tree.nodes()}
+    for _ in range(8000):
+        before = {name: tree.find(name).bt_state.value for name in statuses if name in present}
+        status = tree.tick().value
+        for name in before:
+            now = tree.find(name).bt_state.value
+            if now in ("SUCCESS", "FAILURE") and now != before[name]:
+                statuses[name].append(now)
+        if status != "RUNNING":
+            break
+        robot.step()
+        clock.advance_s(0.01)
+    assert status == "SUCCESS", statuses
+    assert statuses == {"SetDown": ["SUCCESS"], "PlanRegrasp": ["SUCCESS"]}
+    regrasp = tree.root_blackboard.get("grasp")
+    assert abs(float(regrasp.T_base_tcp_grasp[1, 1])) < math.cos(math.radians(30))  # the new grip: pads not along y
+    # the run's attempts: the place blocked for both turns, the set-down, the regrasp, the place that worked
+    made = [(a.kind.value, a.leaf.rsplit("/", 1)[-1].split("::")[0], a.outcome.value) for a in cell.attempts.attempts]
+    assert made == [("place", "Place", "BLOCKED"), ("place", "SetDown", "SUCCEEDED"),
+                    ("grasp", "PlanRegrasp", "SUCCEEDED"), ("place", "Place", "SUCCEEDED")], made
+    first = cell.attempts.attempts[0]
+    assert first.every_turn_blocked and len(first.blocked) == 2
