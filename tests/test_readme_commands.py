@@ -271,7 +271,7 @@ def test_run_goal_clear_succeeds_where_the_table_is_cleared(tmp_path: Path) -> N
     proc, summary = _run_pick(tmp_path, "clear", "--goal", "clear", tree="trees/clear_table.xml",
                               scene="scenes/clear_table.yaml", seed=0, calibration=None)
     assert proc.returncode == 0, proc.stdout + proc.stderr
-    assert summary["goal"] == {"kind": "clear", "into": None}
+    assert summary["goal"] == {"kind": "clear", "into": None, "upright": False, "set_down": False}
     assert _condition(summary, "area_clear")["met"] is True and summary["judge"]["objects_in_workspace"] == []
     assert "goal clear judged by physics: nothing left in the work area" in proc.stdout, proc.stdout
 

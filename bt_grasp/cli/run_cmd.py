@@ -74,11 +74,15 @@ def print_summary(console: Console, summary: EpisodeResult) -> None:
     escaped, so Rich markup in a node's name (``[/]``, ``[link=...]``) prints as text instead of crashing."""
     verdict = "[bold green]SUCCESS[/]" if summary.success else "[bold red]FAILURE[/]"
     console.print(f"\n{verdict}  (tree: {escape(summary.tree_status)}, {escape(judged_phrase(summary))})")
-    if not summary.success:
+    unmet = summary.unmet()
+    if not summary.success and summary.tree_status == "SUCCESS" and unmet is not None:
+        # the tree succeeded and the goal did not: the headline is the goal's first unmet condition
+        console.print(f"  goal not met: [red]{escape(unmet[0])}[/]: {escape(unmet[1])}")
+    elif not summary.success:
         leaf = summary.failed_path or summary.failed_leaf  # the path: the leaf's name in every output
         console.print(f"  reason: [red]{escape(str(summary.reason))}[/]  leaf: {escape(str(leaf))}")
-        if summary.judged.failed_condition is not None:
-            console.print(f"  goal not met: {escape(summary.judged.failed_condition)}")
+        if unmet is not None:
+            console.print(f"  goal not met: {escape(unmet[0])}: {escape(unmet[1])}")
     console.print(
         f"  ticks {summary.ticks}, simulated {summary.sim_time_s:.2f} s, "
         f"wall {summary.wall_time_s:.2f} s, seed {summary.seed}"

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from bt_grasp.episode.request import BlackboardValue, EpisodeRequest
-from bt_grasp.episode.result import ChainStep, EpisodeResult, Judged, interrupted_result
+from bt_grasp.episode.result import GOAL_NOT_MET, ChainStep, EpisodeResult, Judged, interrupted_result
 from bt_grasp.episode.worlds import FreshWorlds, WorldSource
 from bt_grasp.errors import InputError
 from bt_grasp.scene.goals import Goal, PickGoal
@@ -261,16 +261,22 @@ class Episode:
             last = outcome.last_failure
             success = verdict.success and outcome.status == "SUCCESS"
             reason = None
+            # the tree succeeded and the goal did not: the goal's first unmet condition is why, not a leaf's
+            # failure the tree recovered from (a leaf's reason only when the tree failed)
+            goal_not_met = not success and outcome.status == "SUCCESS"
             if not success:
                 reason = last.reason if last else ("MAX_TICKS" if outcome.status == "RUNNING" else None)
+                if goal_not_met:
+                    reason = GOAL_NOT_MET
                 if outcome.stopped:
                     reason = "STOPPED"  # an operator ended the run (bt_grasp.control)
+            blamed = None if success or goal_not_met else last
             result = EpisodeResult(
                 success=success,
                 tree_status=outcome.status,
                 reason=reason,
-                failed_leaf=None if success else (last.leaf if last else None),
-                failed_path=None if success else (last.path if last else None),
+                failed_leaf=blamed.leaf if blamed else None,
+                failed_path=blamed.path if blamed else None,
                 failure_chain=tuple(ChainStep(e.tick, e.stamp_ns * 1e-9, e.path, e.reason, e.followed)
                                     for e in outcome.chain),
                 ticks=outcome.ticks,
@@ -278,6 +284,7 @@ class Episode:
                 wall_time_s=outcome.wall_time_s,
                 retries=outcome.retries,
                 judged=judged(verdict, judge.object_poses()),
+                also_judged=tuple(judged(judge.check(g)) for g in request.also_judge),
                 log=str(request.log) if request.log else None,
                 seed=request.seed,
                 faults_fired=injector.fired if injector is not None else 0,

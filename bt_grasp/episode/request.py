@@ -52,6 +52,9 @@ class EpisodeRequest:
     #: the log's time origin fixed (ns since 1970, from ``SOURCE_DATE_EPOCH``): the log then holds no wall-clock
     #: reading, so the same request writes the same bytes (``bt_grasp.recording.reproducible``); None: now
     log_epoch_ns: int | None = None
+    #: more goals the judge checks at the end besides ``goal`` (``EpisodeResult.also_judged``; they decide
+    #: nothing): a benchmark's figures under another definition of the same task, from the same run
+    also_judge: tuple[Goal, ...] = ()
 
 
 def parse_assignments(items: Sequence[str], source: str = "--set") -> dict[str, BlackboardValue]:

@@ -67,8 +67,9 @@ class ChainStep:
 class EpisodeResult:
     """``success``: the goal judged met by physics AND the tree returned SUCCESS.
 
-    ``reason``/``failed_leaf``: the last leaf FAILURE (or ``MAX_TICKS`` when the tick limit ran out, or
-    ``GOAL_NOT_MET`` with the judge's failed condition when the tree succeeded but the goal was not met).
+    ``reason``/``failed_leaf``: the last leaf FAILURE when the tree failed (or ``MAX_TICKS`` when the tick limit
+    ran out); ``GOAL_NOT_MET`` and no leaf when the tree succeeded but the goal was not met (the judge's first
+    unmet condition, ``judged.failed_condition``, says why).
     ``failed_path``: that leaf's path, its one name in every output (``tree show``, logs, replay, reports).
     """
 
@@ -92,6 +93,8 @@ class EpisodeResult:
     failed_path: str | None = None
     #: every leaf FAILURE that was not by design, in order, with what followed it (the run summary's last lines)
     failure_chain: tuple[ChainStep, ...] = ()
+    #: the verdicts on the request's ``also_judge`` goals, in order (they decide nothing)
+    also_judged: tuple[Judged, ...] = ()
     #: wall time spent preparing the episode (inputs loaded, world built, tree wired) before its first tick;
     #: set by whoever prepared it (a campaign worker), 0 when nobody measured it. Not in ``to_json``: the log's
     #: result holds no wall-clock figure of preparation.
@@ -100,6 +103,10 @@ class EpisodeResult:
     @property
     def object_lift_m(self) -> float:
         return self.judged.object_lift_m
+
+    def unmet(self) -> tuple[str, str] | None:
+        """The goal's first unmet condition and what the judge measured (None when the goal was met)."""
+        return next(((c, d) for c, met, d in self.judged.conditions if not met), None)
 
     def to_json(self) -> JsonObject:
         retries: dict[str, JsonValue] = {k: v for k, v in self.retries.items()}
@@ -126,6 +133,9 @@ class EpisodeResult:
 
 #: ``reason`` of a run a Ctrl-C ended (its result is not judged: ``success`` is null)
 INTERRUPTED = "INTERRUPTED"
+#: ``reason`` of a run whose tree succeeded and whose goal was not met (``judged.failed_condition`` says which
+#: condition; no leaf is blamed: the failures the tree recovered from are in ``failure_chain``)
+GOAL_NOT_MET = "GOAL_NOT_MET"
 
 
 def interrupted_result(tick: int, now_ns: int, seed: int) -> JsonObject:
