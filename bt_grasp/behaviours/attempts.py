@@ -152,14 +152,15 @@ class ObjectSeen:
     label: str = ""
     class_name: str = ""
     shape_class: str = ""
+    color_name: str = ""
 
     @classmethod
     def of(cls, det: Detection) -> ObjectSeen:
         shape_class = getattr(det, "shape_class", "")
-        return cls(tuple(float(v) for v in det.centroid_base_m),  # type: ignore[arg-type]
-                   tuple(float(v) for v in det.size_m),  # type: ignore[arg-type]
+        c, s = det.centroid_base_m, det.size_m
+        return cls((float(c[0]), float(c[1]), float(c[2])), (float(s[0]), float(s[1]), float(s[2])),
                    math.degrees(float(det.yaw_rad)), str(det.label), str(getattr(det, "class_name", "") or ""),
-                   str(getattr(shape_class, "value", shape_class) or ""))
+                   str(getattr(shape_class, "value", shape_class) or ""), str(getattr(det, "color_name", "") or ""))
 
     def same_as(self, other: ObjectSeen) -> bool:
         """The same object: centres within :data:`SAME_OBJECT_M`, footprints of a like size, and the same class
@@ -179,7 +180,7 @@ class ObjectSeen:
     def to_json(self) -> JsonObject:
         return {"centroid_m": [round(v, 4) for v in self.centroid_m], "size_m": [round(v, 4) for v in self.size_m],
                 "yaw_deg": round(self.yaw_deg, 1), "label": self.label, "class_name": self.class_name,
-                "shape_class": self.shape_class}
+                "shape_class": self.shape_class, "color_name": self.color_name}
 
 
 def extent_along(det: Detection | ObjectSeen, direction: Sequence[float] | NDArray[np.float64]) -> float:
@@ -315,6 +316,8 @@ class AttemptMemory:
     current: Attempt | None = None
     #: the last placement found no orientation it may try with the grip held (blocked now or before)
     grip_blocked: bool = False
+    #: objects grasp planning gave up on (no candidate, none reachable): not attempts, but failures on the object
+    unplanned: list[tuple[ObjectSeen, str]] = field(default_factory=list)
 
     # -- recording ---------------------------------------------------------------------------------------
 
@@ -436,9 +439,14 @@ class AttemptMemory:
     def stalled_families(self, target: Detection) -> set[GraspFamily]:
         return {a.family for a in self.on(target, AttemptKind.GRASP) if a.outcome is Outcome.STALLED}
 
+    def planning_failed(self, target: Detection, reason: str) -> None:
+        """Grasp planning found nothing to try on this object (it counts among the object's failures)."""
+        self.unplanned.append((ObjectSeen.of(target), reason))
+
     def object_failures(self, target: Detection) -> int:
-        """Failed attempts (grasps and placements) on this object."""
-        return sum(1 for a in self.on(target) if a.failed)
+        """Failures on this object: failed attempts (grasps and placements) and grasp plannings that gave up."""
+        seen = ObjectSeen.of(target)
+        return sum(1 for a in self.on(seen) if a.failed) + sum(1 for o, _ in self.unplanned if o.same_as(seen))
 
     def place_exclusion(self, held: Detection, grip: Mat4, T_release: Mat4, what: str) -> Exclusion | None:
         """Why a release pose may not be tried with this grip (None: it may): a placement of this object with

@@ -16,6 +16,7 @@ from bt_grasp.behaviours import (
     place,
     place_in,
     regrasp,
+    search,
     viewing,
 )
 from bt_grasp.errors import TreeFileError
@@ -60,6 +61,8 @@ NODES: tuple[type[BtNode], ...] = (
     regrasp.GripBlocksPlace,
     regrasp.SetDown,
     regrasp.PlanRegrasp,
+    search.FindLost,
+    search.AttemptRules,
     place.MoveTo,
     viewing.LookAt,
     follow.FollowTarget,

@@ -300,6 +300,7 @@ class PlanGrasp(RobotLeaf):
         # a planner failure other than IK counts as PLAN_FAILED here, as before the typed seams
         unreachable = self._last.reason is FailureReason.IK_UNREACHABLE
         reason = FailureReason.IK_UNREACHABLE if unreachable else FailureReason.PLAN_FAILED
+        self.cell.attempts.planning_failed(self._target, reason.value)
         return self.fail(reason, f"none of {self._total} grasps is reachable; last: {self._last.sentence}")
 
     def _rank(self) -> Status | None:
@@ -322,6 +323,7 @@ class PlanGrasp(RobotLeaf):
                              seed=self.cell.seeds.integer(Stream.GRASPS), fixtures=fixtures,
                              viewpoint_base_m=viewpoint)
         if not result.ok:
+            self.cell.attempts.planning_failed(target, FailureReason.NOTHING_TO_GRASP.value)
             return self.fail(FailureReason.NOTHING_TO_GRASP, f"{result.status.value}: {result.message}")
         self.cell.media.grasps(result.candidates)
         self._total = len(result.candidates)
@@ -395,6 +397,7 @@ class PlanGrasp(RobotLeaf):
     def _all_excluded(self) -> Status:
         """Every candidate repeats a failed attempt: nothing new to try on this object (a notice on the log)."""
         first = self._excluded[0]
+        self.cell.attempts.planning_failed(self._target, FailureReason.NOTHING_TO_GRASP.value)
         T = self._ranked[0].T_base_tcp_grasp if self._ranked else np.eye(4)
         family = grasp_family(T, self._ranked[0].width_m if self._ranked else 0.0, self._target)
         self.log_attempt(self.cell.attempts.skipped(
