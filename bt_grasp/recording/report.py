@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import base64
 import html
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TypeVar
@@ -24,6 +24,7 @@ from bt_grasp.files.json_types import JsonValue
 from bt_grasp.files.output_files import make_output_folder, write_output_file
 from bt_grasp.geometry import make_T
 from bt_grasp.recording import replay, report_figures, topics
+from bt_grasp.recording.attempt_view import attempt_rows, attempts_html
 from bt_grasp.recording.interventions import interventions_html
 from bt_grasp.recording.reader import RunLog
 from bt_grasp.recording.replay_shapes import AnnotatedNode
@@ -279,8 +280,10 @@ img{max-width:100%;border:1px solid #ddd;margin:6px 0}
 """
 
 
-def build_report(run: RunLog, html_path: Path, png_dir: Path | None = None) -> Report:
-    """Write the report page (and the PNG figures to ``png_dir``); returns what was written."""
+def build_report(run: RunLog, html_path: Path, png_dir: Path | None = None, repeated: Collection[int] = ()
+                 ) -> Report:
+    """Write the report page (and the PNG figures to ``png_dir``); returns what was written. ``repeated``: the
+    numbers of the attempts that repeat a failed earlier one (``bt_grasp.behaviours.attempts.repeats``)."""
     report = Report(Path(html_path))
     s = replay.summary(run)
     rows, labels = _leaf_rows(run)
@@ -323,6 +326,8 @@ def build_report(run: RunLog, html_path: Path, png_dir: Path | None = None) -> R
              f"{_esc(run.metadata.get('log_format', '1'))}</p>",
              "<h2>Summary</h2><table>" + "".join(f"<tr><th>{k}</th><td>{v}</td></tr>" for k, v in summary_rows)
              + "</table>"]
+    parts.append("<h2>Attempts (grasps and placements) and what each ruled out</h2>"
+                 + attempts_html(attempt_rows(run.attempts, repeated)))
     parts.append("<h2>Failures and recovery</h2>")
     if failures:
         items = []
