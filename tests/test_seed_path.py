@@ -110,7 +110,7 @@ ALLOWED_GENERATORS: dict[str, str] = {
     "bt_grasp/perception/calibration.py": "the untilted central view: its draws have zero width (deterministic)",
     "bt_grasp/sim/camera.py": "the noise sweep benchmark's variants, from the benchmark's own seed",
     "bt_grasp/sim/labelling.py": "the detector's dataset tool, from the dataset's seed",
-    "bt_grasp/tree/dry_run.py": "a dry run's --random outcomes, from its --random-seed (no world, no run seed)",
+    "bt_grasp/tree/stand_in.py": "a dry run's --random outcomes, from its --random-seed (no world, no run seed)",
 }
 _GENERATOR = re.compile(r"default_rng\(|SeedSequence\(|random\.Random\(|RandomState\(|np\.random\.seed\(")
 
