@@ -250,9 +250,7 @@ HEAVY = ("sapien", "open3d", "cv2", "trimesh", "matplotlib", "scipy", "torch", "
 #: the comment that marks any other deferred import, on its line or the line above: ``# deferred: <why>``
 DEFERRED = "# deferred:"
 #: folders not yet held to the rule (each is taken off as it is marked; a test keeps this list honest)
-PENDING_FOLDERS: tuple[str, ...] = (
-    "detector", "resident", "scene",
-)
+PENDING_FOLDERS: tuple[str, ...] = ()
 
 
 def _undeclared_deferred_imports(path: Path) -> list[str]:

@@ -34,6 +34,9 @@ from numpy.typing import NDArray
 
 from bt_grasp.detector.obb import DEFAULT_CONF, batch_probiou
 from bt_grasp.errors import InputError
+from bt_grasp.files.bounded_io import read_user_file
+from bt_grasp.files.config import read_yaml
+from bt_grasp.files.image_header import image_size
 
 #: Ultralytics' OBB validation thresholds
 EVAL_CONF = 0.01
@@ -246,7 +249,6 @@ def dataset_names(folder: Path) -> tuple[str, ...]:
     data = folder / "data.yaml"
     if not data.is_file():
         raise DatasetError(folder, "is not a dataset: it has no data.yaml (make one with `bt-grasp detector dataset`)")
-    from bt_grasp.files.config import read_yaml
 
     try:
         doc, _ = read_yaml(data)  # bounded: size, nesting, aliases
@@ -279,8 +281,6 @@ def read_image(path: Path) -> NDArray[np.uint8]:
     """One dataset picture (BGR), read bounded: a regular file of at most 64 MB whose header (PNG, JPEG) says at
     most 8192 pixels a side, so a FIFO, a link to /dev/zero or a small file saying 50,000 x 50,000 is one
     sentence, not a hang or an exhausted machine (found by the pre-review attack)."""
-    from bt_grasp.files.bounded_io import read_user_file
-    from bt_grasp.files.image_header import image_size
 
     data = read_user_file(path, MAX_DATASET_IMAGE_BYTES, error=DatasetError)
     size = image_size(data)
@@ -299,7 +299,6 @@ def read_labels(label_file: Path, width_px: int, height_px: int, nc: int) -> Box
     if not label_file.is_file():
         raise DatasetError(label_file, "no such label file (every image needs one; empty for no object)")
     xywhr, classes = [], []
-    from bt_grasp.files.bounded_io import read_user_file
 
     try:
         text = read_user_file(label_file, error=DatasetError).decode("utf-8")  # bounded: no FIFO, no giant file
@@ -333,7 +332,7 @@ def check_same_classes(model_names: Sequence[str], model: Path, names: Sequence[
 
 def evaluate_model(model_path: Path, dataset: Path, *, imgsz: int | None = None) -> EvalReport:
     """Run ``model_path`` through bt_grasp's inference path on every image of ``dataset`` and score it."""
-    from bt_grasp.detector.model import ObbModel
+    from bt_grasp.detector.model import ObbModel  # deferred: onnxruntime loads only when a model is evaluated
 
     names = dataset_names(dataset)
     images = dataset_images(dataset)

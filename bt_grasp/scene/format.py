@@ -202,7 +202,7 @@ def load_scene(path: str | Path) -> Scene:
     check_references(scene, path, lines)
     check_choose(scene, path, lines)
     if any(o.is_mesh for o in scene.objects):
-        from bt_grasp.scene.meshes import attach_geometry  # trimesh is imported only for scenes with meshes
+        from bt_grasp.scene.meshes import attach_geometry  # deferred: trimesh is imported only for scenes with meshes
 
         attach_geometry(scene.objects, max(scene.table.size_m[0], scene.table.size_m[1]), path, lines,
                         _package_folders(scene, path, lines))
@@ -211,8 +211,8 @@ def load_scene(path: str | Path) -> Scene:
 
 
 def _note_objects_beyond_the_gripper(scene: Scene) -> None:
-    from bt_grasp.scene.graspability import object_warning
-    from bt_grasp.scene.notices import notice
+    from bt_grasp.scene.graspability import object_warning  # deferred: only scenes with mesh objects need it
+    from bt_grasp.scene.notices import notice  # deferred: as above
 
     for obj in scene.objects:
         if obj.is_mesh:

@@ -115,7 +115,7 @@ def read_urdf_object(path: Path, scale: Vec3, source: str | Path, line: int | No
                      packages: Mapping[str, Path] | None = None, scale_line: int | None = None) -> MeshGeometry:
     """A ``shape: urdf`` object (:mod:`bt_grasp.scene.urdf_object`: one rigid body, mesh or primitive parts);
     errors in the URDF name the URDF's line, a missing mesh the line that names it."""
-    from bt_grasp.scene.urdf_object import read_urdf
+    from bt_grasp.scene.urdf_object import read_urdf  # deferred: the URDF reader loads only for shape: urdf objects
 
     urdf = read_urdf(_read(path, source, line, name), path, packages)
     _check_scale_keeps_shapes(urdf.visuals + urdf.collisions, scale, source, line, name)
