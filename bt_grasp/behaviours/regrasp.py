@@ -62,10 +62,11 @@ RELEASE_GAP_M = 0.003
 APPROACH_M = 0.10
 
 
-@condition(needs_robot=True)
+@condition(reasons=(FailureReason.PLACE_BLOCKED,), needs_robot=True)
 class GripBlocksPlace(RobotLeaf):
     """SUCCESS when the last placement found every orientation the held object's footprint allows blocked with
-    the grip held (now, or before: each repeated a failed attempt); FAILURE otherwise (no reason: a question)."""
+    the grip held (now, or before: each repeated a failed attempt); FAILURE otherwise, with no reason (a question;
+    the reason it declares is the one it is asked after, what a dry run's stand-in answers with)."""
 
     def update(self) -> Status:
         if self.cell.attempts.grip_blocked:

@@ -14,11 +14,13 @@ from bt_grasp.scene import mesh_cache
 from bt_grasp.scene.format import load_scene
 from bt_grasp.scene.graspability import collision_hides_open_space
 
-URDF = """<robot name="ell">
+VISUAL_A = '<visual><origin xyz="0 -0.04 0.025"/><geometry><box size="0.10 0.02 0.05"/></geometry></visual>'
+VISUAL_B = '<visual><origin xyz="-0.04 0.0125 0.025"/><geometry><box size="0.02 0.075 0.05"/></geometry></visual>'
+URDF = f"""<robot name="ell">
   <link name="ell">
     <inertial><mass value="0.1"/></inertial>
-    <visual><origin xyz="0 -0.04 0.025"/><geometry><box size="0.10 0.02 0.05"/></geometry></visual>
-    <visual><origin xyz="-0.04 0.0125 0.025"/><geometry><box size="0.02 0.075 0.05"/></geometry></visual>
+    {VISUAL_A}
+    {VISUAL_B}
     <collision><origin xyz="0 0 0.025"/><geometry><box size="0.10 0.10 0.05"/></geometry></collision>
   </link>
 </robot>
@@ -79,10 +81,8 @@ def test_a_non_convex_drawing_is_decomposed_once(monkeypatch: pytest.MonkeyPatch
 
     monkeypatch.setattr(mesh_cache, "decompose", decompose)
     scene = _scene(tmp_path, ", collision: from_visual")
-    (tmp_path / "ell.urdf").write_text(URDF.replace(
-        '<visual><origin xyz="0 -0.04 0.025"/><geometry><box size="0.10 0.02 0.05"/></geometry></visual>\n', "")
-        .replace('<visual><origin xyz="-0.04 0.0125 0.025"/><geometry><box size="0.02 0.075 0.05"/></geometry></visual>',
-                 '<visual><geometry><mesh filename="ell.obj"/></geometry></visual>'))
+    (tmp_path / "ell.urdf").write_text(URDF.replace(VISUAL_A, "").replace(
+        VISUAL_B, '<visual><geometry><mesh filename="ell.obj"/></geometry></visual>'))
     g = load_scene(scene).objects[0].geometry
     assert g.volume_m3 == pytest.approx(ELL_VOLUME_M3, rel=1e-6)
     cache = tmp_path / "cache"
