@@ -104,25 +104,25 @@ class CalibrationFile(StrictModel):
     @property
     def tool_link(self) -> str:
         """The link whose pose an eye-in-hand camera's pose is composed with (``tool0`` for eye-to-hand)."""
-        return self.parent_frame if self.mount == Mount.EYE_IN_HAND else "tool0"
+        return self.parent_frame if Mount(self.mount) == Mount.EYE_IN_HAND else "tool0"
 
     @property
     def T_base_camera(self) -> Mat4:
         """Eye-to-hand: the camera pose in the base frame. (Eye-in-hand: use :meth:`T_base_camera_at`.)"""
-        if self.mount != Mount.EYE_TO_HAND:
+        if Mount(self.mount) != Mount.EYE_TO_HAND:
             raise ValueError("an eye-in-hand camera moves: use T_base_camera_at(T_base_tool) or T_tool_camera")
         return self.transform.T
 
     @property
     def T_tool_camera(self) -> Mat4:
         """Eye-in-hand: the camera pose in the ``tool_link`` frame."""
-        if self.mount != Mount.EYE_IN_HAND:
+        if Mount(self.mount) != Mount.EYE_IN_HAND:
             raise ValueError("an eye-to-hand camera is not on the tool: use T_base_camera")
         return self.transform.T
 
     def T_base_camera_at(self, T_base_tool: Mat4 | None = None) -> Mat4:
         """The camera pose in the base frame at capture time (eye-in-hand needs ``T_base_tool`` then)."""
-        if self.mount == Mount.EYE_TO_HAND:
+        if Mount(self.mount) == Mount.EYE_TO_HAND:
             return self.transform.T
         if T_base_tool is None:
             raise ValueError("an eye-in-hand calibration needs T_base_tool at capture time")
@@ -196,7 +196,7 @@ def mismatch_with_mount(calibration: CalibrationFile, scene: Scene) -> str | Non
     camera = scene.camera
     if calibration.mount != camera.mount:
         return f"it is for an {calibration.mount} camera, but the scene's camera is mounted {camera.mount}"
-    if camera.mount == Mount.EYE_TO_HAND:
+    if Mount(camera.mount) == Mount.EYE_TO_HAND:
         T_base_world = np.linalg.inv(scene.T_world_base())
         position = (T_base_world @ [*camera.eye_to_hand.position_m, 1.0])[:3]
         axis = (T_base_world @ [*camera.eye_to_hand.look_at_m, 1.0])[:3] - position
