@@ -163,7 +163,7 @@ def budget(
     )
 
 
-@bench_app.command("attempts", rich_help_panel=EPISODE_BENCHMARKS)
+@bench_app.command("attempts", rich_help_panel=MICRO_BENCHMARKS)
 def attempts(
     logs: list[Path] = typer.Argument(..., help="MCAP logs, or folders of them (e.g. a campaign's or bench pick "
                                                  "--log-dir's)."),

@@ -89,3 +89,18 @@ def test_the_foxglove_layout_shows_the_attempts_channel() -> None:
     layout = Path(__file__).parents[2] / "bt_grasp" / "foxglove" / "layouts" / "bt_grasp.layout.json"
     configs = json.loads(layout.read_text())["configById"]
     assert any(c.get("topicPath") == "/bt/attempts" for c in configs.values())
+
+
+def test_bench_attempts_counts_the_repeat(attempts_log: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from bt_grasp.cli.main import main
+
+    assert main(["bench", "attempts", str(attempts_log), "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    counts = (summary["episodes"], summary["failed"], summary["repeats"], summary["episodes_with_repeats"])
+    assert counts == (1, 1, 1, 1)
+    assert summary["attempts_per_failed_episode"] == {"3": 1}
+    [entry] = summary["logs"]
+    assert entry["repeats"] == [[1, 3]] and entry["rebuilt"] is False
+    assert main(["bench", "attempts", str(attempts_log)]) == 0
+    out = capsys.readouterr().out
+    assert "1 repeated attempt(s) in 1 episode(s)" in out and "#3 repeats #1" in out
