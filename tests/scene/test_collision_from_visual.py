@@ -106,3 +106,24 @@ def test_collision_is_refused_where_it_means_nothing(tmp_path: Path, obj: str, s
     with pytest.raises(ConfigError) as info:
         load_scene(scene)
     assert says in str(info.value) and "\n" not in str(info.value)
+
+
+@pytest.mark.sim
+def test_the_simulator_collides_as_drawn(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # the body's convex shapes are the two drawn boxes, not the file's one box; it rests on the table, upright,
+    # with the URDF's mass
+    from bt_grasp.sim.oracle import GroundTruthOracle
+    from bt_grasp.sim.world import World
+
+    monkeypatch.setenv(mesh_cache.CACHE_ENV, str(tmp_path / "cache"))
+    counts = {}
+    for extra in ("", ", collision: from_visual"):
+        scene = _scene(tmp_path, extra)
+        world = World(load_scene(scene), seed=0, source=scene)
+        oracle = GroundTruthOracle(world)
+        body = oracle._body("ell")
+        counts[extra] = len(body.get_collision_shapes())
+        T = oracle.T_world_object("ell")
+        assert abs(T[2, 3]) < 0.003 and T[2, 2] > 0.999, T
+        assert body.mass == pytest.approx(0.1, rel=0.02)
+    assert counts == {"": 1, ", collision: from_visual": 2}
