@@ -12,9 +12,6 @@ gripper's arc (about 10 mm of vertical travel over the stroke), and the body is 
 from __future__ import annotations
 
 import enum
-import hashlib
-import os
-import tempfile
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
@@ -22,7 +19,14 @@ from xml.etree.ElementTree import Element, tostring
 
 import defusedxml.ElementTree as SafeET
 
-from bt_grasp.robot_description import GRIPPER_LINKS, MAX_OPENING_M, TCP_LINK, robot_urdf_path, robot_urdf_text
+from bt_grasp.robot_description import (
+    GRIPPER_LINKS,
+    MAX_OPENING_M,
+    TCP_LINK,
+    robot_urdf_path,
+    robot_urdf_text,
+    sealed_memory_file,
+)
 
 
 class GripperName(enum.StrEnum):
@@ -137,16 +141,7 @@ def robot_urdf_with(gripper: GripperName) -> str:
 
 @cache
 def robot_urdf_path_with(gripper: GripperName) -> Path:
-    """The merged URDF with ``gripper`` as a file (cached by content beside bt_grasp's own)."""
+    """The merged URDF with ``gripper``, as a sealed in-memory file of this process (as bt_grasp's own)."""
     if gripper == GripperName.BT_GRASP:
         return robot_urdf_path()
-    text = robot_urdf_with(gripper)
-    digest = hashlib.sha256(text.encode()).hexdigest()[:16]
-    folder = robot_urdf_path().parent
-    path = folder / f"ur5_{gripper.value}_{digest}.urdf"
-    if not path.exists():
-        fd, tmp = tempfile.mkstemp(dir=folder, suffix=".urdf")
-        with os.fdopen(fd, "w") as handle:
-            handle.write(text)
-        os.replace(tmp, path)
-    return path
+    return sealed_memory_file(robot_urdf_with(gripper), f"ur5_{gripper.value}.urdf")
