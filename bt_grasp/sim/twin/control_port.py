@@ -9,6 +9,7 @@ One request per line, one JSON object per line back: ``{"ok": true, ...}`` or ``
     judge {"kind": "pick", ...}       the verdict on that goal (a scene file's goal, as JSON)
     camera capture                    render one frame now
     camera on [HZ] | camera off       render continuously (default 15 Hz) or stop
+    truth camera                      the true camera pose (ground truth: for tests and benchmarks only)
 """
 
 from __future__ import annotations
@@ -38,6 +39,8 @@ class TwinControl(Protocol):
     def judge(self, goal_json: str | None) -> dict[str, Any]: ...
 
     def camera(self, action: str, rate_hz: float | None) -> dict[str, Any]: ...
+
+    def truth(self, what: str) -> dict[str, Any]: ...
 
 
 class ControlSession(Session):
@@ -70,7 +73,7 @@ class ControlSession(Session):
     def _handle(self, line: str) -> dict[str, Any]:
         words = line.split(maxsplit=1)
         if not words:
-            raise RequestError("an empty request; expected status, fault, judge or camera")
+            raise RequestError("an empty request; expected status, fault, judge, camera or truth")
         verb, rest = words[0], (words[1] if len(words) > 1 else "")
         if verb == "status" and not rest:
             return self.twin.status()
@@ -108,4 +111,6 @@ class ControlSession(Session):
             if parts in (["off"], ["capture"]):
                 return self.twin.camera(parts[0], None)
             raise RequestError(f"camera takes on [HZ], off or capture, got {rest!r}")
-        raise RequestError(f"unknown request {verb!r}; expected status, fault, judge or camera")
+        if verb == "truth":
+            return self.twin.truth(rest)
+        raise RequestError(f"unknown request {verb!r}; expected status, fault, judge, camera or truth")
