@@ -1,0 +1,260 @@
+"""``UrArm``: the :class:`bt_grasp.interfaces.Robot` of a UR arm through ur_rtde, with a Robotiq 2F-85 as its gripper.
+
+A thin adapter, as ur_rtde's own examples drive a UR:
+
+* **Motion** is streamed with ``servoJ`` at the controller's period (8 ms on a CB3): each target the executor sets
+  (a sample of a ruckig trajectory the cell's :class:`~bt_grasp.hardware.motion_guard.MotionGuard` checked whole
+  before its first sample) is checked again (:meth:`MotionGuard.check_target`) and sent; a target that fails is not
+  sent, the arm is stopped and the run ends ``SAFETY_LIMIT``. The controller's servo thread holds the last target
+  when no new one comes. ``lookahead_time`` 0.1 s and ``gain`` 300 are ur_rtde's example values.
+* **State** is the controller's: joint positions and speeds from ``RTDEReceiveInterface`` (``actual_q``,
+  ``actual_qd``), and each period (:meth:`poll`, from the tick loop) the robot mode, safety status bits, runtime state,
+  the connection and the speed scaling; any of them ending the run is a typed
+  :class:`~bt_grasp.hardware.cell_faults.CellFault` (``fault_from_state``), after the arm is stopped.
+* **The watchdog** (``rtde_set_watchdog`` through ur_rtde's ``setWatchdog``) is kicked from the tick loop: every
+  ``servoJ`` writes its register, and :meth:`poll` kicks it in periods that sent none. While the arm moves it asks for
+  :data:`WATCHDOG_MOTION_HZ` (a process stalled mid-motion stops the arm within 0.1 s); once the arm has held its
+  target for :data:`HOLD_AFTER_S` it relaxes to :data:`WATCHDOG_HOLD_HZ` (perceiving or planning may take a few
+  hundred ms between ticks while nothing moves). A stall the watchdog ended is reported ``WATCHDOG``.
+* **The first motion** waits for ``confirm`` (the operator's yes; ``--yes`` skips it); the watchdog is armed then,
+  not before (a prompt may wait longer than any watchdog).
+* **Stops**: :meth:`stop` sends ``stopJ`` (the Ctrl-C path and every fault's); after a fault the arm takes no more
+  commands.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from bt_grasp.cell.format import Arm
+from bt_grasp.hardware.cell_faults import (
+    CellFault,
+    CellFaultKind,
+    CellUnavailable,
+    ControllerState,
+    fault_from_state,
+)
+from bt_grasp.hardware.motion_guard import MotionGuard
+from bt_grasp.hardware.robotiq_client import Robotiq2F85Client
+from bt_grasp.hardware.ur_lib import ur_rtde
+from bt_grasp.robot_description import ARM_JOINTS
+
+log = logging.getLogger(__name__)
+
+SERVO_LOOKAHEAD_S = 0.1
+SERVO_GAIN = 300.0
+WATCHDOG_MOTION_HZ = 10.0
+WATCHDOG_HOLD_HZ = 0.5
+#: the arm counts as holding once its target has not changed for this long and it is slower than HOLD_SPEED_RAD_S
+HOLD_AFTER_S = 0.25
+HOLD_SPEED_RAD_S = 0.01
+#: how fast a stop decelerates the joints (rad/s^2; UR's stopj default is 2)
+STOP_DECEL_RAD_S2 = 4.0
+
+
+class UrArm:
+    """Implements :class:`bt_grasp.interfaces.Robot` (see the module docstring). :meth:`connect` before use."""
+
+    def __init__(self, arm: Arm, gripper: Robotiq2F85Client, guard: MotionGuard) -> None:
+        self.arm = arm
+        self.gripper = gripper
+        self.guard = guard
+        self.period_s = 1.0 / arm.control_rate_hz
+        self.control: Any = None
+        self.receive: Any = None
+        self.stopped_by: CellFault | None = None
+        self._last_target: NDArray[np.float64] | None = None
+        self._target_since = time.monotonic()
+        self._sent_since_poll = False
+        self._watchdog_hz = 0.0
+        self._servoing = False
+        #: asked before the first motion (None: not asked); False ends the run NOT_CONFIRMED with nothing sent
+        self.confirm: Callable[[], bool] | None = None
+        self.moved = False
+
+    # -- life -----------------------------------------------------------------------------------------------------
+    def connect(self) -> None:
+        """Connect RTDE, upload ur_rtde's control script, set the TCP, payload and watchdog, connect the gripper.
+        :class:`CellUnavailable` (one sentence) when the cell cannot be used; nothing has moved then."""
+        rtde_control, rtde_receive = ur_rtde("a UR arm")
+        host = self.arm.address
+        try:
+            self.receive = rtde_receive.RTDEReceiveInterface(host)
+        except RuntimeError as exc:
+            raise CellUnavailable(f"the controller at {host} does not answer RTDE (port 30004): {exc}") from None
+        before = fault_from_state(self._state(script=False))
+        if before is not None:
+            self.close()
+            raise CellUnavailable(f"the robot at {host} is not ready: {before.detail}")
+        try:
+            self.control = rtde_control.RTDEControlInterface(host)
+        except RuntimeError as exc:
+            self.close()
+            raise CellUnavailable(f"the controller at {host} did not run ur_rtde's control script: {exc} (is it in "
+                                  "remote control mode?)") from None
+        ok = self.control.setTcp(list(self.arm.tcp_pose)) and self.control.setPayload(self.arm.payload_kg,
+                                                                                      list(self.arm.payload_cog_m))
+        if not ok:
+            self.close()
+            raise CellUnavailable(f"the controller at {host} refused the TCP or the payload")
+        self.gripper.connect()
+
+    def close(self) -> None:
+        """Stop the control script and disconnect (idempotent; after :meth:`stop` on the way out)."""
+        if self.control is not None:
+            try:
+                if self.control.isConnected():
+                    self.control.stopScript()
+                self.control.disconnect()
+            except RuntimeError as exc:
+                log.warning("closing ur_rtde's control interface: %s", exc)
+            self.control = None
+        if self.receive is not None:
+            try:
+                self.receive.disconnect()
+            except RuntimeError as exc:
+                log.warning("closing ur_rtde's receive interface: %s", exc)
+            self.receive = None
+        self.gripper.close()
+
+    # -- the Robot protocol ---------------------------------------------------------------------------------------
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        return ARM_JOINTS
+
+    def joint_positions(self) -> NDArray[np.float64]:
+        return np.asarray(self.receive.getActualQ(), dtype=np.float64)
+
+    def joint_velocities(self) -> NDArray[np.float64]:
+        return np.asarray(self.receive.getActualQd(), dtype=np.float64)
+
+    def set_joint_targets(self, q_rad: NDArray[np.float64], qd_rad_s: NDArray[np.float64] | None = None) -> None:
+        if self.stopped_by is not None:
+            return  # stopped: the run is ending, nothing more is sent
+        q = np.asarray(q_rad, dtype=np.float64).reshape(-1)
+        problem = self.guard.check_target(q, self._last_target, self.joint_positions())
+        if problem is not None:
+            self._fault(CellFault(CellFaultKind.SAFETY_LIMIT, f"refused and not sent: {problem}"))
+        moving = self._last_target is None or float(np.max(np.abs(q - self._last_target))) > 1e-7
+        if moving and not self.moved:
+            self._first_motion()
+        if moving:
+            self._target_since = time.monotonic()
+            if self._watchdog_hz != WATCHDOG_MOTION_HZ:
+                self._set_watchdog(WATCHDOG_MOTION_HZ)
+        if not self.control.servoJ(q.tolist(), 0.0, 0.0, self.period_s, SERVO_LOOKAHEAD_S, SERVO_GAIN):
+            self._check(0.0)
+            self._fault(CellFault(CellFaultKind.PROGRAM_STOPPED, "the controller did not take a servoJ target"))
+        self._servoing = True
+        self._sent_since_poll = True
+        self._last_target = q
+
+    def _first_motion(self) -> None:
+        if self.confirm is not None and not self.confirm():
+            self.stopped_by = CellFault(CellFaultKind.NOT_CONFIRMED, "the operator did not confirm the first motion")
+            raise self.stopped_by
+        self.moved = True
+
+    def open_gripper(self) -> None:
+        if self.stopped_by is None:
+            self._gripper(self.gripper.open)
+
+    def close_gripper(self, force_n: float | None = None) -> None:
+        if self.stopped_by is None:
+            self._gripper(lambda: self.gripper.close_on(40.0 if force_n is None else float(force_n)))
+
+    def gripper_width_m(self) -> float:
+        return self.gripper.status.width_m
+
+    def gripper_target_width_m(self) -> float:
+        return self.gripper.target_width_m
+
+    # -- the tick loop's side -------------------------------------------------------------------------------------
+    def poll(self, stalled_s: float) -> float:
+        """Once a period (``CellStepper``): check the controller (a fault is raised after the arm is stopped), kick the
+        watchdog, relax it once the arm holds, read the gripper. Returns the speed scaling (slider x limiter)."""
+        self._check(stalled_s)
+        if not self._sent_since_poll:
+            self.control.kickWatchdog()
+        self._sent_since_poll = False
+        if (self._watchdog_hz == WATCHDOG_MOTION_HZ and time.monotonic() - self._target_since > HOLD_AFTER_S
+                and float(np.max(np.abs(self.joint_velocities()))) < HOLD_SPEED_RAD_S):
+            self._set_watchdog(WATCHDOG_HOLD_HZ)
+        self._gripper(self.gripper.poll)
+        return float(self.receive.getSpeedScalingCombined())
+
+    def speed_scaling(self) -> float:
+        return float(self.receive.getSpeedScalingCombined())
+
+    def tcp_wrench(self) -> NDArray[np.float64] | None:
+        """The force and torque the controller measures at the TCP (base frame; None when it cannot be read)."""
+        try:
+            return np.asarray(self.receive.getActualTCPForce(), dtype=np.float64)
+        except RuntimeError:
+            return None
+
+    def stop(self, decel_rad_s2: float = STOP_DECEL_RAD_S2) -> bool:
+        """Stop the arm now (``stopJ``); True when the controller took it. Safe to call at any time."""
+        if self.control is None:
+            return False
+        try:
+            if not self.control.isConnected() or not self.control.isProgramRunning():
+                return False
+            if self._servoing:
+                self.control.servoStop(decel_rad_s2)
+                self._servoing = False
+            self.control.stopJ(decel_rad_s2, False)
+            return True
+        except RuntimeError as exc:
+            log.warning("stopJ failed: %s", exc)
+            return False
+
+    def is_still(self, speed_rad_s: float = HOLD_SPEED_RAD_S) -> bool:
+        try:
+            return bool(float(np.max(np.abs(self.joint_velocities()))) < speed_rad_s)
+        except RuntimeError:
+            return False
+
+    # -- inside -----------------------------------------------------------------------------------------------------
+    def _state(self, script: bool = True) -> ControllerState:
+        connected = bool(self.receive.isConnected()) and (not script or bool(self.control.isConnected()))
+        runtime = int(self.receive.getRuntimeState()) if script else 2
+        return ControllerState(connected, int(self.receive.getRobotMode()), int(self.receive.getSafetyStatusBits()),
+                               runtime)
+
+    def _check(self, stalled_s: float) -> None:
+        fault = fault_from_state(self._state())
+        if fault is None:
+            return
+        window = 1.0 / self._watchdog_hz if self._watchdog_hz > 0 else math.inf
+        if fault.kind is CellFaultKind.PROGRAM_STOPPED and stalled_s > window:
+            fault = CellFault(CellFaultKind.WATCHDOG, f"this process stalled for {stalled_s:.2f} s; the controller's "
+                              f"watchdog ({self._watchdog_hz:g} Hz) stopped the program and the arm ({fault.detail})")
+        self._fault(fault)
+
+    def _fault(self, fault: CellFault) -> None:
+        """Stop the arm (if the controller still takes it), take no more commands, raise ``fault``."""
+        if self.stopped_by is None:
+            self.stopped_by = fault
+            log.warning("the cell ended the run: %s", fault)
+            self.stop()
+        raise fault
+
+    def _gripper(self, call: Any) -> None:
+        try:
+            call()
+        except CellFault as fault:
+            self._fault(fault)
+
+    def _set_watchdog(self, hz: float) -> None:
+        if not self.control.setWatchdog(hz):
+            self._check(0.0)
+            self._fault(CellFault(CellFaultKind.PROGRAM_STOPPED, "the controller did not take the watchdog"))
+        self._watchdog_hz = hz
