@@ -27,7 +27,7 @@ PKG = Path(__file__).resolve().parents[1] / "bt_grasp"
 FLOORS: dict[str, int] = {
     # leaf modules: everything may import them; they import nothing of ours but errors
     "errors": 0,
-    "clock": 1, "geometry": 1, "interfaces": 1, "robot_description": 1, "defaults": 1, "hosts": 1,
+    "clock": 1, "geometry": 1, "interfaces": 1, "robot_description": 1, "defaults": 1, "seeds": 1,
     "files": 2,  # the trust boundary: bounded reads and writes of users' files
     "process": 2,  # process set-up: threads, deferred imports, environment strings, the code fingerprint
     "scene": 3, "detector": 3, "cell": 4,  # scene files and goals; the learned detector; cell files

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from bt_grasp.cli.run_cmd import exposure_warning
-from bt_grasp.hosts import is_loopback
+from bt_grasp.files.hosts import is_loopback
 
 
 @pytest.mark.parametrize("host", ["127.0.0.1", "127.1.2.3", "::1", "localhost"])

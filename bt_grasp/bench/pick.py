@@ -123,15 +123,13 @@ def class_target(scene: Path, seed: int) -> tuple[str, str, str]:
     """The object a learned-detector pick chases on ``seed``: (scene object name, its detector class, its colour).
     One of the objects the seed puts on the table (the world's own draw: the scene's ``choose`` from the seed's
     object stream), the (seed mod their number)-th in file order, so the targets go round the classes."""
-    import numpy as np
-
     from bt_grasp.detector.dataset import object_class
     from bt_grasp.scene.format import load_scene
     from bt_grasp.scene.layout import draw_layout
-    from bt_grasp.sim.world import _STREAM_OBJECTS
+    from bt_grasp.seeds import RunSeeds, Stream
 
     config = load_scene(scene)
-    stream = np.random.default_rng(np.random.SeedSequence(int(seed)).spawn(3)[_STREAM_OBJECTS])
+    stream = RunSeeds(int(seed)).generator(Stream.OBJECTS)  # the world's own draw of this seed
     drawn = draw_layout(config, stream).objects
     target = drawn[seed % len(drawn)]
     return target.name, object_class(target.shape, target.mesh, scene, target.name), str(target.color)

@@ -271,7 +271,7 @@ def run(
         from bt_grasp.cli.live_log import show_live_server_log
 
         show_live_server_log()  # a viewer's bytes quoted in the SDK's lines are shown, never obeyed
-    from bt_grasp.hosts import is_loopback
+    from bt_grasp.files.hosts import is_loopback
 
     if live is not None and not is_loopback(live_host):
         console.print(exposure_warning(live_host), highlight=False, markup=False)
@@ -370,7 +370,7 @@ def _run_interactive(request: EpisodeRequest, breakpoints: tuple[Breakpoint, ...
 
 
 def exposure_warning(host: str) -> str:
-    from bt_grasp.hosts import exposure_warning as warning
+    from bt_grasp.files.hosts import exposure_warning as warning
 
     return warning("--live-host", host, "this run (Foxglove WebSocket)", 8765)
 

@@ -61,7 +61,7 @@ def twin(
     import signal
 
     from bt_grasp.errors import InputError
-    from bt_grasp.hosts import is_loopback
+    from bt_grasp.files.hosts import is_loopback
     from bt_grasp.scene.format import load_scene
 
     config_scene = load_scene(scene)  # a bad scene file fails here with file:line, before anything starts

@@ -37,8 +37,8 @@ def run_foxglove_control(request: EpisodeRequest, breakpoints: tuple[Breakpoint,
     layout goes when the run has no log (the caller removes it)."""
     from bt_grasp.control import Controller, SeedPolicy, check_breakpoints, parse_breakpoint
     from bt_grasp.episode.episode import Episode
+    from bt_grasp.files.hosts import is_loopback
     from bt_grasp.foxglove.control import FoxgloveControl
-    from bt_grasp.hosts import is_loopback
 
     if not is_loopback(request.live_host) and not allow_remote:
         raise InputError("--control", f"--live-host {request.live_host} can be reached from other machines and the "

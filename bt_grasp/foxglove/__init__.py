@@ -6,5 +6,5 @@
 - ``tree_layout``: the layout generated for a tree (one row per leaf, by path), for a log or a live run.
 
 ``recording/`` writes and reads logs; this package shows them. The only package that imports ``foxglove``
-(the SDK); the loopback rule its servers follow is ``bt_grasp.hosts``.
+(the SDK); the loopback rule its servers follow is ``bt_grasp.files.hosts``.
 """

@@ -75,7 +75,7 @@ from bt_grasp.control.commands import (
 from bt_grasp.control.controller import Controller
 from bt_grasp.control.state import RunState
 from bt_grasp.errors import InputError
-from bt_grasp.hosts import is_loopback
+from bt_grasp.files.hosts import is_loopback
 
 log = logging.getLogger(__name__)
 

@@ -12,6 +12,7 @@ from bt_grasp.clock import ManualClock
 from bt_grasp.interfaces import Mount
 from bt_grasp.scene.format import COLOR_NAMES, Scene, load_scene
 from bt_grasp.scene.layout import draw_layout
+from bt_grasp.seeds import RunSeeds, Stream
 from bt_grasp.sim.camera import SimCamera
 from bt_grasp.sim.conveyor import belts_for, on_supports
 from bt_grasp.sim.device import create_scene
@@ -21,7 +22,6 @@ from bt_grasp.sim.robot import SimRobot
 
 log = logging.getLogger(__name__)
 
-_STREAM_OBJECTS, _STREAM_CAMERA, _STREAM_FAULTS = 0, 1, 2
 #: settling ends when every object moves slower than this (centre speed, m/s) ...
 SETTLE_SPEED_M_S = 0.002
 #: ... and turns slower than this (rad/s) ...
@@ -76,11 +76,13 @@ class World:
         log.debug("world built: seed %d, %d objects", self.seed, len(self.objects))
 
     def _seed_streams(self, seed: int) -> None:
+        """The world's three streams of the run's seed (``bt_grasp.seeds``): separate, so that drawing more
+        camera noise never moves an object and a fault plan never changes the scene it acts on."""
         self.seed = int(seed)
-        seeds = np.random.SeedSequence(self.seed).spawn(3)
-        self._object_rng = np.random.default_rng(seeds[_STREAM_OBJECTS])
-        self.camera_rng = np.random.default_rng(seeds[_STREAM_CAMERA])
-        self.fault_seed_sequence = seeds[_STREAM_FAULTS]
+        self.seeds = RunSeeds(self.seed)
+        self._object_rng = self.seeds.generator(Stream.OBJECTS)
+        self.camera_rng = self.seeds.generator(Stream.CAMERA)
+        self.fault_seed_sequence = self.seeds.sequence(Stream.FAULTS)
 
     @classmethod
     def from_file(cls, path: str | Path, seed: int, *, camera_mount: str | None = None) -> World:

@@ -34,6 +34,7 @@ from bt_grasp.control import (
     parse_breakpoint,
 )
 from bt_grasp.control.state import DetectionView
+from bt_grasp.files.hosts import is_loopback
 from bt_grasp.foxglove.control import (
     COMMAND_TOPIC,
     FoxgloveControl,
@@ -43,7 +44,6 @@ from bt_grasp.foxglove.control import (
     state_parameters,
 )
 from bt_grasp.foxglove.layout import CONTROL_BUTTONS, control_layout, control_layout_path, layout_path
-from bt_grasp.hosts import is_loopback
 from tests.control.stand_ins import build, run
 from tests.control.test_controller import Faults, Sink
 
