@@ -28,6 +28,7 @@ import contextlib
 import json
 import logging
 import sys
+import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -400,6 +401,7 @@ class CellEpisode:
             attachments={**self._attachments(), LAYOUT_ATTACHMENT: layout_bytes(tree_structure(tree.root),
                                                                                 request.tree.name)},
             flush_every_ticks=LOG_FLUSH_EVERY_TICKS,
+            time_origin_ns=time.time_ns() - devices.clock.now_ns(),  # the log's time: the wall clock, as it ran
             robot_model=RobotModel(robot_urdf_with(devices.gripper_model.name)),
             leaf_names=[n["path"] for n in node_records(tree.root) if n["kind"] in ("Action", "Condition")],
             handle_signals=False,  # Ctrl-C is this run's to handle: stopJ first, then the log

@@ -34,6 +34,13 @@ ACTIVATION_TIMEOUT_S = 10.0
 MAJOR_FAULT = 0x08
 
 
+class GripperSocketClosed(CellFault):
+    """The gripper's socket was closed or reset (not merely silent): the controller itself may be gone."""
+
+    def __init__(self, detail: str) -> None:
+        super().__init__(CellFaultKind.GRIPPER_NOT_ANSWERING, detail)
+
+
 @dataclass(frozen=True)
 class GripperStatus:
     """One poll: the finger opening (m), the object detection (``OBJ``) and the fault code (``FLT``)."""
@@ -150,8 +157,7 @@ class Robotiq2F85Client:
             self._sock.settimeout(self.answer_timeout_s)
             self._sock.sendall(text.encode("ascii"))
         except OSError as exc:
-            raise CellFault(CellFaultKind.GRIPPER_NOT_ANSWERING,
-                            f"the gripper's socket failed ({exc.strerror or exc})") from None
+            raise GripperSocketClosed(f"the gripper's socket failed ({exc.strerror or exc})") from None
 
     def _fill(self, deadline: float) -> None:
         assert self._sock is not None
@@ -183,7 +189,7 @@ class Robotiq2F85Client:
             raise CellFault(CellFaultKind.GRIPPER_NOT_ANSWERING,
                             f"no answer within {self.answer_timeout_s * 1000:.0f} ms") from None
         except (ConnectionError, OSError) as exc:
-            raise CellFault(CellFaultKind.GRIPPER_NOT_ANSWERING, f"the gripper's socket failed ({exc})") from None
+            raise GripperSocketClosed(f"the gripper's socket failed ({exc})") from None
 
     def _read_line(self) -> str:
         return self._read(None).decode("ascii", "replace").strip()

@@ -42,7 +42,7 @@ from bt_grasp.hardware.cell_faults import (
     fault_from_state,
 )
 from bt_grasp.hardware.motion_guard import MotionGuard
-from bt_grasp.hardware.robotiq_client import Robotiq2F85Client
+from bt_grasp.hardware.robotiq_client import GripperSocketClosed, Robotiq2F85Client
 from bt_grasp.hardware.ur_lib import ur_rtde
 from bt_grasp.robot_description import ARM_JOINTS
 
@@ -55,8 +55,11 @@ WATCHDOG_HOLD_HZ = 0.5
 #: the arm counts as holding once its target has not changed for this long and it is slower than HOLD_SPEED_RAD_S
 HOLD_AFTER_S = 0.25
 HOLD_SPEED_RAD_S = 0.01
-#: how fast a stop decelerates the joints (rad/s^2; UR's stopj default is 2)
-STOP_DECEL_RAD_S2 = 4.0
+#: the controller's state (its RTDE timestamp) not advancing for this long while the tick loop runs is a lost
+#: connection (a controller sends it every period: 8 ms on a CB3)
+LOST_AFTER_S = 0.1
+#: how fast a stop (a fault, Ctrl-C) decelerates the joints (rad/s^2; ur_rtde's stopJ default is 2: a stop is quicker)
+STOP_DECEL_RAD_S2 = 10.0
 
 
 class UrArm:
@@ -78,6 +81,9 @@ class UrArm:
         #: asked before the first motion (None: not asked); False ends the run NOT_CONFIRMED with nothing sent
         self.confirm: Callable[[], bool] | None = None
         self.moved = False
+        self._stamp = -1.0  # the controller's last RTDE timestamp seen, and until when a new one must come
+        self._stamp_deadline = math.inf
+        self.lost = False  # no state came from the controller: nothing more is sent (a command would wait for it)
 
     # -- life -----------------------------------------------------------------------------------------------------
     def connect(self) -> None:
@@ -110,7 +116,7 @@ class UrArm:
         """Stop the control script and disconnect (idempotent; after :meth:`stop` on the way out)."""
         if self.control is not None:
             try:
-                if self.control.isConnected():
+                if self.control.isConnected() and not self.lost and not self._silent():
                     self.control.stopScript()
                 self.control.disconnect()
             except RuntimeError as exc:
@@ -180,6 +186,7 @@ class UrArm:
     def poll(self, stalled_s: float) -> float:
         """Once a period (``CellStepper``): check the controller (a fault is raised after the arm is stopped), kick the
         watchdog, relax it once the arm holds, read the gripper. Returns the speed scaling (slider x limiter)."""
+        self._watch_heartbeat(stalled_s)
         self._check(stalled_s)
         if not self._sent_since_poll:
             self.control.kickWatchdog()
@@ -201,8 +208,9 @@ class UrArm:
             return None
 
     def stop(self, decel_rad_s2: float = STOP_DECEL_RAD_S2) -> bool:
-        """Stop the arm now (``stopJ``); True when the controller took it. Safe to call at any time."""
-        if self.control is None:
+        """Stop the arm now (``stopJ``); True when the controller took it. Safe to call at any time; nothing is sent
+        to a controller whose state stopped coming (a synchronous command would wait for it)."""
+        if self.control is None or self.lost or self._silent():
             return False
         try:
             if not self.control.isConnected() or not self.control.isProgramRunning():
@@ -229,6 +237,35 @@ class UrArm:
         return ControllerState(connected, int(self.receive.getRobotMode()), int(self.receive.getSafetyStatusBits()),
                                runtime)
 
+    def _watch_heartbeat(self, stalled_s: float) -> None:
+        """The controller's timestamp must advance within LOST_AFTER_S while this process runs (a stall of our own
+        restarts the wait: the receive thread catches up first)."""
+        now = time.monotonic()
+        stamp = float(self.receive.getTimestamp())
+        if stamp != self._stamp or stalled_s > LOST_AFTER_S / 2:
+            self._stamp, self._stamp_deadline = stamp, now + LOST_AFTER_S
+        elif now > self._stamp_deadline:
+            self.lost = True
+            self._fault(CellFault(CellFaultKind.CONNECTION_LOST, f"no state from the controller for "
+                                  f"{(now - self._stamp_deadline + LOST_AFTER_S) * 1000:.0f} ms"))
+
+    def _silent(self, wait_s: float = 0.0) -> bool:
+        """Whether the controller's state stopped coming (waiting up to ``wait_s`` for a new one)."""
+        if self.receive is None:
+            return True
+        try:
+            if not self.receive.isConnected():
+                return True
+            first = float(self.receive.getTimestamp())
+            deadline = time.monotonic() + wait_s
+            while time.monotonic() < deadline:
+                if float(self.receive.getTimestamp()) != first:
+                    return False
+                time.sleep(0.002)
+            return wait_s > 0
+        except RuntimeError:
+            return True
+
     def _check(self, stalled_s: float) -> None:
         fault = fault_from_state(self._state())
         if fault is None:
@@ -250,6 +287,12 @@ class UrArm:
     def _gripper(self, call: Any) -> None:
         try:
             call()
+        except GripperSocketClosed as closed:
+            if self._silent(LOST_AFTER_S):  # the gripper's socket went with the controller
+                self.lost = True
+                self._fault(CellFault(CellFaultKind.CONNECTION_LOST, f"the controller is gone ({closed.detail}, and no "
+                                      f"state came for {LOST_AFTER_S * 1000:.0f} ms)"))
+            self._fault(closed)
         except CellFault as fault:
             self._fault(fault)
 

@@ -159,6 +159,7 @@ class Twin:
             "robot_mode": state.robot_mode.name, "safety_mode": state.safety_mode.name,
             "runtime_state": state.runtime_state.name, "timestamp_s": round(state.timestamp_s, 6),
             "actual_q": [round(float(v), 6) for v in state.actual_q],
+            "actual_qd": [round(float(v), 6) for v in state.actual_qd],
             "gripper_opening_m": round(self.plant.opening_m(), 5),
             **{k: round(v, 3) for k, v in self.loop.period_stats().items()}, "realtime": self.loop.realtime,
             "camera_frames": frames.frames, "camera_render_ms": round(frames.mean_render_ms, 2),
