@@ -190,7 +190,10 @@ class CellEpisode:
             devices.arm.confirm = self._confirm_first_motion
             recorder = self._open_recorder(devices, where)
             cell = self.cell = self._assemble(devices, recorder)
-            for key, value in request.blackboard.items():
+            entries = dict(request.blackboard)
+            if where["ran_on"] == "twin" and request.goal is None:  # the twin's task, as a scene tells a simulated run
+                entries = {**self._twin_goal_entries(), **{k: v for k, v in entries.items() if k != "lift_height"}}
+            for key, value in entries.items():
                 inputs.tree.root_blackboard.set(key, value)
             if inputs.calibration_path is not None:
                 inputs.tree.root_blackboard.set("calibration_file", str(inputs.calibration_path))
@@ -308,6 +311,21 @@ class CellEpisode:
         if isinstance(height, int | float) and not isinstance(height, bool) and height > 0:
             goal = goal.model_copy(update={"height_m": float(height)})
         return goal
+
+    def _twin_goal_entries(self) -> dict[str, BlackboardValue]:
+        """What the twin's task tells trees that read ``{color}`` and ``{lift_height}`` (the request's colour wins)."""
+        from pydantic import TypeAdapter, ValidationError
+
+        from bt_grasp.episode.episode import goal_entries
+        from bt_grasp.hardware.twin_control import TwinControlError, twin_request
+
+        try:
+            reply = twin_request(self.inputs.cell.arm.address, "goal")
+            goal: Goal = TypeAdapter(Goal).validate_python(reply.get("goal"))
+        except (TwinControlError, ValidationError):
+            log.warning("the twin did not say its goal; the tree's {color} and {lift_height} are the run's")
+            return {}
+        return goal_entries(goal)
 
     def _twin_verdict(self) -> Judged:
         """The twin's physics judge on the run's goal (or the twin scene's own)."""

@@ -5,7 +5,8 @@ The limits are the cell file's (``bt_grasp.cell.format``): the joints' limits (t
 speed and acceleration caps, the tool speed cap, the workspace box the TCP must stay in, and the table top the finger
 tips must stay above. :meth:`MotionGuard.prepare` slows a trajectory (never speeds it up) until it is within the three
 caps, then checks every sample; anything else wrong (a joint out of its range, the TCP outside the box, the finger
-tips under the table) refuses it with one sentence, and nothing is sent. :meth:`MotionGuard.check_target` checks one
+tips under the table) refuses it with one sentence, and nothing is sent; :meth:`MotionGuard.check` refuses a
+trajectory over any cap too (a leaf's trajectory is fitted to them first). :meth:`MotionGuard.check_target` checks one
 streamed target: within the joint limits, the TCP in the box and above the table, and not farther from the last
 target (or from where the arm is) than the speed cap allows in one control period.
 """
@@ -23,7 +24,8 @@ from bt_grasp.motion.trajectory import Trajectory
 
 Vec = NDArray[np.float64]
 
-#: a trajectory is slowed to this fraction of the caps (sampling and interpolation stay under them)
+#: a trajectory is slowed to this fraction of the tool speed cap (the speed between samples, measured along chords,
+#: is a little under the speed along the arc); the joints' samples are ruckig's own, and the caps are theirs
 CAP_MARGIN = 0.98
 #: a streamed target may step this many times the speed cap's travel in one period (and JUMP_SLACK_RAD more)
 STEP_SLACK = 1.25
@@ -73,39 +75,66 @@ class MotionGuard:
 
     # -- whole trajectories ---------------------------------------------------------------------------------------
     def prepare(self, trajectory: Trajectory) -> Trajectory | str:
-        """The trajectory slowed to the caps, or why it is refused (one sentence): nothing of it may be sent."""
+        """The trajectory fitted to the caps (:meth:`fit`) and checked (:meth:`check`), or why it is refused (one
+        sentence): nothing of a refused trajectory may be sent."""
+        fitted = self.fit(trajectory)
+        if isinstance(fitted, str):
+            return self._refuse(fitted)
+        problem = self.check(fitted)
+        return fitted if problem is None else self._refuse(problem)
+
+    def fit(self, trajectory: Trajectory) -> Trajectory | str:
+        """The same path slowed (never sped up) until it is within the joint and tool speed caps and the joint
+        acceleration cap; a trajectory that is not finite joint samples is a sentence."""
         q = np.asarray(trajectory.q, dtype=float)
         if q.ndim != 2 or q.shape[1] != 6 or len(q) == 0 or not np.all(np.isfinite(q)):
-            return self._refuse("the trajectory is not finite joint samples")
-        problem = self._joint_problem(q)
-        poses = [] if problem is not None else [self.kin.fk(qk) for qk in q]
-        for k, T in enumerate(poses):
-            problem = self._pose_problem(T)
-            if problem is not None:
-                problem = f"{problem} (sample {k} of {len(q)})"
-                break
-        if problem is not None:
-            return self._refuse(problem)
-        scale = self._slow_down(trajectory, np.array([T[:3, 3] for T in poses]))
-        if scale > 1.0:
-            trajectory = _stretched(trajectory, scale)
-        return trajectory
-
-    def _slow_down(self, trajectory: Trajectory, p: Vec) -> float:
-        """How much longer the trajectory must take to respect the speed, acceleration and tool speed caps."""
+            return "the trajectory is not finite joint samples"
         lim = self.limits
         qd = float(np.max(np.abs(trajectory.qd))) if len(trajectory.qd) else 0.0
         qdd = float(np.max(np.abs(trajectory.qdd))) if len(trajectory.qdd) else 0.0
+        joint = max(qd / lim.joint_speed_cap_rad_s, float(np.sqrt(qdd / lim.joint_accel_cap_rad_s2)))
+        tool = self._tool_speed(trajectory) / (lim.tool_speed_cap_m_s * CAP_MARGIN)
+        scale = max(1.0, tool, joint if joint > 1.0 + 1e-9 else 1.0)
+        return _stretched(trajectory, scale) if scale > 1.0 else trajectory
+
+    def check(self, trajectory: Trajectory) -> str | None:
+        """Why the trajectory may not be sent (one sentence), or None: every sample within the joints' limits, the
+        TCP inside the workspace box, the finger tips above the table, the joint speeds, accelerations and the
+        tool's speed within the caps."""
+        q = np.asarray(trajectory.q, dtype=float)
+        if q.ndim != 2 or q.shape[1] != 6 or len(q) == 0 or not np.all(np.isfinite(q)):
+            return "the trajectory is not finite joint samples"
+        problem = self._joint_problem(q)
+        if problem is not None:
+            return problem
+        for k, qk in enumerate(q):
+            problem = self._pose_problem(self.kin.fk(qk))
+            if problem is not None:
+                return f"{problem} (sample {k} of {len(q)})"
+        lim = self.limits
+        qd = float(np.max(np.abs(trajectory.qd))) if len(trajectory.qd) else 0.0
+        if qd > lim.joint_speed_cap_rad_s * (1 + 1e-9):
+            return f"a joint would move at {qd:.3f} rad/s, over the cap {lim.joint_speed_cap_rad_s:g} rad/s"
+        qdd = float(np.max(np.abs(trajectory.qdd))) if len(trajectory.qdd) else 0.0
+        if qdd > lim.joint_accel_cap_rad_s2 * (1 + 1e-9):
+            return (f"a joint would accelerate at {qdd:.3f} rad/s^2, over the cap {lim.joint_accel_cap_rad_s2:g} "
+                    "rad/s^2")
+        tool = self._tool_speed(trajectory)
+        if tool > lim.tool_speed_cap_m_s * CAP_MARGIN * (1 + 1e-9):
+            return f"the TCP would move at {tool:.3f} m/s, over the cap {lim.tool_speed_cap_m_s:g} m/s"
+        return None
+
+    def _tool_speed(self, trajectory: Trajectory) -> float:
+        """The TCP's largest speed between samples (along chords), m/s."""
         times = np.asarray(trajectory.times_s, dtype=float)
-        tool = 0.0
-        if len(times) > 1:
-            dt = np.diff(times)
-            moving = dt > 0
-            if np.any(moving):
-                tool = float(np.max(np.linalg.norm(np.diff(p, axis=0)[moving], axis=1) / dt[moving]))
-        return max(1.0, qd / (lim.joint_speed_cap_rad_s * CAP_MARGIN),
-                   float(np.sqrt(qdd / (lim.joint_accel_cap_rad_s2 * CAP_MARGIN))),
-                   tool / (lim.tool_speed_cap_m_s * CAP_MARGIN))
+        if len(times) < 2:
+            return 0.0
+        p = np.array([self.kin.fk(qk)[:3, 3] for qk in trajectory.q])
+        dt = np.diff(times)
+        moving = dt > 0
+        if not np.any(moving):
+            return 0.0
+        return float(np.max(np.linalg.norm(np.diff(p, axis=0)[moving], axis=1) / dt[moving]))
 
     def _joint_problem(self, q: Vec) -> str | None:
         low = q < self._lower

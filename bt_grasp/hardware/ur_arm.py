@@ -12,10 +12,12 @@ A thin adapter, as ur_rtde's own examples drive a UR:
   the connection and the speed scaling; any of them ending the run is a typed
   :class:`~bt_grasp.hardware.cell_faults.CellFault` (``fault_from_state``), after the arm is stopped.
 * **The watchdog** (``rtde_set_watchdog`` through ur_rtde's ``setWatchdog``) is kicked from the tick loop: every
-  ``servoJ`` writes its register, and :meth:`poll` kicks it in periods that sent none. While the arm moves it asks for
-  :data:`WATCHDOG_MOTION_HZ` (a process stalled mid-motion stops the arm within 0.1 s); once the arm has held its
-  target for :data:`HOLD_AFTER_S` it relaxes to :data:`WATCHDOG_HOLD_HZ` (perceiving or planning may take a few
-  hundred ms between ticks while nothing moves). A stall the watchdog ended is reported ``WATCHDOG``.
+  ``servoJ`` writes its register, and :meth:`poll` kicks it in periods that sent none. While moving targets stream
+  (a trajectory's samples on their way) it asks for :data:`WATCHDOG_MOTION_HZ` (a process stalled mid-motion stops
+  the program within 0.1 s); a hold (a target with no velocity: a trajectory's last sample, a settling or cancelled
+  motion) relaxes it to :data:`WATCHDOG_HOLD_HZ` at once (the tick that ends a motion may go on to perceive or plan
+  for a few hundred ms while the servo holds the arm still: a stall then moves nothing). A stall the watchdog ended
+  is reported ``WATCHDOG``.
 * **The first motion** waits for ``confirm`` (the operator's yes; ``--yes`` skips it); the watchdog is armed then,
   not before (a prompt may wait longer than any watchdog).
 * **Stops**: :meth:`stop` sends ``stopJ`` (the Ctrl-C path and every fault's); after a fault the arm takes no more
@@ -26,6 +28,7 @@ from __future__ import annotations
 
 import logging
 import math
+import threading
 import time
 from collections.abc import Callable
 from typing import Any
@@ -52,12 +55,20 @@ SERVO_LOOKAHEAD_S = 0.1
 SERVO_GAIN = 300.0
 WATCHDOG_MOTION_HZ = 10.0
 WATCHDOG_HOLD_HZ = 0.5
-#: the arm counts as holding once its target has not changed for this long and it is slower than HOLD_SPEED_RAD_S
-HOLD_AFTER_S = 0.25
+#: a stream of moving targets that stopped without a hold counts as a hold after this long
+HOLD_AFTER_S = 0.05
 HOLD_SPEED_RAD_S = 0.01
 #: the controller's state (its RTDE timestamp) not advancing for this long while the tick loop runs is a lost
 #: connection (a controller sends it every period: 8 ms on a CB3)
 LOST_AFTER_S = 0.1
+#: a synchronous ur_rtde command (the watchdog, the TCP) not answered within this is a lost connection; a stop within
+#: STOP_TIMEOUT_S (it returns once the arm stands still)
+SYNC_TIMEOUT_S = 0.5
+#: after a stall of this process, the state is read again once it is this recent (at most this long a wait), and a
+#: stopped program seen within RECENT_STALL_S of it is the watchdog's doing when the stall outlasted the watchdog
+CATCH_UP_S = 0.3
+RECENT_STALL_S = 1.0
+STOP_TIMEOUT_S = 1.5
 #: how fast a stop (a fault, Ctrl-C) decelerates the joints (rad/s^2; ur_rtde's stopJ default is 2: a stop is quicker)
 STOP_DECEL_RAD_S2 = 10.0
 
@@ -84,6 +95,8 @@ class UrArm:
         self._stamp = -1.0  # the controller's last RTDE timestamp seen, and until when a new one must come
         self._stamp_deadline = math.inf
         self.lost = False  # no state came from the controller: nothing more is sent (a command would wait for it)
+        self._written_at = time.monotonic()  # the watchdog's register was last written (a servoJ, a kick)
+        self._missed = (0.0, 0.0, -math.inf)  # the last gap the watchdog did not allow: its length, its Hz, its end
 
     # -- life -----------------------------------------------------------------------------------------------------
     def connect(self) -> None:
@@ -105,23 +118,37 @@ class UrArm:
             self.close()
             raise CellUnavailable(f"the controller at {host} did not run ur_rtde's control script: {exc} (is it in "
                                   "remote control mode?)") from None
-        ok = self.control.setTcp(list(self.arm.tcp_pose)) and self.control.setPayload(self.arm.payload_kg,
-                                                                                      list(self.arm.payload_cog_m))
+        try:
+            ok = (self._synchronous(lambda: self.control.setTcp(list(self.arm.tcp_pose)), "setTcp")
+                  and self._synchronous(lambda: self.control.setPayload(self.arm.payload_kg,
+                                                                        list(self.arm.payload_cog_m)), "setPayload"))
+        except CellFault as fault:
+            self.close()
+            raise CellUnavailable(f"the controller at {host} did not take the TCP or the payload: {fault.detail}") \
+                from None
         if not ok:
             self.close()
             raise CellUnavailable(f"the controller at {host} refused the TCP or the payload")
         self.gripper.connect()
 
     def close(self) -> None:
-        """Stop the control script and disconnect (idempotent; after :meth:`stop` on the way out)."""
+        """Stop the control script and disconnect (idempotent; after :meth:`stop` on the way out). The interfaces of
+        a controller that went away are let go from a thread of their own: ur_rtde keeps trying to reconnect to it,
+        and its disconnect waits for that."""
         if self.control is not None:
-            try:
-                if self.control.isConnected() and not self.lost and not self._silent():
-                    self.control.stopScript()
-                self.control.disconnect()
-            except RuntimeError as exc:
-                log.warning("closing ur_rtde's control interface: %s", exc)
-            self.control = None
+            control, self.control = self.control, None
+            if self.lost or self._silent():
+                self.lost = True
+                _let_go(control)
+            else:
+                try:
+                    if control.isConnected():
+                        self._synchronous(control.stopScript, "stopScript", control=control)
+                    control.disconnect()
+                except CellFault:
+                    _let_go(control)
+                except RuntimeError as exc:
+                    log.warning("closing ur_rtde's control interface: %s", exc)
         if self.receive is not None:
             try:
                 self.receive.disconnect()
@@ -148,19 +175,28 @@ class UrArm:
         problem = self.guard.check_target(q, self._last_target, self.joint_positions())
         if problem is not None:
             self._fault(CellFault(CellFaultKind.SAFETY_LIMIT, f"refused and not sent: {problem}"))
-        moving = self._last_target is None or float(np.max(np.abs(q - self._last_target))) > 1e-7
-        if moving and not self.moved:
+        changed = self._last_target is None or float(np.max(np.abs(q - self._last_target))) > 1e-7
+        # a moving target (a trajectory's sample on its way) needs the tight watchdog; a hold (a target with no
+        # velocity: a trajectory's last sample, a settling or cancelled executor) does not: a stall then moves nothing.
+        # The same sample again (a tree re-run within a tick) changes neither.
+        hold = qd_rad_s is not None and float(np.max(np.abs(qd_rad_s))) <= 1e-6
+        streaming = changed and not hold
+        if changed and not self.moved:
             self._first_motion()
-        if moving:
+        if streaming:
             self._target_since = time.monotonic()
             if self._watchdog_hz != WATCHDOG_MOTION_HZ:
                 self._set_watchdog(WATCHDOG_MOTION_HZ)
         if not self.control.servoJ(q.tolist(), 0.0, 0.0, self.period_s, SERVO_LOOKAHEAD_S, SERVO_GAIN):
             self._check(0.0)
-            self._fault(CellFault(CellFaultKind.PROGRAM_STOPPED, "the controller did not take a servoJ target"))
+            self._fault(self._classified(CellFault(CellFaultKind.PROGRAM_STOPPED,
+                                                   "the controller did not take a servoJ target")))
+        self._wrote()
         self._servoing = True
         self._sent_since_poll = True
         self._last_target = q
+        if hold and self._watchdog_hz == WATCHDOG_MOTION_HZ:
+            self._set_watchdog(WATCHDOG_HOLD_HZ)
 
     def _first_motion(self) -> None:
         if self.confirm is not None and not self.confirm():
@@ -190,10 +226,10 @@ class UrArm:
         self._check(stalled_s)
         if not self._sent_since_poll:
             self.control.kickWatchdog()
+            self._wrote()
         self._sent_since_poll = False
-        if (self._watchdog_hz == WATCHDOG_MOTION_HZ and time.monotonic() - self._target_since > HOLD_AFTER_S
-                and float(np.max(np.abs(self.joint_velocities()))) < HOLD_SPEED_RAD_S):
-            self._set_watchdog(WATCHDOG_HOLD_HZ)
+        if self._watchdog_hz == WATCHDOG_MOTION_HZ and time.monotonic() - self._target_since > HOLD_AFTER_S:
+            self._set_watchdog(WATCHDOG_HOLD_HZ)  # the stream stopped without a hold: the servo holds its target
         self._gripper(self.gripper.poll)
         return float(self.receive.getSpeedScalingCombined())
 
@@ -216,12 +252,12 @@ class UrArm:
             if not self.control.isConnected() or not self.control.isProgramRunning():
                 return False
             if self._servoing:
-                self.control.servoStop(decel_rad_s2)
+                self._synchronous(lambda: self.control.servoStop(decel_rad_s2), "servoStop", STOP_TIMEOUT_S)
                 self._servoing = False
-            self.control.stopJ(decel_rad_s2, False)
+            self._synchronous(lambda: self.control.stopJ(decel_rad_s2, False), "stopJ", STOP_TIMEOUT_S)
             return True
-        except RuntimeError as exc:
-            log.warning("stopJ failed: %s", exc)
+        except CellFault as fault:
+            log.warning("stopJ was not answered: %s", fault.detail)
             return False
 
     def is_still(self, speed_rad_s: float = HOLD_SPEED_RAD_S) -> bool:
@@ -266,15 +302,48 @@ class UrArm:
         except RuntimeError:
             return True
 
-    def _check(self, stalled_s: float) -> None:
-        fault = fault_from_state(self._state())
-        if fault is None:
+    def _wrote(self) -> None:
+        """The watchdog's register was written now (a servoJ, a kick, a command): a gap since the last write longer
+        than the watchdog allowed is remembered (the watchdog then stopped the program)."""
+        now = time.monotonic()
+        gap = now - self._written_at
+        if self._watchdog_hz > 0 and gap > 1.0 / self._watchdog_hz:
+            self._missed = (gap, self._watchdog_hz, now)
+        self._written_at = now
+
+    def _catch_up(self) -> None:
+        """After this process stalled (no write for longer than a tight watchdog allows), ur_rtde's receive thread
+        first reads the state the controller sent meanwhile, oldest first: wait (a bounded while) until the state
+        read is as recent as the stall is long."""
+        gap = time.monotonic() - self._written_at
+        if gap < 1.0 / WATCHDOG_MOTION_HZ or self._stamp < 0:
             return
-        window = 1.0 / self._watchdog_hz if self._watchdog_hz > 0 else math.inf
-        if fault.kind is CellFaultKind.PROGRAM_STOPPED and stalled_s > window:
-            fault = CellFault(CellFaultKind.WATCHDOG, f"this process stalled for {stalled_s:.2f} s; the controller's "
-                              f"watchdog ({self._watchdog_hz:g} Hz) stopped the program and the arm ({fault.detail})")
-        self._fault(fault)
+        deadline = time.monotonic() + CATCH_UP_S
+        while time.monotonic() < deadline:
+            if float(self.receive.getTimestamp()) >= self._stamp + gap - 3 * self.period_s:
+                return
+            time.sleep(0.002)
+
+    def _check(self, stalled_s: float) -> None:
+        self._catch_up()
+        fault = fault_from_state(self._state())
+        if fault is not None:
+            self._fault(self._classified(fault))
+
+    def _classified(self, fault: CellFault) -> CellFault:
+        """A stopped program after this process wrote nothing for longer than the watchdog allowed (now, or in a gap
+        just before) is the watchdog's doing: the run's reason is WATCHDOG."""
+        if fault.kind is not CellFaultKind.PROGRAM_STOPPED:
+            return fault
+        now = time.monotonic()
+        gap, hz = now - self._written_at, self._watchdog_hz
+        missed_gap, missed_hz, at = self._missed
+        if now - at < RECENT_STALL_S and (hz <= 0 or missed_gap * missed_hz > gap * hz):
+            gap, hz = missed_gap, missed_hz
+        if hz > 0 and gap > 1.0 / hz:
+            return CellFault(CellFaultKind.WATCHDOG, f"this process stalled for {gap:.2f} s; the controller's "
+                             f"watchdog ({hz:g} Hz) stopped the program and the arm ({fault.detail})")
+        return fault
 
     def _fault(self, fault: CellFault) -> None:
         """Stop the arm (if the controller still takes it), take no more commands, raise ``fault``."""
@@ -283,6 +352,36 @@ class UrArm:
             log.warning("the cell ended the run: %s", fault)
             self.stop()
         raise fault
+
+    def _synchronous(self, call: Callable[[], Any], what: str, timeout_s: float | None = None,
+                     control: Any = None) -> Any:
+        """A ur_rtde call that waits for the controller's answer, bounded: it runs in a thread of its own (ur_rtde lets
+        go of the interpreter while it waits), and an answer that does not come within ``timeout_s`` is a lost
+        connection (a controller that went away: ur_rtde would wait, and try to reconnect, for seconds)."""
+        result: list[Any] = []
+        error: list[BaseException] = []
+
+        def run() -> None:
+            try:
+                result.append(call())
+            except BaseException as exc:  # handed to the caller's thread
+                error.append(exc)
+
+        thread = threading.Thread(target=run, name=f"ur_rtde-{what}", daemon=True)
+        thread.start()
+        thread.join(SYNC_TIMEOUT_S if timeout_s is None else timeout_s)
+        if thread.is_alive():
+            self.lost = True
+            stuck = control if control is not None else self.control
+            if stuck is not None:
+                _LET_GO.append(stuck)  # never destroyed while ur_rtde is inside it
+            raise CellFault(CellFaultKind.CONNECTION_LOST, f"the controller did not answer {what} within "
+                            f"{(SYNC_TIMEOUT_S if timeout_s is None else timeout_s) * 1000:.0f} ms")
+        if error:
+            if isinstance(error[0], RuntimeError):
+                raise CellFault(CellFaultKind.CONNECTION_LOST, f"{what} failed: {error[0]}")
+            raise error[0]
+        return result[0] if result else None
 
     def _gripper(self, call: Any) -> None:
         try:
@@ -297,7 +396,32 @@ class UrArm:
             self._fault(fault)
 
     def _set_watchdog(self, hz: float) -> None:
-        if not self.control.setWatchdog(hz):
+        # a synchronous command: ur_rtde waits for the controller's answer (and tries to reconnect to a controller
+        # that went away, for seconds): nothing synchronous goes to a controller whose state stopped coming
+        if self.lost or self._silent():
+            self.lost = True
+            self._fault(CellFault(CellFaultKind.CONNECTION_LOST, "RTDE's connection to the controller is closed"))
+        self._check(0.0)  # a stopped program answers no command: say why it stopped instead of waiting for it
+        try:
+            taken = self._synchronous(lambda: self.control.setWatchdog(hz), "setWatchdog")
+        except CellFault as fault:
+            self._check(0.0)  # half a second later the state is fresh: a stopped program is said as such
+            self._fault(fault)
+        if not taken:
             self._check(0.0)
-            self._fault(CellFault(CellFaultKind.PROGRAM_STOPPED, "the controller did not take the watchdog"))
+            self._fault(self._classified(CellFault(CellFaultKind.PROGRAM_STOPPED,
+                                                   "the controller did not take the watchdog")))
+        self._wrote()
         self._watchdog_hz = hz
+
+
+#: ur_rtde interfaces of controllers that went away, being let go (never destroyed while ur_rtde reconnects)
+_LET_GO: list[Any] = []
+
+
+def _let_go(interface: Any) -> None:
+    """Disconnect ``interface`` in a daemon thread, waiting at most a second for it; it is kept alive either way."""
+    _LET_GO.append(interface)
+    thread = threading.Thread(target=interface.disconnect, name="ur_rtde-let-go", daemon=True)
+    thread.start()
+    thread.join(timeout=1.0)

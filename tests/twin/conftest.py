@@ -23,7 +23,7 @@ from pathlib import Path
 import pytest
 
 REPO = Path(__file__).resolve().parents[2]
-PORTS = (30004, 29999, 30003, 63352, 30100)
+PORTS = (30004, 29999, 30003, 63352, 30100, 30101)
 START_TIMEOUT_S = 90.0
 
 

@@ -59,6 +59,9 @@ def test_the_written_cell_file_loads_and_matches_the_scene(twin: TwinProcess) ->
     assert (twin.cell_path.parent / cell.calibration).resolve() == REPO / "scenes" / "tabletop.calibration.yaml"
     assert cell.table_plane.normal == (0.0, 0.0, 1.0) and cell.table_plane.offset_m == 0.0
     assert cell.workspace.min_m == (0.25, -0.35, 0.0) and cell.workspace.max_m == (0.75, 0.35, 0.5)
+    assert cell.workspace.objects_up_to_m == 0.30 and cell.table_plane.x_m == (-0.15, 0.85)
+    assert cell.camera.eye_to_hand is not None and cell.camera.eye_to_hand.position_m == (1.05, 0.0, 0.75)
+    assert cell.arm.home_q_rad != (0.0, -1.9, 1.9, -1.57, -1.57, 0.0)  # the 2F-85 is longer: the wrist stands higher
 
 
 def test_a_cell_file_is_loaded_strictly(tmp_path: Path) -> None:
@@ -69,7 +72,7 @@ def test_a_cell_file_is_loaded_strictly(tmp_path: Path) -> None:
     scene_path = REPO / "scenes" / "pick_and_place.yaml"
     path = write_cell(load_scene(scene_path), scene_path, TwinConfig(), tmp_path / "cell.yaml")
     cell = load_cell(path)
-    assert [f.name for f in cell.fixtures] == ["target_marker"] and cell.fixtures[0].boxes[0].solid is False
+    assert [f.name for f in cell.fixtures] == ["target_marker"] and cell.fixtures[0].kind == "marker"
     text = path.read_text()
     path.write_text(text.replace("  payload_kg:", "  payload_kgs:"))
     with pytest.raises(ConfigError, match=r"cell.yaml:\d+: .*payload_kgs"):

@@ -194,6 +194,11 @@ class Twin:
         with self.controller.lock:
             return self._judge.check(goal)
 
+    def goal(self) -> dict[str, Any]:
+        """The goal a run is judged on unless it names one (the task's declaration, as a scene file gives a
+        simulated run: not ground truth)."""
+        return {"goal": goal_for_run(self.scene, {}).model_dump(mode="json")}
+
     def judge(self, goal_json: str | None) -> dict[str, Any]:
         goal: Goal | None = None
         if goal_json is not None:
