@@ -22,8 +22,8 @@ import pytest
 pytest.importorskip("rtde_control", reason="ur_rtde is not installed (pip install -e '.[hardware]')")
 pytest.importorskip("pyrealsense2", reason="pyrealsense2 is not installed (pip install -e '.[hardware]')")
 
-from bt_grasp.bench.cell_faults import EXPECTED, SHUTTLE_TREE, one_trial, recover  # noqa: E402
-from bt_grasp.bench.twin_process import TwinProcess, start_twin  # noqa: E402
+from bt_grasp.bench.cell_faults import EXPECTED, SHUTTLE_TREE, one_trial, recover
+from bt_grasp.bench.twin_process import TwinProcess, start_twin
 
 pytestmark = [pytest.mark.sim, pytest.mark.real_client]
 

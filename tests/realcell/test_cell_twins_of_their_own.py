@@ -16,8 +16,8 @@ import pytest
 pytest.importorskip("rtde_control", reason="ur_rtde is not installed (pip install -e '.[hardware]')")
 pytest.importorskip("pyrealsense2", reason="pyrealsense2 is not installed (pip install -e '.[hardware]')")
 
-from bt_grasp.bench.cell_faults import SHUTTLE_TREE, one_trial  # noqa: E402
-from bt_grasp.bench.twin_process import start_twin  # noqa: E402
+from bt_grasp.bench.cell_faults import SHUTTLE_TREE, one_trial
+from bt_grasp.bench.twin_process import start_twin
 
 pytestmark = [pytest.mark.sim, pytest.mark.slow, pytest.mark.real_client]
 

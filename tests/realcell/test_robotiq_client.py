@@ -112,5 +112,5 @@ def test_nothing_listening_is_one_sentence() -> None:
     with socket.socket() as probe:
         probe.bind(("127.0.0.1", 0))
         port = probe.getsockname()[1]
-    with pytest.raises(CellUnavailable, match="cannot be reached .* URCap"):
+    with pytest.raises(CellUnavailable, match=r"cannot be reached .* URCap"):
         Robotiq2F85Client("127.0.0.1", port, 0.085).connect(connect_timeout_s=0.5)

@@ -93,7 +93,7 @@ def test_a_port_that_answers_nothing_times_out_within_its_bound(port) -> None:  
     host, number = port(b"")
     link = TwinCameraLink(host, number, timeout_s=0.3)
     try:
-        with pytest.raises(TimeoutError, match="sent nothing for 0.3 s"):
+        with pytest.raises(TimeoutError, match=r"sent nothing for 0\.3 s"):
             link.request("frame")
     finally:
         link.close()
@@ -103,5 +103,5 @@ def test_nothing_listening_is_one_sentence() -> None:
     with socket.socket() as probe:
         probe.bind(("127.0.0.1", 0))
         number = probe.getsockname()[1]
-    with pytest.raises(TwinCameraError, match="cannot be reached .* `bt-grasp twin` running there"):
+    with pytest.raises(TwinCameraError, match=r"cannot be reached .* `bt-grasp twin` running there"):
         TwinCameraLink("127.0.0.1", number)
