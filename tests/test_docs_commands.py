@@ -8,7 +8,7 @@ What is done with each command line (``$ `` prompts, ``\\`` continuations and ``
 - the cheap ones whose files all exist in the repository are also *run* (through ``main``, exit 0 expected):
   ``tree validate``, ``tree show``, ``tree models``, ``tree run --dry`` and ``scene validate``. Commands that
   need the simulator, a cluster or the user's own files (``run``, ``eval``, ``calibrate``, ``replay`` of a
-  log the reader made, ``my_leaves.py``...) are parsed only.
+  log the reader made, ``my_leaves.py``, a package ``--plugin NAME`` the reader installed...) are parsed only.
 """
 
 from __future__ import annotations
@@ -136,7 +136,7 @@ def _runnable(args: list[str]) -> bool:
     files = [a for a in args[2:] if not a.startswith("-") and re.search(r"\.(xml|yaml|yml|py)$", a)]
     return words in CHEAP and ("--dry" in args or words != ("tree", "run")) and "--out" not in args and all(
         (REPO / f).is_file() for f in files
-    ) and not any(_placeholder(a) for a in args)
+    ) and not any(_placeholder(a) for a in args) and "--plugin" not in args  # --plugin: one the reader installed
 
 
 @pytest.mark.parametrize(

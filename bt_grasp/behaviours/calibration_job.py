@@ -34,7 +34,10 @@ class CalibrationJob:
     failure. ``progress`` says what it is doing; ``visited``/``planned`` count views."""
 
     def __init__(self, cell: Cell, poses: int) -> None:
+        # deferred: scipy comes with it; a tree loads and validates without it
         from bt_grasp.motion.planning_scene import PlanningScene
+
+        # deferred: OpenCV and scipy come with it; a tree loads and validates without them
         from bt_grasp.perception.calibration import (
             CalibrationSettings,
             ViewCollector,
@@ -114,6 +117,7 @@ class CalibrationJob:
         self.progress = f"view {self.visited + 1}: {self.collector.add(frame, T_base_tool)}"
 
     def _path_to(self, q_goal: NDArray[np.float64]) -> PathFn:
+        # deferred: scipy comes with it; a tree loads and validates without it
         from bt_grasp.motion.planning_scene import PlanningScene
 
         def compute(q: NDArray[np.float64]) -> NDArray[np.float64] | PathFailure:

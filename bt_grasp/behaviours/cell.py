@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 from bt_grasp.behaviours.services import CameraCalibration, MediaSink, MotionGuard, NullSink, Planner
 from bt_grasp.clock import Clock
 from bt_grasp.interfaces import Camera, Robot
+from bt_grasp.perception.config import GraspSettings, PerceptionConfig
 from bt_grasp.scene.format import Scene
 
 if TYPE_CHECKING:
@@ -21,35 +22,38 @@ if TYPE_CHECKING:
     from bt_grasp.motion.planner import PlannerOptions
     from bt_grasp.motion.trajectory import MotionLimits
     from bt_grasp.perception.calibration import BoardMount
-    from bt_grasp.perception.config import PerceptionConfig
-    from bt_grasp.perception.grasps import GraspSettings
 
 
 def _kinematics() -> KinematicModel:
+    # deferred: pinocchio and coal come with it; a tree loads and validates without them
     from bt_grasp.motion.kinematics import ArmKinematics
 
     return ArmKinematics()
 
 
 def _planner() -> Planner:
+    # deferred: OMPL, pinocchio and coal come with it; a tree loads and validates without them
     from bt_grasp.motion.planner import MotionPlanner
 
     return MotionPlanner()
 
 
 def _planner_options() -> PlannerOptions:
+    # deferred: OMPL, pinocchio and coal come with it; a tree loads and validates without them
     from bt_grasp.motion.planner import PlannerOptions
 
     return PlannerOptions()
 
 
 def _motion_limits() -> MotionLimits:
+    # deferred: ruckig comes with it; a tree loads and validates without it
     from bt_grasp.motion.trajectory import MotionLimits
 
     return MotionLimits()
 
 
 def _executor_options() -> ExecutorOptions:
+    # deferred: ruckig comes with it; a tree loads and validates without it
     from bt_grasp.motion.executor import ExecutorOptions
 
     # a grasped object makes the wrist jitter by ~0.01 rad/s at rest: settle on position, not stillness
@@ -57,8 +61,6 @@ def _executor_options() -> ExecutorOptions:
 
 
 def _grasp_settings() -> GraspSettings:
-    from bt_grasp.perception.grasps import GraspSettings
-
     return GraspSettings()
 
 
@@ -100,8 +102,8 @@ def make_cell(
     calibration: CameraCalibration | None = None, board: BoardMount | None = None,
 ) -> Cell:
     """A cell with the run's settings: the planner seeded from the run's seed, perception from the scene."""
+    # deferred: OMPL, pinocchio and coal come with it; a tree loads and validates without them
     from bt_grasp.motion.planner import PlannerOptions
-    from bt_grasp.perception.config import PerceptionConfig
 
     return Cell(
         robot=robot,

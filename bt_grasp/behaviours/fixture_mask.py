@@ -6,15 +6,12 @@ is a conveyor's belt (it brings the objects to pick)."""
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import TYPE_CHECKING
 
 import numpy as np
 
+from bt_grasp.perception.results import Detection, PerceptionResult, PerceptionStatus
 from bt_grasp.scene.fixtures import Conveyor
 from bt_grasp.scene.format import Scene
-
-if TYPE_CHECKING:
-    from bt_grasp.perception.results import Detection, PerceptionResult
 
 #: a detection whose centre lies this close outside a fixture's outer footprint still counts as the fixture
 FIXTURE_MARGIN_M = 0.02
@@ -50,7 +47,6 @@ def without_fixtures(result: PerceptionResult, scene: Scene) -> PerceptionResult
     others = tuple(d for d in result.others if keep(d))
     if len(detections) == len(result.detections) and len(others) == len(result.others):
         return result
-    from bt_grasp.perception.results import PerceptionStatus
 
     if not others:
         return replace(result, status=PerceptionStatus.NO_OBJECTS, detections=(), others=(),

@@ -19,14 +19,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
-from py_trees.common import Status
 
 from bt_grasp.behaviours.base import RobotLeaf
 from bt_grasp.behaviours.perceive import camera_pose, perceive_once
 from bt_grasp.behaviours.reasons import FailureReason
 from bt_grasp.behaviours.servo import Gains, PidLaw, TargetTrack, grasp_yaw, rotate_towards
 from bt_grasp.geometry import make_T, rot_z
-from bt_grasp.tree.registry import PortDirection, PortSpec, leaf
+from bt_grasp.tree.node_api import Status, action, inout_port, input_port
 
 if TYPE_CHECKING:
     from bt_grasp.perception.tracking import BlobMeasurement
@@ -47,23 +46,22 @@ _STOP_TIME_S = 0.1
 _FRAME_LOG_EVERY = 5
 
 
-@leaf(
-    None,
-    name="FollowTarget",
+@action(
     ports=[
-        PortSpec("color", PortDirection.INPUT, str, "{color}", "the target's colour name"),
-        PortSpec("standoff", PortDirection.INPUT, float, 0.15, "tcp height above the target's centre, m"),
-        PortSpec("kp", PortDirection.INPUT, float, 4.0, "proportional gain, 1/s"),
-        PortSpec("ki", PortDirection.INPUT, float, 1.0, "integral gain, 1/s^2"),
-        PortSpec("kd", PortDirection.INPUT, float, 0.0, "derivative gain"),
-        PortSpec("tolerance", PortDirection.INPUT, float, 0.006, "converged when the tcp is this close, m"),
-        PortSpec("converged_time", PortDirection.INPUT, float, 0.5,
-                 "SUCCESS after this long converged, s (negative: follow until halted)"),
-        PortSpec("rate", PortDirection.INPUT, float, 15.0, "camera measurements per second (simulated time)"),
-        PortSpec("lost_after", PortDirection.INPUT, float, 0.6, "TARGET_LOST after this long unseen, s"),
-        PortSpec("track", PortDirection.INOUT, object, "{track}",
-                 "the target's track: continued if set (a previous FollowTarget), written every tick"),
+        input_port("color", str, "{color}", "the target's colour name"),
+        input_port("standoff", float, 0.15, "tcp height above the target's centre, m"),
+        input_port("kp", float, 4.0, "proportional gain, 1/s"),
+        input_port("ki", float, 1.0, "integral gain, 1/s^2"),
+        input_port("kd", float, 0.0, "derivative gain"),
+        input_port("tolerance", float, 0.006, "converged when the tcp is this close, m"),
+        input_port("converged_time", float, 0.5,
+                   "SUCCESS after this long converged, s (negative: follow until halted)"),
+        input_port("rate", float, 15.0, "camera measurements per second (simulated time)"),
+        input_port("lost_after", float, 0.6, "TARGET_LOST after this long unseen, s"),
+        inout_port("track", object, "the target's track: continued if set (a previous FollowTarget), written every "
+                   "tick", default="{track}"),
     ],
+    reasons=(FailureReason.BAD_INPUT, FailureReason.TARGET_LOST, FailureReason.IK_UNREACHABLE),
     needs_robot=True,
 )
 class FollowTarget(RobotLeaf):
@@ -72,20 +70,21 @@ class FollowTarget(RobotLeaf):
     def initialise(self) -> None:
         self._early: Status | None = None
         self._track: TargetTrack | None = None
-        self._pid = PidLaw(Gains(self.input_float("kp"), self.input_float("ki"), self.input_float("kd")))
+        gain = self.ports.require
+        self._pid = PidLaw(Gains(gain("kp", float), gain("ki", float), gain("kd", float)))
         self._last_capture_s = float("-inf")
         self._converged_since: float | None = None
         self._measurements = 0
-        color = self.input_str("color")
+        color = self.ports.get("color", str) or ""
         config = self.cell.perception_config
         if color not in config.color.ranges:
-            self._early = self.failed(FailureReason.BAD_INPUT, f"unknown colour '{color}'; known: "
+            self._early = self.fail(FailureReason.BAD_INPUT, f"unknown colour '{color}'; known: "
                                       f"{', '.join(config.color.ranges)}")
             return
-        if self.input_float("rate") <= 0 or self.input_float("tolerance") <= 0:
-            self._early = self.failed(FailureReason.BAD_INPUT, "rate and tolerance must be positive")
+        if self.ports.require("rate", float) <= 0 or self.ports.require("tolerance", float) <= 0:
+            self._early = self.fail(FailureReason.BAD_INPUT, "rate and tolerance must be positive")
             return
-        previous = self.input("track")
+        previous = self.ports.get("track")
         if isinstance(previous, TargetTrack) and previous.color == color and previous.samples:
             self._track = previous
         else:
@@ -115,6 +114,7 @@ class FollowTarget(RobotLeaf):
 
     # --- measuring -----------------------------------------------------------------------------------
     def _measure(self, t_s: float) -> BlobMeasurement | None:
+        # deferred: Open3D and OpenCV come with it; a tree loads and validates without them
         from bt_grasp.perception.tracking import Footprint, measure_blob
 
         track = self._track
@@ -153,12 +153,12 @@ class FollowTarget(RobotLeaf):
         assert track is not None
         t = self.now_s()
         measurement = None
-        if t - self._last_capture_s >= 1.0 / self.input_float("rate") - 1e-9:
+        if t - self._last_capture_s >= 1.0 / self.ports.require("rate", float) - 1e-9:
             self._last_capture_s = t
             measurement = self._measure(t)
-        if t - track.last_time_s > self.input_float("lost_after"):
+        if t - track.last_time_s > self.ports.require("lost_after", float):
             self._stop()
-            return self.failed(FailureReason.TARGET_LOST,
+            return self.fail(FailureReason.TARGET_LOST,
                                f"the {track.color} target has been out of view for {t - track.last_time_s:.2f} s")
         status = self._control(t, track, measurement)
         self.ports.set("track", track)
@@ -169,7 +169,7 @@ class FollowTarget(RobotLeaf):
         dt = 1.0 / self.cell.scene.physics.control_rate_hz
         position, velocity = track.predict(t)
         support_z = position[2] - track.height_m / 2
-        goal_z = max(position[2] + self.input_float("standoff"), support_z + MIN_TCP_ABOVE_SUPPORT_M)
+        goal_z = max(position[2] + self.ports.require("standoff", float), support_z + MIN_TCP_ABOVE_SUPPORT_M)
         desired = np.array([position[0], position[1], goal_z])
         q = robot.joint_positions()
         T_now = kin.fk(q)
@@ -186,7 +186,7 @@ class FollowTarget(RobotLeaf):
         ik = kin.ik(T_cmd, self._q_cmd, seeds=1)
         if not ik.ok:
             self._stop()
-            return self.failed(FailureReason.IK_UNREACHABLE,
+            return self.fail(FailureReason.IK_UNREACHABLE,
                                f"the tool cannot follow the target to ({desired[0]:.3f}, {desired[1]:.3f}, "
                                f"{desired[2]:.3f}) m")
         q_cmd = np.asarray(ik.q, dtype=float)
@@ -195,11 +195,11 @@ class FollowTarget(RobotLeaf):
         self._record(t, position, velocity, T_now[:3, 3], error, u, measurement)
         err = float(np.linalg.norm(error))
         self.feedback_message = f"error {err * 1e3:.1f} mm, target speed {np.linalg.norm(velocity) * 100:.1f} cm/s"
-        if err < self.input_float("tolerance") and self._turned():
+        if err < self.ports.require("tolerance", float) and self._turned():
             self._converged_since = t if self._converged_since is None else self._converged_since
         else:
             self._converged_since = None
-        hold = self.input_float("converged_time")
+        hold = self.ports.require("converged_time", float)
         if hold >= 0 and self._converged_since is not None and t - self._converged_since >= hold - 1e-9:
             return Status.SUCCESS
         return Status.RUNNING
@@ -231,5 +231,5 @@ class FollowTarget(RobotLeaf):
         robot.set_joint_targets(q + qd * (_STOP_TIME_S / 2), np.zeros_like(q))
 
     def terminate(self, new_status: Status) -> None:
-        if new_status in (Status.INVALID, Status.FAILURE) and getattr(self, "_track", None) is not None:
+        if new_status in (Status.IDLE, Status.FAILURE) and getattr(self, "_track", None) is not None:
             self._stop()

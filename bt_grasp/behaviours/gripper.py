@@ -2,12 +2,10 @@
 
 from __future__ import annotations
 
-from py_trees.common import Status
-
 from bt_grasp.behaviours.base import RobotLeaf
 from bt_grasp.behaviours.reasons import FailureReason
 from bt_grasp.robot_description import MAX_OPENING_M
-from bt_grasp.tree.registry import NodeKind, PortDirection, PortSpec, leaf
+from bt_grasp.tree.node_api import Status, action, condition, input_port, output_port
 
 #: the fingers count as closed on nothing below this width (when the width of what they close on is not known)
 EMPTY_WIDTH_M = 0.004
@@ -63,7 +61,7 @@ class _GripperMove(RobotLeaf):
         return self.now_s() - self._t0 > self.timeout_s
 
 
-@leaf(None, name="OpenGripper", needs_robot=True)
+@action(reasons=(FailureReason.TIMEOUT,), needs_robot=True)
 class OpenGripper(_GripperMove):
     """Open the fingers fully."""
 
@@ -76,19 +74,18 @@ class OpenGripper(_GripperMove):
         if width > MAX_OPENING_M - 0.002:
             return Status.SUCCESS
         if self.timed_out():
-            return self.failed(FailureReason.TIMEOUT, f"the gripper opened only to {width * 1e3:.1f} mm")
+            return self.fail(FailureReason.TIMEOUT, f"the gripper opened only to {width * 1e3:.1f} mm")
         return Status.RUNNING
 
 
-@leaf(
-    None,
-    name="Grasp",
+@action(
     ports=[
-        PortSpec("force", PortDirection.INPUT, float, GRASP_FORCE_N, "grip force per finger, N"),
-        PortSpec("width", PortDirection.OUTPUT, object, "{grasp_width_m}", "measured width once closed, m"),
-        PortSpec("grasp", PortDirection.INPUT, object, "{grasp}",
-                 "the grasp being closed (from PlanGrasp): its width seen says what an empty grip is"),
+        input_port("force", float, GRASP_FORCE_N, "grip force per finger, N"),
+        output_port("width", object, "measured width once closed, m", default="{grasp_width_m}"),
+        input_port("grasp", object, "{grasp}", "the grasp being closed (from PlanGrasp): its width seen says what an "
+                   "empty grip is"),
     ],
+    reasons=(FailureReason.GRASP_EMPTY, FailureReason.TIMEOUT),
     needs_robot=True,
 )
 class Grasp(_GripperMove):
@@ -96,7 +93,7 @@ class Grasp(_GripperMove):
     :func:`empty_below_m` of the planned grasp's width (a thin object is held at a gap of a few mm)."""
 
     def command(self) -> None:
-        self.cell.robot.close_gripper(self.input_float("force"))
+        self.cell.robot.close_gripper(self.ports.require("force", float))
 
     def update(self) -> Status:
         width = self.cell.robot.gripper_width_m()
@@ -105,15 +102,15 @@ class Grasp(_GripperMove):
             return Status.RUNNING
         self.ports.set("width", width)
         if width > MAX_OPENING_M - 0.003:
-            return self.failed(FailureReason.TIMEOUT, f"the fingers did not close (still {width * 1e3:.1f} mm open)")
-        empty_below = empty_below_m(planned_width_m(self.input("grasp")))
+            return self.fail(FailureReason.TIMEOUT, f"the fingers did not close (still {width * 1e3:.1f} mm open)")
+        empty_below = empty_below_m(planned_width_m(self.ports.get("grasp")))
         if width < empty_below:
-            return self.failed(FailureReason.GRASP_EMPTY, f"the fingers closed to {width * 1e3:.1f} mm: nothing held")
+            return self.fail(FailureReason.GRASP_EMPTY, f"the fingers closed to {width * 1e3:.1f} mm: nothing held")
         self.feedback_message = f"holding an object {width * 1e3:.1f} mm wide"
         return Status.SUCCESS
 
 
-@leaf(None, name="IsGrasped", kind=NodeKind.CONDITION, needs_robot=True)
+@condition(reasons=(FailureReason.GRASP_EMPTY, FailureReason.SLIPPED), needs_robot=True)
 class IsGrasped(RobotLeaf):
     """SUCCESS while the gripper is commanded closed and its fingers rest on something."""
 
@@ -121,8 +118,8 @@ class IsGrasped(RobotLeaf):
         robot = self.cell.robot
         width = robot.gripper_width_m()
         if robot.gripper_target_width_m() > 0.0:
-            return self.failed(FailureReason.GRASP_EMPTY, "the gripper is open")
+            return self.fail(FailureReason.GRASP_EMPTY, "the gripper is open")
         if width < EMPTY_WIDTH_M:
-            return self.failed(FailureReason.SLIPPED, f"the fingers are closed ({width * 1e3:.1f} mm): nothing held")
+            return self.fail(FailureReason.SLIPPED, f"the fingers are closed ({width * 1e3:.1f} mm): nothing held")
         self.feedback_message = f"holding {width * 1e3:.1f} mm"
         return Status.SUCCESS

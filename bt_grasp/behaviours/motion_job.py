@@ -49,6 +49,7 @@ class MotionJob:
         self._executed_q: list[NDArray[np.float64]] = []
 
     def update(self) -> bool | PathFailure | None:
+        # deferred: ruckig comes with it; a tree loads and validates without it
         from bt_grasp.motion.executor import ExecStatus
 
         if self.executor is None:
@@ -89,7 +90,10 @@ class MotionJob:
 
     def _start(self, name: str, path: NDArray[np.float64]) -> TrajectoryExecutor | PathFailure:
         """The segment's trajectory, checked by the cell's guard (a real cell's) before anything of it is sent."""
+        # deferred: ruckig comes with it; a tree loads and validates without it
         from bt_grasp.motion.executor import TrajectoryExecutor
+
+        # deferred: ruckig comes with it; a tree loads and validates without it
         from bt_grasp.motion.trajectory import time_parametrize
 
         limits = self.cell.motion_limits

@@ -11,27 +11,32 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
-from py_trees.common import Status
 
 from bt_grasp.behaviours.base import RobotLeaf
+from bt_grasp.behaviours.grasp_plan import GraspPlan
 from bt_grasp.behaviours.gripper import empty_below_m, planned_width_m
+from bt_grasp.behaviours.hang import HeldObject, lift_rise_m
 from bt_grasp.behaviours.motion_job import MotionJob, PathFailure, PathFn, Segment
-from bt_grasp.behaviours.reasons import FailureReason
+from bt_grasp.behaviours.perceive import camera_pose
+from bt_grasp.behaviours.reasons import MOTION_REASONS, FailureReason
 from bt_grasp.defaults import DEFAULT_LIFT_HEIGHT_M
-from bt_grasp.tree.registry import PortDirection, PortSpec, leaf
+from bt_grasp.geometry import make_T, rot_z
+from bt_grasp.perception.antipodal import AntipodalSettings, near_same, rank_grasps, sampled_grasps
+from bt_grasp.perception.results import GraspCandidate
+from bt_grasp.tree.node_api import Status, action, input_port, output_port
 
 if TYPE_CHECKING:
-    from bt_grasp.behaviours.grasp_plan import GraspPlan
     from bt_grasp.motion.cartesian import CartesianStatus
     from bt_grasp.motion.planner import PlanResult, PlanStatus
     from bt_grasp.motion.planning_scene import Box, PlanningScene
-    from bt_grasp.perception.results import Detection, GraspCandidate
+    from bt_grasp.perception.results import Detection
 
 #: a tool pose computed from the current one (e.g. straight up from it)
 PoseFn = Callable[[NDArray[np.float64]], NDArray[np.float64]]
 
 def plan_reason(status: PlanStatus) -> FailureReason:
     """The leaf's failure reason for a planner status (motion is imported late: it loads pinocchio)."""
+    # deferred: OMPL, pinocchio and coal come with it; a tree loads and validates without them
     from bt_grasp.motion.planner import PlanStatus
 
     reasons = {
@@ -43,6 +48,7 @@ def plan_reason(status: PlanStatus) -> FailureReason:
 
 
 def cartesian_reason(status: CartesianStatus) -> FailureReason:
+    # deferred: pinocchio and coal come with it; a tree loads and validates without them
     from bt_grasp.motion.cartesian import CartesianStatus
 
     reasons = {
@@ -59,7 +65,7 @@ def plan_failure(result: PlanResult) -> PathFailure:
 
 
 def detection_box(detection: Detection, name: str, margin_m: float = 0.005) -> Box:
-    from bt_grasp.geometry import make_T, rot_z
+    # deferred: scipy comes with it; a tree loads and validates without it
     from bt_grasp.motion.planning_scene import Box
 
     length, width, height = detection.size_m
@@ -70,6 +76,7 @@ def detection_box(detection: Detection, name: str, margin_m: float = 0.005) -> B
 def planning_scene(
     leaf: RobotLeaf, target: Detection | None = None, objects: Sequence[Detection] = (), allow_target: bool = False
 ) -> PlanningScene:
+    # deferred: scipy comes with it; a tree loads and validates without it
     from bt_grasp.motion.planning_scene import PlanningScene
 
     obstacles = []
@@ -160,6 +167,7 @@ def cartesian_fn(leaf: RobotLeaf, T_goal_fn: PoseFn, scene: PlanningScene) -> Pa
     """A straight tool line from the current pose to ``T_goal_fn(T_now)``."""
 
     def compute(q: NDArray[np.float64]) -> NDArray[np.float64] | PathFailure:
+        # deferred: pinocchio and coal come with it; a tree loads and validates without them
         from bt_grasp.motion.cartesian import cartesian_path
 
         kin = leaf.cell.kinematics
@@ -208,28 +216,30 @@ class _MovingLeaf(RobotLeaf):
             return Status.RUNNING
         if isinstance(outcome, PathFailure):
             self.job.cancel()
-            return self.failed(outcome.reason, outcome.sentence)
+            return self.fail(outcome.reason, outcome.sentence)
         return self.finished()
 
     def terminate(self, new_status: Status) -> None:
         job = getattr(self, "job", None)
-        if job is not None and new_status == Status.INVALID:
+        if job is not None and new_status == Status.IDLE:
             job.cancel()
 
 
-_GRASP = PortSpec("grasp", PortDirection.INPUT, object, "{grasp}", "the grasp to approach (from PlanGrasp)")
+_GRASP = input_port("grasp", object, "{grasp}", "the grasp to approach (from PlanGrasp)")
 
 
-@leaf(
-    None,
-    name="PlanGrasp",
+@action(
     ports=[
-        PortSpec("target", PortDirection.INPUT, object, "{target}", "the detection to grasp"),
-        PortSpec("objects", PortDirection.INPUT, object, "{objects}", "every object seen (obstacles)"),
-        PortSpec("grasp", PortDirection.OUTPUT, object, "{grasp}",
-                 "the first reachable ranked candidate, with its planned approach (a GraspPlan)"),
-        PortSpec("skip", PortDirection.INPUT, int, 0, "skip this many of the best candidates"),
+        input_port("target", object, "{target}", "the detection to grasp"),
+        input_port("objects", object, "{objects}", "every object seen (obstacles)"),
+        output_port("grasp", object, "the first reachable ranked candidate, with its planned approach (a GraspPlan)",
+                    default="{grasp}"),
+        input_port("skip", int, 0, "skip this many of the best candidates"),
     ],
+    reasons=(
+        FailureReason.NO_DETECTION, FailureReason.NOTHING_TO_GRASP, FailureReason.IK_UNREACHABLE,
+        FailureReason.PLAN_FAILED,
+    ),
     needs_robot=True,
 )
 class PlanGrasp(RobotLeaf):
@@ -270,22 +280,20 @@ class PlanGrasp(RobotLeaf):
         # a planner failure other than IK counts as PLAN_FAILED here, as before the typed seams
         unreachable = self._last.reason is FailureReason.IK_UNREACHABLE
         reason = FailureReason.IK_UNREACHABLE if unreachable else FailureReason.PLAN_FAILED
-        return self.failed(reason, f"none of {self._total} grasps is reachable; last: {self._last.sentence}")
+        return self.fail(reason, f"none of {self._total} grasps is reachable; last: {self._last.sentence}")
 
     def _rank(self) -> Status | None:
         """Synthesise and rank the candidates (first tick); a FAILURE status when there is nothing to try."""
-        from bt_grasp.perception.antipodal import rank_grasps
-
         target = self.input_detection("target")
         if target is None:
-            return self.failed(FailureReason.NO_DETECTION, "no target on the blackboard: run Perceive first")
+            return self.fail(FailureReason.NO_DETECTION, "no target on the blackboard: run Perceive first")
         self._target: Detection = target
         self._objects: tuple[Detection, ...] = self.input_detections("objects")
         self._q = self.cell.robot.joint_positions()
+        # deferred: scipy comes with it; a tree loads and validates without it
         from bt_grasp.motion.planning_scene import fixture_boxes
 
         fixtures = [(box.T_base_shape, box.size_m) for box in fixture_boxes(self.cell.scene)]
-        from bt_grasp.behaviours.perceive import camera_pose
 
         # where the camera saw the target from (eye-in-hand: the arm has not moved since Perceive)
         T_base_camera = camera_pose(self.cell)
@@ -293,12 +301,12 @@ class PlanGrasp(RobotLeaf):
         result = rank_grasps(target, self._objects, self.cell.grasp_settings, reachable=self._reachable,
                              fixtures=fixtures, viewpoint_base_m=viewpoint)
         if not result.ok:
-            return self.failed(FailureReason.NOTHING_TO_GRASP, f"{result.status.value}: {result.message}")
+            return self.fail(FailureReason.NOTHING_TO_GRASP, f"{result.status.value}: {result.message}")
         self.cell.media.grasps(result.candidates)
         self._total = len(result.candidates)
         self._ranked = result.candidates
         self._viewpoint, self._fixtures = viewpoint, fixtures
-        skip = self.input_int("skip") if self.input("skip") is not None else 0
+        skip = self.ports.get("skip", int) or 0
         self._skip = skip
         self._candidates = list(result.candidates[skip:])
         self._scene = planning_scene(self, target, self._objects)
@@ -312,7 +320,6 @@ class PlanGrasp(RobotLeaf):
         if self._extended:
             return False
         self._extended = True
-        from bt_grasp.perception.antipodal import AntipodalSettings, near_same, sampled_grasps
 
         assert self._candidates is not None
         settings = AntipodalSettings(pregrasp_offset_m=self.cell.grasp_settings.pregrasp_offset_m)
@@ -334,8 +341,6 @@ class PlanGrasp(RobotLeaf):
         return bool(pre.ok and kin.ik(T_grasp, pre.q).ok)
 
     def _try(self, rank: int, candidate: GraspCandidate) -> GraspPlan | None:
-        from bt_grasp.behaviours.grasp_plan import GraspPlan
-
         kin, q = self.cell.kinematics, self._q
         pre = kin.ik(candidate.T_base_tcp_pregrasp, q)
         if not pre.ok:
@@ -361,14 +366,13 @@ class PlanGrasp(RobotLeaf):
                          descent_path=np.asarray(descent.path, dtype=float))
 
 
-@leaf(
-    None,
-    name="Approach",
+@action(
     ports=[
         _GRASP,
-        PortSpec("target", PortDirection.INPUT, object, "{target}", "the detection being grasped"),
-        PortSpec("objects", PortDirection.INPUT, object, "{objects}", "every object seen (obstacles)"),
+        input_port("target", object, "{target}", "the detection being grasped"),
+        input_port("objects", object, "{objects}", "every object seen (obstacles)"),
     ],
+    reasons=(FailureReason.BAD_INPUT, *MOTION_REASONS),
     needs_robot=True,
 )
 class Approach(_MovingLeaf):
@@ -377,12 +381,9 @@ class Approach(_MovingLeaf):
     a top-down grasp, sideways for a side grasp; the pre-grasp lies back along -approach)."""
 
     def segments(self) -> list[Segment] | Status:
-        from bt_grasp.behaviours.grasp_plan import GraspPlan
-        from bt_grasp.perception.results import GraspCandidate
-
-        grasp = self.input("grasp")
+        grasp = self.ports.get("grasp")
         if not isinstance(grasp, GraspPlan | GraspCandidate):
-            return self.failed(FailureReason.BAD_INPUT, "no grasp on the blackboard: run PlanGrasp first")
+            return self.fail(FailureReason.BAD_INPUT, "no grasp on the blackboard: run PlanGrasp first")
         target, objects = self.input_detection("target"), self.input_detections("objects")
         free = planning_scene(self, target, objects)
         touching = planning_scene(self, target, objects, allow_target=True)
@@ -408,18 +409,16 @@ def planned_path_fn(plan: GraspPlan, replan: PathFn) -> PathFn:
     return compute
 
 
-@leaf(
-    None,
-    name="Lift",
+@action(
     ports=[
-        PortSpec("height", PortDirection.INPUT, float, DEFAULT_LIFT_HEIGHT_M,
-                 "how far to lift, m: the tool, or with target the object's centre"),
-        PortSpec("grasp", PortDirection.INPUT, object, "{grasp}",
-                 "the grasp holding the object (from PlanGrasp): its width seen says what an empty grip is"),
-        PortSpec("target", PortDirection.INPUT, object, "",
-                 "the object held, as perceived (from Perceive): when given, its centre rises height, the tool "
-                 "further by how far the object can hang below the grip (bt_grasp.behaviours.hang)"),
+        input_port("height", float, DEFAULT_LIFT_HEIGHT_M, "how far to lift, m: the tool, or with target the object's "
+                   "centre"),
+        input_port("grasp", object, "{grasp}", "the grasp holding the object (from PlanGrasp): its width seen says "
+                   "what an empty grip is"),
+        input_port("target", object, "", "the object held, as perceived (from Perceive): when given, its centre rises "
+                   "height, the tool further by how far the object can hang below the grip (bt_grasp.behaviours.hang)"),
     ],
+    reasons=(FailureReason.BAD_INPUT, FailureReason.SLIPPED, *MOTION_REASONS),
     needs_robot=True,
 )
 class Lift(_MovingLeaf):
@@ -434,13 +433,11 @@ class Lift(_MovingLeaf):
     higher line is out of reach or blocked, the tool rises ``height`` alone."""
 
     def segments(self) -> list[Segment] | Status:
-        from bt_grasp.behaviours.hang import HeldObject, lift_rise_m
-
-        grasp = self.input("grasp")
+        grasp = self.ports.get("grasp")
         self._empty_below = empty_below_m(planned_width_m(grasp))
-        height = self.input_float("height")
+        height = self.ports.require("height", float)
         if not 0.0 < height < 0.6:
-            return self.failed(FailureReason.BAD_INPUT, f"lift height {height} m is outside (0, 0.6)")
+            return self.fail(FailureReason.BAD_INPUT, f"lift height {height} m is outside (0, 0.6)")
         target = self.input_detection("target")
         T_grasp = getattr(grasp, "T_base_tcp_grasp", None)
         held = None if target is None else HeldObject(
@@ -448,6 +445,7 @@ class Lift(_MovingLeaf):
             None if target.points_base_m is None else np.asarray(target.points_base_m, dtype=float),
             planned_width_m(grasp) or 0.0)
         rise = lift_rise_m(height, None if T_grasp is None else np.asarray(T_grasp, dtype=float), held)
+        # deferred: scipy comes with it; a tree loads and validates without it
         from bt_grasp.motion.planning_scene import PlanningScene
 
         scene = PlanningScene.from_scene(self.cell.scene)
@@ -463,62 +461,65 @@ class Lift(_MovingLeaf):
     def check_during(self) -> Status | None:
         width = self.cell.robot.gripper_width_m()
         if width < self._empty_below:
-            return self.failed(FailureReason.SLIPPED, f"the object slipped out: fingers at {width * 1e3:.1f} mm")
+            return self.fail(FailureReason.SLIPPED, f"the object slipped out: fingers at {width * 1e3:.1f} mm")
         return None
 
     def finished(self) -> Status:
         width = self.cell.robot.gripper_width_m()
         if width < self._empty_below:
-            return self.failed(FailureReason.SLIPPED, f"the object slipped out: fingers at {width * 1e3:.1f} mm")
+            return self.fail(FailureReason.SLIPPED, f"the object slipped out: fingers at {width * 1e3:.1f} mm")
         self.feedback_message = f"lifted, holding {width * 1e3:.1f} mm"
         return Status.SUCCESS
 
 
-@leaf(
-    None,
-    name="Retreat",
-    ports=[PortSpec("height", PortDirection.INPUT, float, 0.10, "how far to back off upwards, m")],
+@action(
+    ports=[
+        input_port("height", float, 0.10, "how far to back off upwards, m"),
+    ],
+    reasons=MOTION_REASONS,
     needs_robot=True,
 )
 class Retreat(_MovingLeaf):
     """Back off straight up from wherever the tool is."""
 
     def segments(self) -> list[Segment] | Status:
-        height = self.input_float("height")
+        height = self.ports.require("height", float)
+        # deferred: scipy comes with it; a tree loads and validates without it
         from bt_grasp.motion.planning_scene import PlanningScene
 
         return [Segment("retreat", cartesian_fn(self, straight_up(height), PlanningScene.from_scene(self.cell.scene)))]
 
 
-@leaf(None, name="MoveHome", needs_robot=True)
+@action(reasons=MOTION_REASONS, needs_robot=True)
 class MoveHome(_MovingLeaf):
     """Plan and move to the scene's home configuration."""
 
     def segments(self) -> list[Segment] | Status:
+        # deferred: scipy comes with it; a tree loads and validates without it
         from bt_grasp.motion.planning_scene import PlanningScene
 
         home = np.asarray(self.cell.scene.robot.home_q_rad, dtype=float)
         return [Segment("home", plan_to_joints_fn(self, home, PlanningScene.from_scene(self.cell.scene)))]
 
 
-@leaf(
-    None,
-    name="MoveAbove",
+@action(
     ports=[
-        PortSpec("x", PortDirection.INPUT, float, description="tool x in the base frame, m"),
-        PortSpec("y", PortDirection.INPUT, float, description="tool y in the base frame, m"),
-        PortSpec("height", PortDirection.INPUT, float, 0.15, "tool height above the table, m"),
+        input_port("x", float, description="tool x in the base frame, m", required=True),
+        input_port("y", float, description="tool y in the base frame, m", required=True),
+        input_port("height", float, 0.15, "tool height above the table, m"),
     ],
+    reasons=MOTION_REASONS,
     needs_robot=True,
 )
 class MoveAbove(_MovingLeaf):
     """Plan and move the tool, pointing down, above a point of the table (e.g. to set an object aside)."""
 
     def segments(self) -> list[Segment] | Status:
+        # deferred: scipy comes with it; a tree loads and validates without it
         from bt_grasp.motion.planning_scene import PlanningScene
 
         T = np.eye(4)
         T[:3, :3] = np.diag([1.0, -1.0, -1.0])
-        T[:3, 3] = [self.input_float("x"), self.input_float("y"), self.input_float("height")]
+        T[:3, 3] = [self.ports.require("x", float), self.ports.require("y", float), self.ports.require("height", float)]
         T = np.linalg.inv(self.cell.scene.T_world_base()) @ T
         return [Segment("move above", plan_to_pose_fn(self, T, PlanningScene.from_scene(self.cell.scene)))]

@@ -15,16 +15,14 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, TypeGuard
 
 import numpy as np
-from py_trees.common import Status
 
 from bt_grasp.behaviours.base import RobotLeaf
 from bt_grasp.behaviours.perceive import DETECTOR_PORTS, DetectorLeaf, perceive_once
 from bt_grasp.behaviours.pose import Pose
-from bt_grasp.behaviours.reasons import FailureReason
+from bt_grasp.behaviours.reasons import PERCEPTION_REASONS, FailureReason
 from bt_grasp.detector.kinds import DetectorKind, parse_detector
 from bt_grasp.errors import TreeFileError
-from bt_grasp.tree.leaf import Leaf
-from bt_grasp.tree.registry import NodeKind, PortDirection, PortSpec, leaf
+from bt_grasp.tree.node_api import Leaf, Status, action, condition, input_port, output_port
 
 if TYPE_CHECKING:
     from collections.abc import Iterable
@@ -34,7 +32,7 @@ if TYPE_CHECKING:
     from bt_grasp.scene.format import Scene
     from bt_grasp.tree.node import BtNode
 
-_OBJECTS_IN = PortSpec("objects", PortDirection.INPUT, object, "{objects}", "an object list (from PerceiveAll)")
+_OBJECTS_IN = input_port("objects", object, "{objects}", "an object list (from PerceiveAll)")
 ORDERS = ("first", "nearest", "farthest", "largest", "smallest")
 ANY = "any"  # an explicit "no filter" for colour, shape and shape class (the same as leaving it empty)
 SHAPES = ("", ANY, "box", "round")
@@ -92,13 +90,12 @@ def matches(det: Detection, color: str, shape: str, min_size_m: float, max_size_
     return min_size_m <= length <= max_size_m
 
 
-@leaf(
-    None,
-    name="PerceiveAll",
+@action(
     ports=[
-        PortSpec("objects", PortDirection.OUTPUT, object, "{objects}", "every object seen, as an object list"),
+        output_port("objects", object, "every object seen, as an object list", default="{objects}"),
         *DETECTOR_PORTS,
     ],
+    reasons=PERCEPTION_REASONS,
     needs_robot=True,
 )
 class PerceiveAll(DetectorLeaf):
@@ -125,26 +122,23 @@ class PerceiveAll(DetectorLeaf):
         return Status.SUCCESS
 
 
-@leaf(
-    None,
-    name="SelectObject",
+@action(
     ports=[
         _OBJECTS_IN,
-        PortSpec("color", PortDirection.INPUT, str, "", "only objects of this colour name (empty or any: any)"),
-        PortSpec("shape", PortDirection.INPUT, str, "", "only this footprint: box or round (empty or any: any)",
-                 SHAPES),
-        PortSpec("shape_class", PortDirection.INPUT, str, "",
-                 "only this shape class: box-like, cylinder-like, elongated, flat, other (empty or any: any)",
-                 SHAPE_CLASSES),
-        PortSpec("class", PortDirection.INPUT, str, "",
-                 "only objects of this class of the learned detector's model, e.g. mug (empty or any: any)"),
-        PortSpec("min_size", PortDirection.INPUT, float, 0.0, "only footprints whose long side is at least this, m"),
-        PortSpec("max_size", PortDirection.INPUT, float, 1.0, "only footprints whose long side is at most this, m"),
-        PortSpec("order", PortDirection.INPUT, str, "first", "which match: " + ", ".join(ORDERS), ORDERS),
-        PortSpec("point", PortDirection.INPUT, Pose, "0;0",
-                 "the point nearest/farthest measure from (a fixture: {pose} from FixturePose)"),
-        PortSpec("object", PortDirection.OUTPUT, object, "{object}", "the chosen object"),
+        input_port("color", str, "", "only objects of this colour name (empty or any: any)"),
+        input_port("shape", str, "", "only this footprint: box or round (empty or any: any)", choices=SHAPES),
+        input_port("shape_class", str, "", "only this shape class: box-like, cylinder-like, elongated, flat, other "
+                   "(empty or any: any)", choices=SHAPE_CLASSES),
+        input_port("class", str, "", "only objects of this class of the learned detector's model, e.g. mug (empty or "
+                   "any: any)"),
+        input_port("min_size", float, 0.0, "only footprints whose long side is at least this, m"),
+        input_port("max_size", float, 1.0, "only footprints whose long side is at most this, m"),
+        input_port("order", str, "first", "which match: " + ", ".join(ORDERS), choices=ORDERS),
+        input_port("point", Pose, "0;0",
+                   "the point nearest/farthest measure from (a fixture: {pose} from FixturePose)"),
+        output_port("object", object, "the chosen object", default="{object}"),
     ],
+    reasons=(FailureReason.BAD_INPUT, FailureReason.NO_DETECTION),
 )
 class SelectObject(Leaf):
     """Choose one object from a list by colour, footprint shape, shape class, class and size (each empty or
@@ -155,25 +149,25 @@ class SelectObject(Leaf):
     no object of the list was named by a learned detector), BAD_INPUT (``objects`` is not an object list)."""
 
     def update(self) -> Status:
-        objects = object_list(self.ports.get("objects") if self.ports.has("objects") else None)
+        objects = object_list(self.ports.get("objects"))
         if objects is None:
             return self.fail(FailureReason.BAD_INPUT.value, "'objects' is not an object list: run PerceiveAll first")
-        color, shape = _wanted(str(self.ports.get("color"))), _wanted(str(self.ports.get("shape")))
-        shape_class = _wanted(str(self.ports.get("shape_class")))
-        class_name = _wanted(str(self.ports.get("class")) if self.ports.has("class") else "")
+        color, shape = _wanted(self.ports.require("color", str)), _wanted(self.ports.require("shape", str))
+        shape_class = _wanted(self.ports.require("shape_class", str))
+        class_name = _wanted(self.ports.get("class", str) or "")
         if class_name and objects and not any(class_of(d) for d in objects):
             return self.fail(FailureReason.NO_DETECTION.value,
                              f"no {class_name} among {len(objects)} object(s): a learned detector named none of them "
                              f"(or they were perceived with the geometric detector)")
-        lo, hi = float(self.ports.get("min_size")), float(self.ports.get("max_size"))
+        lo, hi = self.ports.require("min_size", float), self.ports.require("max_size", float)
         found = [d for d in objects if matches(d, color, shape, lo, hi, shape_class, class_name)]
         if not found:
             wanted = " ".join(w for w in (color, class_name, shape_class, shape or "object") if w)
             seen = sorted({class_of(d) for d in objects if class_of(d)})
             classes = f" (classes seen: {', '.join(seen)})" if class_name and seen else ""
             return self.fail(FailureReason.NO_DETECTION.value, f"no {wanted} among {len(objects)} object(s){classes}")
-        order = str(self.ports.get("order"))
-        point: Pose = self.ports.get("point")
+        order = self.ports.require("order", str)
+        point = self.ports.require("point", Pose)
         chosen = found[0]
         if order in ("nearest", "farthest"):
             dist = [math.hypot(d.centroid_base_m[0] - point.x_m, d.centroid_base_m[1] - point.y_m) for d in found]
@@ -210,6 +204,7 @@ def check_detector_classes(nodes: Iterable[BtNode]) -> None:
             problem = (f"class '{wanted}' asked, but every perceiving leaf of the tree uses the geometric "
                        f"detector, which names no classes (give PerceiveAll detector=\"learned\")")
         else:
+            # deferred: OpenCV comes with it; a tree loads and validates without it
             from bt_grasp.detector.model import ModelError
 
             try:
@@ -227,16 +222,14 @@ def _detector_unknown(node: DetectorLeaf) -> bool:
     return parse_detector(str(node.ports.get("detector"))) is DetectorKind.LEARNED
 
 
-@leaf(
-    None,
-    name="ObjectPose",
+@action(
     ports=[
-        PortSpec("object", PortDirection.INPUT, object, "{object}", "a perceived object"),
-        PortSpec("at", PortDirection.INPUT, str, "center", "center, top (its top face) or bottom",
-                 ("center", "top", "bottom")),
-        PortSpec("offset_z", PortDirection.INPUT, float, 0.0, "added to the height, m (e.g. 0.1: above it)"),
-        PortSpec("pose", PortDirection.OUTPUT, object, "{pose}", "the pose (base frame; yaw = the object's)"),
+        input_port("object", object, "{object}", "a perceived object"),
+        input_port("at", str, "center", "center, top (its top face) or bottom", choices=("center", "top", "bottom")),
+        input_port("offset_z", float, 0.0, "added to the height, m (e.g. 0.1: above it)"),
+        output_port("pose", object, "the pose (base frame; yaw = the object's)", default="{pose}"),
     ],
+    reasons=(FailureReason.BAD_INPUT,),
 )
 class ObjectPose(Leaf):
     """A perceived object's pose in the base frame: its centre, top face or bottom, raised by ``offset_z``.
@@ -244,37 +237,36 @@ class ObjectPose(Leaf):
     FAILURE: BAD_INPUT (``object`` is not a perceived object)."""
 
     def update(self) -> Status:
-        det: object = self.ports.get("object") if self.ports.has("object") else None
+        det: object = self.ports.get("object")
         if not is_detection(det):
             return self.fail(FailureReason.BAD_INPUT.value, "'object' is not a perceived object: run SelectObject")
         x, y, z = (float(v) for v in det.centroid_base_m)
         half = float(det.size_m[2]) / 2
-        z += {"center": 0.0, "top": half, "bottom": -half}[str(self.ports.get("at"))]
-        pose = Pose(x, y, z + float(self.ports.get("offset_z")), math.degrees(float(det.yaw_rad)))
+        z += {"center": 0.0, "top": half, "bottom": -half}[self.ports.require("at", str)]
+        pose = Pose(x, y, z + self.ports.require("offset_z", float), math.degrees(float(det.yaw_rad)))
         self.ports.set("pose", pose)
         self.feedback_message = f"{det.label}: {pose}"
         return Status.SUCCESS
 
 
-@leaf(
-    None,
-    name="ObjectInfo",
+@action(
     ports=[
-        PortSpec("object", PortDirection.INPUT, object, "{object}", "a perceived object"),
-        PortSpec("color", PortDirection.OUTPUT, object, "{object_color}", "its colour name ('object' if none)"),
-        PortSpec("shape", PortDirection.OUTPUT, object, "{object_shape}", "box or round"),
-        PortSpec("shape_class", PortDirection.OUTPUT, object, "{object_shape_class}",
-                 "box-like, cylinder-like, elongated, flat or other"),
-        PortSpec("size", PortDirection.OUTPUT, object, "{object_size}", "its footprint's long side, m"),
-        PortSpec("height", PortDirection.OUTPUT, object, "{object_height}", "its height, m"),
+        input_port("object", object, "{object}", "a perceived object"),
+        output_port("color", object, "its colour name ('object' if none)", default="{object_color}"),
+        output_port("shape", object, "box or round", default="{object_shape}"),
+        output_port("shape_class", object, "box-like, cylinder-like, elongated, flat or other",
+                    default="{object_shape_class}"),
+        output_port("size", object, "its footprint's long side, m", default="{object_size}"),
+        output_port("height", object, "its height, m", default="{object_height}"),
     ],
+    reasons=(FailureReason.BAD_INPUT,),
 )
 class ObjectInfo(Leaf):
     """A perceived object's colour, shape, shape class and size as plain values (for Switch, scripts, ports).
     FAILURE: BAD_INPUT (``object`` is not a perceived object)."""
 
     def update(self) -> Status:
-        det: object = self.ports.get("object") if self.ports.has("object") else None
+        det: object = self.ports.get("object")
         if not is_detection(det):
             return self.fail(FailureReason.BAD_INPUT.value, "'object' is not a perceived object: run SelectObject")
         self.ports.set("color", str(det.label))
@@ -286,30 +278,28 @@ class ObjectInfo(Leaf):
         return Status.SUCCESS
 
 
-@leaf(
-    None,
-    name="ObjectCount",
-    kind=NodeKind.CONDITION,
+@condition(
     ports=[
         _OBJECTS_IN,
-        PortSpec("color", PortDirection.INPUT, str, "", "count only objects of this colour (empty: all)"),
-        PortSpec("min", PortDirection.INPUT, int, 1, "SUCCESS needs at least this many"),
-        PortSpec("max", PortDirection.INPUT, int, -1, "... and at most this many (-1: no limit)"),
-        PortSpec("count", PortDirection.OUTPUT, object, "{object_count}", "how many were counted"),
+        input_port("color", str, "", "count only objects of this colour (empty: all)"),
+        input_port("min", int, 1, "SUCCESS needs at least this many"),
+        input_port("max", int, -1, "... and at most this many (-1: no limit)"),
+        output_port("count", object, "how many were counted", default="{object_count}"),
     ],
+    reasons=(FailureReason.BAD_INPUT, FailureReason.NO_DETECTION, FailureReason.COUNT_EXCEEDED),
 )
 class ObjectCount(Leaf):
     """Count the objects of a list (optionally of one colour); SUCCESS when min <= count <= max.
     FAILURE: NO_DETECTION (fewer than ``min``), COUNT_EXCEEDED (more than ``max``), BAD_INPUT."""
 
     def update(self) -> Status:
-        objects = object_list(self.ports.get("objects") if self.ports.has("objects") else None)
+        objects = object_list(self.ports.get("objects"))
         if objects is None:
             return self.fail(FailureReason.BAD_INPUT.value, "'objects' is not an object list: run PerceiveAll first")
-        color = str(self.ports.get("color"))
+        color = self.ports.require("color", str)
         count = sum(1 for d in objects if not color or d.label == color)
         self.ports.set("count", count)
-        low, high = int(self.ports.get("min")), int(self.ports.get("max"))
+        low, high = self.ports.require("min", int), self.ports.require("max", int)
         what = f"{color} object(s)" if color else "object(s)"
         if count < low:
             return self.fail(FailureReason.NO_DETECTION.value, f"{count} {what}, fewer than {low}")
@@ -319,15 +309,14 @@ class ObjectCount(Leaf):
         return Status.SUCCESS
 
 
-@leaf(
-    None,
-    name="FixturePose",
+@action(
     ports=[
-        PortSpec("fixture", PortDirection.INPUT, str, description="a fixture's name in the scene file"),
-        PortSpec("slot", PortDirection.INPUT, int, -1, "a tray's or bin's slot, row by row from 0 (-1: centre)"),
-        PortSpec("slot_size", PortDirection.INPUT, float, 0.10, "the side of one square slot, m"),
-        PortSpec("pose", PortDirection.OUTPUT, object, "{pose}", "its centre on its surface (base frame)"),
+        input_port("fixture", str, description="a fixture's name in the scene file", required=True),
+        input_port("slot", int, -1, "a tray's or bin's slot, row by row from 0 (-1: centre)"),
+        input_port("slot_size", float, 0.10, "the side of one square slot, m"),
+        output_port("pose", object, "its centre on its surface (base frame)", default="{pose}"),
     ],
+    reasons=(FailureReason.BAD_INPUT,),
     needs_robot=True,
 )
 class FixturePose(RobotLeaf):
@@ -342,16 +331,16 @@ class FixturePose(RobotLeaf):
         """A problem with the literal ``fixture`` port for this scene (checked before the run), or None."""
         if self.ports.key("fixture") is not None:
             return None
-        return _fixture_problem(scene, str(self.ports.get("fixture")))
+        return _fixture_problem(scene, self.ports.require("fixture", str))
 
     def update(self) -> Status:
-        name = str(self.ports.get("fixture"))
+        name = self.ports.require("fixture", str)
         fixture = self.cell.scene.fixture(name)
         if fixture is None:
-            return self.failed(FailureReason.BAD_INPUT, str(_fixture_problem(self.cell.scene, name)))
-        offset = _slot_offset(fixture, int(self.ports.get("slot")), float(self.ports.get("slot_size")))
+            return self.fail(FailureReason.BAD_INPUT, str(_fixture_problem(self.cell.scene, name)))
+        offset = _slot_offset(fixture, self.ports.require("slot", int), self.ports.require("slot_size", float))
         if isinstance(offset, str):
-            return self.failed(FailureReason.BAD_INPUT, offset)
+            return self.fail(FailureReason.BAD_INPUT, offset)
         yaw = math.radians(float(fixture.yaw_deg))
         x = fixture.center_xy_m[0] + math.cos(yaw) * offset[0] - math.sin(yaw) * offset[1]
         y = fixture.center_xy_m[1] + math.sin(yaw) * offset[0] + math.cos(yaw) * offset[1]

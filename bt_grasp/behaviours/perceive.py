@@ -16,32 +16,30 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
-from py_trees.common import Status
 
 from bt_grasp.behaviours.base import RobotLeaf
 from bt_grasp.behaviours.cell import Cell
 from bt_grasp.behaviours.fixture_mask import without_fixtures
-from bt_grasp.behaviours.reasons import FailureReason
+from bt_grasp.behaviours.reasons import PERCEPTION_REASONS, FailureReason
 from bt_grasp.detector.kinds import DetectorKind, model_path, parse_detector
 from bt_grasp.interfaces import Mount, RGBDFrame
-from bt_grasp.tree.context import NodeContext
 from bt_grasp.tree.exceptions import PortValueError
-from bt_grasp.tree.registry import NodeKind, PortDirection, PortSpec, leaf
+from bt_grasp.tree.node_api import NodeContext, Status, action, condition, input_port, output_port
 
 if TYPE_CHECKING:
     from bt_grasp.detector.inference import LearnedDetector
     from bt_grasp.perception.results import PerceptionResult
 
-_COLOR = PortSpec("color", PortDirection.INPUT, str, "", "target colour name (empty: the most graspable)")
+_COLOR = input_port("color", str, "", "target colour name (empty: the most graspable)")
 #: the ports that choose the detector (Perceive, PerceiveAll)
 DETECTOR_PORTS = (
-    PortSpec("detector", PortDirection.INPUT, str, DetectorKind.GEOMETRIC.value,
-             "what finds the objects: geometric (the point cloud) or learned (a YOLO-OBB model's boxes by class, "
-             "joined with the point cloud)", tuple(k.value for k in DetectorKind)),
-    PortSpec("model", PortDirection.INPUT, str, "",
-             "the learned detector's YOLO-OBB ONNX export, relative to the tree file (empty: the shipped household "
-             "model)"),
-    PortSpec("imgsz", PortDirection.INPUT, int, 0, "the input size the model must take, px (0: its own)"),
+    input_port("detector", str, DetectorKind.GEOMETRIC.value,
+               "what finds the objects: geometric (the point cloud) or learned (a YOLO-OBB model's boxes by class, "
+               "joined with the point cloud)", choices=tuple(k.value for k in DetectorKind)),
+    input_port("model", str, "",
+               "the learned detector's YOLO-OBB ONNX export, relative to the tree file (empty: the shipped household "
+               "model)"),
+    input_port("imgsz", int, 0, "the input size the model must take, px (0: its own)"),
 )
 
 
@@ -66,20 +64,24 @@ class DetectorLeaf(RobotLeaf):
         #: the learned detector the tree file names literally, loaded and checked with the tree (else None)
         self.literal_model: LearnedDetector | None = None
         literal = all(self.ports.key(p) is None for p in ("detector", "model", "imgsz"))
-        if literal and parse_detector(str(self.ports.get("detector"))) is DetectorKind.LEARNED:
+        if literal and parse_detector(self.ports.require("detector", str)) is DetectorKind.LEARNED:
+            # deferred: OpenCV comes with it; a tree loads and validates without it
             from bt_grasp.detector.model import ModelError
 
+            model, imgsz = self.ports.require("model", str), self.ports.require("imgsz", int)
             try:
-                self.literal_model = self._model(str(self.ports.get("model")), int(self.ports.get("imgsz")), True)
+                self.literal_model = self._model(model, imgsz, True)
             except ModelError as exc:
                 raise PortValueError(f"port 'model': {exc.message}") from None
 
     def _model(self, text: str, imgsz: int, from_tree: bool) -> LearnedDetector:
+        # deferred: OpenCV comes with it (onnxruntime once a model runs); a tree loads and validates without it
         from bt_grasp.detector.inference import LearnedDetector
 
         path = model_path(text, self.ctx.source if from_tree else None)
         key = (path, imgsz)
         if key not in self._models:
+            # deferred: Open3D and OpenCV come with it; a tree loads and validates without them
             from bt_grasp.perception.learned import TENTATIVE_SCORE
 
             # decoded down to the tentative score: the join decides what a box under the sure score may name
@@ -90,15 +92,16 @@ class DetectorLeaf(RobotLeaf):
         """The learned detector the ports name now (a model named on the blackboard is loaded on first use; a
         bad one is a :class:`bt_grasp.detector.model.ModelError`: exit 2), None for the geometric detector, or
         the FAILURE status for a detector name that is neither."""
-        text = self.input_str("detector")
+        text = self.ports.get("detector", str) or ""
         kind = parse_detector(text)
         if kind is None:
-            return self.failed(FailureReason.BAD_INPUT, f"detector must be geometric or learned, not '{text}'")
+            return self.fail(FailureReason.BAD_INPUT, f"detector must be geometric or learned, not '{text}'")
         if kind is DetectorKind.GEOMETRIC:
             return None
         if self.literal_model is not None:
             return self.literal_model
-        return self._model(self.input_str("model"), self.input_int("imgsz"), self.ports.key("model") is None)
+        model = self.ports.get("model", str) or ""
+        return self._model(model, self.ports.require("imgsz", int), self.ports.key("model") is None)
 
 
 def perceive_once(leaf: RobotLeaf, color: str | None, accept_empty: bool = False,
@@ -106,23 +109,25 @@ def perceive_once(leaf: RobotLeaf, color: str | None, accept_empty: bool = False
     """Capture + pipeline: the leaf's FAILURE status, or the (successful) PerceptionResult. With
     ``accept_empty`` a table with nothing on it is a result (no detections), not a failure, and so (with a
     learned ``detector``) is a table whose objects the detector named none of."""
+    # deferred: Open3D and OpenCV come with it; a tree loads and validates without them
     from bt_grasp.perception.pipeline import perceive
 
     cell = leaf.cell
     T_base_camera = camera_pose(cell)
     if T_base_camera is None:
-        return leaf.failed(FailureReason.CALIBRATION_MISSING, "no camera calibration loaded")
+        return leaf.fail(FailureReason.CALIBRATION_MISSING, "no camera calibration loaded")
     frame: RGBDFrame | None = cell.camera.capture()
     if frame is None:
-        return leaf.failed(FailureReason.NO_FRAME, "the camera returned no frame")
+        return leaf.fail(FailureReason.NO_FRAME, "the camera returned no frame")
     cell.media.frame(frame, T_base_camera)
     config = cell.perception_config
     if color and color not in config.color.ranges:
         known = ", ".join(config.color.ranges)
-        return leaf.failed(FailureReason.BAD_INPUT, f"unknown colour '{color}'; known: {known}")
+        return leaf.fail(FailureReason.BAD_INPUT, f"unknown colour '{color}'; known: {known}")
     if detector is None:
         result = perceive(frame, T_base_camera, config, color or None)
     else:
+        # deferred: Open3D and OpenCV come with it; a tree loads and validates without them
         from bt_grasp.perception.learned import join_boxes
 
         found = detector.detect(frame.color)
@@ -135,19 +140,18 @@ def perceive_once(leaf: RobotLeaf, color: str | None, accept_empty: bool = False
     if accept_empty and (result.status.value == "no_objects" or (detector is not None and result.others)):
         return result
     if not result.ok:
-        return leaf.failed(FailureReason.NO_DETECTION, f"{result.status.value}: {result.message}")
+        return leaf.fail(FailureReason.NO_DETECTION, f"{result.status.value}: {result.message}")
     return result
 
 
-@leaf(
-    None,
-    name="Perceive",
+@action(
     ports=[
         _COLOR,
-        PortSpec("target", PortDirection.OUTPUT, object, "{target}", "the chosen detection"),
-        PortSpec("objects", PortDirection.OUTPUT, object, "{objects}", "every object seen (for clearance)"),
+        output_port("target", object, "the chosen detection", default="{target}"),
+        output_port("objects", object, "every object seen (for clearance)", default="{objects}"),
         *DETECTOR_PORTS,
     ],
+    reasons=PERCEPTION_REASONS,
     needs_robot=True,
 )
 class Perceive(DetectorLeaf):
@@ -160,12 +164,12 @@ class Perceive(DetectorLeaf):
         detector = self.detector_now()
         if isinstance(detector, Status):
             return detector
-        result = perceive_once(self, self.input_str("color"), detector=detector)
+        result = perceive_once(self, self.ports.get("color", str) or "", detector=detector)
         if isinstance(result, Status):
             return result
         best = result.best
         if best is None:
-            return self.failed(FailureReason.NO_DETECTION, "the pipeline succeeded with no detection")
+            return self.fail(FailureReason.NO_DETECTION, "the pipeline succeeded with no detection")
         self.ports.set("target", best)
         self.ports.set("objects", tuple(result.others))
         c = best.centroid_base_m
@@ -176,12 +180,12 @@ class Perceive(DetectorLeaf):
         return Status.SUCCESS
 
 
-@leaf(None, name="ObjectVisible", kind=NodeKind.CONDITION, ports=[_COLOR], needs_robot=True)
+@condition(ports=[_COLOR], reasons=PERCEPTION_REASONS, needs_robot=True)
 class ObjectVisible(RobotLeaf):
     """SUCCESS when the camera sees an object (of the colour) on the table."""
 
     def update(self) -> Status:
-        result = perceive_once(self, self.input_str("color"))
+        result = perceive_once(self, self.ports.get("color", str) or "")
         if isinstance(result, Status):
             return result
         self.feedback_message = f"{len(result.detections)} object(s) visible"

@@ -16,13 +16,14 @@ It then runs, one control period per tick:
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
-from py_trees.common import Status
 
 from bt_grasp.behaviours.base import RobotLeaf
+from bt_grasp.behaviours.fixture_mask import inside_fixture
 from bt_grasp.behaviours.grasp_plan import MOVED_RAD, GraspPose
 from bt_grasp.behaviours.gripper import EMPTY_WIDTH_M, GRASP_FORCE_N
 from bt_grasp.behaviours.motion_job import MotionJob, PathFailure, PathFn, Segment
@@ -37,17 +38,17 @@ from bt_grasp.behaviours.motion_leaves import (
 )
 from bt_grasp.behaviours.objects import is_detection, object_list
 from bt_grasp.behaviours.pose import Pose
-from bt_grasp.behaviours.reasons import FailureReason
+from bt_grasp.behaviours.reasons import MOTION_REASONS, FailureReason
 from bt_grasp.geometry import Mat4, inv, make_T, rot_z
 from bt_grasp.motion.place_orientation import PlaceYaw, footprint_kind, footprint_turns_rad, place_yaws
 from bt_grasp.robot_description import MAX_OPENING_M, TCP_LINK
-from bt_grasp.tree.registry import PortDirection, PortSpec, leaf
+from bt_grasp.scene.format import Scene, place_xy_problem
+from bt_grasp.tree.node_api import Status, action, inout_port, input_port
 
 if TYPE_CHECKING:
     from bt_grasp.behaviours.cell import Cell
     from bt_grasp.motion.planning_scene import Shape
     from bt_grasp.perception.results import Detection
-    from bt_grasp.scene.format import Scene
 
 #: the tool points down: tcp z along base -z
 R_DOWN = np.diag([1.0, -1.0, -1.0])
@@ -75,20 +76,20 @@ EASE_FORCE_N = 4.0
 EASE_S = 0.3
 
 _HELD_PORTS = [
-    PortSpec("grasp", PortDirection.INPUT, object, "{grasp}", "the grasp holding the object (from PlanGrasp)"),
-    PortSpec("held", PortDirection.INPUT, object, "{target}", "the detection of the held object, as grasped"),
-    PortSpec("objects", PortDirection.INPUT, object, "{objects}", "objects seen (obstacles while carrying)"),
-    PortSpec("approach", PortDirection.INPUT, float, 0.10, "height of the pre-place pose above the target, m"),
-    PortSpec("release_gap", PortDirection.INPUT, float, 0.003, "the object's bottom above the surface at release, m"),
-    PortSpec("contact_window", PortDirection.INPUT, float, 0.02, "contact this close above the target = set down, m"),
-    PortSpec("retreat", PortDirection.INPUT, float, 0.08, "how far to back off upwards after opening, m"),
-    PortSpec("turns", PortDirection.INPUT, bool, True, "when the first orientation is blocked or unreachable, "
+    input_port("grasp", object, "{grasp}", "the grasp holding the object (from PlanGrasp)"),
+    input_port("held", object, "{target}", "the detection of the held object, as grasped"),
+    input_port("objects", object, "{objects}", "objects seen (obstacles while carrying)"),
+    input_port("approach", float, 0.10, "height of the pre-place pose above the target, m"),
+    input_port("release_gap", float, 0.003, "the object's bottom above the surface at release, m"),
+    input_port("contact_window", float, 0.02, "contact this close above the target = set down, m"),
+    input_port("retreat", float, 0.08, "how far to back off upwards after opening, m"),
+    input_port("turns", bool, True, "when the first orientation is blocked or unreachable, "
              "try the held object's footprint symmetries (half, quarter or any turn) in order"),
-    PortSpec("free_yaw", PortDirection.INPUT, bool, False, "the goal allows any yaw: try turns of 30 degrees too"),
-    PortSpec("turn_deg", PortDirection.INPUT, float, 0.0, "turn the object by this much from the pose's yaw (or "
+    input_port("free_yaw", bool, False, "the goal allows any yaw: try turns of 30 degrees too"),
+    input_port("turn_deg", float, 0.0, "turn the object by this much from the pose's yaw (or "
              "from how it is held, with no yaw) before the first orientation is tried, degrees"),
-    PortSpec("placed", PortDirection.INOUT, object, None, "objects this tree set down inside a tray or bin (the "
-             "camera's object lists leave them out): obstacles here, and this place is added (not set: not kept)"),
+    inout_port("placed", object, "objects this tree set down inside a tray or bin (the camera's object lists "
+               "leave them out): obstacles here, and this place is added (not given: not kept)"),
 ]
 
 
@@ -195,34 +196,35 @@ class _PlaceBase(RobotLeaf):
 
     def _setup_motion(self) -> Status | None:
         """Read the ports, build the planning scenes and the ordered place orientations (tried in update)."""
+        # deferred: scipy comes with it; a tree loads and validates without it
         from bt_grasp.motion.planning_scene import PlanningScene
 
-        grasp, held = self.input("grasp"), self.input("held")
+        grasp, held = self.ports.get("grasp"), self.ports.get("held")
         if not isinstance(grasp, GraspPose):
-            return self.failed(FailureReason.BAD_INPUT, "no grasp on the blackboard: run PlanGrasp first")
+            return self.fail(FailureReason.BAD_INPUT, "no grasp on the blackboard: run PlanGrasp first")
         if not is_detection(held):
-            return self.failed(FailureReason.BAD_INPUT, "'held' is not the detection of the grasped object")
+            return self.fail(FailureReason.BAD_INPUT, "'held' is not the detection of the grasped object")
         if self.cell.robot.gripper_target_width_m() > 0.0 or self.cell.robot.gripper_width_m() < EMPTY_WIDTH_M:
-            return self.failed(FailureReason.NOT_HOLDING, "the gripper holds nothing to place")
+            return self.fail(FailureReason.NOT_HOLDING, "the gripper holds nothing to place")
         target = self.target_pose()
         if isinstance(target, str):
-            return self.failed(FailureReason.BAD_INPUT, target)
+            return self.fail(FailureReason.BAD_INPUT, target)
         pose, support = target
         surface = pose.z_m if pose.z_m is not None else table_z_base(self.cell, pose.x_m, pose.y_m)
         T_tcp_obj = held_offset(grasp, held)
         height = float(held.size_m[2])
-        gap = self.input_float("release_gap")
+        gap = self.ports.require("release_gap", float)
         self._T_tcp_obj, self._gap, self._surface = T_tcp_obj, gap, surface
         options = self.orientations(pose, held, T_tcp_obj, surface)
         if isinstance(options, str):
-            return self.failed(FailureReason.PLACE_BLOCKED, options)
+            return self.fail(FailureReason.PLACE_BLOCKED, options)
         self._options = options
         self._height = height
         self._standing = height >= STANDING_RATIO * min(float(held.size_m[0]), float(held.size_m[1]))
         self._target_text = self._where(options[0][1])
         margin = 0.004
         held_shape = self.held_model(held, T_tcp_obj, margin)
-        seen = object_list(self.input("objects")) or ()
+        seen = object_list(self.ports.get("objects")) or ()
         remembered = [d for d in self._placed_before() if not any(same_object(d, o) for o in seen)]
         others = [d for d in (*seen, *remembered) if not same_object(d, held)]
         obstacles = tuple(detection_box(d, f"object_{i}") for i, d in enumerate(others))
@@ -241,8 +243,8 @@ class _PlaceBase(RobotLeaf):
         """The place orientations to try in order, each with its release tool pose (or why there is none):
         Place's and PlaceOn's, at ``pose``, turned by the held object's footprint symmetries."""
         return place_options(pose, held, T_tcp_obj, float(held.size_m[2]), self._gap, surface_z_m,
-                             turns=_flag(self.input("turns")), free_yaw=_flag(self.input("free_yaw")),
-                             turn_rad=math.radians(self.input_float("turn_deg")))
+                             turns=_flag(self.ports.get("turns")), free_yaw=_flag(self.ports.get("free_yaw")),
+                             turn_rad=math.radians(self.ports.require("turn_deg", float)))
 
     def held_model(self, held: Detection, T_tcp_obj: Mat4, margin_m: float) -> Shape:
         """The held object as the planner carries it (tool frame): its perceived box, grown by ``margin_m``."""
@@ -264,15 +266,16 @@ class _PlaceBase(RobotLeaf):
         (each: free at the release, the straight line up to the pre-place pose, the way out, then the carry to
         where the line up ends), since a wrist or elbow the other way round may clear a bin's wall."""
         turn = f"turned {math.degrees(option.turn_rad):.0f} deg"
-        pre = _raised(T_place, self.input_float("approach"))
+        pre = _raised(T_place, self.ports.require("approach", float))
         planner, options = self.cell.planner, self.cell.planner_options
         failures: list[PathFailure] = []
         plan = planner.plan_to_pose(self._q_start, pre, self._carry_scene, options)
+        # deferred: OMPL, pinocchio and coal come with it; a tree loads and validates without them
         from bt_grasp.motion.planner import PlanStatus
 
         if plan.status is PlanStatus.GOAL_IN_COLLISION:
             # something tall beside the target (a standing can in the next slot): come down from higher up
-            pre = _raised(T_place, self.input_float("approach") + HIGHER_APPROACH_M)
+            pre = _raised(T_place, self.ports.require("approach", float) + HIGHER_APPROACH_M)
             plan = planner.plan_to_pose(self._q_start, pre, self._carry_scene, options)
         if plan.ok:
             path = np.asarray(plan.path, dtype=float)
@@ -325,7 +328,7 @@ class _PlaceBase(RobotLeaf):
         first: PathFailure | None = None
         for rise_first in (False, True):
             q, failure = q0, None
-            steps = retreat_after_release(T_place, self.input_float("retreat"), self._height, rise_first)
+            steps = retreat_after_release(T_place, self.ports.require("retreat", float), self._height, rise_first)
             for name, fn in steps:
                 line = self.cell.planner.straight_line(q, fn(self.cell.kinematics.fk(q)), self._retreat_scene)
                 if not line.ok:
@@ -358,7 +361,7 @@ class _PlaceBase(RobotLeaf):
         self._T_place = T_place
         self._chosen = option
         carry = _planned_or(carry_path, self._blocked_if_collision(
-            plan_to_pose_fn(self, _raised(T_place, self.input_float("approach")), self._carry_scene)))
+            plan_to_pose_fn(self, _raised(T_place, self.ports.require("approach", float)), self._carry_scene)))
         descend = _planned_or(descent_path, self._blocked_if_collision(
             cartesian_fn(self, lambda _T: T_place, self._descent_scene)))
         segments = [Segment("carry", carry), Segment("descend", descend)]
@@ -379,12 +382,11 @@ class _PlaceBase(RobotLeaf):
         first = blocked[0] if blocked else failures[0]
         n = len(failures)
         what = "the one place orientation" if n == 1 else f"none of {n} place orientations works"
-        return self.failed(first.reason, f"{what} at {self._target_text}: {first.sentence}")
+        return self.fail(first.reason, f"{what} at {self._target_text}: {first.sentence}")
 
     @staticmethod
     def _blocked_if_collision(fn: PathFn) -> PathFn:
         """A target that collides with what is seen there is an occupied target: PLACE_BLOCKED."""
-
         def compute(q: NDArray[np.float64]) -> NDArray[np.float64] | PathFailure:
             out = fn(q)
             if isinstance(out, PathFailure) and out.reason is FailureReason.COLLISION:
@@ -405,7 +407,7 @@ class _PlaceBase(RobotLeaf):
         if self.phase == "move":
             if self.cell.robot.gripper_width_m() < EMPTY_WIDTH_M:
                 self.job.cancel()
-                return self.failed(FailureReason.DROPPED, f"the object left the fingers during '{self.job.current}'")
+                return self.fail(FailureReason.DROPPED, f"the object left the fingers during '{self.job.current}'")
             outcome = self.job.update()
             if outcome is None:
                 self.feedback_message = f"placing at {self._target_text}: {self.job.current}"
@@ -417,13 +419,13 @@ class _PlaceBase(RobotLeaf):
                 if self.job.current == "touch down":
                     # stalled on the surface, or no straight line down from the release pose: open there
                     self.feedback_message = f"touch down ended {above * 1e3:+.0f} mm from the release pose"
-                elif touched and above <= self.input_float("contact_window"):
+                elif touched and above <= self.ports.require("contact_window", float):
                     self.feedback_message = f"touched down {above * 1e3:.0f} mm above the target"
                 elif touched:
-                    return self.failed(FailureReason.PLACE_BLOCKED,
+                    return self.fail(FailureReason.PLACE_BLOCKED,
                                        f"the descent met something {above * 100:.1f} cm above the target")
                 else:
-                    return self.failed(outcome.reason, outcome.sentence)
+                    return self.fail(outcome.reason, outcome.sentence)
             self._t_open = self.now_s()
             self.phase = "ease"
         if self.phase == "ease":
@@ -439,18 +441,19 @@ class _PlaceBase(RobotLeaf):
             width = self.cell.robot.gripper_width_m()
             if width < MAX_OPENING_M - 0.002:
                 if self.now_s() - self._t_open > OPEN_TIMEOUT_S:
-                    return self.failed(FailureReason.TIMEOUT, f"the gripper opened only to {width * 1e3:.1f} mm")
+                    return self.fail(FailureReason.TIMEOUT, f"the gripper opened only to {width * 1e3:.1f} mm")
                 return Status.RUNNING
             scene = self._retreat_scene
             # straight up; after a side grasp back along the approach, then up past the object's top
-            steps = retreat_after_release(self._T_place, self.input_float("retreat"), self._height, self._rise_first)
+            retreat = self.ports.require("retreat", float)
+            steps = retreat_after_release(self._T_place, retreat, self._height, self._rise_first)
             self.job = MotionJob(self.cell, [Segment(name, cartesian_fn(self, fn, scene)) for name, fn in steps])
             self.phase = "retreat"
         outcome = self.job.update()
         if outcome is None:
             return Status.RUNNING
         if isinstance(outcome, PathFailure):
-            return self.failed(outcome.reason, f"after release: {outcome.sentence}")
+            return self.fail(outcome.reason, f"after release: {outcome.sentence}")
         self.feedback_message = f"placed at {self._target_text}"
         self._remember_place()
         return Status.SUCCESS
@@ -459,18 +462,15 @@ class _PlaceBase(RobotLeaf):
         """What the ``placed`` port holds (empty when it is not set or holds nothing yet)."""
         if not self.ports.has("placed"):
             return ()
-        return object_list(self.input("placed")) or ()
+        return object_list(self.ports.get("placed")) or ()
 
     def _remember_place(self) -> None:
         """Add the object just set down to ``placed`` when it went inside a tray or bin (where perception no
         longer reports it): the held detection moved to where the robot released it, turned as it was."""
-        if "placed" not in self.ports.names() or self.ports.key("placed") is None:
+        if self.ports.key("placed") is None:
             return
-        from dataclasses import replace
 
-        from bt_grasp.behaviours.fixture_mask import inside_fixture
-
-        held = self.input("held")
+        held = self.ports.get("held")
         assert self._T_place is not None and is_detection(held)
         T_obj = self._T_place @ self._T_tcp_obj
         xyz = T_obj[:3, 3]
@@ -484,15 +484,20 @@ class _PlaceBase(RobotLeaf):
 
     def terminate(self, new_status: Status) -> None:
         job = getattr(self, "job", None)
-        if job is not None and new_status == Status.INVALID:
+        if job is not None and new_status == Status.IDLE:
             job.cancel()
 
 
-@leaf(
-    None,
-    name="Place",
-    ports=[PortSpec("pose", PortDirection.INPUT, Pose, description="where the held object comes to rest: "
-                    "x;y[;surface_z[;yaw_deg[;frame]]] (no z: the table; no yaw: as held)"), *_HELD_PORTS],
+@action(
+    ports=[
+        input_port("pose", Pose, description="where the held object comes to rest: x;y[;surface_z[;yaw_deg[;frame]]] "
+                   "(no z: the table; no yaw: as held)", required=True),
+        *_HELD_PORTS,
+    ],
+    reasons=(
+        FailureReason.BAD_INPUT, FailureReason.NOT_HOLDING, FailureReason.PLACE_BLOCKED, FailureReason.DROPPED,
+        FailureReason.TIMEOUT, *MOTION_REASONS,
+    ),
     needs_robot=True,
 )
 class Place(_PlaceBase):
@@ -507,29 +512,30 @@ class Place(_PlaceBase):
         """A literal pose off the table or out of reach is a load error (checked before the run)."""
         if self.ports.key("pose") is not None:
             return None
-        from bt_grasp.scene.format import place_xy_problem
 
-        pose: Pose = self.ports.get("pose")
+        pose = self.ports.require("pose", Pose)
         T = np.asarray(scene.T_world_base()) @ np.array([pose.x_m, pose.y_m, 0.0, 1.0])
         xy = (pose.x_m, pose.y_m) if pose.frame == "world" else (float(T[0]), float(T[1]))
         problem = place_xy_problem(scene, xy)
         return f"Place pose {problem}" if problem else None
 
     def target_pose(self) -> tuple[Pose, Detection | None] | str:
-        pose = self.input("pose")
+        pose = self.ports.get("pose")
         if not isinstance(pose, Pose):
             return f"'pose' is not a pose: {pose!r}"
         return pose.in_base(self.cell.scene.T_world_base()), None
 
 
-@leaf(
-    None,
-    name="PlaceOn",
+@action(
     ports=[
-        PortSpec("object", PortDirection.INPUT, object, "{object}", "the perceived object to place on top of"),
-        PortSpec("align", PortDirection.INPUT, bool, True, "turn the held object to the lower object's yaw"),
+        input_port("object", object, "{object}", "the perceived object to place on top of"),
+        input_port("align", bool, True, "turn the held object to the lower object's yaw"),
         *_HELD_PORTS,
     ],
+    reasons=(
+        FailureReason.BAD_INPUT, FailureReason.NOT_HOLDING, FailureReason.PLACE_BLOCKED, FailureReason.DROPPED,
+        FailureReason.TIMEOUT, *MOTION_REASONS,
+    ),
     needs_robot=True,
 )
 class PlaceOn(_PlaceBase):
@@ -539,21 +545,20 @@ class PlaceOn(_PlaceBase):
     """
 
     def target_pose(self) -> tuple[Pose, Detection | None] | str:
-        support = self.input("object")
+        support = self.ports.get("object")
         if not is_detection(support):
             return "'object' is not a perceived object: run SelectObject first"
         x, y, z = (float(v) for v in support.centroid_base_m)
-        yaw = math.degrees(float(support.yaw_rad)) if self.input("align") else None
+        yaw = math.degrees(float(support.yaw_rad)) if self.ports.get("align") else None
         return Pose(x, y, z + float(support.size_m[2]) / 2, yaw), support
 
 
-@leaf(
-    None,
-    name="MoveTo",
+@action(
     ports=[
-        PortSpec("pose", PortDirection.INPUT, Pose, description="tool centre point x;y[;z[;yaw_deg[;frame]]] "
-                 "(no z: 0.15 m above the table; no yaw: 0)"),
+        input_port("pose", Pose, description="tool centre point x;y[;z[;yaw_deg[;frame]]] (no z: 0.15 m above the "
+                   "table; no yaw: 0)", required=True),
     ],
+    reasons=(FailureReason.BAD_INPUT, *MOTION_REASONS),
     needs_robot=True,
 )
 class MoveTo(_MovingLeaf):
@@ -561,11 +566,12 @@ class MoveTo(_MovingLeaf):
     FAILURE: IK_UNREACHABLE, PLAN_FAILED, COLLISION, TRACKING_ERROR, BAD_INPUT."""
 
     def segments(self) -> list[Segment] | Status:
+        # deferred: scipy comes with it; a tree loads and validates without it
         from bt_grasp.motion.planning_scene import PlanningScene
 
-        pose = self.input("pose")
+        pose = self.ports.get("pose")
         if not isinstance(pose, Pose):
-            return self.failed(FailureReason.BAD_INPUT, f"'pose' is not a pose: {pose!r}")
+            return self.fail(FailureReason.BAD_INPUT, f"'pose' is not a pose: {pose!r}")
         base = pose.in_base(self.cell.scene.T_world_base())
         z = base.z_m if base.z_m is not None else table_z_base(self.cell, base.x_m, base.y_m) + 0.15
         T = make_T(rot_z(math.radians(base.yaw_deg or 0.0)) @ R_DOWN, [base.x_m, base.y_m, z])

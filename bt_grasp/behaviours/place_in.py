@@ -19,13 +19,14 @@ import numpy as np
 
 from bt_grasp.behaviours.place import _HELD_PORTS, _PlaceBase
 from bt_grasp.behaviours.pose import Pose
+from bt_grasp.behaviours.reasons import MOTION_REASONS, FailureReason
 from bt_grasp.geometry import Mat4, inv, make_T, rot_z
+from bt_grasp.motion.free_area import Floor, HeldShape, Resting, ToolPart, free_spots
 from bt_grasp.motion.place_orientation import PlaceYaw, wrap_rad
 from bt_grasp.scene.fixtures import Container
-from bt_grasp.tree.registry import PortDirection, PortSpec, leaf
+from bt_grasp.tree.node_api import action, inout_port, input_port
 
 if TYPE_CHECKING:
-    from bt_grasp.motion.free_area import HeldShape, Resting
     from bt_grasp.motion.planning_scene import Shape
     from bt_grasp.perception.results import Detection
     from bt_grasp.scene.format import Scene
@@ -55,19 +56,21 @@ def _fixture_problem(scene: Scene, name: str) -> str | None:
     return None
 
 
-@leaf(
-    None,
-    name="PlaceIn",
+@action(
     ports=[
-        PortSpec("fixture", PortDirection.INPUT, str, description="the tray or bin to set the object down in"),
-        PortSpec("margin", PortDirection.INPUT, float, DEFAULT_MARGIN_M, "each object's footprint grown by this "
-                 "on every side (what perception does not see of it), m"),
-        PortSpec("wall_margin", PortDirection.INPUT, float, DEFAULT_WALL_MARGIN_M, "the held object's footprint "
-                 "this far from the walls at least, m"),
+        input_port("fixture", str, description="the tray or bin to set the object down in", required=True),
+        input_port("margin", float, DEFAULT_MARGIN_M, "each object's footprint grown by this on every side (what "
+                   "perception does not see of it), m"),
+        input_port("wall_margin", float, DEFAULT_WALL_MARGIN_M, "the held object's footprint this far from the walls "
+                   "at least, m"),
         *[p for p in _HELD_PORTS if p.name not in _SKIP],
-        PortSpec("placed", PortDirection.INOUT, object, "{placed}", "the objects this tree set down in trays or "
-                 "bins (the camera's object lists leave them out): where the floor is taken; this one is added"),
+        inout_port("placed", object, "the objects this tree set down in trays or bins (the camera's object lists leave "
+                   "them out): where the floor is taken; this one is added", default="{placed}"),
     ],
+    reasons=(
+        FailureReason.BAD_INPUT, FailureReason.NOT_HOLDING, FailureReason.PLACE_BLOCKED, FailureReason.DROPPED,
+        FailureReason.TIMEOUT, *MOTION_REASONS,
+    ),
     needs_robot=True,
 )
 class PlaceIn(_PlaceBase):
@@ -82,11 +85,11 @@ class PlaceIn(_PlaceBase):
         """A literal fixture the scene lacks, or that is not a container, is a load error."""
         if self.ports.key("fixture") is not None:
             return None
-        problem = _fixture_problem(scene, str(self.ports.get("fixture")))
+        problem = _fixture_problem(scene, self.ports.require("fixture", str))
         return f"PlaceIn {problem}" if problem else None
 
     def _container(self) -> Container | str:
-        name = str(self.input("fixture"))
+        name = self.ports.require("fixture", str)
         problem = _fixture_problem(self.cell.scene, name)
         if problem is not None:
             return problem
@@ -104,7 +107,6 @@ class PlaceIn(_PlaceBase):
 
     def orientations(self, pose: Pose, held: Detection, T_tcp_obj: Mat4, surface_z_m: float
                      ) -> list[tuple[PlaceYaw, Mat4]] | str:
-        from bt_grasp.motion.free_area import Floor, free_spots
 
         container = self._container()
         assert not isinstance(container, str)  # target_pose checked it
@@ -114,8 +116,8 @@ class PlaceIn(_PlaceBase):
         resting = [self._resting(d, T_base_box) for d in self._placed_before()]
         shape = self._held_shape(held, T_tcp_obj)
         base_in_box = inv(T_base_box)[:2, 3]
-        margin = self.input_float("margin")
-        spots = free_spots(floor, resting, shape, margin_m=margin, wall_margin_m=self.input_float("wall_margin"),
+        margin, wall_margin = self.ports.require("margin", float), self.ports.require("wall_margin", float)
+        spots = free_spots(floor, resting, shape, margin_m=margin, wall_margin_m=wall_margin,
                            clearance_m=GRIPPER_CLEARANCE_M,
                            far_from_xy=(float(base_in_box[0]), float(base_in_box[1])), limit=MAX_SPOTS)
         if not spots:
@@ -138,6 +140,7 @@ class PlaceIn(_PlaceBase):
         stands 12 mm beyond its round footprint at the corners (the can's descent met the wall it was clear of)."""
         if held.shape != "round":
             return super().held_model(held, T_tcp_obj, margin_m)
+        # deferred: scipy comes with it; a tree loads and validates without it
         from bt_grasp.motion.planning_scene import Cylinder
 
         radius = max(float(held.size_m[0]), float(held.size_m[1])) / 2 + margin_m / 2
@@ -146,8 +149,6 @@ class PlaceIn(_PlaceBase):
     @staticmethod
     def _resting(placed: Detection, T_base_box: Mat4) -> Resting:
         """An object set down before, in the container's frame (its perceived footprint and height)."""
-        from bt_grasp.motion.free_area import Resting
-
         local = inv(T_base_box) @ np.array([*placed.centroid_base_m[:2], 0.0, 1.0])
         yaw = float(placed.yaw_rad) - math.atan2(T_base_box[1, 0], T_base_box[0, 0])
         return Resting((float(local[0]), float(local[1])), yaw, (float(placed.size_m[0]), float(placed.size_m[1])),
@@ -156,7 +157,7 @@ class PlaceIn(_PlaceBase):
     def _held_shape(self, held: Detection, T_tcp_obj: Mat4) -> HeldShape:
         """The held object's footprint and the open gripper's boxes in its resting frame (the middle of its
         footprint on the surface, x along its length): where the grasp puts them."""
-        from bt_grasp.motion.free_area import HeldShape, ToolPart
+        # deferred: pinocchio and coal come with it; a tree loads and validates without them
         from bt_grasp.motion.gripper_shape import gripper_boxes
 
         length, width, height = (float(v) for v in held.size_m)

@@ -18,15 +18,14 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
-from py_trees.common import Status
 
 from bt_grasp.behaviours.base import RobotLeaf
 from bt_grasp.behaviours.motion_job import Segment
 from bt_grasp.behaviours.motion_leaves import _MovingLeaf, plan_to_pose_fn
-from bt_grasp.behaviours.reasons import FailureReason
-from bt_grasp.geometry import inv, make_T, rot_z
+from bt_grasp.behaviours.reasons import MOTION_REASONS, FailureReason
+from bt_grasp.geometry import T_from_xyz_rpy, inv, make_T, rot_z
 from bt_grasp.interfaces import Mount
-from bt_grasp.tree.registry import PortDirection, PortSpec, leaf
+from bt_grasp.tree.node_api import Status, action, input_port
 
 if TYPE_CHECKING:
     from bt_grasp.perception.results import Detection
@@ -79,16 +78,15 @@ def view_point(leaf: RobotLeaf, view: str, target: Detection | None) -> tuple[ND
     return point, CLOSE_DISTANCE_M
 
 
-@leaf(
-    None,
-    name="LookAt",
+@action(
     ports=[
-        PortSpec("view", PortDirection.INPUT, str, "workspace",
-                 "'workspace' (survey the work area) or a point 'x;y;z' in the base frame, m"),
-        PortSpec("target", PortDirection.INPUT, object, "", "a detection to look at (overrides view)"),
-        PortSpec("distance", PortDirection.INPUT, float, 0.0,
-                 "camera-to-point distance along the optical axis, m (0: 0.62 survey, 0.40 close)"),
+        input_port("view", str, "workspace", "'workspace' (survey the work area) or a point 'x;y;z' in the base frame, "
+                   "m"),
+        input_port("target", object, "", "a detection to look at (overrides view)"),
+        input_port("distance", float, 0.0, "camera-to-point distance along the optical axis, m (0: 0.62 survey, 0.40 "
+                   "close)"),
     ],
+    reasons=(FailureReason.BAD_INPUT, FailureReason.CALIBRATION_MISSING, *MOTION_REASONS),
     needs_robot=True,
 )
 class LookAt(_MovingLeaf):
@@ -99,14 +97,14 @@ class LookAt(_MovingLeaf):
         mount, is a load error (file:line before anything runs)."""
         if scene.camera.mount != Mount.EYE_IN_HAND or self.ports.key("view") is not None:
             return None
-        view = str(self.ports.get("view"))
+        view = self.ports.require("view", str)
         if view == "workspace" or self.ports.key("target") is not None:
             return None
         point = parse_point(view)
         if point is None:
             return f"view '{view}' is neither 'workspace' nor a point 'x;y;z' in the base frame"
-        distance = float(self.ports.get("distance") or 0.0) or CLOSE_DISTANCE_M
-        from bt_grasp.geometry import T_from_xyz_rpy
+        distance = self.ports.get("distance", float) or CLOSE_DISTANCE_M
+        # deferred: pinocchio and coal come with it; a tree loads and validates without them
         from bt_grasp.motion.kinematics import ArmKinematics
 
         mount = scene.camera.eye_in_hand
@@ -120,22 +118,23 @@ class LookAt(_MovingLeaf):
         return None
 
     def segments(self) -> list[Segment] | Status:
+        # deferred: scipy comes with it; a tree loads and validates without it
         from bt_grasp.motion.planning_scene import PlanningScene
 
         calibration = self.cell.calibration
         if calibration is None:
-            return self.failed(FailureReason.CALIBRATION_MISSING, "no camera calibration loaded")
+            return self.fail(FailureReason.CALIBRATION_MISSING, "no camera calibration loaded")
         if calibration.mount != Mount.EYE_IN_HAND:
             self.cell.media.log("INFO", self.name, "eye-to-hand camera: nothing to move")
             self.feedback_message = "fixed camera: nothing to move"
             return Status.SUCCESS
-        found = view_point(self, self.input_str("view") or "workspace", self.input_detection("target"))
+        found = view_point(self, self.ports.get("view", str) or "workspace", self.input_detection("target"))
         if isinstance(found, str):
-            return self.failed(FailureReason.BAD_INPUT, found)
+            return self.fail(FailureReason.BAD_INPUT, found)
         point, default_distance = found
-        distance = (self.input_float("distance") if self.input("distance") is not None else 0.0) or default_distance
+        distance = self.ports.get("distance", float) or default_distance
         if not 0.3 <= distance <= 1.5:
-            return self.failed(FailureReason.BAD_INPUT, f"view distance {distance} m is outside [0.3, 1.5]")
+            return self.fail(FailureReason.BAD_INPUT, f"view distance {distance} m is outside [0.3, 1.5]")
         kin = self.cell.kinematics
         q = self.cell.robot.joint_positions()
         T_tool_tcp = inv(kin.fk_link(q, calibration.tool_link)) @ kin.fk(q)
@@ -143,7 +142,7 @@ class LookAt(_MovingLeaf):
         T_tool = tool_pose_for_view(point, distance, T_tool_camera)
         T_tcp = T_tool @ T_tool_tcp
         if not kin.ik(T_tcp, q).ok:
-            return self.failed(FailureReason.IK_UNREACHABLE,
+            return self.fail(FailureReason.IK_UNREACHABLE,
                                f"the view of ({point[0]:.3f}, {point[1]:.3f}, {point[2]:.3f}) from {distance:.2f} m "
                                "is out of the arm's reach")
         self.cell.media.log("INFO", self.name, f"view of ({point[0]:.3f}, {point[1]:.3f}, {point[2]:.3f}) m from "

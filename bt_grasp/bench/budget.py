@@ -31,9 +31,15 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, ParamSpec, TypedDict, TypeVar
 
 from bt_grasp.process.environment import machine_description
+
+if TYPE_CHECKING:
+    from bt_grasp.tree.loader import LoadedTree
+
+_P = ParamSpec("_P")
+_R = TypeVar("_R")
 
 #: the stages in the order they are printed, with the issue's group each belongs to
 STAGES: tuple[tuple[str, str], ...] = (
@@ -59,29 +65,29 @@ class StageClock:
     now: Callable[[], float] = time.perf_counter
     totals: dict[str, float] = field(default_factory=lambda: {name: 0.0 for name, _ in STAGES})
     calls: dict[str, int] = field(default_factory=lambda: {name: 0 for name, _ in STAGES})
-    _stack: list[list[Any]] = field(default_factory=list)  # [stage, start, time spent in inner stages]
+    _stack: list[list[float]] = field(default_factory=list)  # [start, time spent in inner stages]
 
-    def wrap(self, stage: str, fn: Callable[..., Any]) -> Callable[..., Any]:
+    def wrap(self, stage: str, fn: Callable[_P, _R]) -> Callable[_P, _R]:
         stack, totals, calls, now = self._stack, self.totals, self.calls, self.now
 
         @functools.wraps(fn)
-        def timed(*args: Any, **kwargs: Any) -> Any:
-            stack.append([stage, now(), 0.0])
+        def timed(*args: _P.args, **kwargs: _P.kwargs) -> _R:
+            stack.append([now(), 0.0])
             try:
                 return fn(*args, **kwargs)
             finally:
-                _, start, inner = stack.pop()
+                start, inner = stack.pop()
                 spent = now() - start
                 totals[stage] += spent - inner
                 calls[stage] += 1
                 if stack:
-                    stack[-1][2] += spent
+                    stack[-1][1] += spent
 
         return timed
 
 
 @contextmanager
-def timed_seams(clock: StageClock) -> Iterator[Callable[[Any], None]]:
+def timed_seams(clock: StageClock) -> Iterator[Callable[[LoadedTree], None]]:
     """Install the timers on the classes and functions named in the module's table; removed on exit.
     Yields a function that also times one tree's leaves (their instances' lifecycle methods)."""
     from bt_grasp.episode.observers import LogExtras
@@ -94,7 +100,7 @@ def timed_seams(clock: StageClock) -> Iterator[Callable[[Any], None]]:
     from bt_grasp.sim.world import World
     from bt_grasp.tree import loader, runner
 
-    seams: list[tuple[Any, str, str]] = [
+    seams: list[tuple[object, str, str]] = [
         (World, "step", "physics"),
         (camera.SimCamera, "capture", "rendering"),
         (camera.SimCamera, "render_true", "rendering"),
@@ -115,9 +121,9 @@ def timed_seams(clock: StageClock) -> Iterator[Callable[[Any], None]]:
         (Judge, "observe", "judge"),
     ]
     saved = [(owner, name, vars(owner)[name]) for owner, name, _ in seams]
-    instances: list[tuple[Any, str]] = []
+    instances: list[tuple[object, str]] = []
 
-    def time_leaves(tree: Any) -> None:
+    def time_leaves(tree: LoadedTree) -> None:
         for node in tree.nodes():
             if type(node).__module__.startswith("bt_grasp.behaviours"):
                 for name in ("initialise", "update", "terminate"):
@@ -135,19 +141,48 @@ def timed_seams(clock: StageClock) -> Iterator[Callable[[Any], None]]:
             delattr(node, name)
 
 
+class StageTime(TypedDict):
+    stage: str
+    group: str
+    s: float
+    calls: int
+    share: float
+
+
+class BudgetReport(TypedDict):
+    """``run_budget_bench``'s figures."""
+
+    machine: str
+    tree: str
+    scene: str
+    seed: int
+    log: bool
+    success: bool
+    ticks: int
+    same_as_warmup: bool
+    sim_time_s: float
+    physics_steps: int
+    episode_wall_s: float
+    tick_loop_wall_s: float
+    stages: list[StageTime]
+    tick_loop_overhead_us_per_tick: dict[str, float]
+    floor: dict[str, float]
+    wall_over_floor: float
+
+
 def _floor(scene: Path, physics_steps: int, dt_s: float) -> dict[str, float]:
     """The physics of ``physics_steps`` steps alone and one warm capture, measured here and now."""
     from bt_grasp.bench.sim import run_sim_bench
 
     sim = run_sim_bench(scene, captures=5, physics_seconds=max(1.0, physics_steps * dt_s))
-    physics_s = physics_steps / float(sim["physics_steps_per_s"])  # type: ignore[arg-type]
-    capture_s = float(sim["capture_ms_median"]) / 1e3  # type: ignore[arg-type]
+    physics_s = physics_steps / float(sim["physics_steps_per_s"])
+    capture_s = float(sim["capture_ms_median"]) / 1e3
     return {"physics_s": physics_s, "capture_s": capture_s, "floor_s": physics_s + capture_s,
-            "physics_steps_per_s": float(sim["physics_steps_per_s"])}  # type: ignore[arg-type]
+            "physics_steps_per_s": float(sim["physics_steps_per_s"])}
 
 
 def run_budget_bench(tree: Path, scene: Path, seed: int, calibration: Path | None, log: bool,
-                     now: Callable[[], float] = time.perf_counter) -> dict[str, Any]:
+                     now: Callable[[], float] = time.perf_counter) -> BudgetReport:
     """One warm-up pick, then the measured one (same seed) with the stage timers; the floor beside it (wall
     time). ``now``: the stages' and the episode's clock (``time.thread_time``: the tick loop thread's CPU)."""
 
@@ -156,7 +191,7 @@ def run_budget_bench(tree: Path, scene: Path, seed: int, calibration: Path | Non
 
 
 def _budget(tree: Path, scene: Path, seed: int, calibration: Path | None, log: Path | None,
-            now: Callable[[], float]) -> dict[str, Any]:
+            now: Callable[[], float]) -> BudgetReport:
     from bt_grasp.episode import Episode, WarmWorlds, pick_request
 
     worlds = WarmWorlds()
@@ -172,8 +207,9 @@ def _budget(tree: Path, scene: Path, seed: int, calibration: Path | None, log: P
         total_s = now() - start
     steps = episode.world.physics_steps - steps_before
     floor = _floor(scene, steps, episode.world.dt_s)
-    stages = [{"stage": name, "group": group, "s": round(clock.totals[name], 4), "calls": clock.calls[name],
-               "share": round(clock.totals[name] / total_s, 3)} for name, group in STAGES]
+    stages: list[StageTime] = [
+        {"stage": name, "group": group, "s": round(clock.totals[name], 4), "calls": clock.calls[name],
+         "share": round(clock.totals[name] / total_s, 3)} for name, group in STAGES]
     other_s = total_s - sum(clock.totals.values())
     stages.append({"stage": "everything else", "group": "everything else", "s": round(other_s, 4), "calls": 0,
                    "share": round(other_s / total_s, 3)})

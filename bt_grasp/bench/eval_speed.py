@@ -8,7 +8,37 @@ import statistics
 import tempfile
 import time
 from pathlib import Path
-from typing import Any
+from typing import NotRequired, TypedDict
+
+from bt_grasp.files.json_types import JsonValue
+
+
+class EvalRun(TypedDict):
+    """One way of running the episodes: how many, how fast."""
+
+    episodes: int
+    successes: int
+    wall_s: float
+    episodes_per_min: float
+    setup_s_median_warm: NotRequired[float | None]  # a campaign's
+    setup_s_max_cold: NotRequired[float]
+
+
+class EvalReport(TypedDict):
+    """``run_eval_bench``'s figures."""
+
+    machine: str
+    load_before: tuple[float, float, float]
+    runs: dict[str, EvalRun]
+    same_fingerprints_across_worker_counts: NotRequired[bool]
+    load_after: NotRequired[tuple[float, float, float]]
+
+
+def _seconds(value: JsonValue) -> float:
+    """A results row's time column (a number: the worker wrote it)."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise TypeError(f"a time in a results row is a number, not {value!r}")
+    return float(value)
 
 
 def _campaign_file(folder: Path, trees: list[Path], scene: Path, seeds: int, first_seed: int) -> Path:
@@ -19,7 +49,8 @@ def _campaign_file(folder: Path, trees: list[Path], scene: Path, seeds: int, fir
     return path
 
 
-def _campaign_run(campaign_file: Path, out: Path, workers: int) -> dict[str, Any]:
+def _campaign_run(campaign_file: Path, out: Path, workers: int) -> tuple[EvalRun, dict[str, JsonValue]]:
+    """The campaign's figures, and its episodes' fingerprints (episode -> fingerprint)."""
     from bt_grasp.campaign.backend import warm_backend
     from bt_grasp.campaign.local import LocalEngine
     from bt_grasp.campaign.results import read_rows, results_path
@@ -32,8 +63,8 @@ def _campaign_run(campaign_file: Path, out: Path, workers: int) -> dict[str, Any
     run_campaign(campaign, out, lambda: LocalEngine(workers, warm_backend, out / "logs", KeepLogs.NONE))
     wall = time.perf_counter() - t0
     rows = read_rows(results_path(out, campaign.name))
-    setups = sorted(r["setup_wall_s"] for r in rows)
-    return {
+    setups = sorted(_seconds(r["setup_wall_s"]) for r in rows)
+    figures: EvalRun = {
         "episodes": len(rows),
         "successes": sum(1 for r in rows if r["success"]),
         "wall_s": round(wall, 1),
@@ -42,18 +73,18 @@ def _campaign_run(campaign_file: Path, out: Path, workers: int) -> dict[str, Any
         # (the first episode of each worker builds its world: listed apart)
         "setup_s_median_warm": round(statistics.median(setups[workers:]), 3) if len(setups) > workers else None,
         "setup_s_max_cold": round(max(setups), 3),
-        "fingerprints": {r["episode"]: r["fingerprint"] for r in rows},
     }
+    return figures, {str(r["episode"]): r["fingerprint"] for r in rows}
 
 
-def run_eval_bench(trees: list[Path], scene: Path, seeds: int, first_seed: int, workers: list[int]) -> dict[str, Any]:
+def run_eval_bench(trees: list[Path], scene: Path, seeds: int, first_seed: int, workers: list[int]) -> EvalReport:
     from bt_grasp.bench.pick import run_pick_bench
     from bt_grasp.process.environment import machine_description
     from bt_grasp.scene.format import load_scene
 
     config = load_scene(scene)
     calibration = scene.parent / config.calibration if config.calibration else None
-    report: dict[str, Any] = {"machine": machine_description(), "load_before": os.getloadavg(), "runs": {}}
+    report: EvalReport = {"machine": machine_description(), "load_before": os.getloadavg(), "runs": {}}
     n = len(trees) * seeds
     t0 = time.perf_counter()
     pick = run_pick_bench(trees, scene, seeds, first_seed, calibration, None)
@@ -68,8 +99,8 @@ def run_eval_bench(trees: list[Path], scene: Path, seeds: int, first_seed: int, 
         campaign_file = _campaign_file(Path(tmp), trees, scene, seeds, first_seed)
         prints = []
         for w in workers:
-            result = _campaign_run(campaign_file, Path(tmp) / f"w{w}", w)
-            prints.append(result.pop("fingerprints"))
+            result, fingerprints = _campaign_run(campaign_file, Path(tmp) / f"w{w}", w)
+            prints.append(fingerprints)
             report["runs"][f"eval run --workers {w}"] = result
     report["same_fingerprints_across_worker_counts"] = all(p == prints[0] for p in prints)
     report["load_after"] = os.getloadavg()

@@ -15,7 +15,7 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable
-from typing import Any, Literal, Protocol
+from typing import Literal, Protocol
 
 import numpy as np
 
@@ -91,11 +91,11 @@ def _stats(values: list[float]) -> dict[str, float]:
 
 def run_perception_bench(scenes: int, seed: int, *, backend: BenchBackend, calibrate: bool = True,
                          calibration_poses: int = 16,
-                         progress: Callable[[int, int], None] | None = None) -> dict[str, Any]:
+                         progress: Callable[[int, int], None] | None = None) -> dict[str, object]:
     """Run the benchmark; returns a JSON-able summary (see docs/perception.md for the fields)."""
     t_start = time.perf_counter()
     base = backend.base_scene()
-    calib_report: dict[str, Any] = {}
+    calib_report: dict[str, dict[str, dict[str, float]]] = {}
     if calibrate:
         for mount in Mount:
             for noise in (True, False):
@@ -137,7 +137,7 @@ def run_perception_bench(scenes: int, seed: int, *, backend: BenchBackend, calib
                 grasp_ok += int(synthesize_grasps(det, result.others).ok)
         if progress is not None:
             progress(i + 1, scenes)
-    summary: dict[str, Any] = {
+    summary: dict[str, object] = {
         "scenes": scenes,
         "seed": seed,
         "detection_rate": detected / max(scenes, 1),

@@ -24,13 +24,53 @@ from collections import Counter
 from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, NotRequired, TypedDict
 
 from bt_grasp.interfaces import Mount
 from bt_grasp.process.environment import machine_description
 
 if TYPE_CHECKING:
     from bt_grasp.episode import EpisodeResult
+
+
+class ObjectFigures(TypedDict):
+    """The runs of one tree that lifted one object (the judge names it)."""
+
+    runs: int
+    successes: int
+    failures: dict[int, str]  # seed -> why
+    failure_reasons: dict[str, int]
+
+
+class TreeFigures(TypedDict):
+    """One tree's picks over the seeds."""
+
+    runs: int
+    successes: int
+    success_rate: float
+    failures: dict[int, str]  # seed -> reason (failed leaf)
+    per_object: dict[str, ObjectFigures]
+    sim_time_s_median: float
+    wall_time_s_median: float
+    ticks_median: float
+    retries_total: int
+    plan_calls_per_pick_mean: float
+    plan_pose_calls_per_pick_mean: float
+    plan_wall_s_per_pick_median: float
+    plan_wall_s_per_pick_mean: float
+
+
+class PickBench(TypedDict):
+    """``run_pick_bench``'s figures."""
+
+    machine: str
+    scene: str
+    calibration: str
+    color: str
+    trees: dict[str, TreeFigures]
+    detector: NotRequired[str]
+    targets: NotRequired[dict[int, str]]
+    worlds: NotRequired[str]
 
 
 def default_pick_trees(detector: str = "geometric") -> list[Path]:
@@ -44,7 +84,7 @@ def run_pick_bench(
     trees: list[Path], scene: Path, seeds: int, first_seed: int, calibration: Path | None, log_dir: Path | None,
     warm: bool = False, color: str | None = None, progress: Callable[[str], None] | None = None,
     detector: str = "geometric",
-) -> dict[str, Any]:
+) -> PickBench:
     """``color``: the colour the tree picks ('' = any object: the most graspable one Perceive sees); None: red,
     or any object when the scene declares a mesh or URDF object (:func:`default_color`). ``detector``:
     "learned" names a target per seed (see the module's text; ``color`` is then ignored)."""
@@ -70,7 +110,7 @@ def run_pick_bench(
             calibration = save_calibration(
                 calibrate_in_sim(scene, Mount.EYE_TO_HAND, first_seed).run.calibration, work / "calibration.yaml"
             )
-        report: dict[str, Any] = {
+        report: PickBench = {
             "machine": machine_description(), "scene": str(scene), "calibration": str(calibration),
             "color": color or "any (the most graspable object Perceive sees)", "trees": {}
         }
@@ -155,9 +195,9 @@ def _why(run: EpisodeResult) -> str:
     return "; ".join(parts)
 
 
-def _per_object(runs: list[EpisodeResult]) -> dict[str, dict[str, Any]]:
+def _per_object(runs: list[EpisodeResult]) -> dict[str, ObjectFigures]:
     """Per object the judge names (the one that rose most): runs, successes, and each failure's reason."""
-    out: dict[str, dict[str, Any]] = {}
+    out: dict[str, ObjectFigures] = {}
     for name in sorted({_picked(r) for r in runs}):
         mine = [r for r in runs if _picked(r) == name]
         out[name] = {

@@ -12,6 +12,7 @@ import logging
 import time
 from collections import Counter
 from dataclasses import dataclass, field, replace
+from typing import NotRequired, TypedDict
 
 import numpy as np
 from numpy.typing import NDArray
@@ -29,6 +30,27 @@ log = logging.getLogger(__name__)
 OBJECT_SIZE_M = (0.05, 0.05, 0.05)
 #: an "at" goal puts the finger tips 5 mm above the table: plan those with a smaller table margin
 AT_OBJECT_MARGIN_M = 0.002
+
+
+class PlanSummary(TypedDict):
+    """``PlanReport.summary``: the problem set's figures (times in ms, NaN when no problem gave one)."""
+
+    problems: int
+    seed: int
+    planner: str
+    success_rate: float
+    plan_ms_median: float
+    plan_ms_p95: float
+    ik_ms_median: float
+    traj_ms_median: float
+    path_length_rad_median: float
+    traj_duration_s_median: float
+    direct_fraction: float
+    statuses: dict[str, int]
+    labelled_problems: int
+    feasible_problems: int
+    success_over_feasible: float | None
+    machine: NotRequired[str]  # the command adds where it ran
 
 
 @dataclass(frozen=True)
@@ -79,7 +101,7 @@ class BenchReport:
     def _ok(self) -> list[ProblemOutcome]:
         return [o for o in self.outcomes if o.status is PlanStatus.OK]
 
-    def summary(self) -> dict[str, object]:
+    def summary(self) -> PlanSummary:
         ok = self._ok()
         statuses = Counter(o.status.value for o in self.outcomes)
         labels = feasibility_labels(self.seed)

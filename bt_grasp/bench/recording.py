@@ -14,13 +14,13 @@ import statistics
 import tempfile
 import time
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from bt_grasp.recording.reader import open_log
 from bt_grasp.recording.replay import summary
-from bt_grasp.recording.writer import RunRecorder
+from bt_grasp.recording.writer import Compression, RunRecorder
+from bt_grasp.tree.records import NodeRecord
 
 DT_NS = 10_000_000  # 100 Hz
 
@@ -40,22 +40,23 @@ def _scene(rng: np.random.Generator, h: int, w: int) -> tuple[np.ndarray, np.nda
     return np.clip(rgb, 0, 255).astype(np.uint8), depth
 
 
-def _nodes(tick: int, n_nodes: int) -> list[dict[str, Any]]:
+def _nodes(tick: int, n_nodes: int) -> list[NodeRecord]:
+    """The tick's node records, as the runner hands them over: the root (a Sequence) and its leaves."""
     active = 1 + (tick // 40) % max(1, n_nodes - 1)  # the leaf running now; changes every 40 ticks
-    out = []
+    out: list[NodeRecord] = []
     for uid in range(1, n_nodes + 1):
         running = uid in (1, active)
         status = "RUNNING" if running else ("SUCCESS" if uid < active else "IDLE")
-        out.append({"uid": uid, "path": f"Root/N{uid}", "type": "Action", "name": f"N{uid}", "status": status,
-                    "feedback": f"step {tick % 40}" if uid == active else "", "failure_reason": None,
-                    "ticked": running})
+        out.append({"uid": uid, "type": "Action", "name": f"N{uid}", "path": f"Root/N{uid}",
+                    "kind": "Control" if uid == 1 else "Action", "status": status, "failure_reason": None,
+                    "ticked": running, "feedback": f"step {tick % 40}" if uid == active else ""})
     return out
 
 
 def bench_logging(
     n_ticks: int = 6000, n_nodes: int = 30, image_every: int = 50, image_shape: tuple[int, int] = (480, 640),
-    compression: str = "zstd", folder: str | Path | None = None,
-) -> dict[str, Any]:
+    compression: Compression = "zstd", folder: str | Path | None = None,
+) -> dict[str, object]:
     """Write a synthetic run and measure. Returns µs per tick (write_tick + flush_tick, mean/p50/p99), ms
     per image pair, file size and MB per simulated minute at 100 Hz, with and without images."""
     rng = np.random.default_rng(0)
@@ -64,10 +65,9 @@ def bench_logging(
         path = Path(tmp) / "bench.mcap"
         tick_us: list[float] = []
         image_ms: list[float] = []
-        board: dict[str, Any] = {f"key{i}": i for i in range(18)}
+        board: dict[str, object] = {f"key{i}": i for i in range(18)}
         image_bytes = 0
-        with RunRecorder(path, metadata={"bench": "1"}, compression=compression,  # type: ignore[arg-type]
-                         handle_signals=False) as rec:
+        with RunRecorder(path, metadata={"bench": "1"}, compression=compression, handle_signals=False) as rec:
             rec.write_tree_structure(0, {"uid": 1, "type": "Sequence", "name": "Root", "path": "Root",
                                          "kind": "control", "attributes": {}, "children": []})
             for tick in range(n_ticks):
@@ -105,7 +105,7 @@ def bench_logging(
     }
 
 
-def bench_reading(n_ticks: int = 10_000, n_nodes: int = 30, folder: str | Path | None = None) -> dict[str, Any]:
+def bench_reading(n_ticks: int = 10_000, n_nodes: int = 30, folder: str | Path | None = None) -> dict[str, object]:
     """Write an image-less ``n_ticks`` log, then time ``open_log`` + ``summary`` (indexed) and the same
     on a copy without its summary (the linear crash-recovery path)."""
     with tempfile.TemporaryDirectory(dir=folder) as tmp:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import statistics
 import time
 from pathlib import Path
+from typing import TypedDict
 
 import numpy as np
 
@@ -13,7 +14,21 @@ from bt_grasp.scene.format import load_scene
 from bt_grasp.sim.world import World
 
 
-def run_sim_bench(scene_path: str | Path, captures: int = 20, physics_seconds: float = 10.0) -> dict[str, object]:
+class SimBench(TypedDict):
+    """``run_sim_bench``'s figures."""
+
+    machine: str
+    scene_build_s_first: float
+    scene_build_s_median: float
+    first_capture_s: float
+    render_ms_median: float
+    capture_ms_median: float
+    physics_steps_per_s: int
+    sim_s_per_wall_s: float
+    timestep_s: float
+
+
+def run_sim_bench(scene_path: str | Path, captures: int = 20, physics_seconds: float = 10.0) -> SimBench:
     """Measure build, capture and physics speed on this machine; returns a JSON-able dict."""
     config = load_scene(scene_path)
     t0 = time.perf_counter()

@@ -14,7 +14,7 @@ from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TypedDict
 
 from bt_grasp.defaults import DEFAULT_MAX_TICKS
 
@@ -44,6 +44,20 @@ TASKS: tuple[Task, ...] = (
 )
 
 
+class TaskSummary(TypedDict):
+    """``TaskFigures.summary``: one task's figures."""
+
+    task: str
+    episodes: int
+    successes: int
+    success_rate: float
+    seeds: str
+    failures: dict[str, int]
+    failed_seeds: list[int]
+    sim_time_s_median: float
+    wall_time_s_median: float
+
+
 @dataclass
 class TaskFigures:
     """One task's results over its seeds."""
@@ -56,7 +70,7 @@ class TaskFigures:
     sim_time_s: list[float] = field(default_factory=list)
     wall_time_s: list[float] = field(default_factory=list)
 
-    def summary(self) -> dict[str, Any]:
+    def summary(self) -> TaskSummary:
         n = len(self.seeds)
         return {
             "task": self.task,

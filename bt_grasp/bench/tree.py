@@ -5,7 +5,6 @@ from __future__ import annotations
 import os
 import platform
 import time
-from typing import Any
 
 from bt_grasp.tree.builtins import builtin_registry
 from bt_grasp.tree.loader import load_tree_from_string
@@ -21,7 +20,7 @@ def bench_xml(n_nodes: int) -> str:
     )
 
 
-def tick_overhead(n_nodes: int = 100, n_ticks: int = 1000) -> dict[str, Any]:
+def tick_overhead(n_nodes: int = 100, n_ticks: int = 1000) -> dict[str, object]:
     """Tick a ``n_nodes`` tree ``n_ticks`` times; report the cost per node per tick."""
     if n_nodes < 2 or n_ticks < 1:
         raise ValueError("tick_overhead needs n_nodes >= 2 and n_ticks >= 1")

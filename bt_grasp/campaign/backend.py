@@ -23,17 +23,18 @@ class WarmEpisodeBackend:
     """Implements :class:`bt_grasp.campaign.episode.EpisodeBackend`."""
 
     def __init__(self) -> None:
+        # deferred: start-up time (the coordinator imports this class to hand it to workers; they build worlds)
         from bt_grasp.episode import WarmWorlds
 
         self.worlds = WarmWorlds()
 
     def warm_up(self) -> None:
         # the leaves and the motion and perception stacks they use (the simulator comes with the first world)
-        import bt_grasp.behaviours
-        import bt_grasp.episode.episode  # noqa: F401
+        import bt_grasp.behaviours  # deferred: start-up time (paid here, once per worker, on purpose)
+        import bt_grasp.episode.episode  # noqa: F401  # deferred: start-up time (as above)
 
     def run(self, planned: PlannedEpisode, log: Path | None) -> EpisodeResult:
-        from bt_grasp.episode import Episode
+        from bt_grasp.episode import Episode  # deferred: start-up time (the coordinator never runs an episode)
 
         request = replace(planned.request, log=log, fingerprint=True,
                           argv=("bt-grasp", "eval", "run", planned.campaign, planned.key))

@@ -7,8 +7,8 @@ import json
 import os
 import platform
 from functools import lru_cache
-from typing import Any
 
+from bt_grasp.campaign.rows import Environment
 from bt_grasp.process.code_fingerprint import code_fingerprint
 from bt_grasp.process.environment import KEY_LIBRARIES, cpu_model, library_version
 
@@ -17,8 +17,8 @@ LIBRARIES = (*KEY_LIBRARIES, "numpy", "ray")
 
 
 @lru_cache(maxsize=1)
-def environment() -> dict[str, Any]:
-    env: dict[str, Any] = {
+def environment() -> Environment:
+    env: Environment = {
         "code": code_fingerprint(),  # the package's files and the libraries that change a run (one worker's start)
         "libraries": {name: library_version(name) for name in LIBRARIES},
         "python": platform.python_version(),

@@ -15,9 +15,9 @@ from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
-from typing import Any
 
 from bt_grasp.campaign.episode import EpisodeBackend
+from bt_grasp.campaign.rows import ResultRow
 from bt_grasp.campaign.runner import EpisodeError
 from bt_grasp.campaign.spec import PlannedEpisode
 from bt_grasp.campaign.worker import WORKER_ENV, KeepLogs, Worker
@@ -85,7 +85,7 @@ def _watch_parent(coordinator: int, poll_s: float) -> None:
             os._exit(1)
 
 
-def _run(episode: PlannedEpisode) -> dict[str, Any]:
+def _run(episode: PlannedEpisode) -> ResultRow:
     assert _WORKER is not None, "worker process not initialised"
     return _WORKER.run(episode)
 
@@ -106,7 +106,7 @@ class LocalEngine:
         self.log_dir = log_dir
         self.keep_logs = keep_logs
 
-    def run(self, episodes: Sequence[PlannedEpisode]) -> Iterator[dict[str, Any] | EpisodeError]:
+    def run(self, episodes: Sequence[PlannedEpisode]) -> Iterator[ResultRow | EpisodeError]:
         for key, value in WORKER_ENV.items():  # spawned workers inherit it before they import numpy
             os.environ.setdefault(key, value)
         # every worker is spawned by the submit() calls below, in this thread (Python 3.11's pool spawns again
@@ -119,7 +119,7 @@ class LocalEngine:
             initargs=(self.backend_factory, self.log_dir, self.keep_logs, os.getpid(), in_main_thread,
                       PARENT_POLL_S),
         )
-        futures: dict[Future[dict[str, Any]], PlannedEpisode] = {pool.submit(_run, e): e for e in episodes}
+        futures: dict[Future[ResultRow], PlannedEpisode] = {pool.submit(_run, e): e for e in episodes}
         open_futures = set(futures)
         try:
             while open_futures:

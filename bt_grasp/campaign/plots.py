@@ -9,9 +9,16 @@ from __future__ import annotations
 import io
 from collections import Counter
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Literal
 
+from bt_grasp.campaign.rows import ReportRow
 from bt_grasp.campaign.stats import Rate, success_rates, tree_label
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.axis import Axis
+    from matplotlib.figure import Figure
+    from matplotlib.typing import LegendLocType
 
 GROUPS = ("tree", "scene", "fault_plan")
 COLORS = ("#2b6cb0", "#dd6b20", "#38a169", "#805ad5", "#d53f8c", "#319795", "#718096")
@@ -24,7 +31,7 @@ MAX_RETRY_BARS = 40
 OTHER_COLOR = "#a0aec0"
 
 
-def _figure(width: float, height: float) -> Any:
+def _figure(width: float, height: float) -> Figure:
     import matplotlib
 
     matplotlib.use("Agg")  # no display; only files
@@ -33,7 +40,7 @@ def _figure(width: float, height: float) -> Any:
     return Figure(figsize=(width, height), dpi=100, layout="constrained")
 
 
-def _png(fig: Any) -> bytes:
+def _png(fig: Figure) -> bytes:
     from matplotlib.text import Text
 
     for text in fig.findobj(Text):  # names from files are text: a '$' must not start mathtext (it crashed)
@@ -47,7 +54,7 @@ class _Trees:
     """The trees a figure draws one by one (those with most episodes, at most :data:`MAX_TREES_DRAWN`, the last
     place being "N other trees" when there are more) and which of them a row is drawn as."""
 
-    def __init__(self, rows: Sequence[dict[str, Any]]) -> None:
+    def __init__(self, rows: Sequence[ReportRow]) -> None:
         counts = Counter(tree_label(r) for r in rows)
         if len(counts) <= MAX_TREES_DRAWN:
             self.kept = sorted(counts)
@@ -58,7 +65,7 @@ class _Trees:
         self._kept = set(self.kept)
         self.labels = [*self.kept, *([self.other] if self.other is not None else [])]
 
-    def of(self, row: dict[str, Any]) -> str:
+    def of(self, row: ReportRow) -> str:
         label = tree_label(row)
         return label if label in self._kept or self.other is None else self.other
 
@@ -66,24 +73,24 @@ class _Trees:
         return COLORS[self.kept.index(label) % len(COLORS)] if label in self._kept else OTHER_COLOR
 
 
-def _trees(rows: Sequence[dict[str, Any]]) -> _Trees:
+def _trees(rows: Sequence[ReportRow]) -> _Trees:
     return _Trees(rows)
 
 
-def _integer_axis(axis: Any) -> None:
+def _integer_axis(axis: Axis) -> None:
     """Ticks only at whole numbers (counts of episodes or retries)."""
     from matplotlib.ticker import MaxNLocator
 
     axis.set_major_locator(MaxNLocator(integer=True))
 
 
-def _tree_legend(ax: Any, trees: _Trees, **kwargs: Any) -> None:
+def _tree_legend(ax: Axes, trees: _Trees, **kwargs: LegendLocType) -> None:
     from matplotlib.patches import Patch
 
     ax.legend(handles=[Patch(facecolor=trees.color(t), label=t) for t in trees.labels], fontsize=8, **kwargs)
 
 
-def warm_up_rows(rows: Sequence[dict[str, Any]]) -> set[int]:
+def warm_up_rows(rows: Sequence[ReportRow]) -> set[int]:
     """Indexes of each worker's first episode (in the results file's order, the order they finished): it
     builds the worker's first world, so its wall time is not the steady one. Rows without a worker: none."""
     first: dict[str, int] = {}
@@ -94,7 +101,7 @@ def warm_up_rows(rows: Sequence[dict[str, Any]]) -> set[int]:
     return set(first.values())
 
 
-def success_by_group(rows: Sequence[dict[str, Any]], title: str) -> bytes:
+def success_by_group(rows: Sequence[ReportRow], title: str) -> bytes:
     rates = success_rates(rows, GROUPS)
     if len(rates) > MAX_GROUPS_DRAWN:
         most = set(sorted(range(len(rates)), key=lambda i: -rates[i].n)[:MAX_GROUPS_DRAWN])
@@ -119,7 +126,7 @@ def success_by_group(rows: Sequence[dict[str, Any]], title: str) -> bytes:
     return _png(fig)
 
 
-def failure_reasons(rows: Sequence[dict[str, Any]]) -> bytes:
+def failure_reasons(rows: Sequence[ReportRow]) -> bytes:
     failed = [r for r in rows if not r["success"]]
     trees = _trees(rows)
     keys = Counter(_failure_key(r) for r in failed)
@@ -141,11 +148,11 @@ def failure_reasons(rows: Sequence[dict[str, Any]]) -> bytes:
     return _png(fig)
 
 
-def _failure_key(row: dict[str, Any]) -> str:
+def _failure_key(row: ReportRow) -> str:
     return f"{row['failure_reason'] or '?'} ({row.get('failed_path') or row['failed_leaf'] or '-'})"
 
 
-def time_distributions(rows: Sequence[dict[str, Any]]) -> bytes:
+def time_distributions(rows: Sequence[ReportRow]) -> bytes:
     fig = _figure(10, 3.4)
     axes = fig.subplots(1, 2)
     warm = warm_up_rows(rows)
@@ -153,6 +160,7 @@ def time_distributions(rows: Sequence[dict[str, Any]]) -> bytes:
     left_out = len(rows) - len(steady)
     wall_label = "wall time per episode [s]" + (
         f"\n(each worker's first episode, which pays its warm-up, left out: {left_out})" if left_out else "")
+    column: Literal["sim_time_s", "episode_wall_s"]
     for ax, column, label, chosen in (
         (axes[0], "sim_time_s", "simulated time per episode [s]", rows),
         (axes[1], "episode_wall_s", wall_label, steady),
@@ -166,7 +174,7 @@ def time_distributions(rows: Sequence[dict[str, Any]]) -> bytes:
     return _png(fig)
 
 
-def retries(rows: Sequence[dict[str, Any]]) -> bytes:
+def retries(rows: Sequence[ReportRow]) -> bytes:
     fig = _figure(10, 3.2)
     axes = fig.subplots(1, 2)
     trees = _trees(rows)

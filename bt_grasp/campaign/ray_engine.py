@@ -20,19 +20,26 @@ import logging
 import socket
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
-from typing import Any
+from types import ModuleType
+from typing import TYPE_CHECKING
 
 from bt_grasp.campaign.episode import EpisodeBackend
+from bt_grasp.campaign.rows import ResultRow
 from bt_grasp.campaign.runner import EpisodeError
 from bt_grasp.campaign.spec import PlannedEpisode
 from bt_grasp.campaign.worker import WORKER_ENV, KeepLogs, Worker
 from bt_grasp.errors import InputError
 
+if TYPE_CHECKING:  # Ray is imported when a campaign connects to it (it is an optional extra)
+    from ray import ObjectRef
+    from ray.actor import ActorHandle
+
 log = logging.getLogger(__name__)
 
 #: the options of every episode actor: one CPU each, restarted on a lost node, and never detached (an actor
 #: outliving its driver would hold ~700 MB and a CPU slot with nobody to hand it episodes)
-ACTOR_OPTIONS: dict[str, Any] = {"num_cpus": 1, "max_restarts": 2, "max_task_retries": 2, "lifetime": "non_detached"}
+ACTOR_OPTIONS: dict[str, int | str] = {"num_cpus": 1, "max_restarts": 2, "max_task_retries": 2,
+                                       "lifetime": "non_detached"}
 
 
 class EpisodeActor:
@@ -43,7 +50,7 @@ class EpisodeActor:
         Path(log_dir).mkdir(parents=True, exist_ok=True)
         self.worker = Worker(factory, log_dir, keep_logs)
 
-    def run(self, episode: PlannedEpisode) -> dict[str, Any]:
+    def run(self, episode: PlannedEpisode) -> ResultRow:
         return self.worker.run(episode)
 
 
@@ -89,7 +96,7 @@ class RayEngine:
         self.log_dir = log_dir
         self.keep_logs = keep_logs
 
-    def _connect(self) -> Any:
+    def _connect(self) -> ModuleType:
         probe_address(self.address)
         import ray
 
@@ -106,7 +113,7 @@ class RayEngine:
             raise InputError("--ray", f"cannot connect to the Ray cluster at '{self.address}': {exc}") from None
         return ray
 
-    def run(self, episodes: Sequence[PlannedEpisode]) -> Iterator[dict[str, Any] | EpisodeError]:
+    def run(self, episodes: Sequence[PlannedEpisode]) -> Iterator[ResultRow | EpisodeError]:
         ray = self._connect()
         try:
             slots = self.workers or max(1, int(ray.cluster_resources().get("CPU", 1)))
@@ -116,7 +123,7 @@ class RayEngine:
                 for _ in range(min(slots, len(episodes)))
             ]
             queue = list(reversed(episodes))
-            running: dict[Any, tuple[PlannedEpisode, Any]] = {}
+            running: dict[ObjectRef[ResultRow], tuple[PlannedEpisode, ActorHandle[EpisodeActor]]] = {}
             for actor in actors:
                 if queue:
                     episode = queue.pop()

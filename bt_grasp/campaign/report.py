@@ -12,10 +12,10 @@ import html
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 from bt_grasp.campaign import plots
 from bt_grasp.campaign.results import read_report_rows
+from bt_grasp.campaign.rows import ReportEnvironment, ReportRow
 from bt_grasp.campaign.stats import Rate, success_rates, tree_label
 from bt_grasp.errors import InputError
 from bt_grasp.files.output_files import make_output_folder, write_output_file
@@ -51,14 +51,14 @@ class Figure:
     png: bytes
 
 
-def _load(path: Path) -> list[dict[str, Any]]:
+def _load(path: Path) -> list[ReportRow]:
     rows = read_report_rows(path)
     if not rows:
         raise InputError(path, "holds no finished episode yet")
     return rows
 
 
-def _name(rows: Sequence[dict[str, Any]], path: Path) -> str:
+def _name(rows: Sequence[ReportRow], path: Path) -> str:
     names = sorted({str(r.get("campaign", path.stem)) for r in rows})
     return ", ".join(names)
 
@@ -84,7 +84,7 @@ def _rates_table(rates: Sequence[Rate], columns: Sequence[str]) -> str:
     )
 
 
-def _failures_table(rows: Sequence[dict[str, Any]]) -> str:
+def _failures_table(rows: Sequence[ReportRow]) -> str:
     failed = [r for r in rows if not r["success"]]
     if not failed:
         return "<p>No episode failed.</p>"
@@ -93,7 +93,7 @@ def _failures_table(rows: Sequence[dict[str, Any]]) -> str:
         "<th>ticks</th><th>replay</th></tr>"
     ]
     for r in sorted(failed, key=lambda r: (tree_label(r), r["scene"], r["fault_plan"], r["seed"]))[:MAX_FAILURE_ROWS]:
-        replay = f"<code>bt-grasp replay {html.escape(r['mcap'])}</code>" if r.get("mcap") else "(log not kept)"
+        replay = f"<code>bt-grasp replay {html.escape(str(r['mcap']))}</code>" if r.get("mcap") else "(log not kept)"
         out.append(
             f"<tr><td>{html.escape(tree_label(r))}</td><td>{html.escape(str(r['scene']))}</td>"
             f"<td class=num>{html.escape(str(r['seed']))}</td><td>{html.escape(str(r['fault_plan']))}</td>"
@@ -106,8 +106,8 @@ def _failures_table(rows: Sequence[dict[str, Any]]) -> str:
     return "".join(out)
 
 
-def _environments(rows: Sequence[dict[str, Any]]) -> str:
-    envs: dict[str, dict[str, Any]] = {}
+def _environments(rows: Sequence[ReportRow]) -> str:
+    envs: dict[str, ReportEnvironment] = {}
     for r in rows:
         env = r.get("environment") or {}
         envs.setdefault(str(env.get("id", "?")), env)
@@ -127,10 +127,10 @@ def _environments(rows: Sequence[dict[str, Any]]) -> str:
     return warn + "<ul>" + "".join(parts) + "</ul>"
 
 
-def _paired(a: Sequence[dict[str, Any]], b: Sequence[dict[str, Any]], names: tuple[str, str]) -> str:
+def _paired(a: Sequence[ReportRow], b: Sequence[ReportRow], names: tuple[str, str]) -> str:
     """Episodes run in both campaigns on the same scene, seed and fault plan: which ones changed outcome."""
 
-    def key(r: dict[str, Any]) -> tuple[str, int, str, str]:
+    def key(r: ReportRow) -> tuple[str, int, str, str]:
         return (str(r["scene"]), int(r["seed"]), str(r["fault_plan"]), str(sorted(r.get("params", {}).items())))
 
     single_a = len({tree_label(r) for r in a}) == 1 and len({tree_label(r) for r in b}) == 1

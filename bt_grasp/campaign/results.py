@@ -11,12 +11,14 @@ from __future__ import annotations
 import json
 import math
 import os
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import cast
 
+from bt_grasp.campaign.rows import ReportRow
 from bt_grasp.errors import InputError
 from bt_grasp.files.bounded_io import MAX_RESULTS_BYTES, read_user_file
+from bt_grasp.files.json_types import JsonObject, JsonValue
 from bt_grasp.files.output_files import open_output_stream, write_output_file
 
 SUFFIX = ".jsonl"
@@ -26,7 +28,7 @@ def results_path(out_dir: Path, campaign_name: str) -> Path:
     return Path(out_dir) / f"{campaign_name}{SUFFIX}"
 
 
-def read_rows(path: Path, *, repair: bool = False) -> list[dict[str, Any]]:
+def read_rows(path: Path, *, repair: bool = False) -> list[JsonObject]:
     """Every complete row of a results file; a torn last line is dropped (and cut from the file if ``repair``)."""
     path = Path(path)
     if not path.exists():
@@ -43,8 +45,8 @@ def read_rows(path: Path, *, repair: bool = False) -> list[dict[str, Any]]:
     return [row for _, row in _numbered_rows(path, data[:end])]
 
 
-def _numbered_rows(path: Path, data: bytes) -> list[tuple[int, dict[str, Any]]]:
-    rows = []
+def _numbered_rows(path: Path, data: bytes) -> list[tuple[int, JsonObject]]:
+    rows: list[tuple[int, JsonObject]] = []
     for number, line in enumerate(data.splitlines(), start=1):
         if not line.strip():
             continue
@@ -70,15 +72,15 @@ _TEXT = (str,)
 _OPTIONAL_TEXT = (str, type(None))
 
 
-def _is_int(value: Any, low: int = -(2**63), high: int = 2**63 - 1) -> bool:
+def _is_int(value: object, low: int = -(2**63), high: int = 2**63 - 1) -> bool:
     return isinstance(value, int) and not isinstance(value, bool) and low <= value <= high
 
 
-def _is_finite(value: Any) -> bool:
+def _is_finite(value: object) -> bool:
     return (isinstance(value, float) and math.isfinite(value)) or _is_int(value)
 
 
-def _check_text(value: Any) -> bool:
+def _check_text(value: str) -> bool:
     """A string that can be written out again (no lone surrogate from a ``\\udcff`` escape)."""
     try:
         value.encode("utf-8")
@@ -87,7 +89,7 @@ def _check_text(value: Any) -> bool:
     return True
 
 
-_COLUMNS: dict[str, tuple[str, Any]] = {
+_COLUMNS: dict[str, tuple[str, Callable[[JsonValue], bool]]] = {
     # column -> (what it must be, check)
     "episode": ("a string", lambda v: isinstance(v, str)),
     "tree": ("a string", lambda v: isinstance(v, str)),
@@ -104,7 +106,7 @@ _COLUMNS: dict[str, tuple[str, Any]] = {
     "retries": (f"an object of leaf paths to retry counts (0 to {MAX_RETRIES})",
                 lambda v: isinstance(v, dict) and all(_is_int(n, 0, MAX_RETRIES) for n in v.values())),
 }
-_OPTIONAL_COLUMNS: dict[str, tuple[str, Any]] = {
+_OPTIONAL_COLUMNS: dict[str, tuple[str, Callable[[JsonValue], bool]]] = {
     "campaign": ("a string", lambda v: isinstance(v, str)),
     "mcap": ("a string or null", lambda v: isinstance(v, _OPTIONAL_TEXT)),
     # the failed leaf's path, its name in every output (rows written before it have only failed_leaf)
@@ -115,7 +117,7 @@ _OPTIONAL_COLUMNS: dict[str, tuple[str, Any]] = {
 }
 
 
-def _check_row(path: Path, number: int, row: dict[str, Any]) -> None:
+def _check_row(path: Path, number: int, row: JsonObject) -> None:
     for column, (expected, ok) in _COLUMNS.items():
         if column not in row:
             raise InputError(path, f"the row has no '{column}' column (a report needs it)", number)
@@ -132,12 +134,12 @@ def _check_row(path: Path, number: int, row: dict[str, Any]) -> None:
         raise InputError(path, "the row holds text that is not valid Unicode (a lone surrogate)", number)
 
 
-def _shown(value: Any) -> str:
+def _shown(value: object) -> str:
     text = json.dumps(value, ensure_ascii=True)
     return text if len(text) <= 40 else text[:37] + "..."
 
 
-def read_report_rows(path: Path) -> list[dict[str, Any]]:
+def read_report_rows(path: Path) -> list[ReportRow]:
     """The complete rows of a results file, each checked for the columns a report reads, with their types;
     a row that lacks one or holds the wrong type is an ``InputError`` naming the line and the column."""
     path = Path(path)
@@ -147,7 +149,7 @@ def read_report_rows(path: Path) -> list[dict[str, Any]]:
     numbered = _numbered_rows(path, data[: data.rfind(b"\n") + 1])
     for number, row in numbered:
         _check_row(path, number, row)
-    return [row for _, row in numbered]
+    return [cast("ReportRow", row) for _, row in numbered]  # what _check_row made sure of
 
 
 class ResultsWriter:
@@ -157,7 +159,7 @@ class ResultsWriter:
         self.path = Path(path)
         self._fd = open_output_stream(self.path, "--out", append=True)  # never through a link, never a FIFO
 
-    def append(self, row: dict[str, Any]) -> None:
+    def append(self, row: Mapping[str, object]) -> None:
         line = (json.dumps(row, sort_keys=False, default=str) + "\n").encode()
         os.write(self._fd, line)
         os.fsync(self._fd)
@@ -174,7 +176,7 @@ class ResultsWriter:
         self.close()
 
 
-def export_parquet(rows: Iterable[dict[str, Any]], out: Path) -> Path:
+def export_parquet(rows: Iterable[Mapping[str, object]], out: Path) -> Path:
     """Write rows as a Parquet table; nested columns (params, retries, judge, environment) as JSON text."""
     import pyarrow as pa
     import pyarrow.parquet as pq
@@ -183,7 +185,7 @@ def export_parquet(rows: Iterable[dict[str, Any]], out: Path) -> Path:
         {k: (json.dumps(v, sort_keys=True) if isinstance(v, dict | list) else v) for k, v in row.items()}
         for row in rows
     ]
-    columns: dict[str, list[Any]] = {}
+    columns: dict[str, list[object]] = {}
     for row in flat:
         for key in row:
             columns.setdefault(key, [])

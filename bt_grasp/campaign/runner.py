@@ -11,12 +11,14 @@ import time
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Protocol
 
 from bt_grasp.campaign.out_lock import campaign_lock
 from bt_grasp.campaign.results import ResultsWriter, read_rows, results_path
+from bt_grasp.campaign.rows import ResultRow
 from bt_grasp.campaign.spec import Campaign, PlannedEpisode
 from bt_grasp.errors import BtGraspError, InputError
+from bt_grasp.files.json_types import JsonObject
 from bt_grasp.files.output_files import check_output_file
 
 log = logging.getLogger(__name__)
@@ -34,7 +36,7 @@ class EpisodeError:
 class Engine(Protocol):
     """Runs episodes somewhere and yields each finished row (or error) as soon as it is available."""
 
-    def run(self, episodes: Sequence[PlannedEpisode]) -> Iterator[dict[str, Any] | EpisodeError]: ...
+    def run(self, episodes: Sequence[PlannedEpisode]) -> Iterator[ResultRow | EpisodeError]: ...
 
 
 class CampaignIncomplete(BtGraspError):
@@ -72,7 +74,7 @@ class Progress:
         return self.successes / self.finished if self.finished else None
 
 
-def pending(campaign: Campaign, rows: list[dict[str, Any]], path: Path) -> list[PlannedEpisode]:
+def pending(campaign: Campaign, rows: list[JsonObject], path: Path) -> list[PlannedEpisode]:
     """The campaign's episodes that have no row yet; rows of episodes not in the campaign are refused."""
     episodes = campaign.episodes()
     keys = {e.key for e in episodes}
@@ -92,7 +94,7 @@ def run_campaign(
     campaign: Campaign,
     out_dir: Path,
     engine_factory: Callable[[], Engine],
-    on_progress: Callable[[Progress, dict[str, Any] | EpisodeError | None], None] | None = None,
+    on_progress: Callable[[Progress, ResultRow | EpisodeError | None], None] | None = None,
 ) -> Progress:
     """Run every episode of ``campaign`` that has no row in ``out_dir`` yet; rows are on disk as they finish.
 
@@ -106,7 +108,7 @@ def _run_locked(
     campaign: Campaign,
     out_dir: Path,
     engine_factory: Callable[[], Engine],
-    on_progress: Callable[[Progress, dict[str, Any] | EpisodeError | None], None] | None,
+    on_progress: Callable[[Progress, ResultRow | EpisodeError | None], None] | None,
 ) -> Progress:
     path = check_output_file(results_path(out_dir, campaign.name), "--out")  # not a link, device or folder
     rows = read_rows(path, repair=True) if path.exists() else []

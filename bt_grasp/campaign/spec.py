@@ -12,16 +12,19 @@ from __future__ import annotations
 import hashlib
 import itertools
 import json
-from collections.abc import Iterator
+import re
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
-from typing import Any
 
 from pydantic import Field, field_validator, model_validator
 
-from bt_grasp.episode.request import EpisodeRequest
+from bt_grasp.episode.request import BlackboardValue, EpisodeRequest
 from bt_grasp.errors import ConfigError, InputError
-from bt_grasp.files.config import KeyPath, StrictModel, read_yaml, validate
+from bt_grasp.files.bounded_io import read_user_file
+from bt_grasp.files.config import KeyPath, StrictModel, format_key_path, read_yaml, validate
+from bt_grasp.files.output_files import write_output_file
 from bt_grasp.scene.goals import Goal
 
 NO_FAULTS = "none"
@@ -77,8 +80,6 @@ class CampaignFile(StrictModel):
     @field_validator("name")
     @classmethod
     def _name(cls, value: str) -> str:
-        import re
-
         if not re.fullmatch(NAME_PATTERN, value):
             raise ValueError("a campaign's name names its results file: letters, digits, '_', '.' and '-', not "
                              "starting with '.', at most 100 characters")
@@ -176,7 +177,7 @@ class Campaign:
     scenes: tuple[SceneRef, ...]
     seeds: tuple[int, ...]
     fault_plans: tuple[FaultPlanRef, ...]
-    blackboard: tuple[dict[str, Any], ...]
+    blackboard: tuple[dict[str, BlackboardValue], ...]
     max_ticks: int
     base: Path
     digests: dict[Path, str] = field(default_factory=dict, compare=False)
@@ -185,7 +186,7 @@ class Campaign:
     def episodes(self) -> list[PlannedEpisode]:
         return list(self._iter())
 
-    def request(self, tree: str, scene: SceneRef, plan: FaultPlanRef, params: dict[str, Any], seed: int
+    def request(self, tree: str, scene: SceneRef, plan: FaultPlanRef, params: Mapping[str, BlackboardValue], seed: int
                 ) -> EpisodeRequest:
         """The one mapping from a campaign's row (tree x scene x fault plan x parameters x seed) to the request
         ``bt-grasp run`` would make of the same inputs."""
@@ -223,8 +224,6 @@ class Campaign:
 
 
 def _digest(path: Path) -> str:
-    from bt_grasp.files.bounded_io import read_user_file
-
     return hashlib.sha256(read_user_file(path, error=ConfigError)).hexdigest()  # bounded: no device, no giant
 
 
@@ -306,30 +305,33 @@ def load_campaign(path: str | Path, *, check_inputs: bool = True, leaves: tuple[
 
 def _check_inputs(campaign: Campaign, lines: dict[KeyPath, int]) -> None:
     """Load every tree, scene, calibration and fault plan once (no simulator): errors name the campaign too."""
-    from bt_grasp.behaviours import robot_registry
-    from bt_grasp.faults.plan import load_fault_plan
-    from bt_grasp.tree.loader import load_tree
+    from bt_grasp.behaviours import robot_registry  # deferred: start-up time (the leaf library: checks only)
+    from bt_grasp.faults.plan import load_fault_plan  # deferred: start-up time (checks only)
+    from bt_grasp.tree.loader import load_tree  # deferred: start-up time (the tree package: checks only)
 
     src = campaign.source
 
-    def checked(key: KeyPath, what: str, load: Any) -> Any:
+    def checked(key: KeyPath, what: str, load: Callable[[], object]) -> object:
         try:
             return load()
         except InputError as exc:
             raise ConfigError(src, f"{_where(key)} ({what}) does not load: {exc.message}", _line(lines, key)) from None
 
+    def tree_loads(tree: str) -> object:
+        return load_tree(campaign.base / tree, robot_registry(campaign.leaves))
+
     for i, tree in enumerate(campaign.trees):
-        checked(("trees", i), "tree", lambda t=tree: load_tree(campaign.base / t, robot_registry(campaign.leaves)))
+        checked(("trees", i), "tree", partial(tree_loads, tree))
     for i, plan in enumerate(campaign.fault_plans):
         if not plan.is_none:
-            checked(("fault_plans", i), "fault plan", lambda p=plan: load_fault_plan(p.file, p.inject))
+            checked(("fault_plans", i), "fault plan", partial(load_fault_plan, plan.file, plan.inject))
     _check_combinations(campaign, lines)
 
 
 def _check_combinations(campaign: Campaign, lines: dict[KeyPath, int]) -> None:
     """Every tree x scene x fault plan x parameter set passes the episode API's own input checks (goal names,
     tree leaves against the scene, fault plans against the tree), once, before the first episode runs."""
-    from bt_grasp.episode import load_inputs
+    from bt_grasp.episode import load_inputs  # deferred: start-up time (the episode module and its simulator)
 
     seed = campaign.seeds[0]
     for (ti, tree), (si, scene), (fi, plan), (bi, params) in itertools.product(
@@ -351,8 +353,9 @@ def _scene_calibration(
     path: Path, lines: dict[KeyPath, int], key: KeyPath, scene_file: Path, override: Path | None
 ) -> Path | None:
     """The scene loads, and the calibration its episodes use (the campaign's, else the scene's own) fits it."""
+    # deferred: start-up time (the perception package; a resumed campaign with check_inputs=False skips it)
     from bt_grasp.perception.calibration_file import calibration_for_scene
-    from bt_grasp.scene.format import load_scene
+    from bt_grasp.scene.format import load_scene  # deferred: start-up time (checks only)
 
     try:
         config = load_scene(scene_file)
@@ -372,8 +375,6 @@ def _unique(path: Path, lines: dict[KeyPath, int], key: str, names: list[str]) -
 
 
 def _where(key: KeyPath) -> str:
-    from bt_grasp.files.config import format_key_path
-
     return format_key_path(key)
 
 
@@ -391,8 +392,6 @@ def write_options_campaign(
 ) -> Path:
     """The campaign file `eval run --tree T --scene S --seeds N` stands for, written into the output folder
     (``NAME.campaign.yaml``: the run is resumable and its inputs are on record). Paths in it are absolute."""
-    import re
-
     import yaml
 
     for flag, paths in (("--tree", trees), ("--scene", scenes)):
@@ -414,6 +413,4 @@ def write_options_campaign(
     }
     if max_ticks is not None:
         data["max_ticks"] = max_ticks
-    from bt_grasp.files.output_files import write_output_file
-
     return write_output_file(folder / f"{name}.campaign.yaml", yaml.safe_dump(data, sort_keys=False), "--out")

@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
 
 Z_95 = 1.959963984540054  # two-sided 95% normal quantile
 
@@ -40,16 +39,16 @@ class Rate:
         return wilson_interval(self.successes, self.n)
 
 
-def tree_label(row: dict[str, Any]) -> str:
+def tree_label(row: Mapping[str, object]) -> str:
     tree = str(row["tree"])
     return tree.rsplit("/", 1)[-1].rsplit(".", 1)[0]
 
 
-def group_value(row: dict[str, Any], column: str) -> str:
+def group_value(row: Mapping[str, object], column: str) -> str:
     return tree_label(row) if column == "tree" else str(row[column])
 
 
-def success_rates(rows: Iterable[dict[str, Any]], by: Sequence[str]) -> list[Rate]:
+def success_rates(rows: Iterable[Mapping[str, object]], by: Sequence[str]) -> list[Rate]:
     counts: dict[tuple[str, ...], list[int]] = {}
     for row in rows:
         key = tuple(group_value(row, c) for c in by)

@@ -11,10 +11,10 @@ from collections.abc import Callable
 from dataclasses import replace
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any
 
 from bt_grasp.campaign.environment import environment
 from bt_grasp.campaign.episode import EpisodeBackend
+from bt_grasp.campaign.rows import ResultRow
 from bt_grasp.campaign.spec import PlannedEpisode
 from bt_grasp.episode.result import EpisodeResult
 from bt_grasp.files.output_files import check_output_file, make_output_folder
@@ -51,7 +51,7 @@ def log_path(log_dir: Path, episode: PlannedEpisode) -> Path:
 
 
 def make_row(episode: PlannedEpisode, result: EpisodeResult, mcap: Path | None, episode_wall_s: float
-             ) -> dict[str, Any]:
+             ) -> ResultRow:
     env = environment()
     return {
         "campaign": episode.campaign,
@@ -99,7 +99,7 @@ class Worker:
         self.warm_up_s = time.perf_counter() - t0
         log.debug("worker %d warm in %.2f s", os.getpid(), self.warm_up_s)
 
-    def run(self, episode: PlannedEpisode) -> dict[str, Any]:
+    def run(self, episode: PlannedEpisode) -> ResultRow:
         """Run one episode; its fingerprint is computed as it runs. With ``--keep-logs all`` it is recorded as
         it runs; with ``failures`` a failed episode is run once more with a log (same seed, same run: the
         second run's fingerprint must equal the first's, else the row says so)."""

@@ -169,7 +169,7 @@ def robot_urdf_with(gripper: GripperName) -> str:
     for child in list(robot):
         if (child.tag == "link" and child.get("name") in _GRIPPER_PARTS) or (
             child.tag == "joint" and (child.find("child") is not None)
-            and child.find("child").get("link") in _GRIPPER_PARTS  # type: ignore[union-attr]
+            and child.find("child").get("link") in _GRIPPER_PARTS
         ):
             robot.remove(child)
     for child in SafeET.fromstring(ROBOTIQ_2F85_URDF):

@@ -74,7 +74,7 @@ def plan(
         ("joint path length median", f"{summary['path_length_rad_median']:.2f} rad"),
         ("trajectory duration median", f"{summary['traj_duration_s_median']:.2f} s"),
         ("straight line free (no search)", f"{summary['direct_fraction']:.0%}"),
-        ("statuses", ", ".join(f"{k} {v}" for k, v in summary["statuses"].items())),  # type: ignore[attr-defined]
+        ("statuses", ", ".join(f"{k} {v}" for k, v in summary["statuses"].items())),
         ("machine", str(summary["machine"])),
     ]
     for name, value in rows:

@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import time
 from pathlib import Path
-from typing import Any
 
 import typer
 from rich.console import Console
@@ -113,7 +112,7 @@ def logging_bench(
     from bt_grasp.bench.recording import bench_logging, bench_reading
 
     t0 = time.perf_counter()
-    report: dict[str, Any] = {
+    report: dict[str, object] = {
         "machine": machine_description(), "write": bench_logging(ticks, nodes), "read": bench_reading(10000)
     }
     report["elapsed_s"] = round(time.perf_counter() - t0, 2)

@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from enum import StrEnum
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import typer
 from rich.console import Console
@@ -14,7 +15,8 @@ from bt_grasp.cli.plugin_option import leaves_option
 from bt_grasp.defaults import DEFAULT_MAX_TICKS
 
 if TYPE_CHECKING:  # the campaign package is imported when a campaign runs, not for --help
-    from bt_grasp.campaign.runner import EpisodeError, Progress
+    from bt_grasp.campaign.rows import ResultRow
+    from bt_grasp.campaign.runner import Engine, EpisodeError, Progress
 
 eval_app = typer.Typer(
     help="Evaluation campaigns: trees x scenes x seeds x fault plans, resumable.", no_args_is_help=True
@@ -30,10 +32,10 @@ def _duration(seconds: float | None) -> str:
     return f"{h}h{m:02d}m" if h else (f"{m}m{s:02d}s" if m else f"{s}s")
 
 
-def progress_printer(console: Console) -> Any:
+def progress_printer(console: Console) -> Callable[[Progress, ResultRow | EpisodeError | None], None]:
     from bt_grasp.campaign.runner import EpisodeError
 
-    def show(progress: Progress, item: dict[str, Any] | EpisodeError | None) -> None:
+    def show(progress: Progress, item: ResultRow | EpisodeError | None) -> None:
         finished = progress.already + progress.done
         rate = progress.success_rate
         head = (
@@ -143,12 +145,12 @@ def run(
     if ray is not None:
         from bt_grasp.campaign.ray_engine import RayEngine
 
-        def engine() -> Any:
+        def engine() -> Engine:
             return RayEngine(ray, workers or None, warm_backend, log_dir.resolve(), keep)
     else:
         from bt_grasp.campaign.local import LocalEngine, default_workers
 
-        def engine() -> Any:
+        def engine() -> Engine:
             return LocalEngine(workers or default_workers(), warm_backend, log_dir.resolve(), keep)
 
     console = Console(stderr=True)

@@ -25,7 +25,7 @@ from __future__ import annotations
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import ClassVar
 
 from rich.markup import escape
 from rich.text import Text
@@ -115,10 +115,10 @@ def parse_prompt(key: str, text: str) -> Command:
     raise ValueError(f"no prompt '{key}'")
 
 
-def _params(text: str) -> dict[str, Any]:
+def _params(text: str) -> dict[str, object]:
     from bt_grasp.files.bounded_yaml import load_value
 
-    params: dict[str, Any] = {}
+    params: dict[str, object] = {}
     for item in (i.strip() for i in text.replace(",", " ").split()):
         name, sep, value = item.partition("=")
         if not sep or not name:

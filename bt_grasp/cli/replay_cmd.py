@@ -9,7 +9,7 @@ from __future__ import annotations
 import json
 from dataclasses import asdict
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, TypedDict
 
 import typer
 from rich.console import Console
@@ -19,9 +19,19 @@ from bt_grasp.cli.plugin_option import leaves_option
 
 if TYPE_CHECKING:  # the recording package (mcap, cv2) is imported when a log is replayed, not for --help
     from bt_grasp.recording.reader import RunLog
+    from bt_grasp.recording.replay import FailureReport, StatusChange
+    from bt_grasp.recording.replay_shapes import LeafState, TickView
 
 
-def _json(console: Console, value: Any) -> None:
+class _Views(TypedDict, total=False):
+    """The views asked for, as JSON: one tick, the failures, a leaf's history."""
+
+    tick: TickView
+    failures: list[dict[str, object]]
+    leaf: list[LeafState]
+
+
+def _json(console: Console, value: object) -> None:
     console.out(json.dumps(value, indent=2, default=str), highlight=False)
 
 
@@ -76,7 +86,7 @@ def replay_command(
     other_views = tick is not None or failures or leaf or topic or as_json or frames_dir or btlog
     if (foxglove or report is not None or report_dir is not None) and not other_views:
         return
-    views: dict[str, Any] = {}
+    views: _Views = {}
     if tick is not None:
         views["tick"] = replay.tick_view(run, tick)
     if failures:
@@ -85,9 +95,10 @@ def replay_command(
         ]
     if leaf is not None:
         views["leaf"] = replay.leaf_history(run, leaf)
-    exports: dict[str, Any] = {}
+    exports: dict[str, object] = {}
     if frames_dir is not None:
-        exports["frames"] = [str(p) for p in export_frames(run, frames_dir)]
+        frames = [str(p) for p in export_frames(run, frames_dir)]
+        exports["frames"] = frames
     if btlog is not None:
         written = write_btlog(run, btlog)
         exports["btlog"] = {"path": str(btlog), "transitions": len(written.transitions)}
@@ -113,10 +124,10 @@ def replay_command(
             console.print()
             console.print(interventions_table(run.interventions))
     _print_views(console, run.path.name, views, leaf, max_rows, run)
-    if "frames" in exports:
-        console.print(f"wrote {len(exports['frames'])} frames to {escape(str(frames_dir))}")
-    if "btlog" in exports:
-        console.print(f"wrote {exports['btlog']['transitions']} transitions to {escape(str(btlog))}")
+    if frames_dir is not None:
+        console.print(f"wrote {len(frames)} frames to {escape(str(frames_dir))}")
+    if btlog is not None:
+        console.print(f"wrote {len(written.transitions)} transitions to {escape(str(btlog))}")
 
 
 def _print_foxglove(console: Console, run: RunLog, target: Path | None) -> None:
@@ -186,12 +197,12 @@ def _check_outputs(log: Path, report: Path | None, report_dir: Path | None, btlo
             check_output_folder(folder, flag)
 
 
-def _asdict(obj: Any) -> dict[str, Any]:
+def _asdict(obj: FailureReport | StatusChange) -> dict[str, object]:
     return {k: v for k, v in asdict(obj).items() if k != "recovery"}
 
 
 def _print_views(
-    console: Console, name: str, views: dict[str, Any], leaf: str | None, max_rows: int, run: RunLog
+    console: Console, name: str, views: _Views, leaf: str | None, max_rows: int, run: RunLog
 ) -> None:
     from bt_grasp.recording import render, replay
 
@@ -199,7 +210,7 @@ def _print_views(
         view = views["tick"]
         stamp = view["stamp_ns"] * 1e-9 if view["stamp_ns"] is not None else float("nan")
         console.print(render.tree_render(view["tree"], f"{name} at tick {view['tick']} ({stamp:.3f} s)"))
-        for fault in view.get("faults", ()):  # injected faults that fired in this tick
+        for fault in view["faults"]:  # injected faults that fired in this tick
             console.print(render.fault_text(replay.FaultMark(**fault)))
         console.print(render.mapping_table("blackboard", view["blackboard"]))
         console.print(render.robot_table(view["robot"]))

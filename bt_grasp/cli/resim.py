@@ -13,24 +13,32 @@ from __future__ import annotations
 import json
 import os
 import tempfile
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 from bt_grasp.errors import LogFileError
 from bt_grasp.files.safe_path import check_relative_name, join_under
 from bt_grasp.scene.goals import Goal
+
+if TYPE_CHECKING:  # the recording and control packages are imported when a log is re-simulated
+    from bt_grasp.control.state import InterventionRecord
+    from bt_grasp.episode.request import BlackboardValue
+    from bt_grasp.recording.compare import Divergence
+    from bt_grasp.recording.fingerprint import FingerprintDifference
+    from bt_grasp.recording.reader import RunLog
 
 
 @dataclass
 class ResimReport:
     ticks_recorded: int
     ticks_new: int
-    divergence: Any  # bt_grasp.recording.compare.Divergence | None
+    divergence: Divergence | None
     success_recorded: bool | None
     success_new: bool
     new_log: str
-    fingerprint_difference: Any = None  # bt_grasp.recording.fingerprint.FingerprintDifference | None
+    fingerprint_difference: FingerprintDifference | None = None
     digest_recorded: str = ""
     digest_new: str = ""
     #: an interactive run's interventions applied again at their ticks, and the first that was not (a sentence)
@@ -42,9 +50,7 @@ class ResimReport:
         return (self.divergence is None and self.fingerprint_difference is None
                 and self.intervention_difference is None)
 
-    def to_json(self) -> dict[str, Any]:
-        from dataclasses import asdict
-
+    def to_json(self) -> dict[str, object]:
         return {
             "reproduced": self.reproduced,
             "ticks_recorded": self.ticks_recorded,
@@ -73,7 +79,7 @@ def _write_attachment(log_path: Path, workdir: Path, name: str, data: bytes) -> 
     return path
 
 
-def _attachment(run: Any, folder: str, workdir: Path, log_path: Path) -> Path | None:
+def _attachment(run: RunLog, folder: str, workdir: Path, log_path: Path) -> Path | None:
     for name, data in run.attachments.items():
         if name.startswith(folder + "/"):
             return _write_attachment(log_path, workdir, name, data)
@@ -201,7 +207,7 @@ def _recorded_int(log_path: Path, meta: dict[str, str], key: str, default: str, 
     return int(text)
 
 
-def _recorded_blackboard(log_path: Path, meta: dict[str, str]) -> dict[str, Any]:
+def _recorded_blackboard(log_path: Path, meta: dict[str, str]) -> dict[str, BlackboardValue]:
     """The blackboard entries the run started with: a JSON object of scalars (as ``--set`` gives them)."""
     try:
         value = json.loads(meta.get("blackboard", "{}") or "{}")
@@ -213,7 +219,7 @@ def _recorded_blackboard(log_path: Path, meta: dict[str, str]) -> dict[str, Any]
     return value
 
 
-def _interventions(log_path: Path, recorded: list[dict[str, Any]]) -> list[Any]:
+def _interventions(log_path: Path, recorded: Sequence[Mapping[str, object]]) -> list[InterventionRecord]:
     """The log's interventions as records, each command checked; a malformed one is one sentence (exit 2)."""
     from bt_grasp.control import CommandError, InterventionRecord, command_from_json
 
@@ -229,7 +235,8 @@ def _interventions(log_path: Path, recorded: list[dict[str, Any]]) -> list[Any]:
     return records
 
 
-def _first_intervention_difference(recorded: list[Any], applied: tuple[Any, ...]) -> str | None:
+def _first_intervention_difference(recorded: Sequence[InterventionRecord], applied: Sequence[InterventionRecord]
+                                   ) -> str | None:
     """Where the re-simulation's interventions differ from the recorded ones (tick, command, effect)."""
     for was, now in zip(recorded, applied, strict=False):
         if (was.tick, was.command, was.effect) != (now.tick, now.command, now.effect):

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 import typer
 
 from bt_grasp.cli import ERROR_PREFIX
-from bt_grasp.cli.plugin_option import leaves_option
+from bt_grasp.cli.plugin_option import installed_choice, leaves_option, no_plugins_option, plugin_option
 from bt_grasp.errors import InputError
 from bt_grasp.files.output_files import check_output_file, write_output_file
 from bt_grasp.files.terminal_text import shown
@@ -30,21 +30,13 @@ tree_app = typer.Typer(
 )
 
 
-def tree_registry(leaves: list[str] | None = None) -> NodeRegistry:
-    """The built-in nodes plus the robot leaves, when ``bt_grasp.behaviours`` provides ``register(registry)``,
-    plus the installed plugins' and ``--leaves`` nodes (a bad plugin raises PluginError, an InputError)."""
-    from bt_grasp.tree.builtins import builtin_registry
-    from bt_grasp.tree.plugins import load_plugins
+def tree_registry(leaves: list[str] | None = None, no_plugins: bool = False,
+                  plugins: list[str] | None = None) -> NodeRegistry:
+    """The built-in nodes plus the robot leaves, plus the installed plugins' (all, none with ``--no-plugins``,
+    or those ``--plugin`` names) and the ``--leaves`` nodes (a bad plugin raises PluginError, an InputError)."""
+    from bt_grasp.behaviours import robot_registry
 
-    registry = builtin_registry()
-    try:
-        import bt_grasp.behaviours as behaviours
-    except ImportError:  # pragma: no cover - the package always exists
-        return registry
-    register = getattr(behaviours, "register", None)
-    if callable(register):
-        register(registry)
-    return load_plugins(registry, leaves or ())
+    return robot_registry(leaves or (), installed_choice(no_plugins, plugins or []))
 
 
 def _fail(exc: InputError) -> typer.Exit:
@@ -61,14 +53,17 @@ def _show_tree_warnings() -> None:
 
 @tree_app.command("validate")
 def validate_cmd(
-    file: Path = typer.Argument(..., help="XML or YAML tree file."), leaves: list[str] = leaves_option()
+    file: Path = typer.Argument(..., help="XML or YAML tree file."),
+    leaves: list[str] = leaves_option(),
+    no_plugins: bool = no_plugins_option(),
+    plugins: list[str] = plugin_option(),
 ) -> None:
     """Check a tree file completely (nodes, ports, scripts, includes, subtrees) without running it."""
     from bt_grasp.tree.loader import load_tree
 
     _show_tree_warnings()
     try:
-        tree = load_tree(file, tree_registry(leaves))
+        tree = load_tree(file, tree_registry(leaves, no_plugins, plugins))
         from bt_grasp.behaviours.objects import check_detector_classes
 
         check_detector_classes(tree.nodes())  # a SelectObject's class against the tree's learned models
@@ -93,6 +88,8 @@ def show_cmd(
     fmt: ShowFormat = typer.Option(ShowFormat.text, "--format", "-f", help="How to draw it."),
     out: Path | None = typer.Option(None, "--out", "-o", help="Write here instead of the terminal."),
     leaves: list[str] = leaves_option(),
+    no_plugins: bool = no_plugins_option(),
+    plugins: list[str] = plugin_option(),
 ) -> None:
     """Draw the expanded tree (subtrees inlined) as text, Graphviz dot, png or svg."""
     from rich.console import Console
@@ -106,7 +103,7 @@ def show_cmd(
             raise InputError("--out", f"--format {fmt} needs --out FILE")
         if out is not None:
             check_output_file(out, "--out", example=f"tree.{fmt}", inputs=(file,))
-        tree = load_tree(file, tree_registry(leaves))
+        tree = load_tree(file, tree_registry(leaves, no_plugins, plugins))
         if fmt == "text":
             if out is None:
                 Console().print(render.rich_tree(tree.root))
@@ -135,6 +132,8 @@ def convert_cmd(
     target: Path = typer.Argument(..., help="Output file; its extension chooses the format."),
     force: bool = typer.Option(False, "--force", help="Overwrite OUT if it exists."),
     leaves: list[str] = leaves_option(),
+    no_plugins: bool = no_plugins_option(),
+    plugins: list[str] = plugin_option(),
 ) -> None:
     """Convert between BT.CPP v4 XML and the YAML twin format (node types are not resolved: --leaves plugins
     are only loaded and checked). An existing OUT is kept unless --force."""
@@ -148,8 +147,8 @@ def convert_cmd(
         check_output_file(target, "TARGET", example="tree.yaml")  # not a link, a folder or a device
         if target.exists() and not force:
             raise InputError(target, "exists; pass --force to overwrite it")
-        if leaves:
-            tree_registry(leaves)
+        if leaves or plugins:
+            tree_registry(leaves, no_plugins, plugins)
         convert_file(source, target)
     except InputError as exc:
         raise _fail(exc) from None
@@ -193,6 +192,8 @@ def run_cmd(
     ),
     calibration: Path | None = typer.Option(None, "--calibration", help="With --camera: the camera's calibration."),
     set_: list[str] = typer.Option([], "--set", help="Blackboard entry KEY=VALUE before the first tick."),
+    no_plugins: bool = no_plugins_option(),
+    plugins: list[str] = plugin_option(),
 ) -> None:
     """Tick a tree with a simulated clock until it finishes, every robot leaf replaced by a stand-in (SUCCESS
     unless --outcome or --random say otherwise); print the statuses of the nodes each tick walked; exit 0 on
@@ -211,7 +212,7 @@ def run_cmd(
         if not tick_hz > 0:
             raise InputError("--tick-hz", f"must be positive, got {tick_hz}")
         clock = ManualClock()
-        registry, catalog = tree_registry(leaves), RobotStandIns()
+        registry, catalog = tree_registry(leaves, no_plugins, plugins), RobotStandIns()
         rules = tuple(parse_outcome(text) for text in outcome)
         plan = DryRunPlan(rules, random_seed, catalog, known_reason_names(registry))
         entries = parse_assignments(set_)
@@ -241,8 +242,8 @@ def run_cmd(
     else:  # as BT.CPP prints values: a real with six decimals
         finished = "" if status.completed else f" (not finished after {result.ticks} ticks)"
         typer.echo(f"{status.value} after {result.ticks} ticks{finished}")
-        for key, value in result.blackboard.items():
-            text = display(value)
+        for key, entry in result.blackboard.items():
+            text = display(entry)
             typer.echo(f"  {key} = {text if len(text) <= 100 else text[:97] + '...'}")
         for line in format_walk(result.walk):
             typer.echo(line)
@@ -255,18 +256,26 @@ def models_cmd(
     include_builtins: bool = typer.Option(
         False, "--builtins", help="Also describe BT.CPP's built-in nodes (Groot2 knows them already)."
     ),
+    only_plugins: bool = typer.Option(
+        False, "--only-plugins", help="Only the nodes plugins registered (installed ones and --leaves), none of "
+        "bt_grasp's own."
+    ),
     leaves: list[str] = leaves_option(),
+    no_plugins: bool = no_plugins_option(),
+    plugins: list[str] = plugin_option(),
 ) -> None:
-    """Write the TreeNodesModel of bt_grasp's nodes (ports, types, defaults), for Groot2's palette."""
-    from bt_grasp.tree.builtins import builtin_specs
+    """Write the TreeNodesModel of bt_grasp's nodes and the plugins' (ports, types, defaults), for Groot2's
+    palette."""
+    from bt_grasp.tree.builtins import builtin_names
     from bt_grasp.tree.formats.models import tree_nodes_model
 
-    builtin_names = {spec.name for spec in builtin_specs()}
     try:
-        registry = tree_registry(leaves)
+        registry = tree_registry(leaves, no_plugins, plugins)
     except InputError as exc:
         raise _fail(exc) from None
-    specs = [s for s in registry.specs() if include_builtins or s.name not in builtin_names]
+    builtins = builtin_names()
+    specs = [s for s in registry.specs()
+             if (s.name in registry.origins if only_plugins else include_builtins or s.name not in builtins)]
     text = tree_nodes_model(specs)
     if out is None:
         typer.echo(text, nl=False)

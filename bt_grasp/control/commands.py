@@ -18,7 +18,6 @@ from __future__ import annotations
 import enum
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
 
 from bt_grasp.control.breakpoints import Breakpoint, parse_breakpoint
 from bt_grasp.errors import BtGraspError, InputError
@@ -111,7 +110,7 @@ class FireFault:
     (checked as a fault plan's are)."""
 
     kind: str
-    params: Mapping[str, Any] = field(default_factory=dict)
+    params: Mapping[str, object] = field(default_factory=dict)  # JSON from a front end, YAML scalars from a prompt
 
 
 @dataclass(frozen=True)
@@ -143,10 +142,10 @@ def is_intervention(command: Command) -> bool:
     return type(command) in INTERVENTION_KINDS
 
 
-def command_to_json(command: Command) -> dict[str, Any]:
-    """The command as a JSON object: ``{"kind": ..., <fields>}``."""
+def command_to_json(command: Command) -> dict[str, object]:
+    """The command as a JSON object: ``{"kind": ..., <fields>}`` (a fault's parameters as given)."""
     kind = INTERVENTION_KINDS.get(type(command)) or _WATCHING_KINDS[type(command)]
-    out: dict[str, Any] = {"kind": kind}
+    out: dict[str, object] = {"kind": kind}
     if isinstance(command, Step):
         out["n"] = command.n
     elif isinstance(command, SetBreakpoint):
@@ -164,27 +163,44 @@ def command_to_json(command: Command) -> dict[str, Any]:
     return out
 
 
-def _field(data: Mapping[str, Any], name: str, types: type | tuple[type, ...], kind: str) -> Any:
+def _refused(kind: str, name: str, types: tuple[type, ...], value: object) -> CommandError:
+    names = " or ".join(t.__name__ for t in types)
+    return CommandError(f"a '{kind}' command needs '{name}' ({names}), got {value!r}")
+
+
+def _text(data: Mapping[str, object], name: str, kind: str) -> str:
     value = data.get(name)
-    if not isinstance(value, types) or (isinstance(value, bool) and bool not in _as_tuple(types)):
-        raise CommandError(f"a '{kind}' command needs '{name}' ({_names(types)}), got {value!r}")
+    if not isinstance(value, str):
+        raise _refused(kind, name, (str,), value)
     return value
 
 
-def _as_tuple(types: type | tuple[type, ...]) -> tuple[type, ...]:
-    return types if isinstance(types, tuple) else (types,)
+def _whole(data: Mapping[str, object], name: str, kind: str) -> int:
+    value = data.get(name)
+    if not isinstance(value, int) or isinstance(value, bool):
+        raise _refused(kind, name, (int,), value)
+    return value
 
 
-def _names(types: type | tuple[type, ...]) -> str:
-    return " or ".join(t.__name__ for t in _as_tuple(types))
+def _scalar(data: Mapping[str, object], name: str, kind: str) -> BlackboardScalar:
+    value = data.get(name)
+    if not isinstance(value, str | int | float | bool):
+        raise _refused(kind, name, (str, int, float, bool), value)
+    return value
 
 
-def command_from_json(data: Any) -> Command:
+def _choice(data: Mapping[str, object], name: str, kind: str) -> int | str:
+    value = data.get(name)
+    if not isinstance(value, int | str) or isinstance(value, bool):
+        raise _refused(kind, name, (int, str), value)
+    return value
+
+
+def command_from_json(data: object) -> Command:
     """A command from its JSON form (a front end's message, a recorded intervention)."""
     if not isinstance(data, Mapping):
         raise CommandError(f"a command is a JSON object with a 'kind', got {data!r}")
     kind = data.get("kind")
-    scalar = (str, int, float, bool)
     try:
         if kind == "pause":
             return Pause()
@@ -193,22 +209,22 @@ def command_from_json(data: Any) -> Command:
         if kind == "stop":
             return Stop()
         if kind == "step":
-            return Step(_field(data, "n", int, kind) if "n" in data else 1)
+            return Step(_whole(data, "n", kind) if "n" in data else 1)
         if kind == "set_breakpoint":
-            return SetBreakpoint(parse_breakpoint(_field(data, "breakpoint", str, kind)))
+            return SetBreakpoint(parse_breakpoint(_text(data, "breakpoint", kind)))
         if kind == "clear_breakpoint":
             spec = data.get("breakpoint") or ""
             return ClearBreakpoint(parse_breakpoint(spec) if spec else None)
         if kind == "set_blackboard":
-            return SetBlackboard(_field(data, "key", str, kind), _field(data, "value", scalar, kind))
+            return SetBlackboard(_text(data, "key", kind), _scalar(data, "value", kind))
         if kind == "choose_object":
-            return ChooseObject(_field(data, "choice", (int, str), kind), str(data.get("entry", "target")),
+            return ChooseObject(_choice(data, "choice", kind), str(data.get("entry", "target")),
                                 str(data.get("detections", "objects")))
         if kind == "fire_fault":
             params = data.get("params", {})
             if not isinstance(params, Mapping):
                 raise CommandError(f"a 'fire_fault' command's 'params' is an object, got {params!r}")
-            return FireFault(_field(data, "fault", str, kind), dict(params))
+            return FireFault(_text(data, "fault", kind), dict(params))
         if kind == "restart":
             seed = data.get("seed", "same")
             if seed not in {p.value for p in SeedPolicy}:

@@ -21,7 +21,7 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable, Mapping, Sequence
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Protocol
 
 from bt_grasp.control.breakpoints import SOURCE, BreakKind, Breakpoint
 from bt_grasp.control.commands import (
@@ -71,12 +71,12 @@ Failure = tuple[str, str, str | None, str]
 class InterventionSink(Protocol):
     """Where interventions are recorded (``RunRecorder.write_intervention``)."""
 
-    def write_intervention(self, stamp_ns: int, record: Mapping[str, Any]) -> None: ...
+    def write_intervention(self, stamp_ns: int, record: Mapping[str, object]) -> None: ...
 
 
 #: fires a fault of the catalogue now: (kind, params, tick) -> a sentence saying what fired; CommandError when
 #: the kind or the parameters are wrong
-FaultFirer = Callable[[str, Mapping[str, Any], int], str]
+FaultFirer = Callable[[str, Mapping[str, object], int], str]
 
 
 class Controller:
@@ -420,7 +420,7 @@ def check_breakpoints(tree: LoadedTree, breakpoints: Sequence[Breakpoint]) -> No
             raise InputError(SOURCE, problem)
 
 
-def _views(node: Any, depth: int, out: list[NodeView]) -> None:
+def _views(node: BtNode, depth: int, out: list[NodeView]) -> None:
     out.append(NodeView(node.bt_path, node.name, node.bt_type, bt_status_name(node), depth))
     for child in getattr(node, "children", ()):
         _views(child, depth + 1, out)

@@ -8,7 +8,7 @@ that does not fit raises :class:`CommandError` with one sentence and the blackbo
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Protocol, TypeGuard
 
 from bt_grasp.control.commands import BlackboardScalar, CommandError
 from bt_grasp.files.bounded_yaml import scalar_or_text
@@ -21,6 +21,17 @@ from bt_grasp.tree.values import cast_to
 if TYPE_CHECKING:
     from bt_grasp.tree.loader import LoadedTree
     from bt_grasp.tree.node import BtNode
+
+
+class Detected(Protocol):
+    """What a front end reads of a detection (``bt_grasp.perception.results.Detection``)."""
+
+    @property
+    def label(self) -> str: ...
+    @property
+    def centroid_base_m(self) -> tuple[float, ...]: ...
+    @property
+    def size_m(self) -> tuple[float, ...]: ...
 
 
 def reading_ports(tree: LoadedTree, key: str) -> list[tuple[BtNode, PortSpec]]:
@@ -40,7 +51,7 @@ def reading_ports(tree: LoadedTree, key: str) -> list[tuple[BtNode, PortSpec]]:
     return found
 
 
-def _fit(value: BlackboardScalar, spec: PortSpec) -> Any:
+def _fit(value: BlackboardScalar, spec: PortSpec) -> object:
     if spec.type is object:
         return value
     if isinstance(value, str):
@@ -51,7 +62,7 @@ def _fit(value: BlackboardScalar, spec: PortSpec) -> Any:
     return fitted
 
 
-def set_entry(tree: LoadedTree, key: str, value: BlackboardScalar) -> Any:
+def set_entry(tree: LoadedTree, key: str, value: BlackboardScalar) -> object:
     """Write ``value`` to the main blackboard's ``key`` after checking it against every port reading it;
     returns the value stored (converted by the first typed port); CommandError when it does not fit."""
     if not key or key.startswith("_"):
@@ -61,7 +72,7 @@ def set_entry(tree: LoadedTree, key: str, value: BlackboardScalar) -> Any:
     if not ports and not blackboard.has(key):
         raise CommandError(f"no port of the tree reads blackboard entry '{key}' and it holds no value; "
                            "the run goes on unchanged")
-    stored: Any = value
+    stored: object = value
     typed = False
     for node, spec in ports:
         try:
@@ -84,20 +95,20 @@ def set_entry(tree: LoadedTree, key: str, value: BlackboardScalar) -> Any:
     return blackboard.get(key)
 
 
-def detections_in(tree: LoadedTree, entry: str) -> tuple[Any, ...]:
+def detections_in(tree: LoadedTree, entry: str) -> tuple[Detected, ...]:
     """The detections held by blackboard entry ``entry`` (a list of them, or one), () when none."""
     value = tree.root_blackboard.get(entry, None) if tree.root_blackboard.exists(entry) else None
     if value is None or value is EMPTY:
         return ()
-    items: Sequence[Any] = value if isinstance(value, list | tuple) else (value,)
+    items: Sequence[object] = value if isinstance(value, list | tuple) else (value,)
     return tuple(v for v in items if _is_detection(v))
 
 
-def _is_detection(value: Any) -> bool:
+def _is_detection(value: object) -> TypeGuard[Detected]:
     return all(hasattr(value, a) for a in ("centroid_base_m", "size_m", "label"))
 
 
-def choose_object(tree: LoadedTree, choice: int | str, entry: str, detections: str) -> tuple[int, Any]:
+def choose_object(tree: LoadedTree, choice: int | str, entry: str, detections: str) -> tuple[int, Detected]:
     """Write the chosen detection to ``entry``; returns (its index, the detection)."""
     found = detections_in(tree, detections)
     if not found:

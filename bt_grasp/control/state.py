@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
 
 #: a blackboard value is shown as text cut to this many characters
 VALUE_CHARS = 160
@@ -48,17 +48,29 @@ class InterventionRecord:
     tick: int
     stamp_ns: int
     source: str
-    command: dict[str, Any]
+    command: dict[str, object]
     effect: str = ""
 
-    def to_json(self) -> dict[str, Any]:
+    def to_json(self) -> dict[str, object]:
         return {"tick": self.tick, "stamp_ns": self.stamp_ns, "source": self.source,
                 "kind": str(self.command.get("kind", "")), "command": dict(self.command), "effect": self.effect}
 
     @staticmethod
-    def from_json(data: dict[str, Any]) -> InterventionRecord:
-        return InterventionRecord(int(data["tick"]), int(data.get("stamp_ns", 0)), str(data.get("source", "")),
-                                  dict(data["command"]), str(data.get("effect", "")))
+    def from_json(data: Mapping[str, object]) -> InterventionRecord:
+        """A recorded intervention (as ``to_json`` wrote it); KeyError or TypeError when a field it needs is
+        missing or of another kind."""
+        tick, command = _integer(data["tick"]), data["command"]
+        if not isinstance(command, Mapping):
+            raise TypeError(f"an intervention's command is an object, not {type(command).__name__}")
+        return InterventionRecord(tick, _integer(data.get("stamp_ns", 0)), str(data.get("source", "")),
+                                  dict(command), str(data.get("effect", "")))
+
+
+def _integer(value: object) -> int:
+    """``int(value)`` of a number or a numeral (ValueError or TypeError as ``int`` raises them)."""
+    if not isinstance(value, int | float | str):
+        raise TypeError(f"int() argument must be a string or a real number, not '{type(value).__name__}'")
+    return int(value)
 
 
 @dataclass(frozen=True)
@@ -87,6 +99,6 @@ class RunState:
         return "fail" in self.breakpoints
 
 
-def value_text(value: Any) -> str:
+def value_text(value: object) -> str:
     text = " ".join((repr(value) if not isinstance(value, str) else value).split())  # one line
     return text if len(text) <= VALUE_CHARS else text[: VALUE_CHARS - 3] + "..."

@@ -14,7 +14,7 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -449,12 +449,12 @@ class _Both:
     def __init__(self, first: TickRecorder, second: TickRecorder) -> None:
         self.first, self.second = first, second
 
-    def write_tick(self, tick: int, stamp_ns: int, nodes: Sequence[NodeRecord], blackboard: Mapping[str, Any],
-                   robot: Mapping[str, Any] | None = None) -> None:
+    def write_tick(self, tick: int, stamp_ns: int, nodes: Sequence[NodeRecord], blackboard: Mapping[str, object],
+                   robot: Mapping[str, object] | None = None) -> None:
         self.first.write_tick(tick, stamp_ns, nodes, blackboard, robot)
         self.second.write_tick(tick, stamp_ns, nodes, blackboard, robot)
 
-    def write_event(self, stamp_ns: int, kind: str, payload: Mapping[str, Any]) -> None:
+    def write_event(self, stamp_ns: int, kind: str, payload: Mapping[str, object]) -> None:
         self.first.write_event(stamp_ns, kind, payload)
         self.second.write_event(stamp_ns, kind, payload)
 
@@ -475,7 +475,7 @@ def _fault_firer(injector: Injector) -> FaultFirer:
     from bt_grasp.control.commands import CommandError
     from bt_grasp.faults.plan import fault_now
 
-    def fire(kind: str, params: Mapping[str, Any], tick: int) -> str:
+    def fire(kind: str, params: Mapping[str, object], tick: int) -> str:
         try:
             fault = fault_now(kind, params, tick, "fault")
             injector.fire_now(fault, tick)

@@ -16,7 +16,7 @@ import logging
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -71,7 +71,7 @@ class LogExtras:
     def start(self) -> None:
         self.write_truth()
 
-    def _on_event(self, kind: str, payload: Mapping[str, Any]) -> None:
+    def _on_event(self, kind: str, payload: Mapping[str, object]) -> None:
         if kind == "failure":
             self._failed = True
 

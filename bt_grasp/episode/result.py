@@ -5,13 +5,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from bt_grasp.episode.instruments import PlanningStats
+from bt_grasp.files.json_types import JsonObject, JsonValue
 from bt_grasp.scene.goals import Goal
 
-JsonScalar = str | int | float | bool | None
-JsonValue = JsonScalar | list["JsonValue"] | dict[str, "JsonValue"]
 
-
-def goal_json(goal: Goal) -> dict[str, JsonValue]:
+def goal_json(goal: Goal) -> JsonObject:
     """The goal as the scene file would write it (``kind`` plus its fields)."""
     return {key: value for key, value in goal.model_dump(mode="json").items()}
 
@@ -34,7 +32,7 @@ class Judged:
     #: who judged: the simulator's judge (a simulated run), the twin's physics judge, or a real cell's own checks
     source: str = "simulator ground truth (judge only)"
 
-    def to_json(self) -> dict[str, JsonValue]:
+    def to_json(self) -> JsonObject:
         poses: dict[str, JsonValue] = {n: [list(row) for row in T] for n, T in self.object_poses.items()}
         return {
             "source": self.source,
@@ -62,7 +60,7 @@ class ChainStep:
     reason: str | None
     followed: str
 
-    def to_json(self) -> dict[str, JsonValue]:
+    def to_json(self) -> JsonObject:
         return {"tick": self.tick, "sim_time_s": round(self.sim_time_s, 3), "leaf_path": self.leaf_path,
                 "reason": self.reason, "followed": self.followed}
 
@@ -105,7 +103,7 @@ class EpisodeResult:
     def object_lift_m(self) -> float:
         return self.judged.object_lift_m
 
-    def to_json(self) -> dict[str, JsonValue]:
+    def to_json(self) -> JsonObject:
         retries: dict[str, JsonValue] = {k: v for k, v in self.retries.items()}
         return {
             "success": self.success,
@@ -132,7 +130,7 @@ class EpisodeResult:
 INTERRUPTED = "INTERRUPTED"
 
 
-def interrupted_result(tick: int, now_ns: int, seed: int) -> dict[str, JsonValue]:
+def interrupted_result(tick: int, now_ns: int, seed: int) -> JsonObject:
     """The result a run ended by Ctrl-C records before its log is finished: not judged (``success`` null),
     ``interrupted`` true, and the tick and simulated time it stopped at (replay and the report say so)."""
     return {

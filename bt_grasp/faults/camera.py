@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable
-from typing import Any
 
 import numpy as np
 
@@ -12,7 +11,7 @@ from bt_grasp.faults.armed import ArmedFault
 from bt_grasp.interfaces import Camera, CameraIntrinsics, Mount, RGBDFrame
 
 #: changes a frame (or drops it: returns None) and says what it did
-FrameEffect = Callable[[RGBDFrame], tuple[RGBDFrame | None, dict[str, Any]]]
+FrameEffect = Callable[[RGBDFrame], tuple[RGBDFrame | None, dict[str, object]]]
 
 
 @dataclasses.dataclass
@@ -69,7 +68,7 @@ class FaultyCamera:
 def depth_hole(u_px: int, v_px: int, width_px: int, height_px: int) -> FrameEffect:
     """Depth reads 0 (invalid) in the rectangle (clipped to the image), as over a specular or black surface."""
 
-    def apply(frame: RGBDFrame) -> tuple[RGBDFrame | None, dict[str, Any]]:
+    def apply(frame: RGBDFrame) -> tuple[RGBDFrame | None, dict[str, object]]:
         depth = frame.depth_m.copy()
         h, w = depth.shape
         u0, v0 = min(u_px, w), min(v_px, h)
@@ -83,7 +82,7 @@ def depth_hole(u_px: int, v_px: int, width_px: int, height_px: int) -> FrameEffe
 def depth_burst(sigma_m: float, fraction: float, rng: np.random.Generator) -> FrameEffect:
     """Heavy Gaussian noise on a share of the valid depth pixels (interference, an IR projector glitch)."""
 
-    def apply(frame: RGBDFrame) -> tuple[RGBDFrame | None, dict[str, Any]]:
+    def apply(frame: RGBDFrame) -> tuple[RGBDFrame | None, dict[str, object]]:
         depth = frame.depth_m.copy()
         hit = (depth > 0) & (rng.random(depth.shape) < fraction)
         noise = rng.standard_normal(int(hit.sum())).astype(np.float32) * np.float32(sigma_m)

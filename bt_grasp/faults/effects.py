@@ -12,7 +12,19 @@ from bt_grasp.faults import physics
 from bt_grasp.faults.armed import ArmedFault
 from bt_grasp.faults.calibration import OffsetCalibration, offset_transform
 from bt_grasp.faults.camera import FaultyCamera, depth_burst, depth_hole
-from bt_grasp.faults.model import FaultKind
+from bt_grasp.faults.model import (
+    CalibrationOffsetParams,
+    ControllerStallParams,
+    DepthBurstParams,
+    DepthHoleParams,
+    FaultKind,
+    FrameDropParams,
+    GripperSlipParams,
+    LeafTimeoutParams,
+    ObjectNudgeParams,
+    PlannerFailParams,
+    ServiceFailParams,
+)
 from bt_grasp.faults.physics import PhysicsHook
 from bt_grasp.faults.robot import FaultyRobot
 from bt_grasp.faults.services import FaultyKinematics, FaultyPlanner
@@ -63,21 +75,21 @@ class Wrapped:
 
 
 def _frame_drop(ep: ArmedFault, w: Wrapped, index: int) -> None:
-    w.camera.add(ep, None, ep.params.frames)
+    w.camera.add(ep, None, ep.params_as(FrameDropParams).frames)
 
 
 def _depth_burst(ep: ArmedFault, w: Wrapped, index: int) -> None:
-    p = ep.params
+    p = ep.params_as(DepthBurstParams)
     w.camera.add(ep, depth_burst(p.sigma_m, p.fraction, w.rngs[index]), p.frames)
 
 
 def _depth_hole(ep: ArmedFault, w: Wrapped, index: int) -> None:
-    p = ep.params
+    p = ep.params_as(DepthHoleParams)
     w.camera.add(ep, depth_hole(p.u_px, p.v_px, p.width_px, p.height_px), p.frames)
 
 
 def _calibration_offset(ep: ArmedFault, w: Wrapped, index: int) -> None:
-    p = ep.params
+    p = ep.params_as(CalibrationOffsetParams)
     w.offsets.append(offset_transform((p.dx_mm, p.dy_mm, p.dz_mm), (p.droll_deg, p.dpitch_deg, p.dyaw_deg)))
     w.apply_calibration_offsets()
     ep.fire(effect="calibration offset", loaded=w.cell.calibration is not None)
@@ -85,26 +97,27 @@ def _calibration_offset(ep: ArmedFault, w: Wrapped, index: int) -> None:
 
 
 def _ik_fail(ep: ArmedFault, w: Wrapped, index: int) -> None:
-    w.kinematics.failing.add(ep, ep.params.calls)
+    w.kinematics.failing.add(ep, ep.params_as(ServiceFailParams).calls)
 
 
 def _planner_fail(ep: ArmedFault, w: Wrapped, index: int) -> None:
-    w.planner.failing.add(ep, ep.params.calls)
+    w.planner.failing.add(ep, ep.params_as(PlannerFailParams).calls)
 
 
 def _controller_stall(ep: ArmedFault, w: Wrapped, index: int) -> None:
-    w.robot.hold(ep, ep.params.duration_s, gripper_too=False)
+    w.robot.hold(ep, ep.params_as(ControllerStallParams).duration_s, gripper_too=False)
 
 
 def _leaf_timeout(ep: ArmedFault, w: Wrapped, index: int) -> None:
-    until = w.now_ns() + round(ep.params.duration_s * 1e9)
-    w.robot.hold(ep, ep.params.duration_s, gripper_too=True)
+    duration_s = ep.params_as(LeafTimeoutParams).duration_s
+    until = w.now_ns() + round(duration_s * 1e9)
+    w.robot.hold(ep, duration_s, gripper_too=True)
     w.camera.add(ep, None, None)
     ep.fire(effect="cell not responding", until_ns=until)
 
 
 def _gripper_slip(ep: ArmedFault, w: Wrapped, index: int) -> None:
-    p = ep.params
+    p = ep.params_as(GripperSlipParams)
     details, restore = w.physics.weaken_grip(p.friction, p.force_n)
     ep.fire(effect="grip weakened", duration_s=p.duration_s, **details)
 
@@ -117,7 +130,7 @@ def _gripper_slip(ep: ArmedFault, w: Wrapped, index: int) -> None:
 
 
 def _object_nudge(ep: ArmedFault, w: Wrapped, index: int) -> None:
-    p = ep.params
+    p = ep.params_as(ObjectNudgeParams)
     name = physics.choose_object(w.physics, p.object, w.color)
     details = physics.push_object(w.physics, name, p.dx_m, p.dy_m)
     ep.fire(effect="object pushed", dx_m=p.dx_m, dy_m=p.dy_m, **details)

@@ -10,9 +10,9 @@ the interfaces. Nothing of a leaf is replaced.
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Protocol
 
 import numpy as np
 
@@ -20,12 +20,12 @@ from bt_grasp.errors import InputError
 from bt_grasp.faults.armed import ArmedFault
 from bt_grasp.faults.camera import FaultyCamera
 from bt_grasp.faults.effects import SERVICE_KINDS, START, Wrapped
-from bt_grasp.faults.model import FaultKind
+from bt_grasp.faults.model import ObjectNudgeParams, ServiceFailParams
 from bt_grasp.faults.plan import Fault, FaultPlan
 from bt_grasp.faults.robot import FaultyRobot
 from bt_grasp.faults.services import FaultyKinematics, FaultyPlanner
 from bt_grasp.faults.site import FaultSite
-from bt_grasp.tree.node import BtStatus
+from bt_grasp.tree.node import BtNode, BtStatus
 
 log = logging.getLogger(__name__)
 
@@ -33,7 +33,7 @@ LEAF_KINDS = ("Action", "Condition")
 
 
 class FaultRecorder(Protocol):
-    def write_fault(self, stamp_ns: int, tick: int, fault: dict[str, Any]) -> None: ...
+    def write_fault(self, stamp_ns: int, tick: int, fault: Mapping[str, object]) -> None: ...
 
 
 @dataclass
@@ -50,11 +50,11 @@ class _Armed:
         return self.armed < self.fault.count and (self.current is None or self.current.done)
 
 
-def _matches(node: Any, name: str) -> bool:
+def _matches(node: BtNode, name: str) -> bool:
     return name in (node.name, getattr(node, "bt_type", None), getattr(node, "bt_path", None))
 
 
-def _is_leaf(node: Any) -> bool:
+def _is_leaf(node: BtNode) -> bool:
     kind = getattr(node, "bt_kind", None)
     return getattr(kind, "value", kind) in LEAF_KINDS
 
@@ -62,13 +62,14 @@ def _is_leaf(node: Any) -> bool:
 class Injector:
     """Arms the plan's faults as their triggers come and records every firing."""
 
-    def __init__(self, plan: FaultPlan, wrapped: Wrapped, leaves: list[Any], recorder: FaultRecorder | None) -> None:
+    def __init__(self, plan: FaultPlan, wrapped: Wrapped, leaves: list[BtNode],
+                 recorder: FaultRecorder | None) -> None:
         self.plan = plan
         self.wrapped = wrapped
         self.recorder = recorder
         self.leaves = leaves
         self.fired = 0
-        self.firings: list[dict[str, Any]] = []
+        self.firings: list[dict[str, object]] = []
         self._tick = 0  # the last tick finished
         self._in_after_tick = False
         self._faults = [_Armed(f, i) for i, f in enumerate(plan.faults)]
@@ -78,11 +79,11 @@ class Injector:
         for node in leaves:
             self._hook(node)
 
-    def _hook(self, node: Any) -> None:
+    def _hook(self, node: BtNode) -> None:
         """Watch the leaf's entries through the tree's pre-tick hook (kept chained if one is set)."""
-        previous: Callable[[Any], None] | None = node.bt_pre_tick
+        previous: Callable[[BtNode], None] | None = node.bt_pre_tick
 
-        def pre_tick(entering: Any) -> None:
+        def pre_tick(entering: BtNode) -> None:
             if previous is not None:
                 previous(entering)
             if entering.bt_state is not BtStatus.RUNNING:  # the tick starts a new attempt of the leaf
@@ -91,7 +92,7 @@ class Injector:
         node.bt_pre_tick = pre_tick
 
     # --- triggers ---------------------------------------------------------------------------------------
-    def _entered(self, node: Any) -> None:
+    def _entered(self, node: BtNode) -> None:
         self.wrapped.apply_calibration_offsets()
         self._end_finished_attempts()  # a tree may fail, recover and retry within one tick
         for armed in self._faults:
@@ -175,12 +176,14 @@ class Injector:
     @staticmethod
     def _attempt_over(ep: ArmedFault) -> bool:
         """A ``within_attempt`` service fault armed by a leaf whose attempt has ended."""
-        if ep.node is None or ep.fault.kind not in SERVICE_KINDS or not ep.params.within_attempt:
+        params = ep.fault.params
+        if ep.node is None or ep.fault.kind not in SERVICE_KINDS or not isinstance(params, ServiceFailParams) \
+                or not params.within_attempt:
             return False
         return getattr(ep.node.bt_state, "value", "") != "RUNNING"
 
     # --- arming and recording --------------------------------------------------------------------------
-    def _arm(self, armed: _Armed, node: Any) -> None:
+    def _arm(self, armed: _Armed, node: BtNode | None) -> None:
         leaf = None if node is None else node.name
         tick = self._current_tick()
         arming = ArmedFault(armed.fault, tick, leaf, node, self._record)
@@ -189,11 +192,11 @@ class Injector:
         log.info("fault %s armed (tick %d%s)", armed.fault.label, tick, f", entering {leaf}" if leaf else "")
         START[armed.fault.kind](arming, self.wrapped, armed.index)
 
-    def _record(self, arming: ArmedFault, details: dict[str, Any]) -> None:
+    def _record(self, arming: ArmedFault, details: dict[str, object]) -> None:
         self.fired += 1
         fault = arming.fault
         tick = self._current_tick()
-        record = {
+        record: dict[str, object] = {
             **fault.to_dict(),
             "leaf": arming.leaf,
             "armed_tick": arming.tick,
@@ -206,7 +209,7 @@ class Injector:
             self.recorder.write_fault(self.wrapped.now_ns(), tick, record)
 
 
-def check_fault_plan(plan: FaultPlan, leaves: Sequence[Any], object_names: Sequence[str] | None) -> None:
+def check_fault_plan(plan: FaultPlan, leaves: Sequence[BtNode], object_names: Sequence[str] | None) -> None:
     """InputError (naming the plan's file and fault) when a trigger names no leaf of the tree or a nudge
     names no object of the scene: checked before anything is built."""
     names = sorted({n.name for n in leaves})
@@ -216,13 +219,13 @@ def check_fault_plan(plan: FaultPlan, leaves: Sequence[Any], object_names: Seque
             raise InputError(
                 fault.source, f"on_leaf '{wanted}' names no leaf of the tree; leaves: {', '.join(names)}", fault.where
             )
-        name = fault.params.object if fault.kind is FaultKind.OBJECT_NUDGE else None
+        name = fault.params.object if isinstance(fault.params, ObjectNudgeParams) else None
         if object_names is not None and name is not None and name not in object_names:
             known = ", ".join(object_names)
             raise InputError(fault.source, f"no object '{name}' in the scene; objects: {known}", fault.where)
 
 
-def leaves_of(nodes: Sequence[Any]) -> list[Any]:
+def leaves_of(nodes: Sequence[BtNode]) -> list[BtNode]:
     return [n for n in nodes if _is_leaf(n)]
 
 
@@ -246,7 +249,8 @@ def install_faults(plan: FaultPlan, site: FaultSite, recorder: FaultRecorder | N
     color = None
     root_blackboard = site.tree.root_blackboard
     if root_blackboard.has("color"):
-        color = root_blackboard.get("color")
+        value = root_blackboard.get("color")
+        color = value if isinstance(value, str) else None  # a colour is a name; nothing else matches an object
     rngs = _fault_rngs(site.fault_seed_sequence, plan)
     wrapped = Wrapped(cell, site.physics, camera, robot, planner, kinematics, rngs, color=color)
     leaves = leaves_of(list(site.tree.nodes()))

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import enum
 import math
-from typing import Any, Literal
+from typing import Literal
 
 from pydantic import Field, model_validator
 
@@ -139,7 +139,7 @@ class FaultEntry(StrictModel):
     nth: int | None = Field(None, ge=1, description="arm on entering on_leaf for the nth time (and later entries)")
     probability: float | None = Field(None, gt=0.0, le=1.0, description="chance to arm on each leaf entry")
     count: int = Field(1, ge=1, le=1000, description="how many times the fault may fire")
-    params: dict[str, Any] | None = None
+    params: dict[str, object] | None = None  # checked against the kind's model by the loader
 
     @model_validator(mode="after")
     def _one_trigger(self) -> FaultEntry:

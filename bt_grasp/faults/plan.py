@@ -6,12 +6,12 @@ import logging
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 from bt_grasp.errors import ConfigError, InputError
 from bt_grasp.faults.model import PARAMS, FaultEntry, FaultKind, FaultPlanFile
 from bt_grasp.faults.syntax import parse_inject
-from bt_grasp.files.config import KeyPath, read_yaml, validate
+from bt_grasp.files.config import KeyPath, StrictModel, read_yaml, validate
+from bt_grasp.files.json_types import JsonObject
 
 log = logging.getLogger(__name__)
 
@@ -34,7 +34,7 @@ class Trigger:
             return f"{self.on_leaf or '*'}~{self.probability:g}"
         return f"{self.on_leaf}#{self.nth or 1}"
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> JsonObject:
         return {k: v for k, v in self.__dict__.items() if v is not None}
 
 
@@ -45,12 +45,12 @@ class Fault:
     kind: FaultKind
     trigger: Trigger
     count: int
-    params: Any
+    params: StrictModel  # the kind's model (model.PARAMS[kind]): read it with ArmedFault.params_as
     label: str
     source: str  # the plan file or "--inject"
     where: str  # "faults[2]" or the inject string
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self) -> JsonObject:
         return {
             "kind": self.kind.value,
             "label": self.label,
@@ -117,7 +117,7 @@ def _from_inject(text: str) -> Fault:
         raise InputError(INJECT_SOURCE, f"'{text}': {problem}") from None
 
 
-def fault_now(kind: str, params: Mapping[str, Any], tick: int, source: str) -> Fault:
+def fault_now(kind: str, params: Mapping[str, object], tick: int, source: str) -> Fault:
     """A fault an operator fires by hand after ``tick`` (``bt_grasp.control.FireFault``), checked as a plan's
     fault is; InputError naming ``source`` and the problem in one sentence."""
     where = f"{kind} now"

@@ -9,6 +9,7 @@ from numpy.typing import NDArray
 
 from bt_grasp.behaviours.services import Planner
 from bt_grasp.faults.armed import ArmedFault
+from bt_grasp.faults.model import PlannerFailParams, ServiceFailParams
 from bt_grasp.geometry import Mat4
 from bt_grasp.motion.cartesian import CartesianResult
 from bt_grasp.motion.collision import CollisionChecker
@@ -32,7 +33,7 @@ class _FailingCalls:
             return None
         arming, left = self._pending[0]
         left[0] -= 1
-        arming.fire(effect=f"{method} failed", calls=arming.params.calls)
+        arming.fire(effect=f"{method} failed", calls=arming.params_as(ServiceFailParams).calls)
         if left[0] <= 0:
             arming.finish()
         return arming
@@ -55,7 +56,7 @@ class FaultyPlanner:
         return self.inner.straight_line(q_start, T_base_tcp_goal, scene)
 
     def _failure(self, arming: ArmedFault) -> PlanResult:
-        status = PlanStatus(arming.params.status)
+        status = PlanStatus(arming.params_as(PlannerFailParams).status)
         return PlanResult(status=status, message=f"injected fault '{arming.fault.label}'")
 
     def plan_to_pose(self, q_start: NDArray[np.float64], T_base_tcp_goal: Mat4, scene: PlanningScene,

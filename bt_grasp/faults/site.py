@@ -4,7 +4,7 @@ entries trigger faults), a physics hook of the simulator and the run's fault ran
 from __future__ import annotations
 
 from collections.abc import Iterable
-from typing import Any, Protocol
+from typing import Protocol
 
 import numpy as np
 
@@ -13,6 +13,7 @@ from bt_grasp.clock import Clock
 from bt_grasp.faults.physics import PhysicsHook
 from bt_grasp.interfaces import Camera, Robot
 from bt_grasp.motion.kinematics import KinematicModel
+from bt_grasp.tree.node import BtNode
 
 
 class FaultableCell(Protocol):
@@ -29,7 +30,7 @@ class FaultableCell(Protocol):
 class BlackboardView(Protocol):
     def has(self, key: str) -> bool: ...
 
-    def get(self, key: str, default: Any = ...) -> Any: ...
+    def get(self, key: str) -> object: ...
 
 
 class FaultTree(Protocol):
@@ -38,7 +39,7 @@ class FaultTree(Protocol):
     @property
     def root_blackboard(self) -> BlackboardView: ...
 
-    def nodes(self) -> Iterable[Any]: ...
+    def nodes(self) -> Iterable[BtNode]: ...
 
 
 class FaultSite(Protocol):

@@ -14,7 +14,6 @@ read as YAML scalars (``3``, ``0.05``, ``true``, ``red_box``). Examples::
 from __future__ import annotations
 
 import re
-from typing import Any
 
 from bt_grasp.errors import InputError
 from bt_grasp.files.bounded_yaml import scalar_or_text
@@ -53,12 +52,12 @@ def _split_trigger(text: str, rest: str) -> tuple[str, str]:
     return trigger, tail
 
 
-def _trigger(text: str, trigger: str) -> dict[str, Any]:
+def _trigger(text: str, trigger: str) -> dict[str, object]:
     if m := _TICK.match(trigger):
         return {"at_tick": int(m["tick"])}
     if m := _PROB.match(trigger):
         leaf = m["leaf"]
-        out: dict[str, Any] = {"probability": float(m["p"])}
+        out: dict[str, object] = {"probability": float(m["p"])}
         if leaf not in (None, "*"):
             out["on_leaf"] = leaf
         return out
@@ -67,8 +66,8 @@ def _trigger(text: str, trigger: str) -> dict[str, Any]:
     raise _bad(text, f"cannot read the trigger '{trigger}' (tick:N, LEAF#N, LEAF~P or ~P)")
 
 
-def _pairs(text: str, tail: str) -> dict[str, Any]:
-    out: dict[str, Any] = {}
+def _pairs(text: str, tail: str) -> dict[str, object]:
+    out: dict[str, object] = {}
     for item in filter(None, (p.strip() for p in tail.split(","))):
         key, sep, value = item.partition("=")
         key = key.strip()
@@ -80,7 +79,7 @@ def _pairs(text: str, tail: str) -> dict[str, Any]:
     return out
 
 
-def parse_inject(text: str) -> dict[str, Any]:
+def parse_inject(text: str) -> dict[str, object]:
     """One ``--inject`` string as the mapping a plan file's entry would hold (not yet validated)."""
     kind, sep, rest = text.strip().partition("@")
     if not sep or not kind or not rest:
@@ -88,7 +87,7 @@ def parse_inject(text: str) -> dict[str, Any]:
     if not _KIND.match(kind):
         raise _bad(text, f"'{kind}' is not a fault kind")
     trigger, tail = _split_trigger(text, rest)
-    entry: dict[str, Any] = {"kind": KIND_ALIASES.get(kind, kind), **_trigger(text, trigger)}
+    entry: dict[str, object] = {"kind": KIND_ALIASES.get(kind, kind), **_trigger(text, trigger)}
     params = _pairs(text, tail)
     for key in ENTRY_KEYS:
         if key in params:

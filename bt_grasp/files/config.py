@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import TypeVar
 
 import yaml
 from pydantic import BaseModel, ConfigDict, ValidationError
@@ -65,8 +65,9 @@ _Yaml12Loader.add_implicit_resolver(
 )
 
 
-def read_yaml(path: str | Path) -> tuple[Any, dict[KeyPath, int]]:
-    """Parse a YAML file safely; returns the data and a map from key paths to line numbers."""
+def read_yaml(path: str | Path) -> tuple[object, dict[KeyPath, int]]:
+    """Parse a YAML file safely; returns the data (to check: ``validate``) and a map from key paths to line
+    numbers."""
     path = Path(path)
     raw = read_user_file(path, error=ConfigError)
     try:
@@ -104,7 +105,7 @@ def _nearest_line(path: KeyPath, lines: dict[KeyPath, int]) -> int | None:
         path = path[:-1]
 
 
-def validate(model: type[M], data: Any, source: str | Path, lines: dict[KeyPath, int] | None = None) -> M:
+def validate(model: type[M], data: object, source: str | Path, lines: dict[KeyPath, int] | None = None) -> M:
     """Validate parsed data against a model; the first problem becomes a one-sentence ConfigError."""
     if data is None:
         raise ConfigError(source, "the file is empty")
@@ -136,7 +137,7 @@ def validate(model: type[M], data: Any, source: str | Path, lines: dict[KeyPath,
         raise ConfigError(source, problem, where=line) from None
 
 
-def _data_path(data: Any, loc: tuple[Any, ...]) -> KeyPath:
+def _data_path(data: object, loc: tuple[int | str, ...]) -> KeyPath:
     """The error's location as keys of the data: tagged-union member names pydantic inserts (a fixture's
     ``tray``) are not keys of the file and are dropped; the last part (an unknown or missing key) is kept."""
     path: list[str | int] = []
@@ -144,17 +145,30 @@ def _data_path(data: Any, loc: tuple[Any, ...]) -> KeyPath:
     for i, part in enumerate(loc):
         if not isinstance(part, str | int):
             continue
-        in_list = isinstance(node, list) and isinstance(part, int) and 0 <= part < len(node)
-        if (isinstance(node, dict) and part in node) or in_list:
-            node = node[part]
+        child = _child(node, part)
+        if child is not _ABSENT:
+            node = child
         elif i < len(loc) - 1 or (isinstance(node, dict) and node.get("kind") == part):
             continue  # a union member's name (a goal's or fixture's kind), not a key of the file
         path.append(part)
     return tuple(path)
 
 
+_ABSENT = object()
+
+
+def _child(node: object, part: int | str) -> object:
+    """``node[part]`` when ``node`` is a mapping holding key ``part`` or a list with index ``part``, else
+    ``_ABSENT``."""
+    if isinstance(node, dict):
+        return node.get(part, _ABSENT)
+    if isinstance(node, list) and isinstance(part, int) and 0 <= part < len(node):
+        return node[part]
+    return _ABSENT
+
+
 def _allowed_keys(model: type[BaseModel], loc: KeyPath) -> list[str]:
-    current: Any = model
+    current: object = model
     for part in loc:
         if isinstance(part, int):
             continue
@@ -167,7 +181,7 @@ def _allowed_keys(model: type[BaseModel], loc: KeyPath) -> list[str]:
     return list(getattr(current, "model_fields", {}).keys())
 
 
-def _model_in(annotation: Any) -> type[BaseModel] | None:
+def _model_in(annotation: object) -> type[BaseModel] | None:
     if isinstance(annotation, type) and issubclass(annotation, BaseModel):
         return annotation
     for arg in getattr(annotation, "__args__", ()):

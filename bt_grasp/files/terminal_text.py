@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import re
 
+from bt_grasp.files.json_types import JsonValue
+
 #: C0 controls but tab and newline, DEL, C1 controls, and the bidirectional overrides and isolates
 _UNSAFE = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f\u061c\u200e\u200f\u202a-\u202e\u2066-\u2069]")
 _UNSAFE_WITH_NEWLINES = re.compile("[\x00-\x08\x0a-\x1f\x7f-\x9f\u061c\u200e\u200f\u202a-\u202e\u2066-\u2069]")
@@ -36,7 +38,7 @@ def may_hold_controls(raw_json: str) -> bool:
     return _JSON_ESCAPE.search(raw_json) is not None
 
 
-def shown_deep(value: object) -> object:
+def shown_deep(value: JsonValue) -> JsonValue:
     """``value`` (decoded JSON) with :func:`shown` applied to every string in it, keys included."""
     if isinstance(value, str):
         return shown(value)

@@ -52,7 +52,6 @@ import math
 import threading
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
 
 from bt_grasp.control.breakpoints import Breakpoint, parse_breakpoint
 from bt_grasp.control.commands import (
@@ -75,19 +74,19 @@ from bt_grasp.control.commands import (
 from bt_grasp.control.controller import Controller
 from bt_grasp.control.state import RunState
 from bt_grasp.errors import InputError
+from bt_grasp.faults.model import FaultKind
 from bt_grasp.files.hosts import is_loopback
+from bt_grasp.files.json_types import JsonValue
+from bt_grasp.foxglove.layout import COMMAND_SCHEMA as COMMAND_SCHEMA  # the command topic, named where its
+from bt_grasp.foxglove.layout import COMMAND_TOPIC as COMMAND_TOPIC  # Publish panels are; and here, as before
 
 log = logging.getLogger(__name__)
 
-#: the topic a Foxglove client publishes JSON commands on (the Publish panel's topic)
-COMMAND_TOPIC = "/control/command"
-#: the schema name a client advertises it with (the Publish panel's datatype; the server does not require it)
-COMMAND_SCHEMA = "bt_grasp.Command"
 #: the prefix of the parameters that are blackboard entries
 BB_PREFIX = "bb."
 
-#: a parameter value as the protocol carries it
-ParamValue = bool | int | float | str | list[Any] | dict[str, Any]
+#: a parameter value as the run publishes it (what a client sets may be any value the protocol carries)
+ParamValue = bool | int | float | str | list[str]
 
 READ_ONLY = ("run.tick", "run.sim_time_s", "run.status", "run.message", "run.last_failure", "detections",
              "fault.kinds")
@@ -105,8 +104,6 @@ def is_refusal(message: str) -> bool:
 
 
 def fault_kinds() -> tuple[str, ...]:
-    from bt_grasp.faults.model import FaultKind
-
     return tuple(k.value for k in FaultKind)
 
 
@@ -179,7 +176,7 @@ class FoxgloveControl:
             self._on_refusal(message)
 
     # ---- parameters -> commands -------------------------------------------------------------------------------
-    def set_parameters(self, values: Mapping[str, Any]) -> Answer:
+    def set_parameters(self, values: Mapping[str, object]) -> Answer:
         """Map the values a client set to commands and send them; a refused value sends nothing."""
         if not self.enabled:
             return Answer(problems=(self.refusal,))
@@ -264,7 +261,7 @@ def _shown_value(text: str) -> ParamValue:
     return int(number) if text.lstrip("-").isdigit() else number
 
 
-def parameter_commands(name: str, value: Any, state: RunState, kinds: Sequence[str],
+def parameter_commands(name: str, value: object, state: RunState, kinds: Sequence[str],
                        choose_entry: str = "target", detections_entry: str = "objects") -> list[Command]:
     """The commands one parameter's new value means; CommandError (one sentence) when it means none."""
     if name == "run.paused":
@@ -309,23 +306,23 @@ def parameter_commands(name: str, value: Any, state: RunState, kinds: Sequence[s
     raise CommandError("this run has no such parameter")
 
 
-def _bool(value: Any) -> bool:
+def _bool(value: object) -> bool:
     if not isinstance(value, bool):
         raise CommandError(f"it takes true or false, got {_shown(value)}")
     return value
 
 
-def _int(value: Any) -> int:
+def _int(value: object) -> int:
     if isinstance(value, bool) or not isinstance(value, int | float) or value != int(value):
         raise CommandError(f"it takes a whole number of ticks, got {_shown(value)}")
     return int(value)
 
 
-def _shown(value: Any) -> str:
+def _shown(value: object) -> str:
     return json.dumps(value) if isinstance(value, list | dict | str) or value is None else str(value)
 
 
-def _breakpoint_commands(value: Any, state: RunState) -> list[Command]:
+def _breakpoint_commands(value: object, state: RunState) -> list[Command]:
     if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
         raise CommandError(f"breakpoints are a list of specs such as [\"fail\", \"tick:40\"], got {_shown(value)}")
     wanted: list[Breakpoint] = []
@@ -340,17 +337,18 @@ def _breakpoint_commands(value: Any, state: RunState) -> list[Command]:
     return commands
 
 
-def _fault_commands(value: Any, kinds: Sequence[str]) -> list[Command]:
+def _fault_commands(value: object, kinds: Sequence[str]) -> list[Command]:
     if value in ("", None):
         return []
-    params: Any = {}
+    params: dict[str, JsonValue] = {}
     if isinstance(value, dict):
-        kind, params = value.get("fault"), value.get("params", {})
+        kind, given = value.get("fault"), value.get("params", {})
         extra = sorted(set(value) - {"fault", "params"})
         if extra:
             raise CommandError(f"a fault is {{\"fault\": KIND, \"params\": {{...}}}}; unknown field '{extra[0]}'")
-        if not isinstance(params, dict):
-            raise CommandError(f"a fault's params are an object, got {_shown(params)}")
+        if not isinstance(given, dict):
+            raise CommandError(f"a fault's params are an object, got {_shown(given)}")
+        params = given
     else:
         kind = value
     if not isinstance(kind, str) or kind not in kinds:

@@ -16,10 +16,15 @@ from __future__ import annotations
 import json
 from importlib.resources import files
 from pathlib import Path
-from typing import Any
 
+from bt_grasp.files.json_types import JsonObject, JsonValue
+
+#: the topic a Foxglove client publishes JSON commands on (the Publish panel's topic)
+COMMAND_TOPIC = "/control/command"
+#: the schema name a client advertises it with (the Publish panel's datatype; the server does not require it)
+COMMAND_SCHEMA = "bt_grasp.Command"
 #: the Publish panels of the control layout: (panel id, button text, colour, the JSON command it sends)
-CONTROL_BUTTONS: tuple[tuple[str, str, str, dict[str, Any]], ...] = (
+CONTROL_BUTTONS: tuple[tuple[str, str, str, JsonObject], ...] = (
     ("Publish!pause", "Pause", "#c77c02", {"kind": "pause"}),
     ("Publish!resume", "Resume", "#00a871", {"kind": "resume"}),
     ("Publish!step", "Step 1 tick", "#2f6fba", {"kind": "step", "n": 1}),
@@ -35,28 +40,30 @@ def control_layout_path() -> Path:
     return Path(str(files("bt_grasp") / "foxglove" / "layouts" / "bt_grasp_control.layout.json"))
 
 
-def control_layout() -> dict[str, Any]:
+def control_layout() -> JsonObject:
     """The shipped control layout: the main layout's panels beside a Parameters panel and the command buttons."""
-    return with_control_panels(json.loads(layout_path().read_text()))
+    layout: JsonObject = json.loads(layout_path().read_text())
+    return with_control_panels(layout)
 
 
-def with_control_panels(base: dict[str, Any]) -> dict[str, Any]:
+def with_control_panels(base: JsonObject) -> JsonObject:
     """A layout (the shipped one, or a tree's own: ``tree_layout.layout_for_structure``) with the control panels
     on its right: the Parameters panel above the Publish buttons of :data:`CONTROL_BUTTONS`."""
-    from bt_grasp.foxglove.control import COMMAND_SCHEMA, COMMAND_TOPIC
-
-    config = dict(base["configById"])
+    panels = base["configById"]
+    assert isinstance(panels, dict)  # a Foxglove layout's panels by id
+    config = dict(panels)
     config["Parameters!control"] = {"title": "bt_grasp control (Parameters)"}
     for panel_id, text, colour, command in CONTROL_BUTTONS:
         config[panel_id] = {"topicName": COMMAND_TOPIC, "datatype": COMMAND_SCHEMA, "buttonText": text,
                             "buttonTooltip": json.dumps(command), "buttonColor": colour, "advancedView": False,
                             "value": json.dumps(command)}
     ids = [b[0] for b in CONTROL_BUTTONS]
-    buttons: Any = {"direction": "row", "first": ids[-2], "second": ids[-1]}
+    buttons: JsonValue = {"direction": "row", "first": ids[-2], "second": ids[-1]}
     buttons = {"direction": "row", "first": {"direction": "row", "first": ids[0], "second": ids[1]},
                "second": buttons}
-    side = {"direction": "column", "first": "Parameters!control", "second": buttons, "splitPercentage": 84}
-    layout = {"direction": "row", "first": base["layout"], "second": side, "splitPercentage": 66}
+    side: JsonObject = {"direction": "column", "first": "Parameters!control", "second": buttons,
+                        "splitPercentage": 84}
+    layout: JsonObject = {"direction": "row", "first": base["layout"], "second": side, "splitPercentage": 66}
     return {**base, "configById": config, "layout": layout}
 
 

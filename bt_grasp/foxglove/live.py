@@ -20,14 +20,27 @@ import contextlib
 import logging
 import threading
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any
+from types import ModuleType
+from typing import TYPE_CHECKING
 
 from bt_grasp.errors import BtGraspError, InputError
+from bt_grasp.foxglove.layout import COMMAND_TOPIC
 from bt_grasp.recording import topics
 from bt_grasp.recording.writer import RunRecorder
 
-if TYPE_CHECKING:
-    from bt_grasp.foxglove.control import Answer, FoxgloveControl
+if TYPE_CHECKING:  # the SDK is imported when a server starts (start-up time of every other run)
+    from foxglove import Channel
+    from foxglove.websocket import (
+        ChannelView,
+        Client,
+        ClientChannel,
+        Parameter,
+        PlaybackControlRequest,
+        PlaybackState,
+        WebSocketServer,
+    )
+
+    from bt_grasp.foxglove.control import Answer, FoxgloveControl, ParamValue
 
 log = logging.getLogger(__name__)
 
@@ -46,7 +59,7 @@ CONTROL_STATUS = "bt_grasp.control"
 NO_CONTROL = "this run takes no commands: start it with --live --control to drive it from Foxglove"
 
 
-class _Listener:  # implements foxglove.ServerListener (every callback: the SDK calls them by name)
+class _Listener:  # a foxglove.websocket.ServerListener (every callback: the SDK calls them by name)
     """Re-sends the latched topics' last message when a viewer subscribes; parameters and client messages go to
     the run's control (when it has one)."""
 
@@ -54,23 +67,21 @@ class _Listener:  # implements foxglove.ServerListener (every callback: the SDK 
         self._server = server
         self._command_channels: set[tuple[int, int]] = set()  # (client, client channel) on the command topic
 
-    def on_subscribe(self, client: Any, channel: Any) -> None:
+    def on_subscribe(self, client: Client, channel: ChannelView) -> None:
         self._server.subscribed(+1)
         self._server.resend(str(channel.topic))
 
-    def on_unsubscribe(self, client: Any, channel: Any) -> None:
+    def on_unsubscribe(self, client: Client, channel: ChannelView) -> None:
         self._server.subscribed(-1)
 
-    def on_client_advertise(self, client: Any, channel: Any) -> None:
-        from bt_grasp.foxglove.control import COMMAND_TOPIC
-
+    def on_client_advertise(self, client: Client, channel: ClientChannel) -> None:
         if str(channel.topic) == COMMAND_TOPIC:
             self._command_channels.add((int(client.id), int(channel.id)))
 
-    def on_client_unadvertise(self, client: Any, client_channel_id: int) -> None:
+    def on_client_unadvertise(self, client: Client, client_channel_id: int) -> None:
         self._command_channels.discard((int(client.id), int(client_channel_id)))
 
-    def on_message_data(self, client: Any, client_channel_id: int, data: bytes) -> None:
+    def on_message_data(self, client: Client, client_channel_id: int, data: bytes) -> None:
         if (int(client.id), int(client_channel_id)) not in self._command_channels:
             return
         control = self._server.control
@@ -79,11 +90,13 @@ class _Listener:  # implements foxglove.ServerListener (every callback: the SDK 
             return
         self._server.answer(control.command_message(bytes(data)))
 
-    def on_get_parameters(self, client: Any, param_names: list[str], request_id: str | None = None) -> list[Any]:
+    def on_get_parameters(self, client: Client, param_names: list[str],
+                          request_id: str | None = None) -> list[Parameter]:
         control = self._server.control
         return [] if control is None else self._server.parameters(control.parameters(param_names))
 
-    def on_set_parameters(self, client: Any, parameters: list[Any], request_id: str | None = None) -> list[Any]:
+    def on_set_parameters(self, client: Client, parameters: list[Parameter],
+                          request_id: str | None = None) -> list[Parameter]:
         control = self._server.control
         if control is None:
             self._server.status(NO_CONTROL)
@@ -104,7 +117,7 @@ class _Listener:  # implements foxglove.ServerListener (every callback: the SDK 
     def on_connection_graph_unsubscribe(self) -> None:
         return None
 
-    def on_playback_control_request(self, playback_control_request: Any) -> None:
+    def on_playback_control_request(self, playback_control_request: PlaybackControlRequest) -> PlaybackState | None:
         return None
 
 
@@ -118,9 +131,9 @@ class LiveServer:
         import foxglove
         from foxglove.websocket import Capability
 
-        self._foxglove = foxglove
+        self._foxglove: ModuleType = foxglove
         self._context = foxglove.Context()
-        self._channels: dict[str, Any] = {}
+        self._channels: dict[str, Channel] = {}
         self._latched: dict[str, tuple[int, bytes]] = {}
         self._lock = threading.Lock()
         self.dropped_errors = 0
@@ -128,10 +141,9 @@ class LiveServer:
         self.control: FoxgloveControl | None = None
         capabilities = [Capability.Parameters, Capability.ClientPublish]
         try:
-            self._server = foxglove.start_server(
+            self._server: WebSocketServer = foxglove.start_server(
                 name=name, host=host, port=port, context=self._context, capabilities=capabilities,
-                server_listener=_Listener(self),  # type: ignore[arg-type]
-                supported_encodings=["json", "protobuf"], message_backlog_size=backlog,
+                server_listener=_Listener(self), supported_encodings=["json", "protobuf"], message_backlog_size=backlog,
             )
         except Exception as exc:  # the port is taken, the host cannot be bound, ...
             raise LiveServerError(f"cannot serve a live view on {host}:{port}: {exc}") from exc
@@ -159,14 +171,15 @@ class LiveServer:
         if control.refusal:
             log.warning("%s", control.refusal)
 
-    def parameters(self, values: Mapping[str, Any]) -> list[Any]:
+    def parameters(self, values: Mapping[str, ParamValue]) -> list[Parameter]:
         """Parameter values as the SDK's ``Parameter`` objects (a float stays a float on the wire)."""
         from foxglove.websocket import Parameter, ParameterType
 
-        return [Parameter(name, value=value, type=ParameterType.Float64 if isinstance(value, float) else None)
+        return [Parameter(name, value=list(value) if isinstance(value, list) else value,  # a list of the SDK's
+                          type=ParameterType.Float64 if isinstance(value, float) else None)  # values (copied)
                 for name, value in values.items()]
 
-    def _publish_parameters(self, changed: Mapping[str, Any]) -> None:
+    def _publish_parameters(self, changed: Mapping[str, ParamValue]) -> None:
         try:
             self._server.publish_parameter_values(self.parameters(changed))
         except Exception:  # a viewer's updates must never stop the run

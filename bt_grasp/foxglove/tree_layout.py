@@ -11,15 +11,18 @@ from __future__ import annotations
 import copy
 import json
 import tempfile
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from bt_grasp.foxglove.layout import layout_path
+from bt_grasp.files.json_types import JsonObject
+from bt_grasp.files.output_files import write_output_file
+from bt_grasp.foxglove.layout import layout_path, with_control_panels
 from bt_grasp.recording import topics
 
 if TYPE_CHECKING:
     from bt_grasp.recording.reader import RunLog
+    from bt_grasp.tree.records import TreeNode
 
 #: the attachment holding the run's layout
 LAYOUT_ATTACHMENT = "foxglove/layout.json"
@@ -28,24 +31,27 @@ STATE_PANEL = "StateTransitions!leaves"
 _LEAF_KINDS = ("Action", "Condition")
 
 
-def _leaves(node: Mapping[str, Any]) -> Iterator[Mapping[str, Any]]:
+def _leaves(node: TreeNode) -> Iterator[TreeNode]:
     if node.get("kind") in _LEAF_KINDS:
         yield node
     for child in node.get("children", ()):
         yield from _leaves(child)
 
 
-def leaf_paths(structure: Mapping[str, Any]) -> list[str]:
+def leaf_paths(structure: TreeNode) -> list[str]:
     """The leaves' paths in tree order (uid order: the order of ``/bt/tick.leaves``)."""
     leaves = sorted(_leaves(structure), key=lambda n: int(n.get("uid", 0)))
     return [str(n.get("path") or n.get("name", "")) for n in leaves]
 
 
-def tree_layout(rows: Sequence[tuple[str, str]], title: str = "") -> dict[str, Any]:
+def tree_layout(rows: Sequence[tuple[str, str]], title: str = "") -> JsonObject:
     """The shipped layout with the State Transitions rows ``(label, key of /bt/tick.leaves)``."""
-    layout = json.loads(layout_path().read_text())
+    layout: JsonObject = json.loads(layout_path().read_text())
     config = copy.deepcopy(layout["configById"])
-    panel = dict(config.get(STATE_PANEL, {}))
+    assert isinstance(config, dict)  # the shipped layout's panels by id
+    shipped = config.get(STATE_PANEL, {})
+    assert isinstance(shipped, dict)
+    panel = dict(shipped)
     panel["paths"] = [{"value": f"{topics.TICK}.leaves.{key}", "timestampMethod": "receiveTime", "label": label}
                       for label, key in rows]
     if title:  # Foxglove shows it as the panel's title
@@ -54,17 +60,17 @@ def tree_layout(rows: Sequence[tuple[str, str]], title: str = "") -> dict[str, A
     return {**layout, "configById": config}
 
 
-def layout_for_structure(structure: Mapping[str, Any], title: str = "") -> dict[str, Any]:
+def layout_for_structure(structure: TreeNode, title: str = "") -> JsonObject:
     """The layout for a tree as ``tree_structure`` gives it (what a run attaches to its log)."""
     paths = leaf_paths(structure)
     return tree_layout(list(zip(paths, topics.leaf_keys(paths), strict=True)), title)
 
 
-def layout_bytes(structure: Mapping[str, Any], title: str = "") -> bytes:
+def layout_bytes(structure: TreeNode, title: str = "") -> bytes:
     return (json.dumps(layout_for_structure(structure, title), indent=2) + "\n").encode()
 
 
-def layout_for_log(run: RunLog) -> dict[str, Any]:
+def layout_for_log(run: RunLog) -> JsonObject:
     """The log's own layout (attached by the run), else one made from its tree and its leaves' keys."""
     attached = run.attachments.get(LAYOUT_ATTACHMENT)
     if attached is not None:
@@ -73,7 +79,8 @@ def layout_for_log(run: RunLog) -> dict[str, Any]:
         except ValueError:
             value = None
         if isinstance(value, dict) and STATE_PANEL in value.get("configById", {}):
-            return value
+            layout: JsonObject = value
+            return layout
     parents = {info.parent for info in run.nodes.values()}
     # a log of format 1 spells node kinds in lower case: a leaf is also a node that is nobody's parent
     leaves = [info for uid, info in sorted(run.nodes.items())
@@ -94,19 +101,18 @@ def layout_for_log(run: RunLog) -> dict[str, Any]:
 def write_layout(run: RunLog, target: Path | None = None) -> Path:
     """Write the log's layout to ``target`` (default ``<log>.layout.json`` beside the log); returns the file.
     A place that cannot be written is an ``InputError`` naming it."""
-    from bt_grasp.files.output_files import write_output_file
-
     target = target if target is not None else run.path.with_name(run.path.stem + ".layout.json")
     return write_output_file(target, json.dumps(layout_for_log(run), indent=2) + "\n", "--layout-out",
                              example="run.layout.json")
 
 
-def layout_for_tree_file(tree: Path, leaves: Sequence[str] = ()) -> dict[str, Any]:
+def layout_for_tree_file(tree: Path, leaves: Sequence[str] = ()) -> JsonObject:
     """The layout a run of this tree file attaches to its log (for a live view, before any log exists).
     ``leaves``: the ``--leaves`` plugins the tree needs."""
+    # deferred: start-up time (the tree package and the leaf library, which replay --foxglove does not need)
     from bt_grasp.behaviours.library import robot_registry
-    from bt_grasp.tree.introspect import tree_structure
-    from bt_grasp.tree.loader import load_tree
+    from bt_grasp.tree.introspect import tree_structure  # deferred: start-up time, as above
+    from bt_grasp.tree.loader import load_tree  # deferred: start-up time, as above
 
     loaded = load_tree(tree, robot_registry(leaves))
     return layout_for_structure(tree_structure(loaded.root), Path(tree).name)
@@ -117,13 +123,12 @@ def write_live_layout(tree: Path, leaves: Sequence[str] = (), log: Path | None =
     """Write the layout of ``tree`` for a live view (``control``: with the control panels of ``--control``)
     beside the run's log (``<log>.layout.json``) when it has one, else in ``folder`` (a private temporary folder
     the caller removes when the run ends: :func:`live_layout_folder`); returns the file."""
-    from bt_grasp.files.output_files import write_output_file
-    from bt_grasp.foxglove.layout import with_control_panels
-
-    if log is None and folder is None:
+    if log is not None:
+        target = log.with_name(log.stem + ".layout.json")
+    elif folder is not None:
+        target = Path(folder) / f"{Path(tree).stem}.layout.json"
+    else:
         raise ValueError("a live layout without a log needs the folder it goes in")
-    target = (log.with_name(log.stem + ".layout.json") if log is not None
-              else Path(folder) / f"{Path(tree).stem}.layout.json")  # type: ignore[arg-type]
     layout = layout_for_tree_file(tree, leaves)
     layout = with_control_panels(layout) if control else layout
     return write_output_file(target, json.dumps(layout, indent=2) + "\n", "--log")

@@ -25,4 +25,5 @@ def pyrealsense2(what: str = "a RealSense camera") -> ModuleType:
         import pyrealsense2 as rs
     except ImportError:
         raise RealSenseUnavailable(what) from None
-    return rs
+    module: ModuleType = rs
+    return module

@@ -7,7 +7,18 @@ only writes does not pay for importing the reader (and the reverse).
 from __future__ import annotations
 
 import importlib
-from typing import Any
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # what __getattr__ gives, for the type checker
+    from bt_grasp.recording.reader import NodeInfo as NodeInfo
+    from bt_grasp.recording.reader import NodeUpdate as NodeUpdate
+    from bt_grasp.recording.reader import RunLog as RunLog
+    from bt_grasp.recording.reader import TickRecord as TickRecord
+    from bt_grasp.recording.reader import TreeSnapshot as TreeSnapshot
+    from bt_grasp.recording.reader import open_log as open_log
+    from bt_grasp.recording.schemas import BoxMarker as BoxMarker
+    from bt_grasp.recording.schemas import PoseMarker as PoseMarker
+    from bt_grasp.recording.writer import RunRecorder as RunRecorder
 
 _WHERE = {
     "NodeInfo": "reader",
@@ -24,7 +35,7 @@ _WHERE = {
 __all__ = sorted(_WHERE)
 
 
-def __getattr__(name: str) -> Any:
+def __getattr__(name: str) -> object:
     if name in _WHERE:
         return getattr(importlib.import_module(f"bt_grasp.recording.{_WHERE[name]}"), name)
     raise AttributeError(f"module 'bt_grasp.recording' has no attribute {name!r}")

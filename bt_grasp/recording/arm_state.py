@@ -8,10 +8,10 @@ every link's pose from one forward kinematics pass of the robot description, and
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import Protocol
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from bt_grasp.recording import schemas
 from bt_grasp.recording.encodings import dumps
@@ -19,10 +19,21 @@ from bt_grasp.recording.jsonable import to_jsonable
 from bt_grasp.recording.tf_encoding import FrameTransformsEncoder
 
 
-def ticked(tick: int | None, msg: dict[str, Any]) -> dict[str, Any]:
+def ticked(tick: int | None, msg: dict[str, object]) -> dict[str, object]:
     """``msg`` tagged with the last tick written; before the first tick the key is left out (Foxglove's JSON
     schemas have no nullable types)."""
     return msg if tick is None else {"tick": tick, **msg}
+
+
+def number(value: object) -> float:
+    """A number of an arm state (a float, an int, a numpy scalar) as a float."""
+    return float(np.asarray(value, dtype=np.float64))
+
+
+class LinkPoses(Protocol):
+    """A robot description's forward kinematics (:class:`bt_grasp.recording.robot_model.RobotModel`)."""
+
+    def link_xyzquat(self, q_arm: ArrayLike, gripper_width_m: float | None) -> list[tuple[str, list[float]]]: ...
 
 
 class ArmStateEncoder:
@@ -32,31 +43,32 @@ class ArmStateEncoder:
     tool frame only).
     """
 
-    def __init__(self, joint_names: Sequence[str], base_frame: str, tool_frame: str, robot_model: Any) -> None:
+    def __init__(self, joint_names: Sequence[str], base_frame: str, tool_frame: str,
+                 robot_model: LinkPoses | None) -> None:
         self.joint_names = list(joint_names)
         self.base_frame = base_frame
         self.tool_frame = tool_frame
         self.robot_model = robot_model
         self._tf = FrameTransformsEncoder()
-        self._static_cache: dict[tuple[str, str], tuple[Any, list[float], list[float]]] = {}
+        self._static_cache: dict[tuple[str, str], tuple[NDArray[np.float64], list[float], list[float]]] = {}
 
-    def encode(self, stamp_file_ns: int, tick: int | None, robot: Mapping[str, Any],
+    def encode(self, stamp_file_ns: int, tick: int | None, robot: Mapping[str, object],
                statics: Mapping[tuple[str, str], NDArray[np.float64]]) -> tuple[bytes, bytes | None]:
         """(joint-state JSON, FrameTransforms bytes or None) of ``robot`` = ``{"q_rad", "qd_rad_s",
         "gripper_width_m", "T_base_tcp"}`` at the file time ``stamp_file_ns``."""
         q = np.asarray(robot["q_rad"], dtype=np.float64).ravel()
         qd = robot.get("qd_rad_s")
-        state: dict[str, Any] = ticked(tick, {
+        state = ticked(tick, {
             "name": self.joint_names[: q.size],
             "position": q.tolist(),
             "velocity": [] if qd is None else np.asarray(qd, dtype=np.float64).ravel().tolist(),
         })
         width = robot.get("gripper_width_m")
         if width is not None:
-            state["gripper_width_m"] = float(width)
+            state["gripper_width_m"] = number(width)
         links = None
         if self.robot_model is not None:  # every link's pose (one FK); the tool pose is among them
-            links = self.robot_model.link_xyzquat(q, None if width is None else float(width))
+            links = self.robot_model.link_xyzquat(q, None if width is None else number(width))
         T = robot.get("T_base_tcp")
         M = None
         if T is not None:

@@ -20,12 +20,13 @@ import struct
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import defusedxml.ElementTree as SafeET
 
 from bt_grasp.errors import InputError, LogFileError
+from bt_grasp.files.json_types import JsonValue
 from bt_grasp.files.output_files import write_output_file
+from bt_grasp.recording.messages import LoggedTreeNode
 from bt_grasp.recording.reader import RunLog
 from bt_grasp.recording.replay import status_changes
 from bt_grasp.tree.registry import NodeKind
@@ -76,18 +77,18 @@ def _name(value: object, what: str) -> str:
     return text
 
 
-def _attr(value: Any) -> str:
+def _attr(value: JsonValue) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
     return _text(value)
 
 
-def tree_xml(structure: dict[str, Any], main_tree_id: str = "MainTree") -> str:
+def tree_xml(structure: LoggedTreeNode, main_tree_id: str = "MainTree") -> str:
     """The BT.CPP 4 XML of a recorded structure, every node with ``_uid`` and ``_fullpath``."""
     main_tree_id = _text(main_tree_id)
     root = ET.Element("root", {"BTCPP_format": "4", "main_tree_to_execute": main_tree_id})
     models: dict[str, tuple[str, list[str]]] = {}
-    pending: list[tuple[str, str, dict[str, Any]]] = [(main_tree_id, "", structure)]
+    pending: list[tuple[str, str, LoggedTreeNode]] = [(main_tree_id, "", structure)]
     while pending:
         tree_id, fullpath, top = pending.pop(0)
         tree_elem = ET.SubElement(root, "BehaviorTree", {"ID": tree_id, "_fullpath": fullpath})
@@ -102,8 +103,8 @@ def tree_xml(structure: dict[str, Any], main_tree_id: str = "MainTree") -> str:
 
 
 def _add_node(
-    parent: ET.Element, node: dict[str, Any], models: dict[str, tuple[str, list[str]]],
-    pending: list[tuple[str, str, dict[str, Any]]],
+    parent: ET.Element, node: LoggedTreeNode, models: dict[str, tuple[str, list[str]]],
+    pending: list[tuple[str, str, LoggedTreeNode]],
 ) -> None:
     given = (node.get("attributes") or {}).items()
     attributes = {_name(k, "port name"): v for k, v in given if k not in ("name", "ID")}

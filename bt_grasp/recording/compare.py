@@ -1,18 +1,34 @@
 """`compare_tick_streams`: where a re-simulated run first departs from the recorded one.
 
-Both streams are sequences of ticks, each either a `TickRecord` (from `open_log`) or a mapping
+Both streams are sequences of ticks, each either a `TickRecord` (from `open_log`) or a `StreamTick`
 ``{"tick": int, "stamp_ns": int (optional), "nodes": [{"uid": int, "status": str, ...}, ...]}`` — the node
-dicts a tree runtime hands to `RunRecorder.write_tick` (all nodes, or only the changed ones: the streams are
+records a tree runtime hands to `RunRecorder.write_tick` (all nodes, or only the changed ones: the streams are
 accumulated, a node never written counts as IDLE).
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Literal, NotRequired, TypedDict
 
 from bt_grasp.recording.reader import TickRecord
+
+
+class StreamNode(TypedDict):
+    """A node's status in a ``StreamTick`` (a ``tree.records.NodeRecord`` has these keys and more)."""
+
+    uid: int
+    status: str
+    path: NotRequired[str]
+
+
+class StreamTick(TypedDict):
+    """One tick of a stream given as data rather than read from a log."""
+
+    tick: int
+    stamp_ns: NotRequired[int | None]
+    nodes: Sequence[StreamNode]
 
 
 @dataclass(frozen=True)
@@ -55,7 +71,7 @@ class _Tick:
     nodes: tuple[tuple[int, str, str], ...]  # uid, status, path
 
 
-def _normalise(ticks: Sequence[TickRecord | Mapping[str, Any]]) -> Iterator[_Tick]:
+def _normalise(ticks: Sequence[TickRecord | StreamTick]) -> Iterator[_Tick]:
     for t in ticks:
         if isinstance(t, TickRecord):
             yield _Tick(t.tick, t.stamp_ns, tuple((n.uid, n.status, "") for n in t.nodes))
@@ -66,8 +82,8 @@ def _normalise(ticks: Sequence[TickRecord | Mapping[str, Any]]) -> Iterator[_Tic
 
 
 def compare_tick_streams(
-    recorded_ticks: Sequence[TickRecord | Mapping[str, Any]],
-    new_ticks: Sequence[TickRecord | Mapping[str, Any]],
+    recorded_ticks: Sequence[TickRecord | StreamTick],
+    new_ticks: Sequence[TickRecord | StreamTick],
     *,
     stop_at_shorter: bool = False,
 ) -> Divergence | None:

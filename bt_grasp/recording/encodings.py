@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import enum
 import json
-from typing import Any
+from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -30,12 +30,12 @@ class Encoding(enum.Enum):
     DEPTH = "depth"  #: (log_time_ns, depth_m, frame_id, encoding): a foxglove.RawImage
 
 
-def dumps(obj: Any) -> bytes:
+def dumps(obj: object) -> bytes:
     """Compact JSON; NaN and infinities raise ``ValueError`` (the log's JSON has none)."""
     return _JSON.encode(obj).encode()
 
 
-def json_bytes(obj: Any) -> bytes:
+def json_bytes(obj: object) -> bytes:
     """Compact JSON of ``obj``; a value JSON cannot hold (NaN, an object) is first made JSON-able by the log's
     rules (``to_jsonable``), so a message never fails to encode in a writer process, where no caller would
     see the error."""
@@ -56,21 +56,25 @@ def trajectory_bytes(name: str, kind: str, times_s: NDArray[np.float64], q_rad: 
 
 
 def color_bytes(log_time_ns: int, rgb: NDArray[np.uint8], frame_id: str, fmt: str, jpeg_quality: int) -> bytes:
-    return schemas.compressed_image(log_time_ns, rgb, frame_id, fmt, jpeg_quality).SerializeToString()
+    data: bytes = schemas.compressed_image(log_time_ns, rgb, frame_id, fmt, jpeg_quality).SerializeToString()
+    return data
 
 
 def depth_bytes(log_time_ns: int, depth_m: NDArray[np.floating], frame_id: str, encoding: str) -> bytes:
-    return schemas.depth_image(log_time_ns, depth_m, frame_id, encoding).SerializeToString()
+    data: bytes = schemas.depth_image(log_time_ns, depth_m, frame_id, encoding).SerializeToString()
+    return data
 
 
-_ENCODERS = {Encoding.JSON: json_bytes, Encoding.TRAJECTORY: trajectory_bytes, Encoding.COLOR: color_bytes,
-             Encoding.DEPTH: depth_bytes}
+#: each encoding's function; the arguments differ from one to the next (the ``Encoding`` members say which)
+_ENCODERS: dict[Encoding, Callable[..., bytes]] = {
+    Encoding.JSON: json_bytes, Encoding.TRAJECTORY: trajectory_bytes, Encoding.COLOR: color_bytes,
+    Encoding.DEPTH: depth_bytes,
+}
 
 
-
-def encode(encoding: Encoding, args: tuple[Any, ...]) -> bytes:
+def encode(encoding: Encoding, args: tuple[object, ...]) -> bytes:
     """The message's bytes from its inputs."""
-    return _ENCODERS[encoding](*args)  # type: ignore[operator]
+    return _ENCODERS[encoding](*args)
 
 
 

@@ -40,11 +40,16 @@ import json
 import re
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from bt_grasp.files.json_types import JsonValue
 from bt_grasp.recording.jsonable import BlackboardDiffer, to_jsonable
+
+if TYPE_CHECKING:  # a run's fingerprint is taken with neither the reader nor the tree package imported
+    from bt_grasp.recording.reader import NodeUpdate, RunLog
+    from bt_grasp.tree.records import NodeRecord
 
 #: joint positions are compared to this resolution
 JOINT_RESOLUTION_RAD = 1e-6
@@ -65,7 +70,7 @@ def _quantise(values: Iterable[float], resolution: float) -> tuple[int, ...]:
     return tuple(round(float(v) / resolution) for v in values)
 
 
-def _canonical(value: Any) -> str:
+def _canonical(value: object) -> str:
     text = json.dumps(value, sort_keys=True, separators=(",", ":"), allow_nan=True)
     return _ADDRESS.sub("", text)
 
@@ -126,7 +131,7 @@ class Fingerprint:
         h.update(_canonical(self.final_objects).encode())
         return h.hexdigest()
 
-    def to_json(self) -> dict[str, Any]:
+    def to_json(self) -> dict[str, JsonValue]:
         """The digest, the tick count and the per-tick digests (enough to find a first differing tick)."""
         return {"digest": self.digest, "ticks": len(self.ticks), "tick_digests": [t.digest for t in self.ticks],
                 "final_objects": [name for name, _ in self.final_objects]}
@@ -177,8 +182,9 @@ class FingerprintRecorder:
     """Builds a fingerprint tick by tick; a ``TickRecorder`` (the runner's recorder interface).
 
     ``write_tick`` takes the runner's node records (``uid``, ``status``, ``failure_reason``; every node or only
-    the changed ones: states accumulate), the full blackboard (or only changed keys with ``bb_removed``
-    listing removed ones, as the log has them) and the arm state (``q_rad``, ``gripper_width_m``).
+    the changed ones: states accumulate), the full blackboard and the arm state (``q_rad``,
+    ``gripper_width_m``); ``write_logged_tick`` the same as a log holds them (only the changed blackboard
+    entries, and the removed ones).
     """
 
     def __init__(self) -> None:
@@ -190,19 +196,27 @@ class FingerprintRecorder:
         self._board_items: tuple[tuple[str, str], ...] = ()  # the board sorted by key, and its canonical text,
         self._board_text = _canonical(self._board_items)  # remade only when the board changed
 
-    def write_tick(self, tick: int, stamp_ns: int, nodes: Sequence[Mapping[str, Any]],
-                   blackboard: Mapping[str, Any], robot: Mapping[str, Any] | None = None,
-                   *, bb_removed: Iterable[str] = (), full_blackboard: bool = True) -> None:
+    def write_tick(self, tick: int, stamp_ns: int, nodes: Sequence[NodeRecord], blackboard: Mapping[str, object],
+                   robot: Mapping[str, object] | None = None) -> None:
         for n in nodes:
             uid = int(n["uid"])
             reason = n.get("failure_reason")
             self._nodes[uid] = (str(n["status"]), None if reason is None else str(reason))
             if n.get("path"):
                 self._paths.setdefault(uid, str(n["path"]))
-        if full_blackboard:  # the whole blackboard, as a run hands it over: convert only what changed
-            changed, removed = self._differ.diff(blackboard)
-        else:  # the changed entries, as a log holds them
-            changed, removed = dict(blackboard), list(bb_removed)
+        # the whole blackboard, as a run hands it over: convert only what changed
+        changed, removed = self._differ.diff(blackboard)
+        self._end_tick(tick, changed, removed, robot)
+
+    def write_logged_tick(self, tick: int, nodes: Iterable[NodeUpdate], changed: Mapping[str, JsonValue],
+                          removed: Iterable[str], robot: Mapping[str, object] | None) -> None:
+        """One tick as a log holds it: the nodes written, the blackboard entries changed and removed."""
+        for n in nodes:
+            self._nodes[n.uid] = (n.status, n.failure_reason)
+        self._end_tick(tick, changed, removed, robot)
+
+    def _end_tick(self, tick: int, changed: Mapping[str, object], removed: Iterable[str],
+                  robot: Mapping[str, object] | None) -> None:
         dirty = False
         for key, value in changed.items():
             if key in INPUT_FILE_KEYS:
@@ -214,21 +228,22 @@ class FingerprintRecorder:
         if dirty:
             self._board_items = tuple(sorted(self._board.items()))
             self._board_text = _canonical(self._board_items)
-        q = gripper = None
+        q: tuple[int, ...] | None = None
+        gripper: int | None = None
         if robot is not None:
             q = _quantise(np.asarray(robot["q_rad"], dtype=float).ravel(), JOINT_RESOLUTION_RAD)
             width = robot.get("gripper_width_m")
-            gripper = None if width is None else _quantise([width], WIDTH_RESOLUTION_M)[0]
+            gripper = None if width is None else _quantise(np.asarray([width], dtype=float), WIDTH_RESOLUTION_M)[0]
         nodes_now = tuple((uid, s, r) for uid, (s, r) in sorted(self._nodes.items()))
         self._ticks.append(TickPrint(int(tick), nodes_now, self._board_items, q, gripper, self._board_text))
 
-    def write_event(self, stamp_ns: int, kind: str, payload: Mapping[str, Any]) -> None:
+    def write_event(self, stamp_ns: int, kind: str, payload: Mapping[str, object]) -> None:
         """Events repeat what the ticks hold (failures): not part of the fingerprint."""
 
     def flush_tick(self) -> None:
         """Nothing to flush."""
 
-    def finish(self, final_object_poses: Mapping[str, Any] | None = None) -> Fingerprint:
+    def finish(self, final_object_poses: Mapping[str, object] | None = None) -> Fingerprint:
         """The fingerprint, with every object's final ``T_world_object`` (4x4, the judge's ground truth)."""
         final = []
         for name, T in sorted((final_object_poses or {}).items()):
@@ -237,28 +252,24 @@ class FingerprintRecorder:
         return Fingerprint(tuple(self._ticks), tuple(final), dict(self._paths))
 
 
-def final_object_poses(result: Mapping[str, Any] | None) -> dict[str, Any]:
+def final_object_poses(result: Mapping[str, object] | None) -> dict[str, object]:
     """The final object poses a run's result holds (``judge.object_poses``), or an empty dict."""
     judge = (result or {}).get("judge") or {}
     poses = judge.get("object_poses") if isinstance(judge, Mapping) else None
     return dict(poses) if isinstance(poses, Mapping) else {}
 
 
-def fingerprint_of_log(run: Any) -> Fingerprint:
-    """The fingerprint of a recorded run (a ``bt_grasp.recording.reader.RunLog``)."""
-    from bt_grasp.recording import topics
-
-    robot_by_tick: dict[int, dict[str, Any]] = {}
-    for message in run.iter_messages(topics.JOINT_STATE):
-        state = message.message
-        if isinstance(state, dict) and state.get("tick") is not None:
-            robot_by_tick[int(state["tick"])] = {"q_rad": state["position"],
-                                                 "gripper_width_m": state.get("gripper_width_m")}
+def fingerprint_of_log(run: RunLog) -> Fingerprint:
+    """The fingerprint of a recorded run."""
+    robot_by_tick: dict[int, dict[str, object]] = {}
+    for _, state in run.joint_states():
+        tick = state.get("tick")
+        if tick is not None:
+            robot_by_tick[int(tick)] = {"q_rad": state["position"], "gripper_width_m": state.get("gripper_width_m")}
     recorder = FingerprintRecorder()
     for node in run.nodes.values():
         recorder._paths[node.uid] = node.path
     for record in run.ticks:
-        nodes = [{"uid": n.uid, "status": n.status, "failure_reason": n.failure_reason} for n in record.nodes]
-        recorder.write_tick(record.tick, record.stamp_ns, nodes, record.bb, robot_by_tick.get(record.tick),
-                            bb_removed=record.bb_removed, full_blackboard=False)
+        recorder.write_logged_tick(record.tick, record.nodes, record.bb, record.bb_removed,
+                                   robot_by_tick.get(record.tick))
     return recorder.finish(final_object_poses(run.result))

@@ -5,13 +5,14 @@ from __future__ import annotations
 import html
 import json
 from collections.abc import Sequence
-from typing import Any
 
 from rich.table import Table
 from rich.text import Text
 
+from bt_grasp.recording.messages import LoggedIntervention
 
-def _command(record: dict[str, Any]) -> str:
+
+def _command(record: LoggedIntervention) -> str:
     command = record.get("command")
     if not isinstance(command, dict):
         return ""
@@ -19,13 +20,13 @@ def _command(record: dict[str, Any]) -> str:
     return json.dumps(fields, separators=(", ", ": "), default=str) if fields else ""
 
 
-def rows(records: Sequence[dict[str, Any]]) -> list[tuple[str, str, str, str, str, str]]:
+def rows(records: Sequence[LoggedIntervention]) -> list[tuple[str, str, str, str, str, str]]:
     """(time s, tick, source, kind, command fields, effect) per intervention, as text."""
     return [(f"{int(r.get('stamp_ns', 0)) * 1e-9:.3f}", str(r.get("tick", "")), str(r.get("source", "")),
              str(r.get("kind", "")), _command(r), str(r.get("effect", ""))) for r in records]
 
 
-def interventions_table(records: Sequence[dict[str, Any]]) -> Table:
+def interventions_table(records: Sequence[LoggedIntervention]) -> Table:
     """What ``bt-grasp replay LOG`` lists after the timeline when the run had interventions."""
     table = Table(title=f"interventions ({len(records)}): applied after their tick, re-applied by --resim")
     for name in ("time s", "tick", "by", "what", "command", "effect"):
@@ -35,7 +36,7 @@ def interventions_table(records: Sequence[dict[str, Any]]) -> Table:
     return table
 
 
-def interventions_html(records: Sequence[dict[str, Any]]) -> str:
+def interventions_html(records: Sequence[LoggedIntervention]) -> str:
     """The run report's section (empty when the run had none)."""
     if not records:
         return ""

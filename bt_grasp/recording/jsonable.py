@@ -20,11 +20,17 @@ import math
 import sys
 from collections.abc import Mapping, Sequence
 from pathlib import PurePath
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import NDArray
 
-JsonValue = Any
+from bt_grasp.files.json_types import JsonObject, JsonValue
+from bt_grasp.recording.messages import NodeEntry
+
+if TYPE_CHECKING:  # the tree package is not imported in the writer process (writer_process.py)
+    from bt_grasp.tree.records import NodeRecord
+
 _SCALARS = (str, int, bool, type(None))
 _REPR_LIMIT = 200
 
@@ -35,9 +41,9 @@ def _float(value: float) -> float | str:
     return "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf")
 
 
-def _array(value: np.ndarray, max_elements: int) -> JsonValue:
+def _array(value: NDArray[np.generic], max_elements: int) -> JsonValue:
     if value.size > max_elements:
-        summary: dict[str, Any] = {"shape": list(value.shape), "dtype": str(value.dtype)}
+        summary: JsonObject = {"shape": list(value.shape), "dtype": str(value.dtype)}
         if value.size and np.issubdtype(value.dtype, np.number):
             finite = value[np.isfinite(value)] if np.issubdtype(value.dtype, np.floating) else value
             if finite.size:
@@ -46,11 +52,12 @@ def _array(value: np.ndarray, max_elements: int) -> JsonValue:
     if value.dtype.kind == "f" and not np.isfinite(value).all():
         return to_jsonable(value.tolist(), max_elements)
     if value.dtype.kind in "biuf":
-        return value.tolist()
+        numbers: JsonValue = value.tolist()
+        return numbers
     return to_jsonable(value.tolist(), max_elements)
 
 
-def to_jsonable(value: Any, max_array_elements: int = 64) -> JsonValue:
+def to_jsonable(value: object, max_array_elements: int = 64) -> JsonValue:
     """A JSON-serialisable copy of ``value`` (see the module docstring for the rules)."""
     if isinstance(value, _SCALARS):
         return value
@@ -63,7 +70,7 @@ def to_jsonable(value: Any, max_array_elements: int = 64) -> JsonValue:
     if isinstance(value, enum.Enum):
         return value.name
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        out: dict[str, Any] = {"__type__": type(value).__name__}
+        out: JsonObject = {"__type__": type(value).__name__}
         for field in dataclasses.fields(value):
             out[field.name] = to_jsonable(getattr(value, field.name), max_array_elements)
         return out
@@ -84,11 +91,11 @@ def to_jsonable(value: Any, max_array_elements: int = 64) -> JsonValue:
     return text if len(text) <= _REPR_LIMIT else text[: _REPR_LIMIT - 3] + "..."
 
 
-def _is_immutable_leaf(value: Any) -> bool:
+def _is_immutable_leaf(value: object) -> bool:
     return isinstance(value, (*_SCALARS, float, enum.Enum, PurePath, np.generic))
 
 
-def _is_frozen(value: Any, depth: int = 0) -> bool:
+def _is_frozen(value: object, depth: int = 0) -> bool:
     """Values that cannot change while they stay the same object: immutable scalars, frozen dataclasses
     (the pipeline's results, whose arrays are never written after construction), tuples of those."""
     if _is_immutable_leaf(value):
@@ -107,7 +114,7 @@ def _is_frozen(value: Any, depth: int = 0) -> bool:
 _MISSING = object()
 
 
-def _same_array(last: Any, value: np.ndarray) -> bool:
+def _same_array(last: object, value: NDArray[np.generic]) -> bool:
     """Whether ``last`` (the remembered copy) is an array equal to ``value`` (NaNs equal to NaNs)."""
     return (
         isinstance(last, np.ndarray)
@@ -122,15 +129,15 @@ class BlackboardDiffer:
 
     def __init__(self, max_array_elements: int = 64) -> None:
         self._max = max_array_elements
-        self._raw: dict[str, Any] = {}
-        self._json: dict[str, JsonValue] = {}
+        self._raw: dict[str, object] = {}
+        self._json: JsonObject = {}
         # whether the remembered value is frozen: decided once (it cannot change while it is the same object,
         # which ``_raw`` keeps alive), not every tick (the recursion over tuples was a third of write_tick)
         self._frozen: dict[str, bool] = {}
 
-    def diff(self, blackboard: Mapping[str, Any]) -> tuple[dict[str, JsonValue], list[str]]:
+    def diff(self, blackboard: Mapping[str, object]) -> tuple[JsonObject, list[str]]:
         """(changed keys with their JSON values, keys that disappeared since the last call)."""
-        changed: dict[str, JsonValue] = {}
+        changed: JsonObject = {}
         raw, frozen = self._raw, self._frozen
         for key, value in blackboard.items():
             last = raw.get(key, _MISSING)
@@ -153,12 +160,8 @@ class BlackboardDiffer:
         return changed, removed
 
     @staticmethod
-    def _remember(value: Any) -> Any:
+    def _remember(value: object) -> object:
         return value.copy() if isinstance(value, np.ndarray) else value
-
-
-_NODE_FIELDS = ("status", "feedback", "failure_reason")
-_NAME_FIELDS = ("path", "type", "name")
 
 
 class NodeDiffer:
@@ -170,13 +173,13 @@ class NodeDiffer:
     """
 
     def __init__(self) -> None:
-        self._last: dict[int, tuple[Any, ...]] = {}
+        self._last: dict[int, tuple[str, str, str | None]] = {}
 
     def reset(self) -> None:
         self._last.clear()
 
-    def diff(self, nodes: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
-        out: list[dict[str, Any]] = []
+    def diff(self, nodes: Sequence[NodeRecord]) -> list[NodeEntry]:
+        out: list[NodeEntry] = []
         last_of = self._last
         for node in nodes:
             uid = node["uid"]
@@ -187,14 +190,19 @@ class NodeDiffer:
             ticked = bool(node.get("ticked"))
             if not ticked and last == state:
                 continue
-            entry: dict[str, Any] = {"uid": uid, "status": state[0], "feedback": state[1]}
-            if state[2] is not None:  # left out when none (Foxglove's JSON schemas have no nullable types)
-                entry["failure_reason"] = state[2]
-            entry["ticked"] = ticked
-            if last is None:
-                for name in _NAME_FIELDS:
-                    if name in node:
-                        entry[name] = node[name]
+            entry: NodeEntry
+            if state[2] is None:  # left out when none (Foxglove's JSON schemas have no nullable types)
+                entry = {"uid": uid, "status": state[0], "feedback": state[1], "ticked": ticked}
+            else:
+                entry = {"uid": uid, "status": state[0], "feedback": state[1], "failure_reason": state[2],
+                         "ticked": ticked}
+            if last is None:  # the names, in this order (the log's bytes)
+                if "path" in node:
+                    entry["path"] = node["path"]
+                if "type" in node:
+                    entry["type"] = node["type"]
+                if "name" in node:
+                    entry["name"] = node["name"]
             self._last[uid] = state
             out.append(entry)
         return out

@@ -19,4 +19,5 @@ def box_corners_px(T_camera_base: ArrayLike, K: ArrayLike, T_base_box: ArrayLike
     if np.any(cam[:, 2] <= 0.01):
         return None
     uv = (np.asarray(K, dtype=np.float64) @ cam.T).T
-    return uv[:, :2] / uv[:, 2:3]
+    px: NDArray[np.float64] = uv[:, :2] / uv[:, 2:3]
+    return px

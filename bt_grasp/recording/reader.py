@@ -9,25 +9,43 @@ Anything that is not a readable bt_grasp log raises ``LogFileError`` (exit code 
 from __future__ import annotations
 
 import logging
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import NamedTuple, TypeAlias, TypedDict, TypeVar
 
 import cv2
 import numpy as np
 from google.protobuf.json_format import MessageToDict
+from google.protobuf.message import Message
 from numpy.typing import NDArray
 
 from bt_grasp.errors import LogFileError
 from bt_grasp.files.image_header import MAX_IMAGE_SIDE, image_size
+from bt_grasp.files.json_types import JsonObject, JsonValue
 from bt_grasp.files.terminal_text import shown
-from bt_grasp.recording import mcap_io, topics
+from bt_grasp.recording import mcap_io, topics, validate
+from bt_grasp.recording.messages import (
+    LoggedEvent,
+    LoggedFault,
+    LoggedIntervention,
+    LoggedJointState,
+    LoggedResult,
+    LoggedTick,
+    LoggedTrajectory,
+    LoggedTreeNode,
+)
 from bt_grasp.recording.schemas import PROTOBUF_CLASSES
 from bt_grasp.recording.validate import BadMessage, is_int, parse_json
 from bt_grasp.tree.registry import NodeKind
 
 log = logging.getLogger(__name__)
+
+#: a decoded message: JSON for bt_grasp's own topics, a protobuf message for Foxglove's
+Decoded: TypeAlias = JsonValue | Message
+#: a colour image (HxWx3 uint8 RGB) or a depth image (HxW uint16 mm or float32 m): ``Image.kind`` says which
+Pixels: TypeAlias = NDArray[np.uint8 | np.uint16 | np.float32]
+_T = TypeVar("_T")
 
 #: leaf kinds as the tree introspection writes them (``NodeKind.value``: "Action", "Condition")
 LEAF_KINDS = frozenset({NodeKind.ACTION.value, NodeKind.CONDITION.value})
@@ -46,12 +64,21 @@ class NodeUpdate(NamedTuple):
     ticked: bool = False
 
 
+class LogLine(TypedDict):
+    """A /log message as the reader keeps it."""
+
+    stamp_ns: int
+    level: str
+    name: str
+    message: str
+
+
 @dataclass(frozen=True)
 class TickRecord:
     tick: int
     stamp_ns: int
     nodes: tuple[NodeUpdate, ...]
-    bb: dict[str, Any]
+    bb: JsonObject
     bb_removed: tuple[str, ...] = ()
 
 
@@ -80,11 +107,11 @@ class TreeSnapshot:
 
     stamp_ns: int
     tick: int | None
-    root: dict[str, Any]
+    root: LoggedTreeNode
 
     def nodes(self) -> dict[int, NodeInfo]:
         out: dict[int, NodeInfo] = {}
-        stack: list[tuple[dict[str, Any], int | None, int]] = [(self.root, None, 0)]
+        stack: list[tuple[LoggedTreeNode, int | None, int]] = [(self.root, None, 0)]
         while stack:
             node, parent, depth = stack.pop()
             uid = int(node["uid"])
@@ -100,7 +127,7 @@ class TopicMessage:
     log_time_ns: int
     publish_time_ns: int
     schema_name: str
-    message: Any  # a dict for JSON topics, a protobuf message for Foxglove topics
+    message: Decoded  # JSON for JSON topics, a protobuf message for Foxglove topics
 
 
 @dataclass(frozen=True)
@@ -110,7 +137,7 @@ class Image:
     frame_id: str
     kind: str  # "color" (HxWx3 uint8 RGB) or "depth" (HxW uint16 mm or float32 m)
     encoding: str
-    pixels: NDArray[Any]
+    pixels: Pixels
 
 
 @dataclass
@@ -122,11 +149,11 @@ class RunLog:
     attachments: dict[str, bytes]
     structures: list[TreeSnapshot]
     ticks: list[TickRecord]
-    events: list[dict[str, Any]]
-    faults: list[dict[str, Any]]
-    logs: list[dict[str, Any]]
-    trajectories: list[dict[str, Any]]
-    result: dict[str, Any] | None
+    events: list[LoggedEvent]
+    faults: list[LoggedFault]
+    logs: list[LogLine]
+    trajectories: list[LoggedTrajectory]
+    result: LoggedResult | None
     topics: dict[str, int]
     truncated: bool
     indexed: bool
@@ -138,7 +165,7 @@ class RunLog:
     #: the file's time of simulated time 0 (format 2; 0 for format 1, whose times are simulated time)
     time_origin_ns: int = 0
     #: an interactive run's interventions (/control/interventions), each with its ``stamp_ns``
-    interventions: list[dict[str, Any]] = field(default_factory=list)
+    interventions: list[LoggedIntervention] = field(default_factory=list)
 
     @property
     def ticks_recovered(self) -> int:
@@ -175,8 +202,8 @@ class RunLog:
                 states[node.uid] = node
         return states
 
-    def blackboard_at(self, tick: int) -> dict[str, Any]:
-        board: dict[str, Any] = {}
+    def blackboard_at(self, tick: int) -> JsonObject:
+        board: JsonObject = {}
         for record in self.ticks:
             if record.tick > tick:
                 break
@@ -185,13 +212,26 @@ class RunLog:
                 board.pop(key, None)
         return board
 
-    def robot_at(self, tick: int) -> dict[str, Any] | None:
+    def robot_at(self, tick: int) -> LoggedJointState | None:
         """The last arm state (/robot/joint_state) written at or before ``tick``."""
         for record in reversed(self.ticks):
             if record.tick <= tick and record.stamp_ns in self._robot_raw:
-                state: dict[str, Any] = decode_at(self.path, self._robot_raw[record.stamp_ns], self.time_origin_ns)
-                return state
+                return _json_at(self.path, self._robot_raw[record.stamp_ns], self.time_origin_ns,
+                                validate.joint_state_message)
         return None
+
+    def joint_states(self) -> Iterator[tuple[int, LoggedJointState]]:
+        """(simulated time, message) of every /robot/joint_state message, decoded and checked."""
+        for raw in mcap_io.iter_topic(self.path, [topics.JOINT_STATE], self.indexed):
+            yield (raw.log_time_ns - self.time_origin_ns,
+                   _json_at(self.path, raw, self.time_origin_ns, validate.joint_state_message))
+
+    def protobuf_messages(self, topic: str) -> Iterator[tuple[int, Message]]:
+        """(simulated time, message) of every message on one of Foxglove's topics (``topics.PROTOBUF_TOPICS``)."""
+        if topic not in topics.PROTOBUF_TOPICS:
+            raise ValueError(f"{topic} is not a protobuf topic")
+        for raw in mcap_io.iter_topic(self.path, [topic], self.indexed):
+            yield raw.log_time_ns - self.time_origin_ns, _protobuf_at(self.path, raw, self.time_origin_ns)
 
     def iter_messages(self, topic: str) -> Iterator[TopicMessage]:
         """Every message on ``topic``, decoded (JSON -> dict, Foxglove -> protobuf message) and checked."""
@@ -203,7 +243,7 @@ class RunLog:
         """The recorded colour and depth images, decoded to numpy arrays, in file order; an image that does
         not decode is a ``LogFileError`` naming its topic and time (it is bad input, found when shown)."""
         for raw in mcap_io.iter_topic(self.path, [topics.COLOR, topics.DEPTH], self.indexed):
-            msg = decode_at(self.path, raw, self.time_origin_ns)
+            msg = _protobuf_at(self.path, raw, self.time_origin_ns)
             stamp = raw.log_time_ns - self.time_origin_ns
             try:
                 yield _image(raw.topic, msg, msg.timestamp.seconds * 1_000_000_000 + msg.timestamp.nanos
@@ -212,10 +252,10 @@ class RunLog:
                 raise LogFileError(self.path, f"has a bad image on {raw.topic} at {stamp} ns: {exc}") from None
 
 
-_DEPTH_TYPES: dict[str, np.dtype[Any]] = {"16UC1": np.dtype("<u2"), "32FC1": np.dtype("<f4")}
+_DEPTH_TYPES: dict[str, np.dtype[np.uint16 | np.float32]] = {"16UC1": np.dtype("<u2"), "32FC1": np.dtype("<f4")}
 
 
-def _image(topic: str, msg: Any, stamp: int) -> Image:
+def _image(topic: str, msg: Message, stamp: int) -> Image:
     if topic == topics.COLOR:
         size = image_size(msg.data)
         if size is None:
@@ -226,7 +266,8 @@ def _image(topic: str, msg: Any, stamp: int) -> Image:
         bgr = cv2.imdecode(np.frombuffer(msg.data, np.uint8), cv2.IMREAD_COLOR)
         if bgr is None:
             raise BadMessage(f"its {msg.format or 'unnamed'} data ({len(msg.data)} bytes) does not decode")
-        return Image(topic, stamp, msg.frame_id, "color", msg.format, bgr[:, :, ::-1].copy())
+        rgb: NDArray[np.uint8] = np.asarray(bgr[:, :, ::-1], dtype=np.uint8).copy()
+        return Image(topic, stamp, msg.frame_id, "color", msg.format, rgb)
     dtype = _DEPTH_TYPES.get(msg.encoding)
     if dtype is None:
         raise BadMessage(f"its encoding {msg.encoding!r} is not one of {', '.join(_DEPTH_TYPES)}")
@@ -237,20 +278,25 @@ def _image(topic: str, msg: Any, stamp: int) -> Image:
     return Image(topic, stamp, msg.frame_id, "depth", msg.encoding, pixels.copy())
 
 
-def decode(raw: mcap_io.RawMessage) -> Any:
-    """One message: JSON (checked: :mod:`bt_grasp.recording.validate`) or a Foxglove protobuf message; a topic
-    bt_grasp writes must come in the encoding and schema it writes; raises ``BadMessage``."""
+def _check_encoding(raw: mcap_io.RawMessage) -> None:
+    """A topic bt_grasp writes must come in the encoding and schema it writes; raises ``BadMessage``."""
     if raw.topic in topics.JSON_TOPICS and raw.message_encoding != "json":
         raise BadMessage(f"its encoding is {raw.message_encoding!r}, not 'json'")
     expected = topics.PROTOBUF_TOPICS.get(raw.topic)
     if expected is not None and (raw.message_encoding, raw.schema_name) != ("protobuf", expected):
         raise BadMessage(f"it is {raw.message_encoding!r} of schema {raw.schema_name!r}, not 'protobuf' of "
                          f"{expected!r}")
+
+
+def decode(raw: mcap_io.RawMessage) -> Decoded:
+    """One message: JSON (checked: :mod:`bt_grasp.recording.validate`) or a Foxglove protobuf message; a topic
+    bt_grasp writes must come in the encoding and schema it writes; raises ``BadMessage``."""
+    _check_encoding(raw)
     if raw.message_encoding == "json":
         return parse_json(raw.topic, raw.data)
     cls = PROTOBUF_CLASSES.get(raw.schema_name)
     if raw.message_encoding == "protobuf" and cls is not None:
-        msg = cls()
+        msg: Message = cls()
         try:
             msg.ParseFromString(raw.data)
         except Exception as exc:  # protobuf's DecodeError, or a RecursionError on hostile nesting
@@ -260,25 +306,48 @@ def decode(raw: mcap_io.RawMessage) -> Any:
                               "bytes": len(raw.data)}}
 
 
-def decode_at(path: Path, raw: mcap_io.RawMessage, origin: int) -> Any:
+def _bad_message(path: Path, raw: mcap_io.RawMessage, origin: int, exc: BadMessage) -> LogFileError:
+    return LogFileError(path, f"has a bad message on {raw.topic} at {raw.log_time_ns - origin} ns: {exc}")
+
+
+def decode_at(path: Path, raw: mcap_io.RawMessage, origin: int) -> Decoded:
     """``decode``, with a message that does not decode as one sentence naming the file, topic and time."""
     try:
         return decode(raw)
     except BadMessage as exc:
-        raise LogFileError(path, f"has a bad message on {raw.topic} at {raw.log_time_ns - origin} ns: {exc}") from None
+        raise _bad_message(path, raw, origin, exc) from None
 
 
-def message_to_jsonable(message: Any) -> Any:
+def _protobuf_at(path: Path, raw: mcap_io.RawMessage, origin: int) -> Message:
+    """A message of one of Foxglove's topics (``topics.PROTOBUF_TOPICS``): ``decode_at`` refuses any other
+    encoding or schema on those."""
+    msg = decode_at(path, raw, origin)
+    if not isinstance(msg, Message):
+        raise _bad_message(path, raw, origin, BadMessage("it is not a protobuf message"))
+    return msg
+
+
+def _json_at(path: Path, raw: mcap_io.RawMessage, origin: int, check: Callable[[JsonValue], _T]) -> _T:
+    """One of bt_grasp's own JSON messages, checked by ``check`` (``validate.tick_message``, ...) and typed as
+    what it checked; a message that is not one is one sentence naming the file, topic and time."""
+    try:
+        _check_encoding(raw)
+        return check(validate.json_value(raw.data))
+    except BadMessage as exc:
+        raise _bad_message(path, raw, origin, exc) from None
+
+
+def message_to_jsonable(message: Decoded) -> JsonValue:
     """A decoded message as JSON-able data; bulky ``data`` fields of images and clouds become their size."""
-    if isinstance(message, (dict, list)):
+    if not isinstance(message, Message):
         return message
-    out = MessageToDict(message, preserving_proto_field_name=True)
+    out: JsonObject = MessageToDict(message, preserving_proto_field_name=True)
     if "data" in out:
         out["data"] = {"__bytes__": len(message.data)}
     return out
 
 
-def _tick_record(msg: dict[str, Any]) -> TickRecord:
+def _tick_record(msg: LoggedTick) -> TickRecord:
     nodes = tuple(
         NodeUpdate(int(n["uid"]), str(n["status"]), str(n.get("feedback") or ""), n.get("failure_reason"),
                    bool(n.get("ticked", False)))
@@ -314,42 +383,60 @@ def open_log(path: str | Path) -> RunLog:
         printed = fmt if fmt.isascii() and fmt.isprintable() and len(fmt) <= 20 else repr(fmt[:20])
         raise LogFileError(p, f"was written in bt_grasp log format {printed}; this bt_grasp reads formats {readable}")
     origin = _time_origin(p, metadata)  # format 1: simulated time from 0
-    by_topic: dict[str, list[tuple[mcap_io.RawMessage, Any]]] = {}
     robot_raw: dict[int, mcap_io.RawMessage] = {}
-    for raw in scan.messages:
-        if raw.topic == topics.JOINT_STATE:  # one per tick: decoded and checked only when one is shown
-            robot_raw[raw.log_time_ns - origin] = raw
-        else:  # every other message is decoded and checked once, here
-            by_topic.setdefault(raw.topic, []).append((raw, decode_at(p, raw, origin)))
+    tick_messages: list[LoggedTick] = []
+    structures: list[TreeSnapshot] = []
+    events: list[LoggedEvent] = []
+    faults: list[LoggedFault] = []
+    trajectories: list[LoggedTrajectory] = []
+    results: list[LoggedResult] = []
+    logs: list[LogLine] = []
+    interventions: list[LoggedIntervention] = []
+    for raw in scan.messages:  # every message but the arm states is decoded and checked once, here, in file order
+        topic, stamp = raw.topic, raw.log_time_ns - origin
+        if topic == topics.JOINT_STATE:  # one per tick: decoded and checked only when one is shown
+            robot_raw[stamp] = raw
+        elif topic == topics.TICK:
+            tick_messages.append(_json_at(p, raw, origin, validate.tick_message))
+        elif topic == topics.TREE:
+            tree = _json_at(p, raw, origin, validate.tree_message)
+            structures.append(TreeSnapshot(stamp, tree.get("tick"), tree["structure"]))
+        elif topic == topics.EVENTS:
+            events.append({"stamp_ns": stamp, **_json_at(p, raw, origin, validate.event_message)})
+        elif topic == topics.FAULTS:
+            faults.append({"stamp_ns": stamp, **_json_at(p, raw, origin, validate.fault_message)})
+        elif topic == topics.TRAJECTORY:
+            trajectories.append(_trajectory({"stamp_ns": stamp,
+                                             **_json_at(p, raw, origin, validate.trajectory_message)}))
+        elif topic == topics.RESULT:
+            results.append(_json_at(p, raw, origin, validate.result_message))
+        elif topic == topics.INTERVENTIONS:  # a late JSON topic: decoded as any topic is, then checked
+            interventions.append({"stamp_ns": stamp, **_intervention_at(p, raw, origin)})
+        else:
+            msg = decode_at(p, raw, origin)
+            if topic == topics.LOG and isinstance(msg, Message):
+                logs.append({"stamp_ns": stamp, "level": _level_name(msg), "name": shown(msg.name),
+                             "message": shown(msg.message)})
     learned: dict[int, NodeInfo] = {}
     ticks = []
-    for _, msg in by_topic.get(topics.TICK, []):
+    for msg in tick_messages:
         ticks.append(_tick_record(msg))
         for n in msg.get("nodes", []):
             uid = int(n["uid"])
             if "path" in n and uid not in learned:
                 learned[uid] = NodeInfo(uid, n["path"], n.get("type", ""), n.get("name", ""))
     ticks.sort(key=lambda t: t.tick)
-
-    def stamped(topic: str) -> list[dict[str, Any]]:
-        return [{"stamp_ns": raw.log_time_ns - origin, **msg} for raw, msg in by_topic.get(topic, [])]
-
-    logs = [{"stamp_ns": raw.log_time_ns - origin, "level": _level_name(msg), "name": shown(msg.name),
-             "message": shown(msg.message)} for raw, msg in by_topic.get(topics.LOG, []) if not isinstance(msg, dict)]
-    results = by_topic.get(topics.RESULT, [])
-    structures = [TreeSnapshot(raw.log_time_ns - origin, msg.get("tick"), msg["structure"])
-                  for raw, msg in by_topic.get(topics.TREE, [])]
     return RunLog(
         path=p,
         metadata=metadata,
         attachments=scan.attachments,
         structures=structures,
         ticks=ticks,
-        events=stamped(topics.EVENTS),
-        faults=stamped(topics.FAULTS),
+        events=events,
+        faults=faults,
         logs=logs,
-        trajectories=[_trajectory(t) for t in stamped(topics.TRAJECTORY)],
-        result=results[-1][1] if results else None,
+        trajectories=trajectories,
+        result=results[-1] if results else None,
         topics=dict(sorted((shown(topic), n) for topic, n in scan.topic_counts.items())),
         truncated=not scan.complete,
         indexed=scan.indexed,
@@ -358,8 +445,16 @@ def open_log(path: str | Path) -> RunLog:
         _learned=learned,
         _robot_raw=robot_raw,
         time_origin_ns=origin,
-        interventions=stamped(topics.INTERVENTIONS),
+        interventions=interventions,
     )
+
+
+def _intervention_at(path: Path, raw: mcap_io.RawMessage, origin: int) -> LoggedIntervention:
+    msg = decode_at(path, raw, origin)
+    try:
+        return validate.intervention_message(msg)
+    except BadMessage as exc:
+        raise _bad_message(path, raw, origin, exc) from None
 
 
 def _time_origin(path: Path, metadata: dict[str, str]) -> int:
@@ -371,14 +466,14 @@ def _time_origin(path: Path, metadata: dict[str, str]) -> int:
     return value
 
 
-def _level_name(msg: Any) -> str:
+def _level_name(msg: Message) -> str:
     try:
         return str(msg.Level.Name(msg.level))
     except ValueError:  # a level number the schema does not name
         return str(msg.level)
 
 
-def _trajectory(msg: dict[str, Any]) -> dict[str, Any]:
+def _trajectory(msg: LoggedTrajectory) -> LoggedTrajectory:
     """Format 2 writes waypoints as objects; readers get ``q_rad`` rows as format 1 wrote them."""
     if "q_rad" not in msg and "points" in msg:
         msg = {**msg, "q_rad": [p["q_rad"] for p in msg["points"]]}

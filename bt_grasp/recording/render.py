@@ -7,15 +7,17 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Sequence
-from typing import Any
+from collections.abc import Mapping, Sequence
 
 from rich.console import Group, RenderableType
 from rich.table import Table
 from rich.text import Text
 from rich.tree import Tree
 
+from bt_grasp.files.json_types import JsonValue
+from bt_grasp.recording.messages import LoggedJointState
 from bt_grasp.recording.replay import FailureKind, FailureReport, FaultMark, StatusChange
+from bt_grasp.recording.replay_shapes import AnnotatedNode, LeafState, ReplaySummary
 from bt_grasp.tree.values import display
 
 STATUS_STYLES = {"SUCCESS": "green", "FAILURE": "bold red", "RUNNING": "yellow", "IDLE": "dim",
@@ -31,13 +33,13 @@ def _seconds(stamp_ns: int) -> str:
     return f"{stamp_ns * 1e-9:.3f}s"
 
 
-def _value(value: Any, limit: int = 80) -> str:
+def _value(value: JsonValue, limit: int = 80) -> str:
     # numbers and bools as BT.CPP prints them (a real with six decimals); the log itself keeps them typed
     text = display(value) if isinstance(value, str | int | float) else json.dumps(value, separators=(",", ":"))
     return text if len(text) <= limit else text[: limit - 1] + "…"
 
 
-def summary_table(s: dict[str, Any]) -> Table:
+def summary_table(s: ReplaySummary) -> Table:
     table = Table(show_header=False, box=None, pad_edge=False)
     table.add_column(style="bold")
     table.add_column()
@@ -130,7 +132,7 @@ def timeline_table(rows: Sequence[tuple[int, int, list[StatusChange]]], max_rows
     return table
 
 
-def _node_label(node: dict[str, Any]) -> Text:
+def _node_label(node: AnnotatedNode) -> Text:
     label = Text()
     name, type_name = node["name"], node["type"]
     label.append(name, style="bold" if node.get("ticked") else "")
@@ -147,9 +149,9 @@ def _node_label(node: dict[str, Any]) -> Text:
     return label
 
 
-def tree_render(tree: dict[str, Any], title: str) -> Tree:
+def tree_render(tree: AnnotatedNode, title: str) -> Tree:
     root = Tree(Text(title, style="bold"))
-    stack: list[tuple[Tree, dict[str, Any]]] = [(root, tree)]
+    stack: list[tuple[Tree, AnnotatedNode]] = [(root, tree)]
     while stack:
         parent, node = stack.pop()
         branch = parent.add(_node_label(node))
@@ -157,7 +159,7 @@ def tree_render(tree: dict[str, Any], title: str) -> Tree:
     return root
 
 
-def mapping_table(title: str, values: dict[str, Any], sort: bool = True) -> Table:
+def mapping_table(title: str, values: Mapping[str, JsonValue], sort: bool = True) -> Table:
     table = Table(title=title, title_justify="left", box=None, pad_edge=False, show_header=False)
     table.add_column(style="bold")
     table.add_column()
@@ -168,11 +170,11 @@ def mapping_table(title: str, values: dict[str, Any], sort: bool = True) -> Tabl
     return table
 
 
-def robot_table(robot: dict[str, Any] | None) -> Table:
+def robot_table(robot: LoggedJointState | None) -> Table:
     if robot is None:
         return mapping_table("arm", {})
     q = robot.get("position", [])
-    rows: dict[str, Any] = {
+    rows: dict[str, JsonValue] = {
         "q (rad)": " ".join(f"{v:+.4f}" for v in q),
         "q (deg)": " ".join(f"{math.degrees(v):+.2f}" for v in q),
         "qd (rad/s)": " ".join(f"{v:+.4f}" for v in robot.get("velocity", [])),
@@ -227,7 +229,7 @@ def failures_table(reports: Sequence[FailureReport]) -> RenderableType:
     return Group(*parts)
 
 
-def leaf_table(name: str, history: Sequence[dict[str, Any]], max_rows: int) -> RenderableType:
+def leaf_table(name: str, history: Sequence[LeafState], max_rows: int) -> RenderableType:
     table = Table(title=Text(f"history of {name}"), title_justify="left", box=None, pad_edge=False)
     for column in ("tick", "sim time", "status", "ticked", "feedback", "reason"):
         table.add_column(column)

@@ -11,11 +11,20 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Iterator
-from dataclasses import asdict, dataclass
-from typing import Any
+from dataclasses import dataclass, replace
 
 from bt_grasp.errors import InputError
+from bt_grasp.files.json_types import JsonObject
+from bt_grasp.recording.messages import LoggedTreeNode
 from bt_grasp.recording.reader import NodeInfo, NodeUpdate, RunLog, message_to_jsonable
+from bt_grasp.recording.replay_shapes import (
+    AnnotatedNode,
+    FaultMarkJson,
+    LeafState,
+    ReplaySummary,
+    TickView,
+    TopicRecord,
+)
 
 _RECOVERY_LIMIT = 6
 
@@ -168,8 +177,6 @@ def _by_design(nodes: dict[int, NodeInfo], info: NodeInfo | None, reason: str | 
 def _mark_result_leaf(run: RunLog, reports: list[FailureReport]) -> None:
     """A run that failed without its root failing (the tick limit, an unmet goal): the result's failed leaf,
     at its last failure, is what decided the outcome."""
-    import dataclasses
-
     result = run.result or {}
     if result.get("success") is not False or any(r.decided for r in reports):
         return
@@ -177,17 +184,13 @@ def _mark_result_leaf(run: RunLog, reports: list[FailureReport]) -> None:
     for index in range(len(reports) - 1, -1, -1):
         report = reports[index]
         if wanted and wanted in (report.path, report.name) and report.kind != FailureKind.BY_DESIGN:
-            reports[index] = dataclasses.replace(report, kind=FailureKind.OUTCOME)
+            reports[index] = replace(report, kind=FailureKind.OUTCOME)
             return
 
 
 def failure_chain(run: RunLog) -> list[FailureReport]:
     """The causal chain of the run's failures, oldest first: every failure that was not false by design."""
     return [f for f in failures(run) if f.kind != FailureKind.BY_DESIGN]
-
-
-def _result_field(run: RunLog, key: str) -> Any:
-    return run.result.get(key) if run.result else None
 
 
 def _int_or_none(text: str | None) -> int | None:
@@ -198,7 +201,7 @@ def _int_or_none(text: str | None) -> int | None:
         return None
 
 
-def summary(run: RunLog) -> dict[str, Any]:
+def summary(run: RunLog) -> ReplaySummary:
     """The replay summary as JSON-able data."""
     meta = run.metadata
     counts = attempts(run)
@@ -210,18 +213,19 @@ def summary(run: RunLog) -> dict[str, Any]:
     by_design_per_leaf = Counter(f.path or f.name for f in every_failure if f.kind == FailureKind.BY_DESIGN)
     first, last = (run.ticks[0], run.ticks[-1]) if run.ticks else (None, None)
     sim_s = (last.stamp_ns - first.stamp_ns) * 1e-9 if first and last else 0.0
-    retries = _result_field(run, "retries")
+    result = run.result or {}
+    retries = result.get("retries")
     return {
         "file": str(run.path),
         "tree": meta.get("tree_file", ""),
         "scene": meta.get("scene_file", ""),
         "seed": _int_or_none(meta.get("seed")),  # MCAP metadata is text: the seed is a number here
         "fault_plan": meta.get("fault_plan", ""),
-        "success": _result_field(run, "success"),
-        "interrupted": bool(_result_field(run, "interrupted")),  # Ctrl-C ended the run (success is null)
-        "reason": _result_field(run, "reason"),
-        "failed_leaf": _result_field(run, "failed_leaf"),
-        "failed_path": _result_field(run, "failed_path"),
+        "success": result.get("success"),
+        "interrupted": bool(result.get("interrupted")),  # Ctrl-C ended the run (success is null)
+        "reason": result.get("reason"),
+        "failed_leaf": result.get("failed_leaf"),
+        "failed_path": result.get("failed_path"),
         "ticks": len(run.ticks),
         "first_tick": first.tick if first else None,
         "last_tick": last.tick if last else None,
@@ -265,6 +269,10 @@ class FaultMark:
     target: str
     effect: str
 
+    def as_json(self) -> FaultMarkJson:
+        return {"tick": self.tick, "stamp_ns": self.stamp_ns, "label": self.label, "kind": self.kind,
+                "target": self.target, "effect": self.effect}
+
     def text(self) -> str:
         """``frame_drop@Perceive#1 (frame_drop) on pick/Perceive: no frame``"""
         kind = f" ({self.kind})" if self.kind and self.kind != self.label else ""
@@ -272,11 +280,11 @@ class FaultMark:
         return f"{self.label}{kind}{target}" + (f": {self.effect}" if self.effect else "")
 
 
-def _text(value: Any) -> str:
+def _text(value: object) -> str:
     return "" if value is None else str(value)
 
 
-def _mapping(value: Any) -> dict[str, Any]:
+def _mapping(value: object) -> JsonObject:
     return value if isinstance(value, dict) else {}
 
 
@@ -287,8 +295,8 @@ def fault_marks(run: RunLog) -> list[FaultMark]:
         by_name.setdefault(node.name, []).append(node.path or node.name)
     marks = []
     for record in run.faults:
-        fault = record.get("fault")
-        fault = fault if isinstance(fault, dict) else {"label": _text(fault)}
+        recorded = record.get("fault")
+        fault: JsonObject = recorded if isinstance(recorded, dict) else {"label": _text(recorded)}
         details, params, trigger = (_mapping(fault.get(k)) for k in ("details", "params", "trigger"))
         leaf = _text(fault.get("leaf"))
         paths = by_name.get(leaf, [])
@@ -316,14 +324,15 @@ def find_nodes(run: RunLog, name: str) -> list[NodeInfo]:
     return sorted(found, key=lambda n: n.uid)
 
 
-def leaf_history(run: RunLog, name: str) -> list[dict[str, Any]]:
+def leaf_history(run: RunLog, name: str) -> list[LeafState]:
     """Every written state of the named node(s): tick, status, feedback, reason, ticked."""
     uids = {n.uid for n in find_nodes(run, name)}
-    out = []
+    out: list[LeafState] = []
     for record in run.ticks:
         for node in record.nodes:
             if node.uid in uids:
-                out.append({"tick": record.tick, "stamp_ns": record.stamp_ns, **node._asdict(),
+                out.append({"tick": record.tick, "stamp_ns": record.stamp_ns, "uid": node.uid, "status": node.status,
+                            "feedback": node.feedback, "failure_reason": node.failure_reason, "ticked": node.ticked,
                             "name": _info(run, node.uid).name})
     return out
 
@@ -336,7 +345,7 @@ def check_tick(run: RunLog, tick: int) -> None:
                                    f"(ticks {run.ticks[0].tick}..{run.ticks[-1].tick})")
 
 
-def tree_at(run: RunLog, tick: int) -> dict[str, Any]:
+def tree_at(run: RunLog, tick: int) -> AnnotatedNode:
     """The recorded structure at ``tick`` with each node's status, feedback and reason, as nested dicts."""
     check_tick(run, tick)
     states = run.states_at(tick)
@@ -344,7 +353,7 @@ def tree_at(run: RunLog, tick: int) -> dict[str, Any]:
     ticked_now = {n.uid for n in record.nodes if n.ticked} if record else set()
     snapshot = run.structure_at(tick)
 
-    def annotate(node: dict[str, Any]) -> dict[str, Any]:
+    def annotate(node: LoggedTreeNode) -> AnnotatedNode:
         state = states.get(int(node["uid"]), NodeUpdate(int(node["uid"]), "IDLE"))
         return {
             "uid": state.uid, "name": node.get("name", ""), "type": node.get("type", ""),
@@ -357,20 +366,20 @@ def tree_at(run: RunLog, tick: int) -> dict[str, Any]:
     if snapshot is not None:
         return annotate(snapshot.root)
     # no structure recorded: a flat list under a synthetic root
-    flat = [{"uid": uid, "name": info.name, "type": info.type, "path": info.path, "children": []}
-            for uid, info in sorted(run.nodes.items())]
+    flat: list[LoggedTreeNode] = [{"uid": uid, "name": info.name, "type": info.type, "path": info.path,
+                                   "children": []} for uid, info in sorted(run.nodes.items())]
     return annotate({"uid": -1, "name": "(no tree structure recorded)", "type": "", "children": flat})
 
 
-def tick_view(run: RunLog, tick: int) -> dict[str, Any]:
+def tick_view(run: RunLog, tick: int) -> TickView:
     record = run.tick_record(tick)
     tree = tree_at(run, tick)
-    faults = [asdict(mark) for mark in fault_marks(run) if mark.tick == tick]  # those that fired in this tick
+    faults = [mark.as_json() for mark in fault_marks(run) if mark.tick == tick]  # those that fired in this tick
     return {"tick": tick, "stamp_ns": record.stamp_ns if record else None, "tree": tree,
             "blackboard": run.blackboard_at(tick), "robot": run.robot_at(tick), "faults": faults}
 
 
-def topic_messages(run: RunLog, topic: str) -> Iterator[dict[str, Any]]:
+def topic_messages(run: RunLog, topic: str) -> Iterator[TopicRecord]:
     """Messages of one topic as JSON-able dicts; InputError when the log has no such topic."""
     if topic not in run.topics:
         choices = ", ".join(run.topics)

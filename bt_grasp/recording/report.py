@@ -11,20 +11,27 @@ from __future__ import annotations
 
 import base64
 import html
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TypeVar
 
 import numpy as np
+from google.protobuf.message import Message
 from numpy.typing import NDArray
 
+from bt_grasp.files.json_types import JsonValue
 from bt_grasp.files.output_files import make_output_folder, write_output_file
+from bt_grasp.geometry import make_T
 from bt_grasp.recording import replay, report_figures, topics
+from bt_grasp.recording.interventions import interventions_html
 from bt_grasp.recording.reader import RunLog
+from bt_grasp.recording.replay_shapes import AnnotatedNode
 from bt_grasp.recording.schemas import as_matrix
 
 _CAMERA_FRAMES = ("camera_color_optical_frame", "camera")  # format 2, format 1
 _MAX_FRAMES = 12
+_T = TypeVar("_T")
 
 
 @dataclass
@@ -34,7 +41,7 @@ class Report:
     pngs: list[Path] = field(default_factory=list)
 
 
-def _esc(value: Any) -> str:
+def _esc(value: object) -> str:
     return html.escape("" if value is None else str(value))
 
 
@@ -124,7 +131,7 @@ def _fault_marks(run: RunLog) -> list[tuple[float, str]]:
     return marks
 
 
-def _fault_text(fault: Any) -> str:
+def _fault_text(fault: JsonValue) -> str:
     """A fired fault as its label and effect (``frame_drop@Perceive#1: no frame``), else as recorded."""
     if not isinstance(fault, dict):
         return str(fault)
@@ -148,9 +155,8 @@ def end_statuses(run: RunLog) -> dict[int, str]:
 def _joint_series(run: RunLog) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], list[str]]:
     times, q, width = [], [], []
     names: list[str] = []
-    for msg in run.iter_messages(topics.JOINT_STATE):
-        m = msg.message
-        times.append(msg.log_time_ns * 1e-9)
+    for stamp_ns, m in run.joint_states():
+        times.append(stamp_ns * 1e-9)
         q.append(m.get("position", []))
         width.append(m.get("gripper_width_m") if m.get("gripper_width_m") is not None else np.nan)
         names = list(m.get("name", names))
@@ -159,17 +165,17 @@ def _joint_series(run: RunLog) -> tuple[NDArray[np.float64], NDArray[np.float64]
     return np.array(times), Q, np.array(width, dtype=np.float64), names
 
 
-def _timed(run: RunLog, topic: str) -> list[tuple[int, Any]]:
-    return [(m.log_time_ns, m.message) for m in run.iter_messages(topic)]
+def _timed(run: RunLog, topic: str) -> list[tuple[int, Message]]:
+    return list(run.protobuf_messages(topic))
 
 
-def _at(items: list[tuple[int, Any]], stamp_ns: int) -> Any:
+def _at(items: Sequence[tuple[int, _T]], stamp_ns: int) -> _T | None:
     """The item written at exactly ``stamp_ns`` (a capture's own detections), else None."""
     return next((value for t, value in items if t == stamp_ns), None)
 
 
-def _last_before(items: list[tuple[int, Any]], stamp_ns: int) -> Any:
-    found = None
+def _last_before(items: Sequence[tuple[int, _T]], stamp_ns: int) -> _T | None:
+    found: _T | None = None
     for t, value in items:
         if t > stamp_ns:
             break
@@ -178,8 +184,6 @@ def _last_before(items: list[tuple[int, Any]], stamp_ns: int) -> Any:
 
 
 def _camera_poses(run: RunLog) -> list[tuple[int, NDArray[np.float64]]]:
-    from bt_grasp.geometry import make_T
-
     out = []
     for t, msg in _timed(run, topics.TF):
         for tf in msg.transforms:
@@ -198,9 +202,7 @@ def _quat_to_R(x: float, y: float, z: float, w: float) -> NDArray[np.float64]:
     ])
 
 
-def _boxes(update: Any) -> list[tuple[NDArray[np.float64], tuple[float, float, float], str]]:
-    from bt_grasp.geometry import make_T
-
+def _boxes(update: Message) -> list[tuple[NDArray[np.float64], tuple[float, float, float], str]]:
     boxes = []
     for entity in getattr(update, "entities", []):
         label = next((kv.value for kv in entity.metadata if kv.key == "label"), entity.id)
@@ -229,7 +231,8 @@ def _frames(run: RunLog) -> list[tuple[str, bytes]]:
         T_base_camera = _last_before(poses, im.stamp_ns)
         T_camera_base = np.linalg.inv(T_base_camera) if T_base_camera is not None else None
         caption = f"t = {im.stamp_ns * 1e-9:.2f} s"
-        png = report_figures.frame_with_boxes(im.pixels, K, T_camera_base, _boxes(update) if update else [], caption)
+        rgb = np.asarray(im.pixels, dtype=np.uint8)  # a colour image is uint8 already: no copy
+        png = report_figures.frame_with_boxes(rgb, K, T_camera_base, _boxes(update) if update else [], caption)
         out.append((caption, png))
     return out
 
@@ -237,7 +240,7 @@ def _frames(run: RunLog) -> list[tuple[str, bytes]]:
 # -- the page ----------------------------------------------------------------------------------------------
 
 
-def _tree_html(node: dict[str, Any], counts: dict[int, tuple[int, int, int]]) -> str:
+def _tree_html(node: AnnotatedNode, counts: dict[int, tuple[int, int, int]]) -> str:
     attempts, failures, retries = counts.get(int(node["uid"]), (0, 0, 0))
     extra = []
     if attempts:
@@ -254,7 +257,7 @@ def _tree_html(node: dict[str, Any], counts: dict[int, tuple[int, int, int]]) ->
     return f"<li>{head}" + (f"<ul>{children}</ul>" if children else "") + "</li>"
 
 
-def _with_end_statuses(node: dict[str, Any], statuses: dict[int, str]) -> None:
+def _with_end_statuses(node: AnnotatedNode, statuses: dict[int, str]) -> None:
     node["status"] = statuses.get(int(node["uid"]), node["status"])
     for child in node.get("children", []):
         _with_end_statuses(child, statuses)
@@ -343,8 +346,6 @@ def build_report(run: RunLog, html_path: Path, png_dir: Path | None = None) -> R
             f"<tr><td>{f['stamp_ns'] * 1e-9:.2f} s</td><td>tick {_esc(f.get('tick'))}</td>"
             f"<td>{_esc(_fault_text(f.get('fault')))}</td></tr>" for f in run.faults) + "</table>")
     if run.interventions:
-        from bt_grasp.recording.interventions import interventions_html
-
         parts.append(interventions_html(run.interventions))
     last_tick = run.ticks[-1].tick if run.ticks else None
     if last_tick is not None:

@@ -6,13 +6,18 @@ from __future__ import annotations
 import io
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from types import ModuleType
+from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from bt_grasp.recording.projection import BOX_EDGES, box_corners_px
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
+    from matplotlib.figure import Figure
 
 STATUS_COLOURS = {"RUNNING": "#4a7fd6", "SUCCESS": "#3aa657", "FAILURE": "#d64545", "SKIPPED": "#b0b0b0"}
 FAULT_COLOUR = "#e07b00"
@@ -28,7 +33,7 @@ class Bar:
     status: str
 
 
-def _pyplot() -> Any:
+def _pyplot() -> ModuleType:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -37,7 +42,7 @@ def _pyplot() -> Any:
     return plt
 
 
-def _png(fig: Any) -> bytes:
+def _png(fig: Figure) -> bytes:
     from matplotlib.text import Text
 
     for text in fig.findobj(Text):  # names from files are text: a '$' must not start mathtext (it crashed)
@@ -74,7 +79,7 @@ def gantt(rows: Sequence[str], bars: Sequence[Bar], failures: Sequence[tuple[flo
     ax.invert_yaxis()
     ax.set_xlabel("simulated time (s)")
     ax.grid(axis="x", alpha=0.3)
-    handles: list[Any] = [plt.Rectangle((0, 0), 1, 1, color=c) for c in STATUS_COLOURS.values()]
+    handles: list[Artist] = [plt.Rectangle((0, 0), 1, 1, color=c) for c in STATUS_COLOURS.values()]
     names = list(STATUS_COLOURS)
     if faults:
         handles.append(plt.Line2D([0], [0], color=FAULT_COLOUR, linestyle="--"))
@@ -104,7 +109,7 @@ def series(t_s: NDArray[np.float64], values: NDArray[np.float64], labels: Sequen
 
 
 def frame_with_boxes(rgb: NDArray[np.uint8], K: NDArray[np.float64] | None,
-                     T_camera_base: NDArray[np.float64] | None,
+                     T_camera_base: ArrayLike | None,
                      boxes: Sequence[tuple[NDArray[np.float64], tuple[float, float, float], str]],
                      caption: str) -> bytes:
     """The camera frame with each detected box (pose in the base frame, size, label) projected onto it."""

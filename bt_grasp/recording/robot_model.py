@@ -24,7 +24,7 @@ from foxglove_schemas_protobuf.ModelPrimitive_pb2 import ModelPrimitive
 from foxglove_schemas_protobuf.SceneEntity_pb2 import SceneEntity
 from foxglove_schemas_protobuf.SceneUpdate_pb2 import SceneUpdate
 from foxglove_schemas_protobuf.Vector3_pb2 import Vector3
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from bt_grasp.recording import schemas
 from bt_grasp.robot_description import ARM_JOINTS, FINGER_JOINT, MIMIC_FINGER_JOINT, robot_urdf_text
@@ -106,7 +106,7 @@ class RobotModel:
         pin.framesForwardKinematics(self.model, self.data, q)
         return {name: self.data.oMf[i].homogeneous for name, i in self.links}
 
-    def link_xyzquat(self, q_arm: Sequence[float], gripper_width_m: float | None) -> list[tuple[str, list[float]]]:
+    def link_xyzquat(self, q_arm: ArrayLike, gripper_width_m: float | None) -> list[tuple[str, list[float]]]:
         """(link, [x, y, z, qx, qy, qz, qw]) of every link in the base frame: what /tf needs, with no matrix."""
         q = pin.neutral(self.model)
         q[self._arm_idx] = np.asarray(q_arm, dtype=np.float64)[: len(self._arm_idx)]

@@ -15,7 +15,7 @@ import logging
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cache
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from foxglove_schemas_protobuf.CubePrimitive_pb2 import CubePrimitive
@@ -26,11 +26,14 @@ from foxglove_schemas_protobuf.SceneEntityDeletion_pb2 import SceneEntityDeletio
 from foxglove_schemas_protobuf.SceneUpdate_pb2 import SceneUpdate
 from foxglove_schemas_protobuf.SpherePrimitive_pb2 import SpherePrimitive
 from foxglove_schemas_protobuf.Vector3_pb2 import Vector3
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
+from bt_grasp.files.bounded_io import read_user_file
 from bt_grasp.recording import schemas
+from bt_grasp.scene.meshes import MAX_MESH_BYTES
 
 if TYPE_CHECKING:
+    from bt_grasp.scene.format import Scene
     from bt_grasp.scene.mesh_geometry import MeshGeometry
 
 log = logging.getLogger(__name__)
@@ -84,7 +87,7 @@ def _entity(stamp_ns: int, prefix: str, solid: Solid) -> SceneEntity:
     return entity
 
 
-def scene_solids(scene: Any) -> list[Solid]:
+def scene_solids(scene: Scene) -> list[Solid]:
     """The table and the scene file's fixtures, in the world frame (z up, origin on the table top)."""
     sx, sy, sz = scene.table.size_m
     cx, cy = scene.table.center_xy_m
@@ -99,7 +102,7 @@ def scene_solids(scene: Any) -> list[Solid]:
     return solids
 
 
-def fixture_update(scene: Any, stamp_ns: int) -> SceneUpdate:
+def fixture_update(scene: Scene, stamp_ns: int) -> SceneUpdate:
     return SceneUpdate(entities=[_entity(stamp_ns, f"fixture{i}", s) for i, s in enumerate(scene_solids(scene))])
 
 
@@ -127,18 +130,17 @@ def object_model(geometry: MeshGeometry) -> bytes:
     its visual file, else its collision mesh, else that mesh's convex hull, else its bounding box."""
     import trimesh
 
-    from bt_grasp.files.bounded_io import read_user_file
-    from bt_grasp.scene.meshes import MAX_MESH_BYTES
-
     vertices, faces = geometry.vertices_m, geometry.faces
-    candidates: list[tuple[str, Any, Any]] = []
+    candidates: list[tuple[str, NDArray[np.float64], NDArray[np.int64]]] = []
     if geometry.visual_vertices_m is not None:
         candidates.append(("visual", *geometry.visual_mesh_m()))
     elif geometry.visual_path != geometry.collision_path:
         try:
             data = read_user_file(geometry.visual_path, MAX_MESH_BYTES)
-            visual: Any = trimesh.load(io.BytesIO(data), file_type=geometry.visual_path.suffix.lower()[1:],
-                                  process=False, force="mesh")
+            visual = trimesh.load(io.BytesIO(data), file_type=geometry.visual_path.suffix.lower()[1:],
+                                   process=False, force="mesh")
+            if not isinstance(visual, trimesh.Trimesh):  # force="mesh" makes one (or raises)
+                raise TypeError(f"trimesh read a {type(visual).__name__}, not a mesh")
             candidates.append(("visual", np.asarray(visual.vertices) * np.asarray(geometry.scale), visual.faces))
         except Exception as exc:  # the file was read at load; a viewer's copy falls back to the collision mesh
             log.warning("visual mesh %s not read for the log (%s): drawing its collision mesh", geometry.visual_path,

@@ -9,7 +9,6 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 from foxglove_schemas_protobuf.ArrowPrimitive_pb2 import ArrowPrimitive
@@ -35,11 +34,12 @@ from foxglove_schemas_protobuf.SceneUpdate_pb2 import SceneUpdate
 from foxglove_schemas_protobuf.TextAnnotation_pb2 import TextAnnotation
 from foxglove_schemas_protobuf.TextPrimitive_pb2 import TextPrimitive
 from foxglove_schemas_protobuf.Vector3_pb2 import Vector3
+from google.protobuf.message import Message
 from google.protobuf.timestamp_pb2 import Timestamp
 from numpy.typing import ArrayLike, NDArray
 
 #: protobuf classes of every Foxglove schema a bt_grasp log uses, by full name
-PROTOBUF_CLASSES: dict[str, Any] = {
+PROTOBUF_CLASSES: dict[str, type[Message]] = {
     cls.DESCRIPTOR.full_name: cls
     for cls in (CompressedImage, RawImage, CameraCalibration, PointCloud, FrameTransforms, SceneUpdate, Log,
                 ImageAnnotations)
@@ -106,7 +106,8 @@ def quat_xyzw(R: NDArray[np.float64]) -> tuple[float, float, float, float]:
     return x / norm, y / norm, z / norm, w / norm
 
 
-def as_matrix(T: ArrayLike) -> NDArray[np.float64]:
+def as_matrix(T: object) -> NDArray[np.float64]:
+    """``T`` (anything numpy reads as numbers) as a 4x4 float matrix; a ValueError if it is not one."""
     M = np.asarray(T, dtype=np.float64)
     if M.shape != (4, 4):
         raise ValueError(f"a transform must be a 4x4 matrix, got shape {M.shape}")
@@ -310,17 +311,17 @@ def scene_update(stamp_ns: int, entities: Sequence[SceneEntity]) -> SceneUpdate:
     return SceneUpdate(deletions=[deletion], entities=list(entities))
 
 
-_LOG_LEVELS = {"DEBUG": Log.DEBUG, "INFO": Log.INFO, "WARNING": Log.WARNING, "WARN": Log.WARNING,
-               "ERROR": Log.ERROR, "FATAL": Log.FATAL, "CRITICAL": Log.FATAL}
+_LOG_LEVELS: dict[str, Log.Level.ValueType] = {
+    "DEBUG": Log.DEBUG, "INFO": Log.INFO, "WARNING": Log.WARNING, "WARN": Log.WARNING, "ERROR": Log.ERROR,
+    "FATAL": Log.FATAL, "CRITICAL": Log.FATAL,
+}
 
 
-def log_level(level: str | int) -> Any:
-    """A Foxglove log level from a name ("INFO") or a ``logging`` level number (20)."""
+def log_level(level: str | int) -> Log.Level.ValueType:
+    """A Foxglove log level (``Log.Level``) from a name ("INFO") or a ``logging`` level number (20)."""
     if isinstance(level, int):
-        if level >= 50:
-            return Log.FATAL
-        return (Log.ERROR if level >= 40 else Log.WARNING if level >= 30
-                else Log.INFO if level >= 20 else Log.DEBUG)
+        return _LOG_LEVELS["FATAL" if level >= 50 else "ERROR" if level >= 40 else "WARNING" if level >= 30
+                           else "INFO" if level >= 20 else "DEBUG"]
     try:
         return _LOG_LEVELS[level.upper()]
     except KeyError:

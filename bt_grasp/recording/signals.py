@@ -13,8 +13,8 @@ from __future__ import annotations
 import logging
 import signal
 import threading
+from collections.abc import Callable
 from types import FrameType
-from typing import Any
 
 log = logging.getLogger(__name__)
 
@@ -31,7 +31,7 @@ class SignalGuard:
     """Installs the handlers while active; ``busy()`` marks a critical section that signals must not cut."""
 
     def __init__(self) -> None:
-        self._previous: dict[int, Any] = {}
+        self._previous: dict[int, Callable[[int, FrameType | None], object] | int | None] = {}
         self._busy = 0
         self._pending: int | None = None
         self._section = _Busy(self)

@@ -50,7 +50,7 @@ def quats_xyzw(R: NDArray[np.float64]) -> NDArray[np.float64]:
                   m[:, 1, 0] - m[:, 0, 1]], -1),
     ], 1)  # (n, 4 candidates, 4 components); the candidate with the largest diagonal term is well conditioned
     which = np.argmax(np.stack([t, m[:, 0, 0], m[:, 1, 1], m[:, 2, 2]], -1), axis=1)
-    q = cand[np.arange(len(m)), which]
+    q: NDArray[np.float64] = cand[np.arange(len(m)), which]
     q /= np.linalg.norm(q, axis=1, keepdims=True)
     q[q[:, 3] < 0] *= -1
     return q

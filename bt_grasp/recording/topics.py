@@ -10,7 +10,8 @@ import copy
 import json
 import re
 from collections.abc import Sequence
-from typing import Any
+
+from bt_grasp.files.json_types import JsonObject, JsonValue
 
 #: Metadata record holding the run's description (seed, tree file, versions, ...).
 RUN_METADATA_NAME = "bt_grasp.run"
@@ -78,14 +79,14 @@ LATE_JSON_TOPICS: tuple[str, ...] = (INTERVENTIONS,)
 # type lists: a value that may be absent is left out of the message instead of written as null), "enum" only
 # together with "type", no arrays of arrays, and every object with "properties" (free-form objects such as
 # the blackboard declare an empty set; Foxglove still shows their keys).
-_STATUS = {"type": "string", "enum": ["SUCCESS", "FAILURE", "RUNNING", "IDLE", "SKIPPED"]}
-_INT = {"type": "integer"}
-_STR = {"type": "string"}
-_FLOATS = {"type": "array", "items": {"type": "number"}}
-_FREE = {"type": "object", "properties": {}}
+_STATUS: JsonObject = {"type": "string", "enum": ["SUCCESS", "FAILURE", "RUNNING", "IDLE", "SKIPPED"]}
+_INT: JsonObject = {"type": "integer"}
+_STR: JsonObject = {"type": "string"}
+_FLOATS: JsonObject = {"type": "array", "items": {"type": "number"}}
+_FREE: JsonObject = {"type": "object", "properties": {}}
 
 
-def _object(title: str, properties: dict[str, Any], required: list[str]) -> dict[str, Any]:
+def _object(title: str, properties: JsonObject, required: list[JsonValue]) -> JsonObject:
     return {
         "$schema": "https://json-schema.org/draft/2020-12/schema",
         "title": title,
@@ -95,15 +96,15 @@ def _object(title: str, properties: dict[str, Any], required: list[str]) -> dict
     }
 
 
-def _node(children: dict[str, Any] | None) -> dict[str, Any]:
-    props: dict[str, Any] = {"uid": _INT, "type": _STR, "name": _STR, "path": _STR, "kind": _STR,
+def _node(children: JsonObject | None) -> JsonObject:
+    props: JsonObject = {"uid": _INT, "type": _STR, "name": _STR, "path": _STR, "kind": _STR,
                              "attributes": _FREE}
     if children is not None:
         props["children"] = {"type": "array", "items": children}
     return {"type": "object", "properties": props}
 
 
-JSON_SCHEMAS: dict[str, dict[str, Any]] = {
+JSON_SCHEMAS: dict[str, JsonObject] = {
     # the tree is recursive; the schema names the fields of three levels (deeper levels are still in the data)
     TREE: _object("bt_grasp.TreeStructure", {"tick": _INT, "structure": _node(_node(_node(None)))}, ["structure"]),
     TICK: _object(
@@ -201,11 +202,12 @@ def leaf_keys(paths: Sequence[str]) -> list[str]:
     return keys
 
 
-def tick_schema(leaf_names: Sequence[str]) -> dict[str, Any]:
+def tick_schema(leaf_names: Sequence[str]) -> JsonObject:
     """The /bt/tick schema with the tree's leaves (their paths) declared under ``leaves``."""
     schema = copy.deepcopy(JSON_SCHEMAS[TICK])
-    schema["properties"]["leaves"] = {"type": "object",
-                                      "properties": {key: _STATUS for key in leaf_keys(leaf_names)}}
+    properties = schema["properties"]
+    assert isinstance(properties, dict)  # as _object writes it
+    properties["leaves"] = {"type": "object", "properties": {key: _STATUS for key in leaf_keys(leaf_names)}}
     return schema
 
 

@@ -4,17 +4,31 @@ A log is a file a user gives: a message of the wrong shape (a tick number that i
 its structure, a joint state whose positions are not numbers) must be one sentence naming the file, the topic
 and the time, not a traceback somewhere in a view that uses it later. ``parse_json`` decodes and checks one
 message and raises ``BadMessage`` with what is wrong; the reader adds the file, topic and time.
+
+Each check returns the message as the shape it checked (``bt_grasp.recording.messages``): the one place a
+value read from a file becomes a typed message.
 """
 
 from __future__ import annotations
 
 import json
 import re
-from collections.abc import Callable
-from typing import Any
+from collections.abc import Callable, Mapping
+from typing import TypeGuard, cast
 
+from bt_grasp.files.json_types import JsonObject, JsonValue
 from bt_grasp.files.terminal_text import may_hold_controls, shown_deep
 from bt_grasp.recording import topics
+from bt_grasp.recording.messages import (
+    LoggedEvent,
+    LoggedFault,
+    LoggedIntervention,
+    LoggedJointState,
+    LoggedResult,
+    LoggedTick,
+    LoggedTrajectory,
+    LoggedTree,
+)
 
 #: deeper than any real tree (the views walk trees recursively in places: a hostile depth would crash them)
 MAX_TREE_DEPTH = 100
@@ -27,25 +41,31 @@ class BadMessage(ValueError):
     """A message that is not what its topic holds; the text says what is wrong in it."""
 
 
-def _kind(value: Any) -> str:
+def _kind(value: object) -> str:
     return {bool: "a boolean", int: "an integer", float: "a number", str: "a string", list: "a list",
             dict: "an object", type(None): "null"}.get(type(value), type(value).__name__)
 
 
-def is_int(value: Any) -> bool:
+def is_int(value: object) -> TypeGuard[int]:
     return isinstance(value, int) and not isinstance(value, bool) and -INT_LIMIT <= value < INT_LIMIT
 
 
-def is_number(value: Any) -> bool:
+def is_number(value: object) -> TypeGuard[int | float]:
     return (isinstance(value, float) or is_int(value)) and not isinstance(value, bool)
 
 
-def _need(ok: bool, what: str, value: Any, expected: str) -> None:
+def _need(ok: bool, what: str, value: object, expected: str) -> None:
     if not ok:
         raise BadMessage(f"'{what}' is {_kind(value)}, not {expected}")
 
 
-def _int(msg: dict[str, Any], key: str, where: str = "", optional: bool = False, null: bool = False) -> None:
+def _list(value: JsonValue, what: str, expected: str) -> list[JsonValue]:
+    if not isinstance(value, list):
+        raise BadMessage(f"'{what}' is {_kind(value)}, not {expected}")
+    return value
+
+
+def _int(msg: JsonObject, key: str, where: str = "", optional: bool = False, null: bool = False) -> None:
     if key not in msg:
         if optional:
             return
@@ -56,7 +76,7 @@ def _int(msg: dict[str, Any], key: str, where: str = "", optional: bool = False,
     _need(is_int(value), where + key, value, "an integer below 2^63")
 
 
-def _str(msg: dict[str, Any], key: str, where: str = "", optional: bool = True, null: bool = False) -> None:
+def _str(msg: JsonObject, key: str, where: str = "", optional: bool = True, null: bool = False) -> None:
     if key not in msg:
         if optional:
             return
@@ -67,28 +87,29 @@ def _str(msg: dict[str, Any], key: str, where: str = "", optional: bool = True, 
     _need(isinstance(value, str), where + key, value, "a string" + (" or null" if null else ""))
 
 
-def _numbers(value: Any, what: str, null_ok: bool = False) -> None:
-    _need(isinstance(value, list), what, value, "a list of numbers")
-    if all(type(item) is float for item in value):  # the usual case, fast: a log holds one list per tick
+def _numbers(value: JsonValue, what: str, null_ok: bool = False) -> None:
+    items = _list(value, what, "a list of numbers")
+    if all(type(item) is float for item in items):  # the usual case, fast: a log holds one list per tick
         return
-    for i, item in enumerate(value):
+    for i, item in enumerate(items):
         _need(is_number(item) or (null_ok and item is None), f"{what}[{i}]", item, "a number")
 
 
-def _object(msg: Any, what: str = "the message") -> dict[str, Any]:
+def _object(msg: object, what: str = "the message") -> JsonObject:
     if not isinstance(msg, dict):
         raise BadMessage(f"{what} is {_kind(msg)}, not a JSON object")
     return msg
 
 
-def _tick(msg: dict[str, Any]) -> None:
+def tick_message(value: JsonValue) -> LoggedTick:
+    """A ``/bt/tick`` message, checked."""
+    msg = _object(value)
     _int(msg, "tick")
     _int(msg, "stamp_ns")
-    nodes = msg.get("nodes", [])
-    _need(isinstance(nodes, list), "nodes", nodes, "a list")
-    for i, node in enumerate(nodes):
+    nodes = _list(msg.get("nodes", []), "nodes", "a list")
+    for i, value_of_node in enumerate(nodes):
         where = f"nodes[{i}]."
-        _object(node, f"nodes[{i}]")
+        node = _object(value_of_node, f"nodes[{i}]")
         _int(node, "uid", where)
         _str(node, "status", where, optional=False)
         for key in ("feedback", "failure_reason"):
@@ -102,16 +123,19 @@ def _tick(msg: dict[str, Any]) -> None:
     removed = msg.get("bb_removed", [])
     _need(isinstance(removed, list) and all(isinstance(k, str) for k in removed), "bb_removed", removed,
           "a list of strings")
+    return cast("LoggedTick", msg)  # what the checks above make sure of
 
 
-def _tree(msg: dict[str, Any]) -> None:
+def tree_message(value: JsonValue) -> LoggedTree:
+    """A ``/bt/tree`` message, checked."""
+    msg = _object(value)
     _int(msg, "tick", optional=True, null=True)
     if "structure" not in msg:
         raise BadMessage("'structure' is missing")
-    stack: list[tuple[Any, str, int]] = [(msg["structure"], "structure", 1)]
+    stack: list[tuple[JsonValue, str, int]] = [(msg["structure"], "structure", 1)]
     while stack:
-        node, where, depth = stack.pop()
-        _object(node, where)
+        value_of_node, where, depth = stack.pop()
+        node = _object(value_of_node, where)
         if depth > MAX_TREE_DEPTH:
             raise BadMessage(f"the tree is nested deeper than {MAX_TREE_DEPTH} levels")
         _int(node, "uid", where + ".")
@@ -119,12 +143,14 @@ def _tree(msg: dict[str, Any]) -> None:
             _str(node, key, where + ".")
         if "attributes" in node:  # a node's ports as written: an object (the .btlog export walks it)
             _need(isinstance(node["attributes"], dict), where + ".attributes", node["attributes"], "an object")
-        children = node.get("children", [])
-        _need(isinstance(children, list), where + ".children", children, "a list")
+        children = _list(node.get("children", []), where + ".children", "a list")
         stack.extend((child, f"{where}.children[{i}]", depth + 1) for i, child in enumerate(children))
+    return cast("LoggedTree", msg)  # what the checks above make sure of
 
 
-def _result(msg: dict[str, Any]) -> None:
+def result_message(value: JsonValue) -> LoggedResult:
+    """A ``/run/result`` message, checked."""
+    msg = _object(value)
     if "success" in msg:
         _need(msg["success"] is None or isinstance(msg["success"], bool), "success", msg["success"], "a boolean")
     for key in ("reason", "failed_leaf"):
@@ -134,9 +160,12 @@ def _result(msg: dict[str, Any]) -> None:
             _need(is_number(msg[key]), key, msg[key], "a number")
     if "ticks" in msg:
         _int(msg, "ticks", null=True)
+    return cast("LoggedResult", msg)  # what the checks above make sure of
 
 
-def _joint_state(msg: dict[str, Any]) -> None:
+def joint_state_message(value: JsonValue) -> LoggedJointState:
+    """A ``/robot/joint_state`` message, checked."""
+    msg = _object(value)
     _int(msg, "tick", optional=True, null=True)
     for key in ("position", "velocity", "tcp_xyz_m", "tcp_quat_xyzw"):
         if key in msg:
@@ -146,34 +175,58 @@ def _joint_state(msg: dict[str, Any]) -> None:
               "a list of strings")
     if msg.get("gripper_width_m") is not None:
         _need(is_number(msg["gripper_width_m"]), "gripper_width_m", msg["gripper_width_m"], "a number")
+    return cast("LoggedJointState", msg)  # what the checks above make sure of
 
 
-def _trajectory(msg: dict[str, Any]) -> None:
+def trajectory_message(value: JsonValue) -> LoggedTrajectory:
+    """A ``/motion/trajectory`` message, checked."""
+    msg = _object(value)
+    _int(msg, "stamp_ns", optional=True)  # the reader adds it (a message of its own keeps its own)
     if "q_rad" in msg:
-        _need(isinstance(msg["q_rad"], list), "q_rad", msg["q_rad"], "a list of joint vectors")
-        for i, row in enumerate(msg["q_rad"]):
+        for i, row in enumerate(_list(msg["q_rad"], "q_rad", "a list of joint vectors")):
             _numbers(row, f"q_rad[{i}]", null_ok=True)
     if "points" in msg:
-        _need(isinstance(msg["points"], list), "points", msg["points"], "a list")
-        for i, point in enumerate(msg["points"]):
+        for i, point in enumerate(_list(msg["points"], "points", "a list")):
             _numbers(_object(point, f"points[{i}]").get("q_rad"), f"points[{i}].q_rad", null_ok=True)
     if "times_s" in msg:
         _numbers(msg["times_s"], "times_s", null_ok=True)
+    return cast("LoggedTrajectory", msg)  # what the checks above make sure of
 
 
-def _stamped(msg: dict[str, Any]) -> None:
-    """Events and faults: free-form, but the reader adds ``stamp_ns`` and the views print ``tick``."""
+def _stamped(value: JsonValue) -> JsonObject:
+    """Events, faults and interventions: free-form, but the reader adds ``stamp_ns`` and the views print
+    ``tick``."""
+    msg = _object(value)
     _int(msg, "tick", optional=True, null=True)
     _int(msg, "stamp_ns", optional=True)
+    return msg
 
 
-_CHECKS: dict[str, Callable[[dict[str, Any]], None]] = {
-    topics.TICK: _tick, topics.TREE: _tree, topics.RESULT: _result, topics.JOINT_STATE: _joint_state,
-    topics.TRAJECTORY: _trajectory, topics.EVENTS: _stamped, topics.FAULTS: _stamped,
+def event_message(value: JsonValue) -> LoggedEvent:
+    """A ``/bt/events`` message, checked."""
+    return cast("LoggedEvent", _stamped(value))  # what the checks make sure of
+
+
+def fault_message(value: JsonValue) -> LoggedFault:
+    """A ``/faults`` message, checked."""
+    return cast("LoggedFault", _stamped(value))  # what the checks make sure of
+
+
+def intervention_message(value: JsonValue) -> LoggedIntervention:
+    """A ``/control/interventions`` message, checked (when the reader loads it: the topic is not one
+    ``parse_json`` checks, so a log written before interventions were checked still opens)."""
+    return cast("LoggedIntervention", _stamped(value))  # what the checks make sure of
+
+
+#: the check of each of bt_grasp's own JSON topics
+CHECKS: dict[str, Callable[[JsonValue], Mapping[str, object]]] = {
+    topics.TICK: tick_message, topics.TREE: tree_message, topics.RESULT: result_message,
+    topics.JOINT_STATE: joint_state_message, topics.TRAJECTORY: trajectory_message, topics.EVENTS: event_message,
+    topics.FAULTS: fault_message,
 }
 
 
-def _check_text(value: Any) -> None:
+def _check_text(value: JsonValue) -> None:
     """Every string in ``value`` encodes as UTF-8 (a lone surrogate escape, ``"\\udcff"``, does not)."""
     stack = [value]
     while stack:
@@ -190,14 +243,23 @@ def _check_text(value: Any) -> None:
             stack.extend(item)
 
 
-def parse_json(topic: str, data: bytes) -> Any:
+def parse_json(topic: str, data: bytes) -> JsonValue:
     """One JSON message, decoded and, for bt_grasp's own topics, checked; raises ``BadMessage``."""
+    msg = json_value(data)
+    check = CHECKS.get(topic)
+    if check is not None:
+        check(msg)
+    return msg
+
+
+def json_value(data: bytes) -> JsonValue:
+    """One JSON message, decoded (its strings made safe to print) but not checked; raises ``BadMessage``."""
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise BadMessage(f"it is not UTF-8 text (byte {exc.start})") from None
     try:
-        msg = json.loads(text)
+        msg: JsonValue = json.loads(text)
     except RecursionError:
         raise BadMessage("it is nested too deeply to read") from None
     except ValueError as exc:  # JSONDecodeError, and integers of more digits than Python converts
@@ -209,7 +271,4 @@ def parse_json(topic: str, data: bytes) -> Any:
             msg = shown_deep(msg)
         except RecursionError:
             raise BadMessage("it is nested too deeply to read") from None
-    check = _CHECKS.get(topic)
-    if check is not None:
-        check(_object(msg))
     return msg

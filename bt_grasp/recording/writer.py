@@ -31,24 +31,33 @@ from importlib.metadata import PackageNotFoundError
 from importlib.metadata import version as dist_version
 from pathlib import Path
 from types import TracebackType
-from typing import Any, BinaryIO, Literal
+from typing import TYPE_CHECKING, BinaryIO, Literal
 
 import cv2
 import numpy as np
+from foxglove_schemas_protobuf.SceneEntity_pb2 import SceneEntity
+from foxglove_schemas_protobuf.SceneUpdate_pb2 import SceneUpdate
 from mcap.well_known import MessageEncoding, SchemaEncoding
 from mcap.writer import CompressionType, Writer
 from mcap_protobuf.schema import build_file_descriptor_set
 from numpy.typing import ArrayLike, NDArray
 
+from bt_grasp.files.json_types import JsonValue
+from bt_grasp.interfaces import CameraIntrinsics
 from bt_grasp.recording import schemas, topics
 from bt_grasp.recording.arm_state import ArmStateEncoder
 from bt_grasp.recording.arm_state import ticked as _ticked
 from bt_grasp.recording.encodings import Encoding, encode
 from bt_grasp.recording.jsonable import BlackboardDiffer, NodeDiffer, to_jsonable
+from bt_grasp.recording.messages import NodeEntry, TickMessage
 from bt_grasp.recording.projection import box_corners_px
 from bt_grasp.recording.signals import SignalGuard
 from bt_grasp.recording.tf_encoding import FrameTransformsEncoder
-from bt_grasp.recording.writer_process import ProcessWriter
+from bt_grasp.recording.writer_process import ArmSettings, ProcessWriter
+
+if TYPE_CHECKING:
+    from bt_grasp.recording.robot_model import RobotModel
+    from bt_grasp.tree.records import NodeRecord, TreeNode
 
 log = logging.getLogger(__name__)
 
@@ -62,6 +71,8 @@ UR5_JOINT_NAMES: tuple[str, ...] = (
     "wrist_1_joint", "wrist_2_joint", "wrist_3_joint",
 )
 _LEAF_KINDS = ("Action", "Condition")  # NodeKind values of leaves
+#: how a log's chunks are compressed
+Compression = Literal["zstd", "lz4", "none"]
 _COMPRESSION = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}
 _MEDIA_TYPES = {".xml": "application/xml", ".yaml": "application/yaml", ".yml": "application/yaml",
                 ".json": "application/json", ".txt": "text/plain", ".urdf": "application/xml"}
@@ -146,7 +157,7 @@ class RunRecorder:
         metadata: Mapping[str, str],
         attachments: Mapping[str, bytes] | None = None,
         wall_clock: Callable[[], int] = time.time_ns,
-        compression: Literal["zstd", "lz4", "none"] = "zstd",
+        compression: Compression = "zstd",
         chunk_size: int = 4 * 1024 * 1024,
         image_format: Literal["jpeg", "png"] = "jpeg",
         jpeg_quality: int = 90,
@@ -159,7 +170,7 @@ class RunRecorder:
         tool_frame: str = TOOL_FRAME,
         joint_names: Sequence[str] = UR5_JOINT_NAMES,
         max_array_elements: int = 64,
-        robot_model: Any = None,
+        robot_model: RobotModel | None = None,
         leaf_names: Sequence[str] = (),
         writer_process: bool = False,
     ) -> None:
@@ -185,7 +196,7 @@ class RunRecorder:
         self._nodes = NodeDiffer()
         self._blackboard = BlackboardDiffer(max_array_elements)
         self._guard = SignalGuard()
-        self._last_structure: dict[str, Any] | None = None
+        self._last_structure: JsonValue | None = None
         self._last_tick: int | None = None
         self._last_stamp_ns = 0
         self._sequence: dict[int, int] = {}
@@ -197,7 +208,7 @@ class RunRecorder:
         self._demand: list[Callable[[], bool]] = []
         self._when_watched: dict[str, Callable[[], None]] = {}
         #: called with (kind, payload) after every event written (a failure, a retry, an abort)
-        self.event_listeners: list[Callable[[str, Mapping[str, Any]], None]] = []
+        self.event_listeners: list[Callable[[str, Mapping[str, object]], None]] = []
         #: called with the spec of a channel registered mid-run (``late_channel_spec``): a live server advertises it
         self.channel_listeners: list[Callable[[ChannelSpec], None]] = []
         self._robot_model = robot_model
@@ -206,7 +217,7 @@ class RunRecorder:
         self._node_count = -1
         self._leaf_uids: set[int] = set()
         self._leaf_of_uid: dict[int, str] = {}
-        self._leaf_status: dict[str, Any] = {}
+        self._leaf_status: dict[str, str] = {}
         #: (parent, child) -> T_parent_child repeated in every /tf message written with an arm state, so a
         #: viewer that seeks (and reads only the last /tf message) still has the whole frame tree
         self.static_transforms: dict[tuple[str, str], NDArray[np.float64]] = {}
@@ -215,8 +226,8 @@ class RunRecorder:
         self._sent_statics: dict[tuple[str, str], int] = {}
         self._file: BinaryIO | None = None
         if writer_process and self.to_file:
-            arm = {"joint_names": self._joint_names, "base_frame": base_frame, "tool_frame": tool_frame,
-                   "robot_model": robot_model is not None}
+            arm: ArmSettings = {"joint_names": self._joint_names, "base_frame": base_frame,
+                                "tool_frame": tool_frame, "robot_model": robot_model is not None}
             self._process = ProcessWriter(str(self.path), chunk_size=chunk_size, compression=compression,
                                           arm_state=arm)
             self._writer: Writer | ProcessWriter = self._process
@@ -332,7 +343,7 @@ class RunRecorder:
         """The file's time of simulated time ``stamp_ns``."""
         return self.time_origin_ns + int(stamp_ns)
 
-    def _write_encoded(self, topic: str, stamp_ns: int, encoding: Encoding, args: tuple[Any, ...]) -> None:
+    def _write_encoded(self, topic: str, stamp_ns: int, encoding: Encoding, args: tuple[object, ...]) -> None:
         """A message given by its inputs: with a writer process and no live viewer the child encodes it (off
         the tick loop's thread); else it is encoded here. The same bytes either way (``encodings.py``)."""
         if self._process is not None and not self._taps:
@@ -342,14 +353,14 @@ class RunRecorder:
             return
         self._write(topic, stamp_ns, encode(encoding, args))
 
-    def _write_json(self, topic: str, stamp_ns: int, obj: Any) -> None:
+    def _write_json(self, topic: str, stamp_ns: int, obj: object) -> None:
         """``obj`` as compact JSON; ``obj`` must not be changed afterwards (a writer process encodes it at the
         tick's end)."""
         self._write_encoded(topic, stamp_ns, Encoding.JSON, (obj,))
 
     # -- the tree ----------------------------------------------------------------------------------------
 
-    def write_tree_structure(self, stamp_ns: int, structure: Mapping[str, Any]) -> bool:
+    def write_tree_structure(self, stamp_ns: int, structure: TreeNode) -> bool:
         """Write the tree's structure on /bt/tree unless it equals the last one written; True if written.
 
         ``structure``: the root node as nested dicts with ``uid``, ``type``, ``name``, ``path``, ``kind``
@@ -368,14 +379,14 @@ class RunRecorder:
         self,
         tick: int,
         stamp_ns: int,
-        nodes: Sequence[Mapping[str, Any]],
-        blackboard: Mapping[str, Any],
-        robot: Mapping[str, Any] | None = None,
+        nodes: Sequence[NodeRecord],
+        blackboard: Mapping[str, object],
+        robot: Mapping[str, object] | None = None,
     ) -> None:
         """Record one tick: the nodes ticked or changed, the blackboard entries changed, the arm state.
 
-        ``nodes``: every node of the tree as ``{"uid", "path", "type", "name", "status", "feedback",
-        "failure_reason", "ticked"}``. ``blackboard``: the full current blackboard. ``robot``:
+        ``nodes``: every node of the tree (``tree.records.NodeRecord``, as the runner hands them over).
+        ``blackboard``: the full current blackboard. ``robot``:
         ``{"q_rad": [6], "qd_rad_s": [6], "gripper_width_m": float, "T_base_tcp": 4x4}`` or None.
         """
         if not self.active:  # a live view nobody watches: the next watched tick is written in full
@@ -389,8 +400,8 @@ class RunRecorder:
                 write()
         changed_nodes = self._nodes.diff(nodes)
         bb_changed, bb_removed = self._blackboard.diff(blackboard)
-        msg: dict[str, Any] = {"tick": int(tick), "stamp_ns": int(stamp_ns), "nodes": changed_nodes,
-                               "leaves": self._leaf_statuses(nodes, changed_nodes)}
+        msg: TickMessage = {"tick": int(tick), "stamp_ns": int(stamp_ns), "nodes": changed_nodes,
+                            "leaves": self._leaf_statuses(nodes, changed_nodes)}
         if bb_changed:
             msg["bb"] = bb_changed
         if bb_removed:
@@ -401,8 +412,8 @@ class RunRecorder:
             self.write_robot_state(stamp_ns, robot)
 
     def _leaf_statuses(
-        self, nodes: Sequence[Mapping[str, Any]], changed: Sequence[Mapping[str, Any]]
-    ) -> dict[str, Any]:
+        self, nodes: Sequence[NodeRecord], changed: Sequence[NodeEntry]
+    ) -> dict[str, str]:
         """Every leaf's status this tick, keyed by ``topics.leaf_keys`` of the leaves' paths, in uid order.
 
         A leaf's status changes only in a node entry ``NodeDiffer`` writes (it writes every node whose status
@@ -426,7 +437,7 @@ class RunRecorder:
                     status[key] = entry["status"]
         return dict(self._leaf_status)
 
-    def write_robot_state(self, stamp_ns: int, robot: Mapping[str, Any]) -> None:
+    def write_robot_state(self, stamp_ns: int, robot: Mapping[str, object]) -> None:
         """The arm state on /robot/joint_state (JSON, for plots) and base->tool on /tf (for the 3D view)."""
         if not self.active or "q_rad" not in robot:  # nobody watches, or a state read while nobody did
             return
@@ -438,7 +449,7 @@ class RunRecorder:
         if tf is not None:
             self._write(topics.TF, stamp_ns, tf)
 
-    def _hand_over_arm_state(self, stamp_ns: int, robot: Mapping[str, Any]) -> None:
+    def _hand_over_arm_state(self, stamp_ns: int, robot: Mapping[str, object]) -> None:
         assert self._process is not None
         js_channel, js_seq, t = self._next(topics.JOINT_STATE, stamp_ns)
         tf_channel, tf_seq, _ = self._next(topics.TF, stamp_ns)
@@ -455,21 +466,21 @@ class RunRecorder:
         self._write_encoded(topics.COLOR, stamp_ns, Encoding.COLOR,
                             (self.t(stamp_ns), np.array(rgb), frame_id, self._image_format, self._jpeg_quality))
 
-    def write_camera_calibration(self, stamp_ns: int, frame_id: str, intrinsics: Any) -> None:
-        """``intrinsics``: width_px, height_px, fx_px, fy_px, cx_px, cy_px (a CameraIntrinsics)."""
+    def write_camera_calibration(self, stamp_ns: int, frame_id: str, intrinsics: CameraIntrinsics) -> None:
         i = intrinsics
         msg = schemas.camera_calibration(self.t(stamp_ns), frame_id, i.width_px, i.height_px, i.fx_px, i.fy_px,
                                          i.cx_px, i.cy_px)
         self._camera_K = np.array(msg.K, dtype=np.float64).reshape(3, 3)
         self._write(topics.CALIBRATION, stamp_ns, msg.SerializeToString())
 
-    def robot_model_update(self) -> Any:
+    def robot_model_update(self) -> SceneUpdate:
         """The robot's link entities (a ``foxglove.SceneUpdate``) at the start of the run."""
         if self._robot_model is None:
             raise ValueError("this recorder has no robot model")
-        return self._robot_model.scene_update(self.t(0))
+        update: SceneUpdate = self._robot_model.scene_update(self.t(0))
+        return update
 
-    def write_scene(self, topic: str, stamp_ns: int, update: Any) -> None:
+    def write_scene(self, topic: str, stamp_ns: int, update: SceneUpdate) -> None:
         """A ready ``foxglove.SceneUpdate`` on one of the scene topics (robot model, fixtures, judge)."""
         if topics.PROTOBUF_TOPICS.get(topic) != "foxglove.SceneUpdate":
             raise ValueError(f"{topic!r} is not a scene topic")
@@ -503,7 +514,7 @@ class RunRecorder:
         markers shown before on its topic. With ``topic`` given, everything goes there (an empty list clears
         it)."""
         frame = frame_id or self.base_frame
-        by_topic: dict[str, list[Any]] = {topic: []} if topic else {}
+        by_topic: dict[str, list[SceneEntity]] = {topic: []} if topic else {}
         for marker in entities:
             if isinstance(marker, schemas.BoxMarker):
                 entity, default = schemas.box_entity(self.t(stamp_ns), marker, frame), topics.DETECTIONS
@@ -550,18 +561,18 @@ class RunRecorder:
     def write_log(self, stamp_ns: int, level: str | int, name: str, message: str) -> None:
         self._write(topics.LOG, stamp_ns, schemas.log(self.t(stamp_ns), level, name, message).SerializeToString())
 
-    def write_event(self, stamp_ns: int, kind: str, payload: Mapping[str, Any]) -> None:
+    def write_event(self, stamp_ns: int, kind: str, payload: Mapping[str, object]) -> None:
         """An event on /bt/events (a failure, a retry, an abort); tagged with the last tick written."""
         self._write_json(topics.EVENTS, stamp_ns,
                          _ticked(self._last_tick, {"kind": kind, "payload": to_jsonable(payload)}))
         for listener in self.event_listeners:
             listener(kind, payload)
 
-    def write_fault(self, stamp_ns: int, tick: int, fault: Mapping[str, Any]) -> None:
+    def write_fault(self, stamp_ns: int, tick: int, fault: Mapping[str, object]) -> None:
         """One firing of an injected fault on /faults."""
         self._write_json(topics.FAULTS, stamp_ns, {"tick": int(tick), "fault": to_jsonable(fault)})
 
-    def write_intervention(self, stamp_ns: int, record: Mapping[str, Any]) -> None:
+    def write_intervention(self, stamp_ns: int, record: Mapping[str, object]) -> None:
         """An operator's intervention on /control/interventions (``bt_grasp.control.InterventionRecord``); the
         channel is registered with the first one, so a run with none records nothing extra."""
         topic = topics.INTERVENTIONS
@@ -580,7 +591,7 @@ class RunRecorder:
         return ChannelSpec(topic, MessageEncoding.JSON, str(topics.JSON_SCHEMAS[topic]["title"]),
                            SchemaEncoding.JSONSchema, topics.json_schema_bytes(topic))
 
-    def write_result(self, stamp_ns: int, result: Mapping[str, Any]) -> None:
+    def write_result(self, stamp_ns: int, result: Mapping[str, object]) -> None:
         """The run's outcome on /run/result: success, reason, failed_leaf, ticks, sim_time_s, wall_time_s,
         retries, object_lift_m, ..."""
         self._write_json(topics.RESULT, stamp_ns, to_jsonable(result))

@@ -38,22 +38,55 @@ import sys
 import tempfile
 import threading
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any, BinaryIO, TextIO
+from typing import BinaryIO, Literal, TextIO, TypeAlias, TypedDict
 
 import numpy as np
 from numpy.typing import NDArray
 
+from bt_grasp.recording.arm_state import ArmStateEncoder
 from bt_grasp.recording.encodings import Encoding, encode
-
-if TYPE_CHECKING:
-    from bt_grasp.recording.arm_state import ArmStateEncoder
 
 log = logging.getLogger(__name__)
 
 #: how long ``finish`` waits for the child to write the summary and exit
 FINISH_TIMEOUT_S = 120.0
 
-_Item = tuple[Any, ...]
+
+class ArmSettings(TypedDict):
+    """What the child's :class:`ArmStateEncoder` is built from (``robot_model``: build the default one)."""
+
+    joint_names: list[str]
+    base_frame: str
+    tool_frame: str
+    robot_model: bool
+
+
+class FileSettings(TypedDict):
+    """The file a batch opens (``("open", settings)``)."""
+
+    path: str
+    chunk_size: int
+    compression: str
+    arm_state: ArmSettings | None
+
+
+Statics: TypeAlias = dict[tuple[str, str], NDArray[np.float64]]
+#: the requests a batch carries, one tuple each, the request's kind first (``write_file`` carries them out)
+_Item: TypeAlias = (
+    tuple[Literal["m"], int, int, bytes, int, int]  # channel, log time, data, publish time, sequence
+    | tuple[Literal["e"], int, int, int, str, tuple[object, ...]]  # channel, log time, sequence, encoding, args
+    | tuple[Literal["arm"], tuple[int, int], tuple[int, int], int, int | None, dict[str, object]]
+    | tuple[Literal["flush"]]
+    | tuple[Literal["fsync"]]
+    | tuple[Literal["statics"], Statics]
+    | tuple[Literal["open"], FileSettings]
+    | tuple[Literal["start"], str, str]  # profile, library
+    | tuple[Literal["metadata"], str, dict[str, str]]
+    | tuple[Literal["attachment"], int, int, str, str, bytes]
+    | tuple[Literal["schema"], int, str, str, bytes]  # id, name, encoding, data
+    | tuple[Literal["channel"], int, str, str, int]  # id, topic, message encoding, schema id
+    | tuple[Literal["finish"], bool]  # fsync
+)
 #: a batch on the pipe: the pickle's size and how many out-of-band buffers follow it, then each buffer's size
 _FRAME = struct.Struct("<QI")
 _BUFFER_SIZE = struct.Struct("<Q")
@@ -152,14 +185,14 @@ def _close_idle() -> None:
 class ProcessWriter:
     """``mcap.writer.Writer``'s calls, carried out by a writer process that owns ``path`` until ``finish()``."""
 
-    def __init__(self, path: str, *, chunk_size: int, compression: str, arm_state: Mapping[str, Any] | None) -> None:
+    def __init__(self, path: str, *, chunk_size: int, compression: str, arm_state: ArmSettings | None) -> None:
         """``compression``: "zstd", "lz4" or "none"; ``arm_state``: the :class:`ArmStateEncoder`'s settings
         (``joint_names``, ``base_frame``, ``tool_frame``, ``robot_model``: True builds the default robot model
         in the child) or None when no arm state is handed over."""
         with open(path, "wb"):  # a path that cannot be written fails here, before the run, not at its end
             pass
-        settings = {"path": str(path), "chunk_size": int(chunk_size), "compression": compression,
-                    "arm_state": dict(arm_state) if arm_state is not None else None}
+        settings: FileSettings = {"path": str(path), "chunk_size": int(chunk_size), "compression": compression,
+                                  "arm_state": ArmSettings(**arm_state) if arm_state is not None else None}
         self._child = _take_child()
         self._process = self._child.process
         self._pending: queue.SimpleQueue[_Send | None] = queue.SimpleQueue()
@@ -196,7 +229,7 @@ class ProcessWriter:
         self._batch.append(("m", channel_id, log_time, data, publish_time, sequence))
 
     def add_encoded(self, channel_id: int, log_time: int, sequence: int, encoding: Encoding,
-                    args: tuple[Any, ...]) -> None:
+                    args: tuple[object, ...]) -> None:
         """A message the child encodes (``encodings.encode(encoding, args)``: the same bytes as in this
         process) and writes on ``channel_id`` at ``log_time``. ``args`` must not change until the next
         ``flush()`` (they are pickled then): pass copies of arrays a caller may write to."""
@@ -235,7 +268,7 @@ class ProcessWriter:
     # -- the arm state -----------------------------------------------------------------------------------
 
     def add_arm_state(self, channels: tuple[int, int], sequences: tuple[int, int], log_time: int, tick: int | None,
-                      robot: Mapping[str, Any]) -> None:
+                      robot: Mapping[str, object]) -> None:
         """The child encodes ``robot`` (``ArmStateEncoder.encode``) and writes the joint state and /tf messages
         on ``channels`` with ``sequences`` at ``log_time``."""
         self._batch.append(("arm", channels, sequences, log_time, tick, dict(robot)))
@@ -308,19 +341,17 @@ def _read_batch(stream: BinaryIO) -> list[_Item] | None:
     return batch
 
 
-def _encoder(settings: Mapping[str, Any]) -> ArmStateEncoder | None:
-    from bt_grasp.recording.arm_state import ArmStateEncoder
-
-    arm_state = settings.get("arm_state")
-    if arm_state is None:
+def _encoder(settings: FileSettings) -> ArmStateEncoder | None:
+    arm = settings.get("arm_state")
+    if arm is None:
         return None
-    arm = dict(arm_state)
     model = None
-    if arm.pop("robot_model", False):
+    if arm.get("robot_model", False):
+        # deferred: start-up time (pinocchio and the robot's meshes, only for a log with the robot model)
         from bt_grasp.recording.robot_model import default_robot_model
 
         model = default_robot_model()  # built once per process: its later files reuse it
-    return ArmStateEncoder(robot_model=model, **arm)
+    return ArmStateEncoder(arm["joint_names"], arm["base_frame"], arm["tool_frame"], robot_model=model)
 
 
 def write_file(first: list[_Item], requests: BinaryIO) -> bool:
@@ -329,12 +360,13 @@ def write_file(first: list[_Item], requests: BinaryIO) -> bool:
     the batches that came whole)."""
     from mcap.writer import CompressionType, Writer
 
-    kind, settings = first[0]
-    if kind != "open":
-        raise ValueError(f"a file must begin with 'open', not {kind!r}")
+    opening = first[0]
+    if opening[0] != "open":
+        raise ValueError(f"a file must begin with 'open', not {opening[0]!r}")
+    settings = opening[1]
     kinds = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}
     encoder = _encoder(settings)
-    statics: dict[tuple[str, str], NDArray[np.float64]] = {}
+    statics: Statics = {}
     batch: list[_Item] | None = first[1:]
     with open(settings["path"], "wb") as stream:
         writer = Writer(stream, chunk_size=int(settings["chunk_size"]), compression=kinds[settings["compression"]])
@@ -343,13 +375,12 @@ def write_file(first: list[_Item], requests: BinaryIO) -> bool:
                 writer.finish()
                 return False
             for item in batch:
-                kind = item[0]
-                if kind == "m":
+                if item[0] == "m":
                     writer.add_message(item[1], log_time=item[2], data=item[3], publish_time=item[4], sequence=item[5])
-                elif kind == "e":
+                elif item[0] == "e":
                     data = encode(Encoding(item[4]), item[5])  # ValueError for a value no Encoding has
                     writer.add_message(item[1], log_time=item[2], data=data, publish_time=item[2], sequence=item[3])
-                elif kind == "arm":
+                elif item[0] == "arm":
                     if encoder is None:
                         raise ValueError("an arm state, but no arm-state settings")
                     (js_channel, tf_channel), (js_seq, tf_seq), t, tick, robot = item[1:]
@@ -357,35 +388,35 @@ def write_file(first: list[_Item], requests: BinaryIO) -> bool:
                     writer.add_message(js_channel, log_time=t, data=joint_state, publish_time=t, sequence=js_seq)
                     if tf is not None:
                         writer.add_message(tf_channel, log_time=t, data=tf, publish_time=t, sequence=tf_seq)
-                elif kind == "flush":
+                elif item[0] == "flush":
                     writer.flush()
-                elif kind == "statics":
+                elif item[0] == "statics":
                     statics = item[1]
-                elif kind == "fsync":
+                elif item[0] == "fsync":
                     stream.flush()
                     os.fsync(stream.fileno())
-                elif kind == "start":
+                elif item[0] == "start":
                     writer.start(profile=item[1], library=item[2])
-                elif kind == "metadata":
+                elif item[0] == "metadata":
                     writer.add_metadata(item[1], item[2])
-                elif kind == "attachment":
+                elif item[0] == "attachment":
                     writer.add_attachment(item[1], item[2], item[3], item[4], item[5])
-                elif kind == "schema":
+                elif item[0] == "schema":
                     got = writer.register_schema(name=item[2], encoding=item[3], data=item[4])
                     if got != item[1]:
                         raise ValueError(f"schema id {got}, the parent named it {item[1]}")
-                elif kind == "channel":
+                elif item[0] == "channel":
                     got = writer.register_channel(item[2], item[3], item[4])
                     if got != item[1]:
                         raise ValueError(f"channel id {got}, the parent named it {item[1]}")
-                elif kind == "finish":
+                elif item[0] == "finish":
                     writer.finish()
                     stream.flush()
                     if item[1]:
                         os.fsync(stream.fileno())
                     return True
                 else:
-                    raise ValueError(f"unknown request {kind!r}")
+                    raise ValueError(f"unknown request {item[0]!r}")
             batch = _read_batch(requests)
 
 

@@ -292,7 +292,7 @@ def _alignment_effect(scene_path: Path, config: Scene, recording: Path, simulate
     intrinsics = opened.camera.intrinsics
     poses = {raw.stamp_ns: tool_pose(config, raw.q_rad, raw.stamp_ns) for raw in simulated}
     placer = opened.placer
-    if placer.calibration is not None and placer.calibration.mount == Mount.EYE_IN_HAND:
+    if placer.calibration is not None and Mount(placer.calibration.mount) is Mount.EYE_IN_HAND:
         placer = FramePlacer(placer.calibration, placer.calibration_path, poses.get, "simulated arm")
     perceiver = Perceiver(PerceptionConfig.for_scene(config), config, detector)
     own: list[Detection] = []

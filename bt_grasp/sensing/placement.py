@@ -83,7 +83,7 @@ class FramePlacer:
             if T_camera_table is None:
                 return None
             return Placement(CAMERA_FRAME, pipeline_pose(T_camera_table), T_camera_table, None)
-        if calibration.mount == Mount.EYE_TO_HAND:
+        if Mount(calibration.mount) is Mount.EYE_TO_HAND:
             T = np.asarray(calibration.T_base_camera_at(None), dtype=float)
             return Placement(BASE_LINK, T, identity, T)
         pose = self._tool_pose(frame.stamp_ns) if self._tool_pose is not None else None

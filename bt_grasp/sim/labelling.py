@@ -27,7 +27,7 @@ import os
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
@@ -52,6 +52,9 @@ from bt_grasp.scene.format import Light, Scene, load_scene
 from bt_grasp.sim.poses import to_T
 from bt_grasp.sim.table_texture import TEXTURE_KINDS, add_table_top, texture_image
 from bt_grasp.sim.world import World
+
+if TYPE_CHECKING:
+    from cv2.typing import MatLike
 
 log = logging.getLogger(__name__)
 
@@ -265,7 +268,7 @@ class DatasetSummary:
     per_class: dict[str, int]
 
 
-def _png(bgr: NDArray[Any]) -> bytes:
+def _png(bgr: MatLike) -> bytes:
     ok, data = cv2.imencode(".png", bgr)
     if not ok:
         raise ValueError("a picture did not encode as PNG")

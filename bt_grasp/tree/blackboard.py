@@ -15,7 +15,7 @@ Entries are shared objects, so a remapped key and the parent's key see the same 
 from __future__ import annotations
 
 from collections.abc import Iterator
-from typing import Any
+from typing import Final
 
 from bt_grasp.tree.exceptions import TreeRuntimeError
 from bt_grasp.tree.values import convert_text, copy_into
@@ -27,7 +27,7 @@ class _Empty:
 
 
 #: the value of an entry that was declared (a port points to it) but never written
-EMPTY: Any = _Empty()
+EMPTY: Final = _Empty()
 
 
 #: the scalar types an entry can be declared with (BT.CPP's strongly typed entries)
@@ -49,13 +49,13 @@ class Entry:
 
     __slots__ = ("declared", "sequence_id", "value")
 
-    def __init__(self, value: Any = EMPTY, declared: type | None = None) -> None:
+    def __init__(self, value: object = EMPTY, declared: type | None = None) -> None:
         self.value = value
         self.sequence_id = 0
         self.declared = declared
 
 
-def scalar_type(value: Any) -> type | None:
+def scalar_type(value: object) -> type | None:
     """``bool``, ``int``, ``float`` or ``str`` for a scalar value, None for anything else."""
     for kind in _SCALARS:
         if isinstance(value, kind):
@@ -132,12 +132,12 @@ class Blackboard:
 
     def declare(self, key: str, kind: type | None = None) -> None:
         """Create an empty entry (BT.CPP creates one for every ``{key}`` port when it builds a tree) declared
-        with the port's type: a scalar, or an application type with ``from_port_text`` (BT.CPP's strongly
-        typed ports; ``object`` declares nothing). A second port of another type raises BlackboardTypeError,
-        except on an entry declared ``str`` first: BT.CPP lets any port read text (``convertFromString``),
-        and the entry stays text."""
+        with the port's type: a scalar or an application class (BT.CPP's strongly typed ports; ``object``
+        declares nothing). A second port of another type raises BlackboardTypeError, except on an entry
+        declared ``str`` first: BT.CPP lets any port read text (``convertFromString``), and the entry stays
+        text."""
         entry = self.create_entry(key)
-        if kind not in _SCALARS and not _is_text_type(kind):
+        if kind is None or kind is object:
             return
         if entry.declared is None:
             entry.declared = kind
@@ -165,7 +165,7 @@ class Blackboard:
         """True when ``key`` resolves to an entry, empty or not."""
         return self.entry(key) is not None
 
-    def get(self, key: str, default: Any = EMPTY) -> Any:
+    def get(self, key: str, default: object = EMPTY) -> object:
         """The value of ``key``; ``default`` when missing or empty, or ``KeyError`` without a default."""
         entry = self.entry(key)
         if entry is None or entry.value is EMPTY:
@@ -174,7 +174,7 @@ class Blackboard:
             return default
         return entry.value
 
-    def set(self, key: str, value: Any) -> None:
+    def set(self, key: str, value: object) -> None:
         """Write ``key``, creating the entry (in the scope remapping says) when needed, as BT.CPP's
         ``Blackboard::set``: the first number or bool written declares the entry's type; a later scalar of
         another type is converted (text parsed, numbers cast without loss) or refused (BlackboardTypeError)."""
@@ -191,7 +191,7 @@ class Blackboard:
         entry.value = value
         entry.sequence_id += 1
 
-    def set_local(self, key: str, value: Any) -> None:
+    def set_local(self, key: str, value: object) -> None:
         """Write ``key`` in this blackboard itself, ignoring autoremapping (SubTree literal ports); a number
         or bool declares the entry's type, as BT.CPP's typed ``set`` of a literal port does."""
         entry = self._storage.get(key)
@@ -207,7 +207,7 @@ class Blackboard:
         """Keys known to this blackboard itself (including remapped aliases), in creation order."""
         return iter(list(self._storage))
 
-    def items(self) -> dict[str, Any]:
+    def items(self) -> dict[str, object]:
         """This blackboard's keys with values (empty entries left out)."""
         return {k: e.value for k, e in self._storage.items() if e.value is not EMPTY}
 
@@ -215,12 +215,7 @@ class Blackboard:
         return f"Blackboard({self.items()!r})"
 
 
-def _is_text_type(kind: type | None) -> bool:
-    """An application port type converted from text (``registry.is_text_port_type``)."""
-    return kind is not None and callable(getattr(kind, "from_port_text", None))
-
-
-def _fit(key: str, value: Any, entry: Entry) -> Any:
+def _fit(key: str, value: object, entry: Entry) -> object:
     """``value`` converted to the type ``entry`` was declared with (text is parsed, as BT.CPP's ``set``
     parses a string with the entry's converter; numbers are cast without loss)."""
     declared = entry.declared

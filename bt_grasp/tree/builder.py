@@ -18,7 +18,7 @@ from bt_grasp.tree.builtins.subtree import SubTreeNode
 from bt_grasp.tree.context import NodeContext
 from bt_grasp.tree.exceptions import PortValueError, ScriptSyntaxError
 from bt_grasp.tree.formats.document import Document, NodeDecl
-from bt_grasp.tree.node import BtNode, WakeUp
+from bt_grasp.tree.node import BtNode, Conditions, WakeUp
 from bt_grasp.tree.ports import PortAccessor, blackboard_key
 from bt_grasp.tree.registry import NodeKind, NodeRegistry, NodeSpec
 from bt_grasp.tree.substitution import SubstitutionRule, substitute
@@ -121,21 +121,19 @@ class TreeBuilder:
     registry: NodeRegistry
     clock: Clock
     rules: tuple[SubstitutionRule, ...] = ()
-    _uids: itertools.count = field(default_factory=lambda: itertools.count(1))
+    _uids: itertools.count[int] = field(default_factory=lambda: itertools.count(1))
     wake_up: WakeUp = field(default_factory=WakeUp)
 
     def build(self, main: str, root_blackboard: Blackboard) -> BtNode:
         return self._node(self.document.trees[main].root, root_blackboard, "", "", (main,))
 
-    def _context(self, decl: NodeDecl, **kwargs: object) -> NodeContext:
+    def _context(self, decl: NodeDecl, *, name: str, type_id: str, uid: int, path: str, spec: NodeSpec,
+                 ports: PortAccessor, blackboard: Blackboard, children: tuple[BtNode, ...],
+                 conditions: Conditions) -> NodeContext:
         return NodeContext(
-            clock=self.clock,
-            attributes=dict(decl.attributes),
-            enums=self.registry.enums,
-            source=decl.source,
-            line=decl.line,
-            wake_up=self.wake_up,
-            **kwargs,  # type: ignore[arg-type]
+            name=name, type_id=type_id, uid=uid, path=path, kind=spec.kind, spec=spec, ports=ports, clock=self.clock,
+            blackboard=blackboard, attributes=dict(decl.attributes), children=children, conditions=conditions,
+            enums=self.registry.enums, source=decl.source, line=decl.line, wake_up=self.wake_up,
         )
 
     def _node(self, decl: NodeDecl, bb: Blackboard, prefix: str, instance: str, stack: tuple[str, ...]) -> BtNode:
@@ -161,7 +159,6 @@ class TreeBuilder:
             type_id=spec.name,
             uid=uid,
             path=path,
-            kind=spec.kind,
             spec=spec,
             ports=PortAccessor({p.name: p for p in spec.ports}, ports, bb, path),
             blackboard=bb,
@@ -210,7 +207,6 @@ class TreeBuilder:
             type_id="SubTree",
             uid=uid,
             path=path,
-            kind=NodeKind.SUBTREE,
             spec=SUBTREE_SPEC,
             ports=PortAccessor({}, {}, bb, path),
             blackboard=bb,

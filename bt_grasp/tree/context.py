@@ -6,11 +6,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from bt_grasp.tree.node import NO_CONDITIONS, Conditions, WakeUp
+from bt_grasp.tree.node import NO_CONDITIONS, BtNode, Conditions, WakeUp
 
 if TYPE_CHECKING:
-    import py_trees
-
     from bt_grasp.clock import Clock
     from bt_grasp.tree.blackboard import Blackboard
     from bt_grasp.tree.ports import PortAccessor
@@ -50,7 +48,7 @@ class NodeContext:
     clock: Clock
     blackboard: Blackboard
     attributes: Mapping[str, str] = field(default_factory=dict)
-    children: tuple[py_trees.behaviour.Behaviour, ...] = ()
+    children: tuple[BtNode, ...] = ()
     conditions: Conditions = NO_CONDITIONS
     enums: Mapping[str, int] = field(default_factory=dict)
     source: str = ""

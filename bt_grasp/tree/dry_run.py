@@ -35,14 +35,12 @@ import random
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Protocol
-
-from py_trees.common import Status
+from typing import Protocol
 
 from bt_grasp.clock import ManualClock
 from bt_grasp.errors import InputError
 from bt_grasp.tree.context import NodeContext
-from bt_grasp.tree.leaf import Leaf
+from bt_grasp.tree.leaf_node import Leaf
 from bt_grasp.tree.loader import LoadedTree, load_tree
 from bt_grasp.tree.node import BtNode, BtStatus
 from bt_grasp.tree.registry import NodeKind, NodeRegistry, NodeSpec, PortDirection, PortSpec
@@ -54,7 +52,7 @@ _SYNTAX = "NAME=success, NAME=failure[:REASON] or NAME=running:N"
 class StandInCatalog(Protocol):
     """What the application knows about its robot leaves' outputs, for their stand-ins."""
 
-    def placeholder(self, spec: NodeSpec, port: PortSpec) -> Any:
+    def placeholder(self, spec: NodeSpec, port: PortSpec) -> object:
         """The value a stand-in writes to an output port on SUCCESS (typed like the real leaf's)."""
         ...
 
@@ -62,7 +60,7 @@ class StandInCatalog(Protocol):
 class TypedPlaceholders:
     """A catalog that knows nothing about particular leaves: placeholders by port type only."""
 
-    def placeholder(self, spec: NodeSpec, port: PortSpec) -> Any:
+    def placeholder(self, spec: NodeSpec, port: PortSpec) -> object:
         return type_placeholder(port, spec.name)
 
 
@@ -77,10 +75,10 @@ class StandInValue:
         return f"<{self.port} from a {self.leaf} stand-in>"
 
 
-def type_placeholder(port: PortSpec, leaf: str = "") -> Any:
+def type_placeholder(port: PortSpec, leaf: str = "") -> object:
     """A value of the port's type: 0, 0.0, False, ``""``, the type's ``from_port_text("0;0")``, else (an
     ``object`` port) a :class:`StandInValue`."""
-    simple: dict[type, Any] = {int: 0, float: 0.0, bool: False, str: ""}
+    simple: dict[type, object] = {int: 0, float: 0.0, bool: False, str: ""}
     if port.type in simple:
         return simple[port.type]
     parse = getattr(port.type, "from_port_text", None)
@@ -185,21 +183,21 @@ class StandIn(Leaf):
         self.outcome = self._draw()
         self.running_left = self.outcome.running_ticks
 
-    def update(self) -> Status:
+    def update(self) -> BtStatus:
         if self.running_left > 0:
             self.running_left -= 1
-            return Status.RUNNING
+            return BtStatus.RUNNING
         if self.outcome.kind is OutcomeKind.FAILURE:
             declared = self.original.failure_reasons
             reason = self.outcome.reason or (declared[0] if declared else None)
             if reason is None:  # a leaf that declares no reason (Script) fails as it would: without one
                 self.feedback_message = f"stand-in for {self.name} was told to fail"
-                return Status.FAILURE
+                return BtStatus.FAILURE
             return self.fail(reason, f"stand-in for {self.name} was told to fail with {reason}")
         for port in self.original.ports:
             if port.direction is not PortDirection.INPUT and self.ports.has(port.name) and self.ports.key(port.name):
                 self.ports.set(port.name, self.plan.catalog.placeholder(self.original, port))
-        return Status.SUCCESS
+        return BtStatus.SUCCESS
 
 
 def stand_in_spec(spec: NodeSpec, plan: DryRunPlan, real: frozenset[str] = frozenset()) -> NodeSpec:
@@ -209,7 +207,7 @@ def stand_in_spec(spec: NodeSpec, plan: DryRunPlan, real: frozenset[str] = froze
     assert original is not None
     robot = spec.needs_robot and spec.name not in real
 
-    def factory(ctx: NodeContext) -> Any:
+    def factory(ctx: NodeContext) -> BtNode:
         if robot or plan.rule_for(spec.name, ctx.name, ctx.path) is not None:
             return StandIn(ctx, plan, spec)
         return original(ctx)
@@ -225,9 +223,7 @@ def dry_registry(registry: NodeRegistry, plan: DryRunPlan, real: frozenset[str] 
         stand_in_spec(s, plan, real) if s.kind in _LEAF_KINDS and (s.needs_robot or plan.rules) else s
         for s in registry.specs()
     ]
-    dry = NodeRegistry(specs, registry.enums, registry.reasons())
-    dry.origins = dict(registry.origins)
-    return dry
+    return registry.with_specs(specs)
 
 
 def known_reason_names(registry: NodeRegistry) -> frozenset[str]:
@@ -274,7 +270,7 @@ class TickWalk:
     status: str
     runs: list[list[Step]] = field(default_factory=list)
 
-    def as_json(self) -> dict[str, Any]:
+    def as_json(self) -> dict[str, object]:
         return {
             "tick": self.tick,
             "status": self.status,
@@ -316,7 +312,7 @@ class DryRunResult:
     status: BtStatus
     ticks: int
     walk: list[TickWalk]
-    blackboard: dict[str, Any]
+    blackboard: dict[str, object]
 
 
 def load_dry(

@@ -8,13 +8,11 @@ from __future__ import annotations
 
 import xml.etree.ElementTree as ET
 
-import py_trees
-
 from bt_grasp.tree.node import BtNode
 from bt_grasp.tree.records import NodeSnapshot, TreeNode
 
 
-def _walk(root: py_trees.behaviour.Behaviour) -> list[BtNode]:
+def _walk(root: BtNode) -> list[BtNode]:
     return [n for n in root.iterate() if isinstance(n, BtNode)]
 
 
@@ -25,7 +23,7 @@ def bt_status_name(node: BtNode) -> str:
     return node.bt_state.value
 
 
-def node_records(root: py_trees.behaviour.Behaviour) -> list[NodeSnapshot]:
+def node_records(root: BtNode) -> list[NodeSnapshot]:
     """One dict per node, in uid order: uid, type, name, path, kind, status (py_trees name),
     bt_status (BT.CPP name, including SKIPPED), feedback_message, failure_reason."""
     records: list[NodeSnapshot] = []
@@ -46,9 +44,8 @@ def node_records(root: py_trees.behaviour.Behaviour) -> list[NodeSnapshot]:
     return records
 
 
-def tree_structure(root: py_trees.behaviour.Behaviour) -> TreeNode:
+def tree_structure(root: BtNode) -> TreeNode:
     """The nested structure: uid, type, name, path, kind, attributes (as written), children."""
-    assert isinstance(root, BtNode), "tree_structure needs a tree built by bt_grasp.tree"
     entry: TreeNode = {
         "uid": root.bt_uid,
         "type": root.bt_type,
@@ -56,7 +53,7 @@ def tree_structure(root: py_trees.behaviour.Behaviour) -> TreeNode:
         "path": root.bt_path,
         "kind": root.bt_kind.value,
         "attributes": dict(root.bt_attributes),
-        "children": [tree_structure(c) for c in root.children],
+        "children": [tree_structure(c) for c in root.bt_children()],
     }
     subtree_id = getattr(root, "subtree_id", None)
     if subtree_id:
@@ -86,10 +83,10 @@ def to_btcpp_xml(root: BtNode, main_tree: str) -> str:
                     attributes.setdefault(key, value)
             element = ET.SubElement(parent, "SubTree" if subtree_id else node.bt_type, attributes)
             if subtree_id:
-                trees.append((subtree_id, attributes["_fullpath"], node.children[0]))  # type: ignore[arg-type]
+                trees.append((subtree_id, attributes["_fullpath"], node.bt_children()[0]))
                 return
-            for child in node.children:
-                add(child, element)  # type: ignore[arg-type]
+            for child in node.bt_children():
+                add(child, element)
 
         add(top, tree_element)
     ET.indent(xml_root, space="  ")

@@ -11,7 +11,6 @@ import os
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import py_trees
 
@@ -23,6 +22,7 @@ from bt_grasp.tree.builder import TreeBuilder, validate_document
 from bt_grasp.tree.formats.document import Document
 from bt_grasp.tree.formats.xml_format import read_xml
 from bt_grasp.tree.formats.yaml_format import read_yaml
+from bt_grasp.tree.introspect import to_btcpp_xml
 from bt_grasp.tree.node import BtNode, BtStatus
 from bt_grasp.tree.registry import NodeRegistry
 from bt_grasp.tree.substitution import parse_rules
@@ -159,11 +159,10 @@ class LoadedTree:
     @property
     def btcpp_xml(self) -> str:
         """The expanded tree as BT.CPP writes it for Groot2 (``_uid`` and ``_fullpath`` attributes)."""
-        from bt_grasp.tree.introspect import to_btcpp_xml
 
         return to_btcpp_xml(self.root, self.main_tree)
 
-    def blackboard_values(self) -> dict[str, Any]:
+    def blackboard_values(self) -> dict[str, object]:
         return self.root_blackboard.items()
 
 

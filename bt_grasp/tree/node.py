@@ -14,13 +14,15 @@ hold exactly:
   post-conditions run when the node completes (``_onSuccess``/``_onFailure`` then ``_post``), and
   ``_onHalted`` after a halt;
 * halting (BT.CPP ``haltChild``) calls ``halt_node`` on RUNNING children, which reaches a leaf's
-  ``terminate(Status.INVALID)``.
+  ``terminate(Status.IDLE)``.
 
 ``tick()`` (the py_trees generator) ticks the node as a tree root, as BT.CPP's ``Tree::tickOnce``: it resets
 a completed root to IDLE first, executes the root, and executes it again at once while the root is RUNNING
 and a node requested a wake-up (:class:`WakeUp`; Repeat, RetryUntilSuccessful, SequenceWithMemory,
-AsyncSequence and AsyncFallback do after each synchronous child). It then yields every node, so
-``py_trees.trees.BehaviourTree`` with visitors works unchanged.
+AsyncSequence and AsyncFallback do after each synchronous child). When the root ends in SUCCESS, the root
+blackboard's ``failure_reason`` and ``failed_leaf`` (a leaf's :meth:`fail` wrote them) are removed: the tree
+recovered from that failure. It then yields every node, so ``py_trees.trees.BehaviourTree`` with visitors works
+unchanged.
 """
 
 from __future__ import annotations
@@ -31,26 +33,55 @@ import sys
 import traceback
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import py_trees
 from py_trees.common import Status
 
 from bt_grasp.tree.exceptions import TreeRuntimeError
-from bt_grasp.tree.registry import NodeKind
+from bt_grasp.tree.kinds import NodeKind
+from bt_grasp.tree.reasons import FAILED_LEAF_KEY, FAILURE_REASON_KEY
 
 #: this package's folder: frames inside it are bt_grasp's, not a plugin's
 _PACKAGE_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + os.sep
 
 if TYPE_CHECKING:
+    import uuid
+
     from bt_grasp.tree.blackboard import Blackboard
     from bt_grasp.tree.context import NodeContext
     from bt_grasp.tree.registry import NodeSpec
     from bt_grasp.tree.scripting import Program
 
+    class PyTreesBehaviour:
+        """py_trees' ``Behaviour`` as the type checker sees a bt_grasp node: every attribute and method bt_grasp
+        uses, but not ``update`` and ``terminate``, which a bt_grasp leaf redefines with BT.CPP's statuses (one
+        status type for every node). py_trees never calls them on a bt_grasp node (:meth:`BtNode.tick` and
+        ``execute_tick`` drive it), so the only thing hidden is a signature the node never meets. At run time the
+        base is py_trees' own class (below)."""
+
+        id: uuid.UUID
+        name: str
+        status: Status
+        feedback_message: str
+        parent: py_trees.behaviour.Behaviour | None
+        children: list[py_trees.behaviour.Behaviour]
+
+        def __init__(self, name: str) -> None: ...
+        def setup(self, **kwargs: object) -> None: ...
+        def initialise(self) -> None: ...
+        def shutdown(self) -> None: ...
+        def iterate(self, direct_descendants: bool = False) -> Iterator[py_trees.behaviour.Behaviour]: ...
+        def tick(self) -> Iterator[py_trees.behaviour.Behaviour]: ...
+        def stop(self, new_status: Status = Status.INVALID) -> None: ...
+else:
+    PyTreesBehaviour = py_trees.behaviour.Behaviour
+
 
 class BtStatus(enum.Enum):
-    """BT.CPP's ``NodeStatus``."""
+    """BT.CPP's ``NodeStatus``: the one status type of every node (``Status`` in :mod:`bt_grasp.nodes`). A leaf's
+    ``update()`` and a control's or decorator's ``bt_tick()`` return RUNNING, SUCCESS, FAILURE or SKIPPED; IDLE is
+    the state of a node that is not running (and what ``terminate`` receives when a leaf is halted)."""
 
     IDLE = "IDLE"
     RUNNING = "RUNNING"
@@ -128,8 +159,9 @@ class WakeUp:
         return pending
 
 
-class BtNode(py_trees.behaviour.Behaviour):
-    """Base of every node built from a tree file. Subclasses implement :meth:`bt_tick` (and ``halt``)."""
+class BtNode(PyTreesBehaviour):
+    """Base of every node built from a tree file (a py_trees ``Behaviour``). Subclasses implement :meth:`bt_tick`
+    (and ``halt``)."""
 
     bt_uid: int = 0
     bt_type: str = ""
@@ -137,7 +169,7 @@ class BtNode(py_trees.behaviour.Behaviour):
     bt_kind: NodeKind = NodeKind.ACTION
     bt_status_extra: str | None = "IDLE"
     bt_state: BtStatus = BtStatus.IDLE
-    #: the spec the node was built from (also set on a Leaf class by the ``@leaf`` decorator)
+    #: the spec the node was built from (on a node class: its declaration, stored by ``@action`` and the like)
     bt_spec: NodeSpec
 
     def _bt_bind(self, ctx: NodeContext) -> None:
@@ -280,21 +312,14 @@ class BtNode(py_trees.behaviour.Behaviour):
             if script is not None:
                 script.run(self._bt_blackboard, self._bt_enums)
 
-    # ---- helpers for controls and decorators (BT.CPP ControlNode / DecoratorNode) -----------------
     def bt_children(self) -> list[BtNode]:
-        return self.children  # type: ignore[return-value]
+        """The children, as bt_grasp nodes (every child of a bt_grasp node is one)."""
+        return [child for child in self.children if isinstance(child, BtNode)]
 
-    def halt_child(self, index: int) -> None:
-        child: BtNode = self.children[index]  # type: ignore[assignment]
-        if child.bt_state is BtStatus.RUNNING:
-            child.halt_node()
-        child.reset_status()
-
-    def halt_children(self, first: int = 0) -> None:
-        for index in range(first, len(self.children)):
-            self.halt_child(index)
-
-    reset_children = halt_children
+    @property
+    def enums(self) -> Mapping[str, int]:
+        """The registry's scripting enums (BT.CPP's ``config().enums``), for a node that runs scripts."""
+        return self._bt_enums
 
     # ---- py_trees integration ---------------------------------------------------------------------
     @property
@@ -323,6 +348,10 @@ class BtNode(py_trees.behaviour.Behaviour):
             runs += 1
         wake_up.capped = status is BtStatus.RUNNING and wake_up.take()
         wake_up.runs = runs
+        if status is BtStatus.SUCCESS:  # the tree recovered from any failure a leaf reported on the way
+            root_blackboard = self._bt_blackboard.root
+            root_blackboard.unset(FAILURE_REASON_KEY)
+            root_blackboard.unset(FAILED_LEAF_KEY)
         self.bt_last_root_status = status
         yield from self.iterate()
 
@@ -339,6 +368,14 @@ class BtNode(py_trees.behaviour.Behaviour):
         return f"<{self.bt_type} {self.bt_path!r} uid={self.bt_uid} {self.bt_state.value}>"
 
 
-def describe(node: Any) -> str:
+def as_behaviour(node: BtNode) -> py_trees.behaviour.Behaviour:
+    """A bt_grasp node as py_trees' own type, for py_trees' constructors (it is one at run time; the type checker
+    sees :class:`PyTreesBehaviour`)."""
+    if not isinstance(node, py_trees.behaviour.Behaviour):  # pragma: no cover - BtNode's base is Behaviour
+        raise TypeError(f"{node!r} is not a py_trees behaviour")
+    return node
+
+
+def describe(node: py_trees.behaviour.Behaviour) -> str:
     """``Type 'path'`` for messages."""
     return f"{getattr(node, 'bt_type', type(node).__name__)} {getattr(node, 'bt_path', node.name)!r}"

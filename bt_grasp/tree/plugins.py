@@ -10,13 +10,16 @@ loader, ``tree models``, the runner, recording, replay) can tell them apart. Plu
   (``[project.entry-points."bt_grasp.leaves"] my_nodes = "my_pkg.nodes:register"``), discovered once per
   process with :func:`importlib.metadata.entry_points`.
 
-Anything wrong with a plugin (it cannot be imported, it has no ``register``, it registers a name that exists,
-it declares a bad port or reason) raises :class:`PluginError`: exit 2, one sentence naming the file (or the
-distribution and entry point) and the problem.
+Installed plugins are all loaded unless a command says otherwise (``--no-plugins``: none of them; ``--plugin
+NAME``: only those named, by entry point or distribution name). Anything wrong with a plugin (it cannot be
+imported, it has no ``register``, it registers a name that exists, it declares a bad port or reason) raises
+:class:`PluginError`: exit 2, one sentence naming the file (or the distribution and entry point) and the problem;
+a name registered twice also names the plugin that registered it first.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import importlib
 import importlib.util
@@ -51,6 +54,8 @@ class Plugin:
     register: RegisterHook
     #: the file the plugin's code is in, for a line number in errors ("" when unknown)
     path: str = ""
+    #: the names it answers to in ``--plugin NAME``: an installed one's entry point and distribution names
+    names: tuple[str, ...] = ()
 
 
 def _is_file_name(spec: str) -> bool:
@@ -153,38 +158,52 @@ def entry_point_plugins() -> tuple[Plugin, ...]:
         except Exception as exc:
             raise PluginError(source, _import_problem(exc)) from None
         # no line numbers for these: the source named in errors is the entry point, not a file
+        names = (ep.name, dist)
         if isinstance(target, ModuleType):
-            plugins.append(_hook_of(target, source, ""))
+            plugins.append(dataclasses.replace(_hook_of(target, source, ""), names=names))
         elif callable(target):
-            plugins.append(Plugin(source, target))
+            plugins.append(Plugin(source, target, names=names))
         else:
             raise PluginError(source, f"names {target!r}, neither a register(registry) function nor a module")
     return tuple(plugins)
 
 
 def apply(registry: NodeRegistry, plugins: Iterable[Plugin]) -> NodeRegistry:
-    """Run each plugin's ``register(registry)``; a failing one raises PluginError naming it. Records the
-    origin of every node and reason a plugin added or replaced."""
+    """Run each plugin's ``register(registry)``; a failing one raises PluginError naming it. The registry
+    records the plugin as the origin of every node and reason it registers."""
     for plugin in plugins:
-        before = {spec.name: spec for spec in registry.specs()}
-        reasons_before = {r.name for r in registry.reasons()}
         try:
-            plugin.register(registry)
+            with registry.registering(plugin.source):
+                plugin.register(registry)
         except Exception as exc:  # DeclarationError (duplicate, bad port), or any error of the user's code
             where = _error_line(exc, plugin.path) if plugin.path else None
             raise PluginError(plugin.source, _register_problem(exc), where=where) from None
-        for name in registry.names():  # added, or a node of that name replaced (unregister, then register)
-            if before.get(name) is not registry.get(name):
-                registry.origins[name] = plugin.source
-        for reason in registry.reasons():
-            if reason.name not in reasons_before:
-                registry.reason_origins[reason.name] = plugin.source
     return registry
 
 
-def load_plugins(registry: NodeRegistry, leaves: Sequence[str] = (), installed: bool = True) -> NodeRegistry:
-    """Add the installed plugins (entry points, when ``installed``) and then each ``--leaves`` file or module,
-    in order, to ``registry``. Raises PluginError (exit 2) naming the plugin and the problem."""
-    plugins: list[Plugin] = list(entry_point_plugins()) if installed else []
+#: which installed plugins a command loads: all (True), none (False), or those named (entry point or distribution)
+Installed = bool | Sequence[str]
+
+
+def installed_plugins(chosen: Installed = True) -> tuple[Plugin, ...]:
+    """The installed plugins a command loads: every one, none, or the ones named (``--plugin NAME``: an entry
+    point's or a distribution's name); a name no installed plugin has raises PluginError listing theirs."""
+    if chosen is True:
+        return entry_point_plugins()
+    if chosen is False or not chosen:
+        return ()
+    found = entry_point_plugins()
+    for name in chosen:
+        if not any(name in plugin.names for plugin in found):
+            listing = ", ".join(sorted({p.names[0] for p in found if p.names})) or "none is installed"
+            raise PluginError("--plugin", f"no installed plugin is called '{name}' (installed: {listing})")
+    return tuple(plugin for plugin in found if set(plugin.names) & set(chosen))
+
+
+def load_plugins(registry: NodeRegistry, leaves: Sequence[str] = (), installed: Installed = True) -> NodeRegistry:
+    """Add the installed plugins (entry points: all of them, none, or those named, see
+    :func:`installed_plugins`) and then each ``--leaves`` file or module, in order, to ``registry``. Raises
+    PluginError (exit 2) naming the plugin and the problem."""
+    plugins: list[Plugin] = list(installed_plugins(installed))
     plugins += [load_spec(spec) for spec in leaves]
     return apply(registry, plugins)

@@ -1,11 +1,12 @@
-"""Port values: literals typed at load time, ``{key}`` blackboard references resolved at tick time."""
+"""Port values: literals typed at load time, ``{key}`` blackboard references resolved at tick time, and what a
+node reads and writes through them (:class:`PortAccessor`, a node's ``self.ports``)."""
 
 from __future__ import annotations
 
 import logging
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import TypeVar, overload
 
 from bt_grasp.tree.blackboard import EMPTY, Blackboard
 from bt_grasp.tree.exceptions import PortValueError, TreeRuntimeError
@@ -14,24 +15,26 @@ from bt_grasp.tree.values import cast_to, int_prefix, real_prefix
 
 logger = logging.getLogger(__name__)
 
+T = TypeVar("T")
+
 _TRUE = ("true", "True", "TRUE", "1")
 _FALSE = ("false", "False", "FALSE", "0")
 _TYPE_NAMES = {str: "text", int: "an integer", float: "a number", bool: "true or false", object: "any value"}
 
 
-def convert_text(text: str, port: PortSpec, where: str = "") -> Any:
+def convert_text(text: str, port: PortSpec, where: str = "") -> object:
     """Convert a literal as written in a tree file to the port's type (BT.CPP ``convertFromString``: numbers
     are read from the start of the text, as ``std::from_chars`` does, with no leading space or ``+``; what
     follows a number is ignored, with a logged warning when it is more than spaces; a bool is ``true``,
     ``false``, ``1``, ``0`` or their ``True``/``TRUE`` forms exactly). ``where`` (``file:line``) starts the
-    warning's text."""
+    warning's text. A type that cannot be read from text refuses every literal."""
     kind = port.type
-    value: Any
+    value: object
     if kind is str or kind is object:
         value = text
     elif is_text_port_type(kind):
         try:
-            value = kind.from_port_text(text)  # type: ignore[attr-defined]
+            value = getattr(kind, "from_port_text")(text)  # noqa: B009 - is_text_port_type checked it
         except ValueError as exc:
             raise PortValueError(f"port '{port.name}': {exc}") from None
     elif kind is bool:
@@ -41,7 +44,7 @@ def convert_text(text: str, port: PortSpec, where: str = "") -> Any:
             value = False
         else:
             raise PortValueError(f"port '{port.name}' needs true or false, got {text!r}")
-    else:
+    elif kind is int or kind is float:
         found = int_prefix(text) if kind is int else real_prefix(text)
         if found is None:
             raise PortValueError(f"port '{port.name}' needs {_TYPE_NAMES[kind]}, got {text!r}")
@@ -51,6 +54,9 @@ def convert_text(text: str, port: PortSpec, where: str = "") -> Any:
                 "%sport '%s': %r is read as %r, as BT.CPP reads it (%r is ignored)",
                 f"{where}: " if where else "", port.name, text, value, rest,
             )
+    else:
+        raise PortValueError(f"port '{port.name}': a {kind.__name__} cannot be written in a tree file (it has no "
+                             f"from_port_text); give a blackboard entry such as {{{port.name}}}")
     if port.choices and value not in port.choices:
         raise PortValueError(f"port '{port.name}' must be one of {', '.join(port.choices)}; got {text!r}")
     return value
@@ -73,7 +79,7 @@ class PortValue:
     """A resolved port: either a typed ``literal`` or a blackboard ``key``."""
 
     port: PortSpec
-    literal: Any = NO_DEFAULT
+    literal: object = NO_DEFAULT
     key: str | None = None
 
     @staticmethod
@@ -97,7 +103,16 @@ class PortValue:
 
 
 class PortAccessor:
-    """A node's ports: ``get`` reads (literal or blackboard), ``set`` writes an output port."""
+    """A node's ports (``self.ports``), read and written as BT.CPP's ``getInput``/``setOutput`` do.
+
+    * ``get(name)`` / ``get(name, int)``: the value, or None when the port has none (the tree did not give it and
+      it has no default, or its blackboard entry was never written): BT.CPP's ``getInput`` returns that case to
+      the node, which tests it. A value of a type the port cannot take is an error (exit 2), not None.
+    * ``require(name)`` / ``require(name, int)``: the strict form: the value, or an error naming the tree file's
+      line, the node and the port (exit 2).
+    * ``has(name)``: ``get`` would return a value (an output port: the tree connects it).
+    * ``set(name, value)``: write an output port's entry (False when the tree leaves it unconnected).
+    """
 
     __slots__ = ("_blackboard", "_owner", "_specs", "_values")
 
@@ -113,17 +128,15 @@ class PortAccessor:
         self._blackboard = blackboard
         self._owner = owner
 
-    def _value(self, name: str) -> PortValue:
-        value = self._values.get(name)
-        if value is None:
-            if name not in self._specs:
-                raise TreeRuntimeError(f"{self._owner}: node has no port '{name}'")
-            raise TreeRuntimeError(f"{self._owner}: port '{name}' was not set in the tree file")
-        return value
+    def _spec(self, name: str) -> PortSpec:
+        spec = self._specs.get(name)
+        if spec is None:
+            raise TreeRuntimeError(f"{self._owner}: node has no port '{name}'")
+        return spec
 
     def has(self, name: str) -> bool:
-        """True when the port was given (or has a default). For an input port naming an entry, that entry
-        must also hold a value; an output port only needs to be connected to a key."""
+        """True when the port has a value now: a literal or default, or a blackboard entry that holds one. An output
+        port only needs to be connected to a key. False for a name the node does not declare."""
         value = self._values.get(name)
         if value is None:
             return False
@@ -132,41 +145,82 @@ class PortAccessor:
         return self._blackboard.has(value.key)
 
     def key(self, name: str) -> str | None:
-        """The blackboard key a port points to, None for a literal."""
-        return self._value(name).key
+        """The blackboard key a port points to; None for a literal or a port the tree did not give."""
+        self._spec(name)
+        value = self._values.get(name)
+        return value.key if value is not None else None
 
-    def get(self, name: str) -> Any:
-        """The port's value: the typed literal, or the blackboard entry converted to the port's type as
-        BT.CPP's ``getInput<T>`` does (text parsed; a real becomes an integer only without a fraction, an
-        integer a bool only when 0 or 1; a number read by a text port renders as BT.CPP prints it)."""
-        value = self._value(name)
-        if value.key is None:
-            return value.literal
-        entry = self._blackboard.entry(value.key)
-        if entry is None or entry.value is EMPTY:
-            raise TreeRuntimeError(
-                f"{self._owner}: port '{name}' reads blackboard entry '{value.key}', which has no value yet"
-            )
+    @overload
+    def get(self, name: str) -> object | None: ...
+
+    @overload
+    def get(self, name: str, kind: type[T]) -> T | None: ...
+
+    def get(self, name: str, kind: type[object] | None = None) -> object | None:
+        """BT.CPP's ``getInput<T>``: the port's value converted to ``kind`` (the port's declared type when not
+        given), or None when it has none. Text is parsed as BT.CPP's ``convertFromString`` does; a real becomes
+        an integer only without a fraction, an integer a bool only when 0 or 1; a value that cannot be converted
+        is an error (exit 2)."""
+        return self._read(name, kind)
+
+    @overload
+    def require(self, name: str) -> object: ...
+
+    @overload
+    def require(self, name: str, kind: type[T]) -> T: ...
+
+    def require(self, name: str, kind: type[object] | None = None) -> object:
+        """The strict form of :meth:`get` (BT.CPP's ``getInput`` followed by a throw when it failed): the value,
+        or an error (exit 2) naming the tree file's line, the node and the port that has none."""
+        found = self._read(name, kind)
+        if found is not None:
+            return found
+        value = self._values.get(name)
+        if value is None or value.key is None:
+            raise TreeRuntimeError(f"{self._owner}: port '{name}' was not given in the tree file and has no default")
+        raise TreeRuntimeError(f"{self._owner}: port '{name}' reads blackboard entry '{value.key}', which has no "
+                               "value yet")
+
+    def _read(self, name: str, kind: type[object] | None) -> object | None:
+        spec = self._spec(name)
+        value = self._values.get(name)
+        if value is None:
+            return None
+        wanted = kind if kind is not None else spec.type
         try:
-            return cast_to(entry.value, value.port.type)
+            if value.key is None:  # a literal, converted at load time
+                raw, where = value.literal, "its value"
+                converted = raw if isinstance(raw, wanted) else cast_to(raw, wanted)
+            else:
+                entry = self._blackboard.entry(value.key)
+                if entry is None or entry.value is EMPTY:
+                    return None
+                raw, where = entry.value, f"blackboard entry '{value.key}'"
+                converted = cast_to(raw, wanted)
         except TreeRuntimeError as exc:
-            raise TreeRuntimeError(f"{self._owner}: port '{name}' (blackboard entry '{value.key}'): {exc}") from None
+            raise TreeRuntimeError(f"{self._owner}: port '{name}' ({where}): {exc}") from None
+        if not isinstance(converted, wanted):
+            raise TreeRuntimeError(f"{self._owner}: port '{name}' ({where}) holds a {type(converted).__name__}, "
+                                   f"not a {wanted.__name__}")
+        return converted
 
-    def set(self, name: str, value: Any) -> bool:
+    def set(self, name: str, value: object) -> bool:
         """Write an output (or inout) port's blackboard entry; True when written. An output port the tree does
         not connect is left alone and False returned, as BT.CPP's ``setOutput`` returns an error value that
         nodes are free to ignore (Nav2's leaves write ``error_code_id`` whether the tree reads it or not)."""
-        if name not in self._values and name in self._specs and self._specs[name].direction is PortDirection.OUTPUT:
-            return False
-        port_value = self._value(name)
-        if port_value.port.direction is PortDirection.INPUT:
+        spec = self._spec(name)
+        if spec.direction is PortDirection.INPUT:
             raise TreeRuntimeError(f"{self._owner}: port '{name}' is an input port; it cannot be written")
+        port_value = self._values.get(name)
+        if port_value is None:
+            return False
         if port_value.key is None:
             raise TreeRuntimeError(f"{self._owner}: port '{name}' is a literal, not a blackboard key")
         self._blackboard.set(port_value.key, value)
         return True
 
     def names(self) -> tuple[str, ...]:
+        """The ports the tree gave (or that have defaults)."""
         return tuple(self._values)
 
     def blackboard_ports(self) -> tuple[tuple[PortSpec, Blackboard, str], ...]:

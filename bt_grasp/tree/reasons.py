@@ -18,6 +18,11 @@ from bt_grasp.tree.exceptions import DeclarationError
 
 _NAME = re.compile(r"[A-Z][A-Z0-9_]{0,63}")
 
+#: root blackboard keys :meth:`bt_grasp.tree.leaf_node.Leaf.fail` writes (read by the ``FailureIs`` condition;
+#: both are removed when the whole tree succeeds)
+FAILURE_REASON_KEY = "failure_reason"
+FAILED_LEAF_KEY = "failed_leaf"
+
 
 class FailureReason(enum.StrEnum):
     """The built-in reasons of bt_grasp's robot leaves."""
@@ -66,7 +71,7 @@ class Reason:
         return self.name
 
 
-#: what :meth:`bt_grasp.tree.leaf.Leaf.fail` accepts: a built-in reason, a declared one, or its name
+#: what :meth:`bt_grasp.tree.leaf_node.Leaf.fail` accepts: a built-in reason, a declared one, or its name
 ReasonLike = FailureReason | Reason | str
 
 

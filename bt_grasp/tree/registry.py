@@ -1,12 +1,11 @@
 """The node registry: which node types a tree file may name, their ports, and how to build them.
 
-This is the contract robot leaves are written against::
-
-    registry = builtin_registry()
-
-    @leaf(registry, name="Approach", ports=[PortSpec("target", PortDirection.INPUT, str)], needs_robot=True)
-    class Approach(Leaf):
-        ...
+A node type is a class declared with one of the decorators of :mod:`bt_grasp.nodes` (``@action``,
+``@condition``, ``@control``, ``@decorator``: the declaration is its manifest, as BT.CPP's
+``providedPorts()``) and registered with ``registry.register(MyNode)`` (BT.CPP's ``registerNodeType<T>``);
+a simple leaf is a function and a port list (``registry.register_simple_action``). bt_grasp's own nodes are
+declared and registered exactly so. :class:`NodeSpec` and :class:`PortSpec` are the registry's records of
+those declarations; nobody writes them by hand.
 
 Node types come only from a registry, never from dotted paths or ``eval`` of tree-file text. There is no
 process-global registry: every caller builds (or copies) its own.
@@ -14,41 +13,39 @@ process-global registry: every caller builds (or copies) its own.
 
 from __future__ import annotations
 
-import enum
-from collections.abc import Callable, Iterable, Mapping
+import contextlib
+import dataclasses
+import functools
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, Final
 
 from bt_grasp.errors import closest_names
-from bt_grasp.tree.exceptions import DeclarationError
+from bt_grasp.tree.exceptions import DeclarationError, TreeRuntimeError
+from bt_grasp.tree.kinds import NodeKind, PortDirection
+from bt_grasp.tree.leaf_node import SimpleLeaf, SimpleTick
 from bt_grasp.tree.reasons import Reason, ReasonLike, reason_name
+from bt_grasp.tree.values import convert_text
 
 if TYPE_CHECKING:
-    import py_trees
-
     from bt_grasp.tree.context import NodeContext
+    from bt_grasp.tree.node import BtNode
 
-
-class PortDirection(enum.Enum):
-    """Which way a port moves data between a node and its blackboard (BT.CPP ``PortDirection``)."""
-
-    INPUT = "input"
-    OUTPUT = "output"
-    INOUT = "inout"
-
-
-class NodeKind(enum.Enum):
-    """The BT.CPP node category; the value is the explicit XML tag (``<Action ID=...>``)."""
-
-    ACTION = "Action"
-    CONDITION = "Condition"
-    CONTROL = "Control"
-    DECORATOR = "Decorator"
-    SUBTREE = "SubTree"
+__all__ = [
+    "NO_DEFAULT",
+    "RESERVED_ATTRIBUTES",
+    "NodeKind",
+    "NodeRegistry",
+    "NodeSpec",
+    "PortDirection",
+    "PortSpec",
+    "is_text_port_type",
+    "model_type_name",
+]
 
 
 class _NoDefault:
-    """Marker type of :data:`NO_DEFAULT`: the port has no default and must be given in the tree file."""
+    """Marker type of :data:`NO_DEFAULT`: the port has no default (BT.CPP's port declared without one)."""
 
     _instance: _NoDefault | None = None
 
@@ -61,17 +58,28 @@ class _NoDefault:
         return "NO_DEFAULT"
 
 
-NO_DEFAULT: Any = _NoDefault()
+#: the default of a port declared without one
+NO_DEFAULT: Final = _NoDefault()
 
-#: the Python types a port may carry; ``object`` means "any blackboard value"
-PORT_TYPES: tuple[type, ...] = (str, int, float, bool, object)
+#: the Python types a literal in a tree file converts to without help; ``object`` means "any value, as text"
+TEXT_TYPES: tuple[type, ...] = (str, int, float, bool, object)
+#: the C++ names Groot2 and BT.CPP print for bt_grasp's scalar port types (``tree models``, warnings)
+_GROOT_NAMES: dict[type, str] = {int: "int", float: "double", bool: "bool", str: "std::string"}
 
 
 def is_text_port_type(kind: type) -> bool:
-    """An application type a port may carry besides PORT_TYPES (BT.CPP's ``convertFromString<T>``): a class
-    with a classmethod ``from_port_text(text) -> instance`` that raises ValueError with one sentence on
-    malformed text (e.g. ``bt_grasp.behaviours.pose.Pose`` for ``"0.35;-0.25;0.0;90"``)."""
+    """An application type a literal can be written as (BT.CPP's ``convertFromString<T>``): a class with a
+    classmethod ``from_port_text(text) -> instance`` that raises ValueError with one sentence on malformed
+    text (e.g. ``bt_grasp.behaviours.pose.Pose`` for ``"0.35;-0.25;0.0;90"``)."""
     return callable(getattr(kind, "from_port_text", None))
+
+
+def model_type_name(kind: type) -> str | None:
+    """The type name Groot2's TreeNodesModel uses for a port type: ``int``, ``double``, ``bool``,
+    ``std::string``, an application class by its name (``Pose``); None for ``object`` (any value)."""
+    if kind is object:
+        return None
+    return _GROOT_NAMES.get(kind, kind.__name__)
 
 
 #: attribute names a port may not use (BT.CPP reserves the same ones)
@@ -82,28 +90,40 @@ RESERVED_ATTRIBUTES: frozenset[str] = frozenset(
 )
 
 
+def _is_reference(text: str) -> bool:
+    stripped = text.strip()
+    return stripped in ("{=}", "=") or (len(stripped) >= 3 and stripped[0] == "{" and stripped[-1] == "}") or (
+        stripped.startswith("${") and stripped.endswith("}"))
+
+
 @dataclass(frozen=True)
 class PortSpec:
-    """One port of a node type.
+    """One port of a node type, as :func:`bt_grasp.nodes.input_port` (and ``output_port``, ``inout_port``)
+    declare it.
 
     Attributes:
         name: the XML attribute name (``target``)
         direction: INPUT, OUTPUT or INOUT
-        type: ``str``, ``int``, ``float``, ``bool`` or ``object`` (any blackboard value, not checked)
-        default: used when the tree file does not give the port; :data:`NO_DEFAULT` makes the port required.
-            A string default may be a blackboard reference such as ``"{target}"``.
+        type: the value's type: ``str``, ``int``, ``float``, ``bool``, ``object`` (any value) or an application
+            class; a literal in a tree file must convert to it (a class with ``from_port_text``), any class may
+            travel through the blackboard
+        default: used when the tree file does not give the port (a blackboard reference such as ``"{target}"``
+            or a literal); :data:`NO_DEFAULT`: none, the port has no value until the tree gives it one
         description: one sentence shown by ``bt-grasp tree show`` and written to TreeNodesModel
         choices: when not empty, the only literal values the port accepts (``else`` of Precondition)
         reason: the port names a failure reason: a literal must be one the registry knows (``FailureIs``)
+        required: bt_grasp's stricter choice for an input: a tree that leaves the port out is refused at load
+            (BT.CPP would fail at the first tick, when the node reads it)
     """
 
     name: str
     direction: PortDirection
     type: type = str
-    default: Any = NO_DEFAULT
+    default: object = NO_DEFAULT
     description: str = ""
     choices: tuple[str, ...] = ()
     reason: bool = False
+    required: bool = False
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name or not self.name[0].isalpha():
@@ -112,17 +132,52 @@ class PortSpec:
             raise DeclarationError(f"port name {self.name!r} is reserved or not letters, digits and underscores")
         if not isinstance(self.direction, PortDirection):
             raise DeclarationError(f"port {self.name!r}: direction must be a PortDirection, got {self.direction!r}")
-        if not isinstance(self.type, type) or (self.type not in PORT_TYPES and not is_text_port_type(self.type)):
-            raise DeclarationError(
-                f"port {self.name!r}: type must be one of str, int, float, bool, object, or a class with from_port_text"
-            )
+        if not isinstance(self.type, type):
+            raise DeclarationError(f"port {self.name!r}: type must be a class (str, int, float, bool, object or "
+                                   f"your own), got {self.type!r}")
+        if self.default is None:
+            raise DeclarationError(f"port {self.name!r}: default=None: leave the default out (a port declared "
+                                   "without one is optional, as in BT.CPP; ports.get() returns None while unset)")
+        if self.required and (self.direction is PortDirection.OUTPUT or self.default is not NO_DEFAULT):
+            raise DeclarationError(f"port {self.name!r}: required=True is for an input port with no default")
+        if isinstance(self.default, str):
+            self._check_default(self.default)
+
+    def _check_default(self, text: str) -> None:
+        """A default written as text must convert to the port's type now, not when a tree uses it."""
+        if _is_reference(text):
+            return
+        if self.direction is PortDirection.OUTPUT:
+            raise DeclarationError(f"output port {self.name!r}: the default must be a blackboard reference such as "
+                                   f"'{{{self.name}}}', got {text!r}")
+        if not self.text_type:
+            raise DeclarationError(f"port {self.name!r}: the default {text!r} is text, but a {self.type.__name__} "
+                                   "cannot be read from text (give it from_port_text, or a default such as "
+                                   f"'{{{self.name}}}')")
+        try:
+            value = convert_text(text, self.type)
+        except TreeRuntimeError as exc:
+            raise DeclarationError(f"port {self.name!r}: the default {text!r} is not a {self.type_label} "
+                                   f"({exc})") from None
+        if self.choices and value not in self.choices:
+            raise DeclarationError(f"port {self.name!r}: the default {text!r} is not one of {', '.join(self.choices)}")
 
     @property
-    def required(self) -> bool:
-        return self.default is NO_DEFAULT
+    def text_type(self) -> bool:
+        """A literal written in a tree file converts to the port's type."""
+        return self.type in TEXT_TYPES or is_text_port_type(self.type)
+
+    @property
+    def type_label(self) -> str:
+        """The type as Groot2 names it (``double``, ``std::string``, ``Pose``); ``any value`` for ``object``."""
+        return model_type_name(self.type) or "any value"
+
+    @property
+    def has_default(self) -> bool:
+        return self.default is not NO_DEFAULT
 
 
-Factory = Callable[["NodeContext"], "py_trees.behaviour.Behaviour"]
+Factory = Callable[["NodeContext"], "BtNode"]
 
 _DEFAULT_CHILDREN: dict[NodeKind, tuple[int, int | None]] = {
     NodeKind.ACTION: (0, 0),
@@ -135,19 +190,20 @@ _DEFAULT_CHILDREN: dict[NodeKind, tuple[int, int | None]] = {
 
 @dataclass(frozen=True)
 class NodeSpec:
-    """A registered node type.
+    """A registered node type: what its declaration says (BT.CPP's ``TreeNodeManifest``).
 
     Attributes:
         name: the registration ID used in tree files (``RetryUntilSuccessful``)
         kind: ACTION, CONDITION, CONTROL, DECORATOR or SUBTREE
         ports: the ports the node accepts; any other attribute in a tree file is a load error
-        factory: ``factory(ctx)`` returns the py_trees behaviour (a :class:`bt_grasp.tree.node.BtNode`)
+        factory: ``factory(ctx)`` returns the node (a :class:`bt_grasp.tree.node.BtNode`)
         description: one sentence for ``tree show`` and TreeNodesModel
-        needs_robot: the node talks to the robot or camera; ``tree run --dry`` requires it substituted
+        needs_robot: the node talks to the robot or camera; ``tree run --dry`` replaces it by a stand-in
         children: ``(min, max)`` number of children, ``max`` None for unbounded; defaults from ``kind``
-        failure_reasons: the names of the reasons the leaf may fail with (its own and those of the jobs it runs),
-            each registered in the registry it goes into; a dry run's stand-in fails with them
-            (``tree run --dry --outcome``, ``--random``)
+        failure_reasons: the names of the reasons the leaf may fail with (its own and those of the jobs it runs);
+            a dry run's stand-in fails with them (``tree run --dry --outcome``, ``--random``)
+        declared_reasons: the :class:`Reason` values the declaration named (registered with the node when the
+            registry does not know them yet)
     """
 
     name: str
@@ -158,6 +214,7 @@ class NodeSpec:
     needs_robot: bool = False
     children: tuple[int, int | None] | None = None
     failure_reasons: tuple[str, ...] = ()
+    declared_reasons: tuple[Reason, ...] = ()
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name or not self.name.replace("_", "a").isalnum():
@@ -169,7 +226,8 @@ class NodeSpec:
         object.__setattr__(self, "ports", tuple(self.ports))
         for port in self.ports:
             if not isinstance(port, PortSpec):
-                raise DeclarationError(f"node {self.name!r}: a port must be a PortSpec, got {port!r}")
+                raise DeclarationError(f"node {self.name!r}: a port must come from input_port, output_port or "
+                                       f"inout_port, got {port!r}")
         names = [p.name for p in self.ports]
         if len(set(names)) != len(names):
             raise DeclarationError(f"node {self.name!r} declares a port twice: {names}")
@@ -195,39 +253,130 @@ class NodeSpec:
         return self.children[1]
 
 
-class NodeRegistry:
-    """Node types by registration ID, and the failure reasons leaves may report. A duplicate name raises
-    :class:`DeclarationError` (a ``ValueError``)."""
+def declared_spec(node_class: object) -> NodeSpec:
+    """The manifest a node class's declaration (``@action`` ...) stored on it; DeclarationError when the class
+    itself was not declared (a subclass of a declared node is a new node type: declare it too)."""
+    spec = node_class.__dict__.get("bt_spec") if isinstance(node_class, type) else None
+    if isinstance(spec, NodeSpec):
+        return spec
+    if isinstance(node_class, NodeSpec):
+        cls = node_class.factory
+        name = cls.__name__ if isinstance(cls, type) else node_class.name
+        raise DeclarationError(f"register() takes the node class, not its spec: registry.register({name}) (BT.CPP's "
+                               "registerNodeType<T>)")
+    if not isinstance(node_class, type):
+        raise DeclarationError(f"register() takes a node class declared with @action(...), @condition(...), "
+                               f"@control(...) or @decorator(...) (BT.CPP's registerNodeType<T>), got {node_class!r}")
+    raise DeclarationError(f"{node_class.__name__} is not declared: decorate the class with @action(...), "
+                           "@condition(...), @control(...) or @decorator(...) from bt_grasp.nodes (its manifest, as "
+                           "BT.CPP's providedPorts)")
 
-    def __init__(
-        self, specs: Iterable[NodeSpec] = (), enums: Mapping[str, int] | None = None, reasons: Iterable[Reason] = ()
-    ) -> None:
+
+def _with_arguments(node_class: Callable[..., BtNode], args: tuple[object, ...]) -> Factory:
+    """A factory passing ``args`` after the context: ``node_class(ctx, *args)``."""
+
+    def build(ctx: NodeContext) -> BtNode:
+        return node_class(ctx, *args)
+
+    build.__name__ = getattr(node_class, "__name__", "build")
+    return build
+
+
+#: who registered a node or reason that came with bt_grasp itself
+BT_GRASP = "bt_grasp"
+
+
+class NodeRegistry:
+    """Node types by registration ID, and the failure reasons leaves may report (BT.CPP's
+    ``BehaviorTreeFactory``). A name registered twice raises :class:`DeclarationError` (a ``ValueError``)
+    saying who registered it first."""
+
+    def __init__(self, enums: Mapping[str, int] | None = None, reasons: Iterable[Reason] = ()) -> None:
         self._specs: dict[str, NodeSpec] = {}
         #: scripting enums (BT.CPP ``registerScriptingEnum``): identifiers scripts read as integers
         self.enums: dict[str, int] = dict(enums or {})
         self._reasons: dict[str, Reason] = {}
-        #: who registered each node that did not come with bt_grasp (node name -> plugin file or distribution)
+        #: who registered each node that did not come with bt_grasp (node name -> plugin file or entry point)
         self.origins: dict[str, str] = {}
         #: the same for failure reasons (reason name -> plugin)
         self.reason_origins: dict[str, str] = {}
+        self._origin: str | None = None
         for reason in reasons:
             self.register_reason(reason)
-        for spec in specs:
-            self.register(spec)
 
-    def register(self, spec: NodeSpec) -> NodeSpec:
-        if not isinstance(spec, NodeSpec):
-            raise DeclarationError(f"register() takes a NodeSpec (e.g. MyLeaf.bt_spec), got {spec!r}")
+    # ---- registering --------------------------------------------------------------------------------
+    @contextlib.contextmanager
+    def registering(self, origin: str) -> Iterator[NodeRegistry]:
+        """What is registered inside the block is ``origin``'s (a plugin's file or entry point): named as its
+        origin in ``tree models --only-plugins`` and in the error when another plugin registers the same name."""
+        previous, self._origin = self._origin, origin
+        try:
+            yield self
+        finally:
+            self._origin = previous
+
+    def origin(self, name: str) -> str:
+        """Who registered the node ``name``: a plugin's file or entry point, else bt_grasp."""
+        return self.origins.get(name, BT_GRASP)
+
+    def register(self, node_class: type[BtNode], name: str | None = None, *, args: tuple[object, ...] = ()) -> NodeSpec:
+        """Register a declared node class (BT.CPP's ``registerNodeType<T>(name, args...)``): under its declared
+        name, or ``name``; ``args`` are passed to its constructor after the context (``MyNode(ctx, *args)``).
+        The reasons its declaration names are registered with it when the registry does not know them yet."""
+        spec = declared_spec(node_class)
+        if name is not None and name != spec.name:
+            spec = dataclasses.replace(spec, name=name)
+        if args:
+            spec = dataclasses.replace(spec, factory=_with_arguments(node_class, args))
+        return self._add(spec)
+
+    def register_simple_action(
+        self, name: str, tick: SimpleTick, ports: Iterable[PortSpec] = (), *, reasons: Iterable[ReasonLike] = (),
+        description: str = "", needs_robot: bool = False,
+    ) -> NodeSpec:
+        """An action from a function (BT.CPP's ``registerSimpleAction``): ``tick(node) -> Status`` runs at every
+        tick; ``node`` is a :class:`bt_grasp.nodes.Leaf` (``node.ports``, ``node.blackboard``, ``node.fail``).
+        As BT.CPP's SimpleActionNode it is synchronous: returning RUNNING stops the run (exit 2)."""
+        return self._simple(name, NodeKind.ACTION, tick, ports, reasons, description, needs_robot)
+
+    def register_simple_condition(
+        self, name: str, tick: SimpleTick, ports: Iterable[PortSpec] = (), *, reasons: Iterable[ReasonLike] = (),
+        description: str = "", needs_robot: bool = False,
+    ) -> NodeSpec:
+        """A condition from a function (BT.CPP's ``registerSimpleCondition``), as :meth:`register_simple_action`."""
+        return self._simple(name, NodeKind.CONDITION, tick, ports, reasons, description, needs_robot)
+
+    def _simple(self, name: str, kind: NodeKind, tick: SimpleTick, ports: Iterable[PortSpec],
+                reasons: Iterable[ReasonLike], description: str, needs_robot: bool) -> NodeSpec:
+        if not callable(tick):
+            raise DeclarationError(f"node {name!r}: the tick function {tick!r} is not callable")
+        reasons = tuple(reasons)
+        doc = (getattr(tick, "__doc__", None) or "").strip().splitlines()
+        spec = NodeSpec(
+            name, kind, tuple(ports), functools.partial(SimpleLeaf, tick=tick, synchronous=kind is NodeKind.ACTION),
+            description or (doc[0] if doc else ""), needs_robot, failure_reasons=tuple(reason_name(r) for r in reasons),
+            declared_reasons=tuple(r for r in reasons if isinstance(r, Reason)),
+        )
+        return self._add(spec)
+
+    def _add(self, spec: NodeSpec) -> NodeSpec:
         if spec.name in self._specs:
-            raise DeclarationError(f"a node named {spec.name!r} is already registered (to replace it, call "
-                                   f"registry.unregister({spec.name!r}) first)")
+            raise DeclarationError(f"a node named {spec.name!r} is already registered by {self.origin(spec.name)} "
+                                   f"(to replace it, call registry.unregister({spec.name!r}) first)")
         if spec.factory is None or not callable(spec.factory):
             raise DeclarationError(f"node {spec.name!r} has no factory")
+        for declared in spec.declared_reasons:
+            known = self._reasons.get(declared.name)
+            if known is None:
+                self.register_reason(declared)
         for reason in spec.failure_reasons:
             if reason not in self._reasons:
                 raise DeclarationError(f"node {spec.name!r} declares the failure reason {reason!r}, which is not "
-                                       "registered (registry.register_reason(...) before registry.register(...))")
+                                       "registered (declare it as a Reason(...) value, or "
+                                       "registry.register_reason(...) before registry.register(...))")
         self._specs[spec.name] = spec
+        if self._origin is not None:
+            self.origins[spec.name] = self._origin
         return spec
 
     def unregister(self, name: str) -> bool:
@@ -239,24 +388,29 @@ class NodeRegistry:
 
     def register_reason(self, reason: Reason | str, description: str = "") -> Reason:
         """Declare a failure reason leaves may report and ``FailureIs`` may test; a name registered twice
-        raises (the built-in ones included)."""
+        raises, saying who registered it first (the built-in ones are bt_grasp's)."""
         value = reason if isinstance(reason, Reason) else Reason(reason, description)
         if value.name in self._reasons:
-            raise DeclarationError(f"a failure reason named {value.name!r} is already registered")
+            first = self.reason_origins.get(value.name, BT_GRASP)
+            raise DeclarationError(f"a failure reason named {value.name!r} is already registered by {first}")
         self._reasons[value.name] = value
+        if self._origin is not None:
+            self.reason_origins[value.name] = self._origin
         return value
 
+    def register_enums(self, values: Mapping[str, int]) -> None:
+        """Scripting enums (BT.CPP's ``registerScriptingEnum``): names scripts read as integers."""
+        for key, value in values.items():
+            if key in self.enums and self.enums[key] != value:
+                raise DeclarationError(f"scripting enum {key!r} is already registered with value {self.enums[key]}")
+            self.enums[key] = int(value)
+
+    # ---- reading ------------------------------------------------------------------------------------
     def reason(self, name: str) -> Reason | None:
         return self._reasons.get(name)
 
     def reasons(self) -> tuple[Reason, ...]:
         return tuple(self._reasons[n] for n in sorted(self._reasons))
-
-    def register_enums(self, values: Mapping[str, int]) -> None:
-        for key, value in values.items():
-            if key in self.enums and self.enums[key] != value:
-                raise ValueError(f"scripting enum {key!r} is already registered with value {self.enums[key]}")
-            self.enums[key] = int(value)
 
     def get(self, name: str) -> NodeSpec | None:
         return self._specs.get(name)
@@ -280,47 +434,15 @@ class NodeRegistry:
         """Known names closest to ``name`` (for "did you mean ...?"), best first."""
         return closest_names(name, list(self._specs), n)
 
-    def copy(self) -> NodeRegistry:
-        twin = NodeRegistry(self._specs.values(), self.enums, self._reasons.values())
+    def with_specs(self, specs: Iterable[NodeSpec]) -> NodeRegistry:
+        """A registry with the same enums, reasons and origins holding ``specs`` (the same node types built
+        another way: a dry run's stand-ins)."""
+        twin = NodeRegistry(self.enums, self._reasons.values())
         twin.origins = dict(self.origins)
         twin.reason_origins = dict(self.reason_origins)
+        for spec in specs:
+            twin._specs[spec.name] = spec
         return twin
 
-
-T = TypeVar("T")
-
-
-def leaf(
-    registry: NodeRegistry | None,
-    *,
-    name: str | None = None,
-    kind: NodeKind = NodeKind.ACTION,
-    ports: Iterable[PortSpec] = (),
-    needs_robot: bool = False,
-    description: str | None = None,
-    reasons: Iterable[ReasonLike] = (),
-) -> Callable[[T], T]:
-    """Class decorator: describe a :class:`bt_grasp.tree.leaf.Leaf` subclass as a node type (``reasons``: the
-    failure reasons it may report, see :attr:`NodeSpec.failure_reasons`).
-
-    The spec is stored on the class as ``bt_spec``; with a registry it is also registered there. With
-    ``None`` the caller registers later: ``registry.register(Approach.bt_spec)``.
-    """
-
-    def decorate(cls: T) -> T:
-        doc = (getattr(cls, "__doc__", None) or "").strip().splitlines()
-        spec = NodeSpec(
-            name=name or cls.__name__,  # type: ignore[attr-defined]
-            kind=kind,
-            ports=tuple(ports),
-            factory=cls,  # type: ignore[arg-type]
-            description=description if description is not None else (doc[0] if doc else ""),
-            needs_robot=needs_robot,
-            failure_reasons=tuple(reason_name(r) for r in reasons),
-        )
-        cls.bt_spec = spec  # type: ignore[attr-defined]
-        if registry is not None:
-            registry.register(spec)
-        return cls
-
-    return decorate
+    def copy(self) -> NodeRegistry:
+        return self.with_specs(self._specs.values())

@@ -53,8 +53,8 @@ def rich_tree(root: BtNode, *, with_status: bool = False) -> rich.tree.Tree:
         if with_status:
             text += f" [bold]{bt_status_name(node)}[/]"
         branch = rich.tree.Tree(text) if parent is None else parent.add(text)
-        for child in node.children:
-            add(child, branch)  # type: ignore[arg-type]
+        for child in node.bt_children():
+            add(child, branch)
         return branch
 
     return add(root, None)
@@ -97,9 +97,9 @@ def to_dot(root: BtNode, title: str = "tree", *, with_status: bool = False) -> s
             fill = STATUS_FILL.get(status, fill)
         label = '"' + "\\n".join(_quote(part)[1:-1] for part in parts) + '"'
         lines.append(f'  n{node.bt_uid} [label={label}, shape={_SHAPE[node.bt_kind]}, fillcolor="{fill}"];')
-        for child in node.children:
-            lines.append(f"  n{node.bt_uid} -> n{child.bt_uid};")  # type: ignore[attr-defined]
-            add(child)  # type: ignore[arg-type]
+        for child in node.bt_children():
+            lines.append(f"  n{node.bt_uid} -> n{child.bt_uid};")
+            add(child)
 
     add(root)
     legend = STATUS_FILL if with_status else {kind.value: fill for kind, fill in KIND_FILL.items()}

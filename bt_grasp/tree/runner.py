@@ -18,7 +18,7 @@ import time
 from collections import Counter
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Protocol, TypedDict
 
 from bt_grasp.interfaces import Stepper
 from bt_grasp.tree.introspect import bt_status_name
@@ -36,13 +36,20 @@ class TickRecorder(Protocol):
         tick: int,
         stamp_ns: int,
         nodes: Sequence[NodeRecord],
-        blackboard: Mapping[str, Any],
-        robot: Mapping[str, Any] | None = None,
+        blackboard: Mapping[str, object],
+        robot: Mapping[str, object] | None = None,
     ) -> None: ...
 
-    def write_event(self, stamp_ns: int, kind: str, payload: Mapping[str, Any]) -> None: ...
+    def write_event(self, stamp_ns: int, kind: str, payload: Mapping[str, object]) -> None: ...
 
     def flush_tick(self) -> None: ...
+
+
+class TickStatuses(TypedDict):
+    """One tick of :attr:`TreeRunner.stream`: every node's status as recorded, by path."""
+
+    tick: int
+    status: dict[str, str]
 
 
 class TickGate(Protocol):
@@ -105,7 +112,7 @@ class TreeRunner:
         *,
         steps_per_tick: int,
         recorder: TickRecorder | None = None,
-        robot_state: Callable[[], Mapping[str, Any]] | None = None,
+        robot_state: Callable[[], Mapping[str, object]] | None = None,
         on_tick: Callable[[int, LoadedTree], None] | None = None,
         gate: TickGate | None = None,
         on_failure: Callable[[FailureEvent], None] | None = None,
@@ -125,7 +132,7 @@ class TreeRunner:
         #: every node in uid order, walked once: a tree's structure does not change while it runs
         self._nodes = sorted(tree.nodes(), key=lambda n: n.bt_uid)
         #: per tick, every node's status as recorded (path -> status), for comparing runs
-        self.stream: list[dict[str, Any]] = []
+        self.stream: list[TickStatuses] = []
 
     def run(self, max_ticks: int) -> RunOutcome:
         start_ns = self.stepper.now_ns()

@@ -19,11 +19,10 @@ import functools
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from py_trees.common import Status
-
 from bt_grasp.errors import InputError
 from bt_grasp.tree.context import NodeContext
-from bt_grasp.tree.leaf import Leaf
+from bt_grasp.tree.leaf_node import Leaf
+from bt_grasp.tree.node import BtStatus
 from bt_grasp.tree.registry import NodeKind, NodeRegistry, NodeSpec
 
 _LEAF_KINDS = (NodeKind.ACTION, NodeKind.CONDITION)
@@ -37,7 +36,7 @@ class TestBehaviour:
     __test__ = False  # not a pytest test class
 
     running_ticks: int = 0
-    result: Status = Status.SUCCESS
+    result: BtStatus = BtStatus.SUCCESS
     reason: str | None = None
 
 
@@ -54,11 +53,11 @@ class TestNode(Leaf):
     def initialise(self) -> None:
         self.ticks = 0
 
-    def update(self) -> Status:
+    def update(self) -> BtStatus:
         if self.ticks < self.behaviour.running_ticks:
             self.ticks += 1
-            return Status.RUNNING
-        if self.behaviour.result == Status.FAILURE and self.behaviour.reason:
+            return BtStatus.RUNNING
+        if self.behaviour.result == BtStatus.FAILURE and self.behaviour.reason:
             return self.fail(self.behaviour.reason, f"stand-in for {self.name} was told to fail")
         return self.behaviour.result
 
@@ -93,18 +92,18 @@ def parse_test_behaviour(text: str) -> TestBehaviour | None:
     parts = [p.strip() for p in text.split(":")]
     head = parts[0].lower()
     if head == "success" and len(parts) == 1:
-        return TestBehaviour(0, Status.SUCCESS)
+        return TestBehaviour(0, BtStatus.SUCCESS)
     if head == "failure" and len(parts) <= 2:
-        return TestBehaviour(0, Status.FAILURE, parts[1] if len(parts) == 2 and parts[1] else None)
+        return TestBehaviour(0, BtStatus.FAILURE, parts[1] if len(parts) == 2 and parts[1] else None)
     if head == "running" and 2 <= len(parts) <= 4 and parts[1].isdigit():
         ticks = int(parts[1])
         if len(parts) == 2:
-            return TestBehaviour(ticks, Status.SUCCESS)
+            return TestBehaviour(ticks, BtStatus.SUCCESS)
         final = parts[2].lower()
         if final == "success" and len(parts) == 3:
-            return TestBehaviour(ticks, Status.SUCCESS)
+            return TestBehaviour(ticks, BtStatus.SUCCESS)
         if final == "failure":
-            return TestBehaviour(ticks, Status.FAILURE, parts[3] if len(parts) == 4 and parts[3] else None)
+            return TestBehaviour(ticks, BtStatus.FAILURE, parts[3] if len(parts) == 4 and parts[3] else None)
     return None
 
 

@@ -11,12 +11,13 @@ from dataclasses import dataclass, field
 
 from bt_grasp.errors import TreeFileError, did_you_mean
 from bt_grasp.tree.builtins import REMOVED_V3_NAMES
-from bt_grasp.tree.exceptions import PortValueError, ScriptSyntaxError
+from bt_grasp.tree.exceptions import PortValueError, ScriptSyntaxError, TreeRuntimeError
 from bt_grasp.tree.formats.document import Document, ModelDecl, NodeDecl
 from bt_grasp.tree.node import POST_CONDITIONS, PRE_CONDITIONS, Conditions
-from bt_grasp.tree.ports import PortValue, blackboard_key, convert_text
-from bt_grasp.tree.registry import NodeKind, NodeRegistry, NodeSpec, PortDirection, PortSpec
+from bt_grasp.tree.ports import PortValue, blackboard_key
+from bt_grasp.tree.registry import NodeKind, NodeRegistry, NodeSpec, model_type_name
 from bt_grasp.tree.scripting import parse_script
+from bt_grasp.tree.values import convert_text as text_value
 
 logger = logging.getLogger(__name__)
 
@@ -108,11 +109,15 @@ def resolve_node(decl: NodeDecl, registry: NodeRegistry, document: Document) -> 
     for port in spec.ports:
         if port.name in ports:
             continue
-        if port.required and port.direction is PortDirection.OUTPUT:
-            continue  # BT.CPP: an output may stay unconnected (writing it then does nothing)
         if port.required:
-            raise decl.error(f"{spec.name} needs the port '{port.name}' ({port.description or port.type.__name__})")
-        ports[port.name] = PortValue.from_default(port)
+            raise decl.error(f"{spec.name} needs the port '{port.name}' ({port.description or port.type_label})")
+        if not port.has_default:
+            continue  # BT.CPP: an optional port; the node's ports.get() gives None
+        try:
+            ports[port.name] = PortValue.from_default(port)
+        except PortValueError as exc:  # a plugin's default its own type refuses
+            origin = registry.origin(spec.name)
+            raise decl.error(f"{spec.name} (from {origin}): the default of {exc}") from None
     name = decl.name if decl.name is not None else spec.name
     return ResolvedNode(spec, name, ports, parse_conditions(decl))
 
@@ -128,8 +133,8 @@ def resolve_subtree(decl: NodeDecl, document: Document, spec: NodeSpec) -> Resol
     for key, value in decl.attributes:
         if key == "_autoremap":
             try:
-                autoremap = bool(convert_text(value, PortSpec("autoremap", PortDirection.INPUT, bool)))
-            except PortValueError:
+                autoremap = bool(text_value(value, bool))
+            except TreeRuntimeError:
                 raise decl.error(f"_autoremap must be true or false, got {value!r}") from None
         elif key in SPECIAL_ATTRIBUTES or key in CONDITION_ATTRIBUTES:
             continue
@@ -188,10 +193,13 @@ def _model_problems(model: ModelDecl, spec: NodeSpec) -> list[tuple[int, str]]:
             says = f"the model says {mport.direction}"
             problems.append((line, f"port '{mport.name}' of {spec.name} is {port.direction.value}, {says}"))
             continue
-        wanted = _MODEL_TYPES.get((mport.type_name or "").strip())
-        if wanted is not None and port.type is not object and wanted is not port.type:
-            says = f"the model says {mport.type_name}"
-            problems.append((line, f"port '{mport.name}' of {spec.name} has type {port.type.__name__}, {says}"))
+        said = (mport.type_name or "").strip()
+        wanted = _MODEL_TYPES.get(said)
+        ours = model_type_name(port.type)
+        scalar = port.type in _MODEL_TYPES.values()
+        if ours is not None and said and ((wanted is not None and wanted is not port.type) or (
+                wanted is None and not scalar and said.rsplit("::", 1)[-1] != ours)):
+            problems.append((line, f"port '{mport.name}' of {spec.name} has type {ours}, the model says {said}"))
     return problems
 
 

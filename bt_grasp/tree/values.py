@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Mapping
-from typing import Any
+from typing import TypeGuard
 
 from bt_grasp.tree.exceptions import TreeRuntimeError
 
@@ -32,16 +32,16 @@ _MAX_EXACT = 2**53 - 1
 SCALAR_TYPES: tuple[type, ...] = (bool, int, float, str)
 
 
-def is_scalar(value: Any) -> bool:
+def is_scalar(value: object) -> TypeGuard[bool | int | float | str]:
     return isinstance(value, bool | int | float | str)
 
 
-def is_number(value: Any) -> bool:
+def is_number(value: object) -> TypeGuard[int | float]:
     """``Any::isNumber``: integers, reals and bools (a bool is an integer underneath)."""
     return isinstance(value, int | float)
 
 
-def type_name(value: Any) -> str:
+def type_name(value: object) -> str:
     """The C++ type name BT.CPP would print in an error message."""
     if isinstance(value, bool):
         return "bool"
@@ -54,7 +54,7 @@ def type_name(value: Any) -> str:
     return type(value).__name__
 
 
-def to_text(value: Any) -> str:
+def to_text(value: object) -> str:
     """``Any::cast<std::string>``: how BT.CPP turns a value into text (``..``, string ports, dumps)."""
     if isinstance(value, str):
         return value
@@ -71,7 +71,7 @@ def to_text(value: Any) -> str:
     return str(value)
 
 
-def display(value: Any) -> str:
+def display(value: object) -> str:
     """A value as a user reads it (blackboard dumps, replay text): BT.CPP's text for numbers (a real with six
     decimals, ``2.000000``), ``true``/``false`` for a bool (BT.CPP's ``toStr<bool>``), text as it is."""
     if isinstance(value, bool):
@@ -141,7 +141,7 @@ def real_prefix(text: str) -> tuple[float, str] | None:
     return value, text[match.end() :]
 
 
-def to_real(value: Any, enums: Mapping[str, int] | None = None) -> float:
+def to_real(value: object, enums: Mapping[str, int] | None = None) -> float:
     """A script operand as a real (``Any::cast<double>``; strings also read ``true``/``false``/enums,
     as ``StringToDouble`` does in comparisons)."""
     if is_number(value):
@@ -161,7 +161,7 @@ def to_real(value: Any, enums: Mapping[str, int] | None = None) -> float:
     raise TreeRuntimeError(f"[Any::convert]: no known safe conversion between [{type_name(value)}] and [double]")
 
 
-def to_int(value: Any) -> int:
+def to_int(value: object) -> int:
     """``Any::cast<int64_t>``: a real must have no fraction and fit; a string must be an integer."""
     if isinstance(value, int):
         return int(value)
@@ -177,7 +177,7 @@ def to_int(value: Any) -> int:
     raise TreeRuntimeError(f"[Any::convert]: no known safe conversion between [{type_name(value)}] and [int64_t]")
 
 
-def to_bool(value: Any) -> bool:
+def to_bool(value: object) -> bool:
     """``Any::cast<bool>``: a real is true when not zero, an integer must be 0 or 1, a string is refused."""
     if isinstance(value, bool):
         return value
@@ -197,7 +197,7 @@ def real_from_int(value: int) -> float:
     return float(value)
 
 
-def copy_into(value: Any, current: Any) -> Any:
+def copy_into(value: object, current: object) -> object:
     """``Any::copyInto``: ``value`` converted to the type ``current`` holds (raises when impossible)."""
     if isinstance(current, str) and isinstance(value, str):
         return value
@@ -215,7 +215,7 @@ def copy_into(value: Any, current: Any) -> Any:
     return value
 
 
-def convert_text(text: str, kind: type) -> Any:
+def convert_text(text: str, kind: type) -> object:
     """``convertFromString<T>`` for the scalar port types (``int``, ``float``, ``bool``, ``str``): a number is
     read from the start of the text and the rest ignored (``std::from_chars``; no leading space or ``+``), a
     bool is one of BT.CPP's seven spellings exactly."""
@@ -246,7 +246,7 @@ def convert_text(text: str, kind: type) -> Any:
     return text
 
 
-def cast_to(value: Any, kind: type) -> Any:
+def cast_to(value: object, kind: type) -> object:
     """A blackboard value read through a port of type ``kind`` (BT.CPP ``getInput<T>``)."""
     if kind is object:
         return value
@@ -266,7 +266,7 @@ def cast_to(value: Any, kind: type) -> Any:
     return real_from_int(value) if isinstance(value, int) and not isinstance(value, bool) else float(value)
 
 
-def literal_value(text: str) -> Any:
+def literal_value(text: str) -> int | float | str:
     """A literal written on a ``<SubTree>`` port: an integer, else a real, else the text (BT.CPP 4.10)."""
     if text and "." not in text and "e" not in text and "E" not in text:
         number = parse_int(text)

@@ -13,7 +13,7 @@ import pytest
 from behaviour_fakes import FakeRobot, fake_cell
 
 from bt_grasp.behaviours import robot_registry
-from bt_grasp.behaviours.library import ROBOT_LEAVES, check_tree_against_scene
+from bt_grasp.behaviours.library import check_tree_against_scene
 from bt_grasp.behaviours.pose import Pose
 from bt_grasp.clock import ManualClock
 from bt_grasp.perception.results import Detection, PerceptionResult, PerceptionStatus, ShapeClass
@@ -23,7 +23,7 @@ from bt_grasp.tree.loader import load_tree
 REPO = Path(__file__).resolve().parents[2]
 TREE = REPO / "trees" / "clear_household.xml"
 #: every robot leaf a stand-in: RUNNING for 2 ticks, then SUCCESS (the object queries run for real)
-STAND_INS = {cls.bt_spec.name: "Running:2" for cls in ROBOT_LEAVES if cls.bt_spec.needs_robot}  # type: ignore[attr-defined]
+STAND_INS = {spec.name: "Running:2" for spec in robot_registry(installed=False).specs() if spec.needs_robot}
 
 
 def _det(x: float, y: float, shape_class: ShapeClass) -> Detection:

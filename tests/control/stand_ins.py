@@ -19,14 +19,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from py_trees.common import Status
-
 from bt_grasp.clock import ManualClock
 from bt_grasp.control import Controller
+from bt_grasp.nodes import Leaf, Status, action, input_port, output_port
 from bt_grasp.tree.builtins import builtin_registry
-from bt_grasp.tree.leaf import Leaf
 from bt_grasp.tree.loader import LoadedTree, load_tree_from_string
-from bt_grasp.tree.registry import PortDirection, PortSpec, leaf
 from bt_grasp.tree.runner import RunOutcome, TickGate, TreeRunner
 
 STEP_NS = 10_000_000  # 10 ms a tick
@@ -55,9 +52,9 @@ class Stepper:
 def _registry() -> Any:
     registry = builtin_registry()
 
-    @leaf(registry, name="See", ports=[
-        PortSpec("objects", PortDirection.OUTPUT, object, "{objects}", "every object"),
-        PortSpec("target", PortDirection.OUTPUT, object, "{target}", "the first one"),
+    @action(ports=[
+        output_port("objects", object, "every object", default="{objects}"),
+        output_port("target", object, "the first one", default="{target}"),
     ])
     class See(Leaf):
         def update(self) -> Status:
@@ -66,7 +63,7 @@ def _registry() -> Any:
             self.ports.set("target", objects[0])
             return Status.SUCCESS
 
-    @leaf(registry, name="Check", ports=[PortSpec("height", PortDirection.INPUT, float, "{height}", "m")])
+    @action(ports=[input_port("height", float, "{height}", "m")])
     class Check(Leaf):
         def setup(self, **kwargs: Any) -> None:
             self.calls = 0
@@ -75,15 +72,15 @@ def _registry() -> Any:
             self.calls += 1
             if self.calls == 1:
                 return self.fail("FLAKY", "the first check always fails")
-            if self.ports.get("height") < 0.05:
+            if self.ports.require("height", float) < 0.05:
                 return self.fail("TOO_LOW", "the height is under 5 cm")
             return Status.SUCCESS
 
-    @leaf(registry, name="Move", ports=[
-        PortSpec("target", PortDirection.INPUT, object, "{target}", "what to move"),
-        PortSpec("height", PortDirection.INPUT, float, "{height}", "m"),
-        PortSpec("mode", PortDirection.INPUT, str, "{mode}", "how", ("fast", "slow")),
-        PortSpec("done", PortDirection.OUTPUT, object, "{moved}", "the label moved"),
+    @action(ports=[
+        input_port("target", object, "{target}", "what to move"),
+        input_port("height", float, "{height}", "m"),
+        input_port("mode", str, "{mode}", "how", choices=("fast", "slow")),
+        output_port("done", object, "the label moved", default="{moved}"),
     ])
     class Move(Leaf):
         def initialise(self) -> None:
@@ -91,11 +88,14 @@ def _registry() -> Any:
 
         def update(self) -> Status:
             self.ticks += 1
-            if self.ticks < round(self.ports.get("height") * 100):
+            if self.ticks < round(self.ports.require("height", float) * 100):
                 return Status.RUNNING
-            self.ports.set("done", self.ports.get("target").label)
+            self.ports.set("done", self.ports.require("target").label)
             return Status.SUCCESS
 
+    registry.register(See)
+    registry.register(Check)
+    registry.register(Move)
     return registry
 
 

@@ -61,8 +61,8 @@ def test_dry_run_with_the_plugin(tree_file: Path, capsys: pytest.CaptureFixture[
     out = json.loads(capsys.readouterr().out)
     assert code == 0
     assert out["status"] == "SUCCESS" and out["ticks"] == 4
-    assert out["blackboard"]["failure_reason"] == "WEIGHT_OUT_OF_RANGE"
-    assert out["blackboard"]["verdict"] == "rejected"
+    assert out["blackboard"]["verdict"] == "rejected"  # FailureIs matched WEIGHT_OUT_OF_RANGE
+    assert "failure_reason" not in out["blackboard"]  # the tree succeeded: the recovered failure is cleared
 
 
 def test_models_list_the_users_nodes(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -104,25 +104,39 @@ BAD_PLUGINS = {
     "no_register": (HEADER + GOOD_LEAF, None, "defines no register(registry) function (see docs/own-leaves.md)"),
     "duplicate_builtin": (
         HEADER + "@action(name='Sequence')\nclass Mine(Leaf):\n    pass\n"
-        "def register(registry: NodeRegistry) -> None:\n    registry.register(Mine.bt_spec)\n",
-        6, "bad declaration: a node named 'Sequence' is already registered "
+        "def register(registry: NodeRegistry) -> None:\n    registry.register(Mine)\n",
+        6, "bad declaration: a node named 'Sequence' is already registered by bt_grasp "
         "(to replace it, call registry.unregister('Sequence') first)"),
     "duplicate_robot_leaf": (
         HEADER + "@action(name='Perceive')\nclass Mine(Leaf):\n    pass\n"
-        "def register(registry: NodeRegistry) -> None:\n    registry.register(Mine.bt_spec)\n",
-        6, "bad declaration: a node named 'Perceive' is already registered "
+        "def register(registry: NodeRegistry) -> None:\n    registry.register(Mine)\n",
+        6, "bad declaration: a node named 'Perceive' is already registered by bt_grasp "
         "(to replace it, call registry.unregister('Perceive') first)"),
+    "old_register_of_a_spec": (
+        HEADER + "@action()\nclass Mine(Leaf):\n    pass\n"
+        "def register(registry: NodeRegistry) -> None:\n    registry.register(Mine.bt_spec)\n",
+        6, "bad declaration: register() takes the node class, not its spec: registry.register(Mine) (BT.CPP's "
+           "registerNodeType<T>)"),
+    "undeclared_class": (
+        HEADER + "class Mine(Leaf):\n    pass\n"
+        "def register(registry: NodeRegistry) -> None:\n    registry.register(Mine)\n",
+        5, "bad declaration: Mine is not declared: decorate the class with @action(...), @condition(...), "
+           "@control(...) or @decorator(...) from bt_grasp.nodes (its manifest, as BT.CPP's providedPorts)"),
     "duplicate_reason": (
         HEADER + "def register(registry: NodeRegistry) -> None:\n    registry.register_reason(Reason('SLIPPED'))\n",
-        3, "bad declaration: a failure reason named 'SLIPPED' is already registered"),
+        3, "bad declaration: a failure reason named 'SLIPPED' is already registered by bt_grasp"),
     "bad_reason_name": (
         HEADER + "def register(registry: NodeRegistry) -> None:\n    registry.register_reason('too heavy')\n",
         3, "bad declaration: failure reason 'too heavy' must be upper-case letters, digits and underscores, "
            "starting with a letter (at most 64 characters)"),
     "bad_port_type": (
-        HEADER + "@action(ports=[input_port('items', list)])\nclass Mine(Leaf):\n    pass\n",
-        2, "bad declaration: port 'items': type must be one of str, int, float, bool, object, or a class with "
-           "from_port_text"),
+        HEADER + "@action(ports=[input_port('items', 'list')])\nclass Mine(Leaf):\n    pass\n",
+        2, "bad declaration: port 'items': type must be a class (str, int, float, bool, object or your own), got "
+           "'list'"),
+    "default_none": (
+        HEADER + "@action(ports=[input_port('start', float, None)])\nclass Mine(Leaf):\n    pass\n",
+        2, "bad declaration: port 'start': default=None: leave the default out (a port declared without one is "
+           "optional, as in BT.CPP; ports.get() returns None while unset)"),
     "reserved_port": (
         HEADER + "@action(ports=[input_port('name')])\nclass Mine(Leaf):\n    pass\n",
         2, "bad declaration: port name 'name' is reserved or not letters, digits and underscores"),
@@ -138,7 +152,8 @@ BAD_PLUGINS = {
         3, "register() failed: KeyError: 'x'"),
     "not_a_spec": (
         HEADER + "def register(registry: NodeRegistry) -> None:\n    registry.register('Beep')\n",
-        3, "bad declaration: register() takes a NodeSpec (e.g. MyLeaf.bt_spec), got 'Beep'"),
+        3, "bad declaration: register() takes a node class declared with @action(...), @condition(...), "
+           "@control(...) or @decorator(...) (BT.CPP's registerNodeType<T>), got 'Beep'"),
 }
 
 
@@ -158,7 +173,8 @@ def test_the_same_plugin_twice_names_the_duplicate(tree_file: Path, capsys: pyte
     assert main(["tree", "validate", "--leaves", str(PLUGIN), "--leaves", str(PLUGIN), str(tree_file)]) == 2
     line = PLUGIN.read_text().splitlines().index("    registry.register_reason(WEIGHT_OUT_OF_RANGE)") + 1
     assert _one_line_error(capsys) == (
-        f"{PLUGIN}:{line}: bad declaration: a failure reason named 'WEIGHT_OUT_OF_RANGE' is already registered"
+        f"{PLUGIN}:{line}: bad declaration: a failure reason named 'WEIGHT_OUT_OF_RANGE' is already registered by "
+        f"{PLUGIN}"
     )
 
 

@@ -3,10 +3,8 @@ the ``--leaves`` files, and a bad one named by its entry point and distribution 
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-from dataclasses import dataclass
 from pathlib import Path
-from types import ModuleType, SimpleNamespace
+from types import ModuleType
 from typing import Any
 
 import pytest
@@ -16,40 +14,9 @@ from bt_grasp.tree import plugins
 from bt_grasp.tree.builtins import builtin_registry
 from bt_grasp.tree.registry import NodeRegistry
 
+from .conftest import FakeEntryPoint
+
 PLUGIN = Path(__file__).parent / "data" / "user_nodes.py"
-
-
-@dataclass
-class FakeEntryPoint:
-    name: str
-    value: str
-    target: Any
-    dist_name: str
-
-    @property
-    def dist(self) -> SimpleNamespace:
-        return SimpleNamespace(name=self.dist_name)
-
-    def load(self) -> Any:
-        if isinstance(self.target, BaseException):
-            raise self.target
-        return self.target
-
-
-@pytest.fixture
-def installed(monkeypatch: pytest.MonkeyPatch) -> Iterator[list[FakeEntryPoint]]:
-    found: list[FakeEntryPoint] = []
-    groups: list[str] = []
-
-    def entry_points(group: str) -> list[FakeEntryPoint]:
-        groups.append(group)
-        return list(found)
-
-    monkeypatch.setattr(plugins, "entry_points", entry_points)
-    plugins.entry_point_plugins.cache_clear()
-    yield found
-    plugins.entry_point_plugins.cache_clear()
-    assert set(groups) <= {"bt_grasp.leaves"} and len(groups) <= 1  # discovered once per process
 
 
 def test_installed_plugins_register_in_a_fixed_order_before_leaves_files(installed: list[FakeEntryPoint]) -> None:
@@ -83,7 +50,7 @@ def test_an_entry_point_naming_a_module_uses_its_register(installed: list[FakeEn
         (ModuleNotFoundError("No module named 'pyzbar'", name="pyzbar"),
          "import error: ModuleNotFoundError: No module named 'pyzbar'"),
         (42, "names 42, neither a register(registry) function nor a module"),
-        ("dup", "bad declaration: a node named 'Sequence' is already registered "
+        ("dup", "bad declaration: a node named 'Sequence' is already registered by bt_grasp "
         "(to replace it, call registry.unregister('Sequence') first)"),
     ],
 )
@@ -98,7 +65,7 @@ def test_a_bad_installed_plugin_is_named_with_its_distribution(
             pass
 
         def target(registry: NodeRegistry) -> None:
-            registry.register(Mine.bt_spec)
+            registry.register(Mine)
 
     installed.append(FakeEntryPoint("scanner", "scan_pkg.nodes:register", target, "scan-pkg"))
     tree = tmp_path / "t.xml"

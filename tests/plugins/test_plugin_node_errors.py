@@ -18,7 +18,7 @@ class Shout(Leaf):
     """Shouts."""
 
     def update(self) -> Status:
-        return self.ports.get("message").shout()
+        return self.ports.require("message").shout()
 
 
 @action()
@@ -29,7 +29,7 @@ class Stubborn(Leaf):
         return Status.RUNNING
 
     def terminate(self, new_status: Status) -> None:
-        if new_status == Status.INVALID:
+        if new_status is Status.IDLE:
             raise RuntimeError("cannot stop")
 
 
@@ -40,7 +40,7 @@ class Unfinished(Leaf):
 
 def register(registry) -> None:
     for node in (Shout, Stubborn, Unfinished):
-        registry.register(node.bt_spec)
+        registry.register(node)
 '''
 
 TREES = {

@@ -58,17 +58,17 @@ def tree_file(tmp_path: Path) -> Path:
 
 def test_registering_over_a_shipped_node_names_the_way_out(tree_file: Path, tmp_path: Path,
                                                           capsys: pytest.CaptureFixture[str]) -> None:
-    plugin = _plugin(tmp_path, "    registry.register(TheirOpenGripper.bt_spec)")
+    plugin = _plugin(tmp_path, "    registry.register(TheirOpenGripper)")
     assert main(["tree", "validate", "--leaves", str(plugin), str(tree_file)]) == 2
     err = capsys.readouterr().err.strip()
     assert err == (f"bt-grasp: error: {plugin}:19: bad declaration: a node named 'OpenGripper' is already "
-                   "registered (to replace it, call registry.unregister('OpenGripper') first)")
+                   "registered by bt_grasp (to replace it, call registry.unregister('OpenGripper') first)")
 
 
 def test_unregister_then_register_replaces_it_in_every_tree_command(tree_file: Path, tmp_path: Path,
                                                                    capsys: pytest.CaptureFixture[str]) -> None:
     plugin = _plugin(tmp_path, "    assert registry.unregister('OpenGripper')\n"
-                               "    registry.register(TheirOpenGripper.bt_spec)")
+                               "    registry.register(TheirOpenGripper)")
     # the shipped OpenGripper has no 'width' port: validation with the user's node accepts it
     assert main(["tree", "validate", str(tree_file)]) == 2
     assert "width" in capsys.readouterr().err

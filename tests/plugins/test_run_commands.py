@@ -36,7 +36,7 @@ def campaign_file(tmp_path: Path) -> Path:
 
 def test_campaign_checks_and_episodes_carry_the_leaves(campaign_file: Path) -> None:
     campaign = load_campaign(campaign_file, leaves=(str(PLUGIN),))
-    assert [e.leaves for e in campaign.episodes()] == [(str(PLUGIN),), (str(PLUGIN),)]
+    assert [e.request.leaves for e in campaign.episodes()] == [(str(PLUGIN),), (str(PLUGIN),)]
 
 
 def test_eval_run_without_the_plugin_names_the_campaign_and_node(
@@ -64,12 +64,12 @@ def test_run_with_a_bad_plugin_is_exit_2_before_the_simulator(tmp_path: Path,
     tree = tmp_path / "weigh.xml"
     tree.write_text(TREE)
     bad = tmp_path / "bad.py"
-    bad.write_text("from bt_grasp.nodes import input_port\nPORT = input_port('x', dict)\n")
+    bad.write_text("from bt_grasp.nodes import input_port\nPORT = input_port('x', dict, 'a=1')\n")
     assert main(["run", str(tree), "--scene", str(SCENE), "--leaves", str(bad), "--quiet"]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "Traceback" not in err
-    assert err.endswith(f"{bad}:2: bad declaration: port 'x': type must be one of str, int, float, bool, object, "
-                        "or a class with from_port_text")
+    assert err.endswith(f"{bad}:2: bad declaration: port 'x': the default 'a=1' is text, but a dict cannot be read "
+                        "from text (give it from_port_text, or a default such as '{x}')")
 
 
 def test_the_resident_process_gets_the_leaves_as_absolute_paths(tmp_path: Path,

@@ -7,11 +7,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from py_trees.common import Status
-
 from bt_grasp.clock import ManualClock
-from bt_grasp.tree import LoadedTree, NodeContext, NodeKind, NodeSpec, builtin_registry, load_tree_from_string
-from bt_grasp.tree.leaf import Leaf
+from bt_grasp.nodes import Leaf, NodeContext, Status, action
+from bt_grasp.tree import LoadedTree, builtin_registry, load_tree_from_string
+from bt_grasp.tree.kinds import NodeKind
 from bt_grasp.tree.plugins import load_plugins
 
 PLUGIN = Path(__file__).parent / "data" / "user_nodes.py"
@@ -28,10 +27,13 @@ class Script:
     terminated: list[str] = field(default_factory=list)
 
 
+@action(name="Stub")
 class StandIn(Leaf):
-    def __init__(self, ctx: NodeContext, script: Script, calls: list[str]) -> None:
+    """Returns what its script says."""
+
+    def __init__(self, ctx: NodeContext, run: Run) -> None:
         super().__init__(ctx)
-        self.script, self.calls = script, calls
+        self.script, self.calls = run.scripts.setdefault(ctx.name, Script()), run.calls
 
     def update(self) -> Status:
         self.script.ticks += 1
@@ -50,15 +52,12 @@ class Run:
         self.scripts = {name: Script(list(q)) for name, q in scripts.items()}
         self.calls: list[str] = []
         registry = builtin_registry()
-        registry.register(NodeSpec("Stub", NodeKind.ACTION, (), self._factory))
+        registry.register(StandIn, args=(self,))
         load_plugins(registry, [str(PLUGIN)], installed=False)
         self.registry = registry
         self.clock = ManualClock()
         xml = f'<root BTCPP_format="4"><BehaviorTree ID="Main">{body}</BehaviorTree></root>'
         self.tree: LoadedTree = load_tree_from_string(xml, registry, clock=self.clock)
-
-    def _factory(self, ctx: NodeContext) -> StandIn:
-        return StandIn(ctx, self.scripts.setdefault(ctx.name, Script()), self.calls)
 
     def tick(self) -> tuple[str, list[str]]:
         """The root's status and the stand-ins ticked, in order; then 10 ms of simulated time pass."""
@@ -96,10 +95,13 @@ def test_user_leaf_fails_with_its_own_reason_and_failure_is_matches_it() -> None
     # tick 1 (t=0): CheckWeight FAILURE (750 g > 500 g), FailureIs SUCCESS, Script: the Fallback succeeds;
     #               WaitSim starts, its deadline is t=30 ms: RUNNING
     # ticks 2, 3 (t=10, 20 ms): WaitSim RUNNING; tick 4 (t=30 ms): SUCCESS
-    assert [run.tick()[0] for _ in range(4)] == [R, R, R, S]
-    bb = run.tree.root_blackboard.items()
+    assert run.tick()[0] == R
+    bb = run.tree.root_blackboard.items()  # during the run, the leaf's failure is on the blackboard
     assert bb["failure_reason"] == "WEIGHT_OUT_OF_RANGE" and bb["failed_leaf"] == "CheckWeight"
+    assert [run.tick()[0] for _ in range(3)] == [R, R, S]
+    bb = run.tree.root_blackboard.items()
     assert bb["verdict"] == "rejected"
+    assert "failure_reason" not in bb and "failed_leaf" not in bb  # the tree succeeded: cleared
     node = run.tree.find("CheckWeight")
     assert node.feedback_message == "750 g is more than 500 g"
 
@@ -141,7 +143,7 @@ def test_round_robin_fallback_halts_its_running_child() -> None:
     assert run.tick() == (R, ["A"])
     run.tree.root_blackboard.set("go", False)
     assert run.tick() == (F, [])  # the condition fails: the ReactiveSequence halts the RUNNING A
-    assert run.scripts["A"].terminated == ["INVALID"]
+    assert run.scripts["A"].terminated == ["IDLE"]
     assert run.tree.find("A").bt_state.value == "IDLE"
 
 

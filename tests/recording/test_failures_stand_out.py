@@ -12,18 +12,16 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from py_trees.common import Status
-
 from bt_grasp.clock import ManualClock
+from bt_grasp.nodes import Leaf, Status, action
 from bt_grasp.recording import replay
 from bt_grasp.recording.reader import open_log
 from bt_grasp.recording.render import failures_table
 from bt_grasp.recording.writer import RunRecorder
 from bt_grasp.tree.builtins import builtin_registry
 from bt_grasp.tree.introspect import tree_structure
-from bt_grasp.tree.leaf import Leaf
 from bt_grasp.tree.loader import load_tree_from_string
-from bt_grasp.tree.registry import NodeRegistry, leaf
+from bt_grasp.tree.registry import NodeRegistry
 from bt_grasp.tree.runner import FailureEvent, RunOutcome, TreeRunner
 
 # Reach fails twice (UNREACHABLE) and succeeds on its third attempt; after each failure the Fallback asks
@@ -65,7 +63,7 @@ class Stepper:
 def _registry() -> NodeRegistry:
     registry = builtin_registry()
 
-    @leaf(registry, name="Reach")
+    @action(name="Reach")
     class Reach(Leaf):
         def setup(self, **kwargs: Any) -> None:
             self.attempts = 0
@@ -80,7 +78,7 @@ def _registry() -> NodeRegistry:
                 return Status.RUNNING
             return self.fail("IK_UNREACHABLE", "out of reach") if self.attempts <= 2 else Status.SUCCESS
 
-    @leaf(registry, name="Recover")
+    @action(name="Recover")
     class Recover(Leaf):  # two ticks, so each failure and retry is on a tick of its own in the log
         def initialise(self) -> None:
             self.ticks = 0
@@ -89,11 +87,14 @@ def _registry() -> NodeRegistry:
             self.ticks += 1
             return Status.SUCCESS if self.ticks >= 2 else Status.RUNNING
 
-    @leaf(registry, name="Doomed")
+    @action(name="Doomed")
     class Doomed(Leaf):
         def update(self) -> Status:
             return self.fail("GRASP_EMPTY", "nothing between the fingers")
 
+    registry.register(Reach)
+    registry.register(Recover)
+    registry.register(Doomed)
     return registry
 
 

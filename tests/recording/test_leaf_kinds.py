@@ -9,17 +9,15 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from py_trees.common import Status
-
 from bt_grasp.clock import ManualClock
+from bt_grasp.nodes import Leaf, Status, action
 from bt_grasp.recording.reader import open_log
 from bt_grasp.recording.replay import summary
 from bt_grasp.recording.writer import RunRecorder
 from bt_grasp.tree.builtins import builtin_registry
 from bt_grasp.tree.introspect import tree_structure
-from bt_grasp.tree.leaf import Leaf
 from bt_grasp.tree.loader import load_tree_from_string
-from bt_grasp.tree.registry import NodeKind, NodeRegistry, leaf
+from bt_grasp.tree.registry import NodeKind, NodeRegistry
 from bt_grasp.tree.runner import TreeRunner
 
 # FlakyReach: each attempt is RUNNING for one tick, then FAILURE (UNREACHABLE) on the first two attempts,
@@ -53,7 +51,7 @@ class Stepper:
 def _registry() -> NodeRegistry:
     registry = builtin_registry()
 
-    @leaf(registry, name="FlakyReach")
+    @action(name="FlakyReach")
     class FlakyReach(Leaf):
         def setup(self, **kwargs: Any) -> None:
             self.attempts = 0
@@ -68,7 +66,7 @@ def _registry() -> NodeRegistry:
                 return Status.RUNNING
             return self.fail("UNREACHABLE", "out of reach") if self.attempts <= 2 else Status.SUCCESS
 
-    @leaf(registry, name="Recover")
+    @action(name="Recover")
     class Recover(Leaf):
         def initialise(self) -> None:
             self.ticks = 0
@@ -77,6 +75,8 @@ def _registry() -> NodeRegistry:
             self.ticks += 1
             return Status.SUCCESS if self.ticks >= 2 else Status.RUNNING
 
+    registry.register(FlakyReach)
+    registry.register(Recover)
     return registry
 
 

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from bt_grasp.behaviours import robot_registry
-from bt_grasp.behaviours.library import ROBOT_LEAVES, check_tree_against_scene
+from bt_grasp.behaviours.library import check_tree_against_scene
 from bt_grasp.bench.tasks import TASKS
 from bt_grasp.clock import ManualClock
 from bt_grasp.perception.results import Detection
@@ -18,7 +18,7 @@ from bt_grasp.tree.loader import load_tree
 REPO = Path(__file__).resolve().parents[2]
 # every leaf that needs the robot: RUNNING for 2 ticks, then SUCCESS; the object queries run for real on a
 # list of two objects put where PerceiveAll would write it
-STAND_INS = {cls.bt_spec.name: "Running:2" for cls in ROBOT_LEAVES if cls.bt_spec.needs_robot}  # type: ignore[attr-defined]
+STAND_INS = {spec.name: "Running:2" for spec in robot_registry(installed=False).specs() if spec.needs_robot}
 SEEN = (
     Detection("red", (0, 0, 1, 1), (0.5, 0.1, 0.025), (0.05, 0.05, 0.05), 0.0, 100, 1.0),
     Detection("blue", (0, 0, 1, 1), (0.5, -0.1, 0.02), (0.06, 0.06, 0.04), 0.0, 100, 1.0),

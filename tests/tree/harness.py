@@ -5,25 +5,13 @@ from __future__ import annotations
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
-from py_trees.common import Status
-
 from bt_grasp.clock import ManualClock
-from bt_grasp.tree import (
-    BtNode,
-    Leaf,
-    LoadedTree,
-    NodeContext,
-    NodeKind,
-    NodeSpec,
-    PortDirection,
-    PortSpec,
-    builtin_registry,
-    load_tree_from_string,
-)
+from bt_grasp.nodes import Leaf, NodeContext, Status, action, condition, output_port
+from bt_grasp.tree import BtNode, LoadedTree, builtin_registry, load_tree_from_string
 from bt_grasp.tree.introspect import bt_status_name
 
-S, F, R = "SUCCESS", "FAILURE", "RUNNING"
-_PY = {S: Status.SUCCESS, F: Status.FAILURE, R: Status.RUNNING}
+S, F, R, K = "SUCCESS", "FAILURE", "RUNNING", "SKIPPED"
+_STATUS = {S: Status.SUCCESS, F: Status.FAILURE, R: Status.RUNNING, K: Status.SKIPPED}
 
 
 @dataclass
@@ -41,17 +29,23 @@ class Stub:
 
     def next(self) -> Status:
         status = self.queue.pop(0) if len(self.queue) > 1 else self.queue[0]
-        return _PY[status]
+        return _STATUS[status]
 
     @property
     def halted(self) -> int:
-        return self.terminated.count("INVALID")
+        return self.terminated.count("IDLE")
 
 
+_OUT = output_port("out", object, default="{=}")
+
+
+@action(name="Stub", ports=[_OUT])
 class StubLeaf(Leaf):
-    def __init__(self, ctx: NodeContext, stub: Stub) -> None:
+    """A leaf whose statuses the test scripts."""
+
+    def __init__(self, ctx: NodeContext, harness: Harness) -> None:
         super().__init__(ctx)
-        self.stub = stub
+        self.stub = harness.stubs.setdefault(ctx.name, Stub())
 
     def initialise(self) -> None:
         self.stub.initialised += 1
@@ -66,25 +60,31 @@ class StubLeaf(Leaf):
         self.stub.terminated.append(new_status.name)
 
 
-class Harness:
-    """Load ``xml`` (a full file, or the body of one ``<BehaviorTree ID="Main">``) with Stub leaves."""
+@condition(name="Check", ports=[_OUT])
+class StubCheck(StubLeaf):
+    """A condition whose statuses the test scripts."""
 
-    def __init__(self, xml: str, extra_specs: tuple[NodeSpec, ...] = (), **kwargs: object) -> None:
+
+@action(name="Arm", needs_robot=True)
+class StubArm(StubLeaf):
+    """A robot leaf whose statuses the test scripts (one update per control period)."""
+
+
+class Harness:
+    """Load ``xml`` (a full file, or the body of one ``<BehaviorTree ID="Main">``) with Stub leaves; ``extra``
+    node classes (declared with the node API) are registered too."""
+
+    def __init__(self, xml: str, extra: tuple[type[BtNode], ...] = (), **kwargs: object) -> None:
         self.stubs: dict[str, Stub] = {}
         self.registry = builtin_registry()
-        out = PortSpec("out", PortDirection.OUTPUT, object, "{=}")
-        for kind, type_id in ((NodeKind.ACTION, "Stub"), (NodeKind.CONDITION, "Check")):
-            self.registry.register(NodeSpec(type_id, kind, (out,), self._factory))
-        self.registry.register(NodeSpec("Arm", NodeKind.ACTION, (), self._factory, needs_robot=True))
-        for spec in extra_specs:
-            self.registry.register(spec)
+        for node in (StubLeaf, StubCheck, StubArm):
+            self.registry.register(node, args=(self,))
+        for node_class in extra:
+            self.registry.register(node_class)
         if not xml.lstrip().startswith("<root"):
             xml = f'<root BTCPP_format="4"><BehaviorTree ID="Main">{xml}</BehaviorTree></root>'
         self.clock = ManualClock()
         self.tree: LoadedTree = load_tree_from_string(xml, self.registry, clock=self.clock, **kwargs)  # type: ignore[arg-type]
-
-    def _factory(self, ctx: NodeContext) -> StubLeaf:
-        return StubLeaf(ctx, self.stubs.setdefault(ctx.name, Stub()))
 
     def __getitem__(self, name: str) -> Stub:
         return self.stubs[name]

@@ -56,9 +56,9 @@ def test_while_halts_running_node_when_it_turns_false() -> None:
     # tick 1: go true -> Move RUNNING
     assert h.tick() == R
     h.tree.root_blackboard.set("go", False)
-    # tick 2: _while false while RUNNING -> Move halted (terminate INVALID), SKIPPED -> the Sequence succeeds
+    # tick 2: _while false while RUNNING -> Move halted (terminate IDLE), SKIPPED -> the Sequence succeeds
     assert h.tick() == S
-    assert h["Move"].terminated == ["INVALID"] and h.bb["halted"] == 1.0
+    assert h["Move"].terminated == ["IDLE"] and h.bb["halted"] == 1.0
 
 
 def test_while_false_when_idle_skips() -> None:

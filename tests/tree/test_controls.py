@@ -41,9 +41,9 @@ def test_reactive_sequence_halts_running_child_when_condition_fails() -> None:
     assert h.tick() == R
     # tick 2: ok is re-checked (SUCCESS), Move still RUNNING
     assert h.tick() == R and h["ok"].ticks == 2 and h["Move"].initialised == 1
-    # tick 3: ok FAILURE -> Move is halted (terminate(INVALID)) -> FAILURE
+    # tick 3: ok FAILURE -> Move is halted (terminate(IDLE)) -> FAILURE
     assert h.tick() == F
-    assert h["Move"].terminated == ["INVALID"] and h.state("Move") == "IDLE"
+    assert h["Move"].terminated == ["IDLE"] and h.state("Move") == "IDLE"
 
 
 def test_reactive_sequence_halts_other_children_when_one_runs() -> None:

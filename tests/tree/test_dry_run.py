@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from bt_grasp.behaviours.library import ROBOT_LEAVES
+from bt_grasp.behaviours.library import robot_registry
 from bt_grasp.behaviours.reasons import FailureReason
 from bt_grasp.cli.main import main
 
@@ -222,6 +222,6 @@ def test_a_wildcard_substitutes_robot_leaves_only_unless_a_kind_is_named() -> No
 
 
 def test_every_robot_leaf_declares_its_failure_reasons() -> None:
-    specs = [cls.bt_spec for cls in ROBOT_LEAVES if cls.bt_spec.needs_robot]  # type: ignore[attr-defined]
+    specs = [spec for spec in robot_registry(installed=False).specs() if spec.needs_robot]
     known = {r.value for r in FailureReason}
     assert all(spec.failure_reasons and set(spec.failure_reasons) <= known for spec in specs)

@@ -31,7 +31,7 @@ class CheckWeight(RobotLeaf):
 
 def register(registry: NodeRegistry) -> None:
     registry.register_reason(SCALE_OVERLOAD)
-    registry.register(CheckWeight.bt_spec)
+    registry.register(CheckWeight)
 '''
 
 TREE = """<root BTCPP_format="4" main_tree_to_execute="Main">
@@ -68,8 +68,8 @@ def test_a_plugin_leaf_told_to_fail_fails_with_its_first_declared_reason(
     code, out, err = _dry(capsys, "--leaves", plugin, tree, "--outcome", "CheckWeight=failure", "--json")
     assert code == 0, err
     result = json.loads(out)
-    assert result["blackboard"]["failure_reason"] == "SCALE_OVERLOAD"
-    assert result["blackboard"]["handled"] == "overload"  # FailureIs matched: the recovery branch ran
+    assert result["blackboard"]["handled"] == "overload"  # FailureIs matched SCALE_OVERLOAD: the recovery ran
+    assert "failure_reason" not in result["blackboard"]  # the tree succeeded: the reason is cleared
     # tick 1, in tree order: the leaf failed with its reason, the Fallback's second child handled it
     #   Fallback SUCCESS / CheckWeight FAILURE / overload SUCCESS / FailureIs SUCCESS / SetBlackboard SUCCESS
     assert [(w["tick"], [(s["path"].rsplit("/", 1)[-1], s["status"]) for s in w["runs"][0]])
@@ -98,7 +98,8 @@ def test_random_mode_draws_only_the_declared_reasons(
     for seed in range(24):
         code, out, err = _dry(capsys, "--leaves", plugin, tree, "--random", str(seed), "--json")
         assert code in (0, 1), err
-        seen.add(json.loads(out)["blackboard"].get("failure_reason"))
+        blackboard = json.loads(out)["blackboard"]  # a recovered failure's reason is cleared with the success
+        seen.add("SCALE_OVERLOAD" if blackboard.get("handled") else blackboard.get("failure_reason"))
     assert seen == {None, "SCALE_OVERLOAD", "TIMEOUT"}  # success, or one of the two it declares
 
 
@@ -107,13 +108,27 @@ def test_a_leaf_declaring_an_unregistered_reason_is_a_bad_plugin(
 ) -> None:
     _, tree = files
     bad = tmp_path / "bad.py"
-    bad.write_text(PLUGIN.replace("    registry.register_reason(SCALE_OVERLOAD)\n", ""))
+    # the reason named by text only, never declared as a Reason value nor registered
+    bad.write_text(PLUGIN.replace("    registry.register_reason(SCALE_OVERLOAD)\n", "").replace(
+        "reasons=[SCALE_OVERLOAD,", 'reasons=["SCALE_OVERLOAD",'))
     code, out, err = _dry(capsys, "--leaves", str(bad), tree)
     assert (code, out) == (2, "")
     lines = err.splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"bt-grasp: error: {bad}:"), err
     assert ("bad declaration: node 'CheckWeight' declares the failure reason 'SCALE_OVERLOAD', which is not "
             "registered") in lines[0]
+
+
+def test_a_declared_reason_value_is_registered_with_its_node(
+    tmp_path: Path, files: tuple[str, str], capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The declaration is the manifest: a Reason value the leaf declares needs no register_reason call."""
+    _, tree = files
+    short = tmp_path / "short.py"
+    short.write_text(PLUGIN.replace("    registry.register_reason(SCALE_OVERLOAD)\n", ""))
+    code, out, err = _dry(capsys, "--leaves", str(short), tree, "--outcome", "CheckWeight=failure", "--json")
+    assert code == 0, err
+    assert json.loads(out)["blackboard"]["handled"] == "overload"  # FailureIs matched the plugin's reason
 
 
 def test_every_robot_leaf_declares_registered_reasons_on_its_spec() -> None:

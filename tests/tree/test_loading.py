@@ -6,22 +6,13 @@ import logging
 from pathlib import Path
 
 import pytest
-from py_trees.common import Status
 
 from bt_grasp.errors import InputError, TreeFileError
-from bt_grasp.tree import (
-    Leaf,
-    NodeKind,
-    NodeRegistry,
-    PortDirection,
-    PortSpec,
-    builtin_registry,
-    leaf,
-    load_tree,
-    load_tree_from_string,
-)
+from bt_grasp.nodes import Leaf, NodeContext, NodeRegistry, Status, action, input_port
+from bt_grasp.tree import builtin_registry, load_tree, load_tree_from_string
 from bt_grasp.tree.formats.convert import convert_file, write_xml
 from bt_grasp.tree.formats.yaml_format import read_yaml, write_yaml
+from bt_grasp.tree.kinds import NodeKind
 from bt_grasp.tree.loader import read_document
 
 from .harness import F, Harness, R, S
@@ -30,22 +21,23 @@ from .harness import F, Harness, R, S
 def test_registry_contract() -> None:
     registry = NodeRegistry()
 
-    @leaf(registry, name="Approach", ports=[PortSpec("target", PortDirection.INPUT, str)], needs_robot=True)
+    @action(ports=[input_port("target", str)], needs_robot=True)
     class Approach(Leaf):
         """Move the gripper above the target."""
 
         def update(self) -> Status:
             return Status.SUCCESS
 
-    spec = registry["Approach"]
+    spec = registry.register(Approach)
+    assert registry["Approach"] is spec
     assert spec.kind is NodeKind.ACTION and spec.needs_robot and spec.children == (0, 0)
-    assert spec.description == "Move the gripper above the target." and Approach.bt_spec is spec  # type: ignore[attr-defined]
-    with pytest.raises(ValueError, match="already registered"):
-        registry.register(spec)
+    assert spec.description == "Move the gripper above the target." and spec.factory is Approach
+    with pytest.raises(ValueError, match="already registered by bt_grasp"):
+        registry.register(Approach)
     copy = registry.copy()
     assert copy.names() == ("Approach",) and copy is not registry
     full = builtin_registry()
-    full.register(spec)
+    full.register(Approach)
     assert full.nearest("Aproach") == ["Approach"]
     assert "Approach" not in builtin_registry()  # no global state
 
@@ -105,7 +97,8 @@ def test_substitution_rules() -> None:
     assert [h.tick(), h.tick(), h.tick()] == [R, R, S]
     assert h.stubs == {}  # no Stub was built
     assert h.node("Approach").bt_type == "TestNode" and h.node("Perceive").bt_type == "AlwaysSuccess"
-    assert h.bb["failure_reason"] == "SLIPPED"
+    assert h.node("Grasp").failure_reason == "SLIPPED"  # type: ignore[attr-defined]  # FailureIs matched it
+    assert "failure_reason" not in h.bb  # the tree succeeded: cleared
 
 
 @pytest.mark.parametrize("replacement", ["Sequence", "Teleport", "Running:x", "SetBlackboard"])
@@ -131,15 +124,16 @@ def test_nothing_runs_when_loading_fails() -> None:
     registry = builtin_registry()
     built: list[str] = []
 
+    @action()
     class Spy(Leaf):
-        def __init__(self, ctx) -> None:  # type: ignore[no-untyped-def]
+        def __init__(self, ctx: NodeContext) -> None:
             super().__init__(ctx)
             built.append(ctx.name)
 
         def update(self) -> Status:
             raise AssertionError("must not tick")
 
-    registry.register(leaf(None, name="Spy")(Spy).bt_spec)  # type: ignore[attr-defined]
+    registry.register(Spy)
     with pytest.raises(TreeFileError):
         load_tree_from_string('<root BTCPP_format="4"><BehaviorTree><Sequence><Spy/><Nope/></Sequence>'
                               "</BehaviorTree></root>", registry)  # fmt: skip

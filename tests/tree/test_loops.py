@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import pytest
 
 from bt_grasp.errors import TreeFileError
-from bt_grasp.tree.builtins.loops import loop_spec
+from bt_grasp.nodes import loop_node
 from bt_grasp.tree.exceptions import TreeRuntimeError
 
 from .harness import F, Harness, R, S
@@ -74,7 +74,7 @@ class Seen:
 
 def test_an_application_loop_iterates_its_own_type() -> None:
     xml = '<LoopSeen queue="{objects}" value="{obj}"><Stub name="A"/></LoopSeen>'
-    h = Harness(xml, extra_specs=(loop_spec("LoopSeen", Seen),))
+    h = Harness(xml, extra=(loop_node("LoopSeen", Seen),))
     h.tree.root_blackboard.set("objects", [Seen("red"), Seen("blue")])
     # tick 1: obj = red; tick 2: obj = blue; tick 3: SUCCESS
     assert h.tick() == R and h.bb["obj"] == Seen("red")

@@ -9,14 +9,21 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from py_trees.common import Status
-
-from bt_grasp.tree import Leaf, NodeContext, NodeKind, NodeRegistry, NodeSpec, PortDirection, PortSpec
+from bt_grasp.nodes import (
+    Leaf,
+    NodeContext,
+    NodeRegistry,
+    Status,
+    action,
+    condition,
+    inout_port,
+    input_port,
+    output_port,
+)
 from bt_grasp.tree.builtins import builtin_registry
 from bt_grasp.tree.exceptions import TreeRuntimeError
 from bt_grasp.tree.plugins import load_plugins
 
-IN, OUT, INOUT = PortDirection.INPUT, PortDirection.OUTPUT, PortDirection.INOUT
 ENUMS = {"RED": 1, "GREEN": 2, "BLUE": 3}
 
 
@@ -49,6 +56,7 @@ class _Traced(Leaf):
         return trace
 
 
+@action(ports=[input_port("result", str, "SUCCESS"), input_port("running", int, 0)])
 class TestAction(_Traced):
     """RUNNING for ``running`` ticks after it starts, then ``result``."""
 
@@ -60,16 +68,17 @@ class TestAction(_Traced):
 
     def update(self) -> Status:
         self.count_tick()
-        if self.done < int(self.ports.get("running")):
+        if self.done < self.ports.require("running", int):
             self.done += 1
             return Status.RUNNING
-        return {"SUCCESS": Status.SUCCESS, "FAILURE": Status.FAILURE}[str(self.ports.get("result"))]
+        return {"SUCCESS": Status.SUCCESS, "FAILURE": Status.FAILURE}[self.ports.require("result", str)]
 
     def terminate(self, new_status: Status) -> None:
-        if new_status == Status.INVALID:
+        if new_status is Status.IDLE:
             self.traces[self.name].halts += 1
 
 
+@condition(ports=[input_port("value", bool)])
 class TestCondition(_Traced):
     """SUCCESS when the input port ``value`` reads true."""
 
@@ -77,33 +86,36 @@ class TestCondition(_Traced):
 
     def update(self) -> Status:
         self.count_tick()
-        return Status.SUCCESS if self.ports.get("value") else Status.FAILURE
+        return Status.SUCCESS if self.ports.require("value", bool) else Status.FAILURE
 
 
+@action(ports=[inout_port("value", int), input_port("step", int, 1)])
 class Counter(_Traced):
     """Reads the integer ``value`` (0 when empty), writes value + ``step``."""
 
     def update(self) -> Status:
         self.count_tick()
         try:  # BT.CPP's getInput returns an error (not an exception) for an empty or unconvertible entry
-            current = self.ports.get("value")
+            current = self.ports.get("value", int) or 0
         except TreeRuntimeError:
             current = 0
-        self.ports.set("value", current + int(self.ports.get("step")))
+        self.ports.set("value", current + self.ports.require("step", int))
         return Status.SUCCESS
 
 
+@action(ports=[input_port("value", float), output_port("out", float)])
 class WriteReal(_Traced):
     def update(self) -> Status:
         self.count_tick()
-        self.ports.set("out", float(self.ports.get("value")))
+        self.ports.set("out", self.ports.require("value", float))
         return Status.SUCCESS
 
 
+@action(ports=[input_port("text", str), output_port("out", str)])
 class EchoText(_Traced):
     def update(self) -> Status:
         self.count_tick()
-        self.ports.set("out", str(self.ports.get("text")))
+        self.ports.set("out", self.ports.require("text", str))
         return Status.SUCCESS
 
 
@@ -115,20 +127,7 @@ def conformance_registry(traces: Traces) -> NodeRegistry:
     (``standins.py``, loaded as a user's ``--leaves`` plugin file is)."""
     registry = builtin_registry()
     load_plugins(registry, [str(STANDINS)], installed=False)
-
-    def spec(cls: type[_Traced], kind: NodeKind, ports: tuple[PortSpec, ...]) -> NodeSpec:
-        return NodeSpec(cls.__name__, kind, ports, lambda ctx: cls(ctx, traces), cls.__doc__ or "")
-
-    registry.register(
-        spec(
-            TestAction,
-            NodeKind.ACTION,
-            (PortSpec("result", IN, str, "SUCCESS"), PortSpec("running", IN, int, 0)),
-        )
-    )
-    registry.register(spec(TestCondition, NodeKind.CONDITION, (PortSpec("value", IN, bool),)))
-    registry.register(spec(Counter, NodeKind.ACTION, (PortSpec("value", INOUT, int), PortSpec("step", IN, int, 1))))
-    registry.register(spec(WriteReal, NodeKind.ACTION, (PortSpec("value", IN, float), PortSpec("out", OUT, float))))
-    registry.register(spec(EchoText, NodeKind.ACTION, (PortSpec("text", IN, str), PortSpec("out", OUT, str))))
+    for node in (TestAction, TestCondition, Counter, WriteReal, EchoText):
+        registry.register(node, args=(traces,))  # BT.CPP's registerNodeType<T>(name, args...)
     registry.register_enums(ENUMS)
     return registry

@@ -15,7 +15,6 @@ from __future__ import annotations
 from typing import Any
 
 from bt_grasp.nodes import (
-    BtStatus,
     Control,
     Decorator,
     Leaf,
@@ -31,11 +30,11 @@ from bt_grasp.nodes import (
 )
 
 RUNNING, SUCCESS, FAILURE, SKIPPED, IDLE = (
-    BtStatus.RUNNING,
-    BtStatus.SUCCESS,
-    BtStatus.FAILURE,
-    BtStatus.SKIPPED,
-    BtStatus.IDLE,
+    Status.RUNNING,
+    Status.SUCCESS,
+    Status.FAILURE,
+    Status.SKIPPED,
+    Status.IDLE,
 )
 
 
@@ -85,7 +84,7 @@ class SaySomething(Leaf):
     """Says the message."""
 
     def update(self) -> Status:
-        say(self, self.ports.get("message"))
+        say(self, self.ports.require("message", str))
         return Status.SUCCESS
 
 
@@ -112,7 +111,7 @@ class PrintTarget(Leaf):
     """Says the target."""
 
     def update(self) -> Status:
-        target = self.ports.get("target")
+        target = self.ports.require("target", Position2D)
         say(self, f"target {target.x:.1f} {target.y:.1f}")
         return Status.SUCCESS
 
@@ -122,7 +121,7 @@ class BatteryOK(Leaf):
     """SUCCESS while the battery is at least 20."""
 
     def update(self) -> Status:
-        return Status.SUCCESS if self.ports.get("level") >= 20 else Status.FAILURE
+        return Status.SUCCESS if self.ports.require("level", int) >= 20 else Status.FAILURE
 
 
 @action(ports=[input_port("goal", Position2D), input_port("steps", int, 2, "ticks to arrive")])
@@ -130,20 +129,20 @@ class MoveBase(Leaf):
     """Drives to the goal in `steps` ticks."""
 
     def initialise(self) -> None:
-        self.ports.get("goal")
+        self.ports.require("goal", Position2D)
         self.done = -1  # BT.CPP's onStart returns RUNNING without counting a step
 
     def update(self) -> Status:
         self.done += 1
         if self.done == 0:
             return Status.RUNNING
-        if self.done >= self.ports.get("steps"):
+        if self.done >= self.ports.require("steps", int):
             set_root(self, "moves", root_value(self, "moves", 0) + 1)
             return Status.SUCCESS
         return Status.RUNNING
 
     def terminate(self, new_status: Status) -> None:
-        if new_status == Status.INVALID:
+        if new_status is Status.IDLE:
             set_root(self, "move_halts", root_value(self, "move_halts", 0) + 1)
 
 
@@ -224,7 +223,7 @@ class ComputePathToPose(Leaf):
         if take_one(self, "planner_failures"):
             self.ports.set("error_code_id", 204)
             return Status.FAILURE
-        self.ports.set("path", f"{self.ports.get('planner_id')}:{self.ports.get('goal')}")
+        self.ports.set("path", f"{self.ports.require('planner_id', str)}:{self.ports.require('goal', str)}")
         self.ports.set("error_code_id", 0)
         return Status.SUCCESS
 
@@ -240,7 +239,7 @@ class FollowPath(Leaf):
 
     def update(self) -> Status:
         if self.done < 0:
-            if not self.ports.get("path"):
+            if not self.ports.require("path", str):
                 return Status.FAILURE
             self.done = 0
             return Status.RUNNING
@@ -255,7 +254,7 @@ class FollowPath(Leaf):
         return Status.SUCCESS
 
     def terminate(self, new_status: Status) -> None:
-        if new_status == Status.INVALID:
+        if new_status is Status.IDLE:
             set_root(self, "follow_halts", root_value(self, "follow_halts", 0) + 1)
 
 
@@ -295,7 +294,7 @@ class _Behavior(Leaf):
         return Status.SUCCESS
 
     def terminate(self, new_status: Status) -> None:
-        if new_status == Status.INVALID:
+        if new_status is Status.IDLE:
             say(self, f"halted {self.bt_type}")
 
 
@@ -312,7 +311,7 @@ class Wait(_Behavior):
     """Waits."""
 
     def ticks(self) -> int:
-        return int(self.ports.get("wait_duration"))
+        return int(self.ports.require("wait_duration", float))
 
 
 @action(ports=[input_port("backup_dist", float, 0.15, "m"), input_port("backup_speed", float, 0.025, "m/s")])
@@ -332,11 +331,11 @@ class RecoveryNode(Control):
         self.current = 0
         self.retry_count = 0
 
-    def bt_tick(self) -> BtStatus:
-        retries = self.ports.get("number_of_retries")
+    def bt_tick(self) -> Status:
+        retries = self.ports.require("number_of_retries", int)
         self.set_bt_status(RUNNING)
         while self.current < 2 and self.retry_count <= retries:
-            status = self._tick_child(self.current)
+            status = self.tick_child(self.current)
             if self.current == 0:
                 if status in (SKIPPED, SUCCESS):
                     self.halt()
@@ -375,10 +374,10 @@ class PipelineSequence(Control):
         super().__init__(ctx)
         self.last_running = 0
 
-    def bt_tick(self) -> BtStatus:
+    def bt_tick(self) -> Status:
         self.set_bt_status(RUNNING)
-        for index in range(len(self.kids)):
-            status = self._tick_child(index)
+        for index in range(len(self.child_nodes)):
+            status = self.tick_child(index)
             if status is FAILURE:
                 self.halt_children()
                 self.last_running = 0
@@ -404,12 +403,12 @@ class RoundRobin(Control):
         self.current = 0
         self.failed = 0
 
-    def bt_tick(self) -> BtStatus:
-        count = len(self.kids)
+    def bt_tick(self) -> Status:
+        count = len(self.child_nodes)
         self.set_bt_status(RUNNING)
         skipped = 0
         while self.failed + skipped < count:
-            status = self._tick_child(self.current)
+            status = self.tick_child(self.current)
             if status is not RUNNING:
                 self.current = (self.current + 1) % count
             if status is SUCCESS:
@@ -440,13 +439,13 @@ class RateController(Decorator):
         self.first = True
         self.since = 0
 
-    def bt_tick(self) -> BtStatus:
+    def bt_tick(self) -> Status:
         if self.bt_state is IDLE:
             self.first = True
             self.since = 0
         self.set_bt_status(RUNNING)
         self.since += 1
-        if self.first or self.child.bt_state is RUNNING or self.since >= self.ports.get("period"):
+        if self.first or self.child.bt_state is RUNNING or self.since >= self.ports.require("period", int):
             self.first = False
             status = self.tick_child()
             if status is SUCCESS:
@@ -459,9 +458,9 @@ class RateController(Decorator):
 class GoalUpdater(Decorator):
     """Writes @goal_update (when set), else input_goal, to output_goal, then ticks the child."""
 
-    def bt_tick(self) -> BtStatus:
+    def bt_tick(self) -> Status:
         self.set_bt_status(RUNNING)
-        goal = self.ports.get("input_goal")
+        goal = self.ports.require("input_goal", str)
         update = root_value(self, "goal_update", "")
         self.ports.set("output_goal", update or goal)
         status = self.tick_child()
@@ -479,5 +478,5 @@ NODES = (
 
 def register(registry: NodeRegistry) -> None:
     for node in NODES:
-        registry.register(node.bt_spec)
+        registry.register(node)
     registry.register_enums({"DOCKED": 0, "NAVIGATING": 1, "RECOVERING": 2})

@@ -4,13 +4,10 @@ from __future__ import annotations
 
 from typing import Any
 
-from py_trees.common import Status
-
 from bt_grasp.clock import ManualClock
+from bt_grasp.nodes import Leaf, NodeRegistry, Status, action
 from bt_grasp.tree.builtins import builtin_registry
-from bt_grasp.tree.leaf import Leaf
 from bt_grasp.tree.loader import load_tree_from_string
-from bt_grasp.tree.registry import leaf
 from bt_grasp.tree.runner import TreeRunner
 
 
@@ -42,10 +39,10 @@ class Recorder:
         self.flushes += 1
 
 
-def _registry() -> Any:
+def _registry() -> NodeRegistry:
     registry = builtin_registry()
 
-    @leaf(registry, name="FailTwice")
+    @action()
     class FailTwice(Leaf):
         """FAILURE (FLAKY) on the first two attempts, then SUCCESS; each attempt finishes at once."""
 
@@ -56,7 +53,7 @@ def _registry() -> Any:
             self.calls += 1
             return self.fail("FLAKY", f"attempt {self.calls} failed") if self.calls <= 2 else Status.SUCCESS
 
-    @leaf(registry, name="Slow")
+    @action()
     class Slow(Leaf):
         """RUNNING for two ticks, then SUCCESS."""
 
@@ -67,6 +64,8 @@ def _registry() -> Any:
             self.ticks += 1
             return Status.SUCCESS if self.ticks >= 3 else Status.RUNNING
 
+    registry.register(FailTwice)
+    registry.register(Slow)
     return registry
 
 

@@ -277,7 +277,8 @@ def axis_angle_matrix(axis: Vec, angle: float) -> NDArray[np.float64]:
     """Rodrigues: the rotation of ``angle`` rad about the unit ``axis``."""
     x, y, z = axis
     K = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
-    return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * (K @ K)
+    R: NDArray[np.float64] = np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * (K @ K)
+    return R
 
 
 def rotation_vector(R: NDArray[np.float64]) -> Vec:

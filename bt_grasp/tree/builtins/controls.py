@@ -1,47 +1,24 @@
 """BT.CPP 4.10 control nodes, each following the corresponding ``src/controls/*.cpp``: Sequence,
 AsyncSequence, SequenceWithMemory, ReactiveSequence, Fallback, AsyncFallback, ReactiveFallback, Parallel,
-ParallelAll, IfThenElse, WhileDoElse, TryCatch and Switch2..Switch6."""
+ParallelAll, IfThenElse, WhileDoElse, TryCatch and Switch2..Switch6.
+
+They are written as a plugin's controls are (``docs/own-leaves.md``): declared with ``@control``, ticking and
+halting their children with ``tick_child``, ``halt_child`` and ``reset_children``, registered by
+:func:`register`."""
 
 from __future__ import annotations
 
-import py_trees
-
-from bt_grasp.tree.builtins.manifest import IN, control
-from bt_grasp.tree.context import NodeContext
 from bt_grasp.tree.exceptions import TreeRuntimeError
-from bt_grasp.tree.node import BtNode, BtStatus
-from bt_grasp.tree.registry import NodeKind, NodeSpec, PortSpec
-from bt_grasp.tree.values import to_text
+from bt_grasp.tree.node_api import Control, NodeContext, NodeRegistry, Status, control, input_port
+from bt_grasp.tree.registry import PortSpec
 
 RUNNING, SUCCESS, FAILURE, SKIPPED, IDLE = (
-    BtStatus.RUNNING,
-    BtStatus.SUCCESS,
-    BtStatus.FAILURE,
-    BtStatus.SKIPPED,
-    BtStatus.IDLE,
+    Status.RUNNING,
+    Status.SUCCESS,
+    Status.FAILURE,
+    Status.SKIPPED,
+    Status.IDLE,
 )
-
-
-class Control(BtNode, py_trees.composites.Composite):
-    """Base of control nodes; ``halt`` resets every child (halting RUNNING ones) then itself."""
-
-    def __init__(self, ctx: NodeContext) -> None:
-        py_trees.composites.Composite.__init__(self, ctx.name, list(ctx.children))
-        self._bt_bind(ctx)
-        self.ports = ctx.ports
-        self.clock = ctx.clock
-        self.blackboard = ctx.blackboard  # the tree instance's, as a leaf's (BT.CPP ``config().blackboard``)
-        self.kids: list[BtNode] = self.children  # type: ignore[assignment]
-
-    def halt(self) -> None:
-        self.reset_children()
-        self.reset_status()
-
-    def _tick_child(self, index: int) -> BtStatus:
-        status = self.kids[index].execute_tick()
-        if status is IDLE:
-            raise TreeRuntimeError(f"{self.bt_path}: a child returned IDLE")
-        return status
 
 
 class _Ordered(Control):
@@ -52,8 +29,8 @@ class _Ordered(Control):
     after each child that completed within one tick, so a reactive parent re-checks its conditions.
     """
 
-    _stop_on: BtStatus = FAILURE
-    _all_done: BtStatus = SUCCESS
+    _stop_on: Status = FAILURE
+    _all_done: Status = SUCCESS
     _asynchronous = False
 
     def __init__(self, ctx: NodeContext) -> None:
@@ -61,15 +38,15 @@ class _Ordered(Control):
         self.current = 0
         self.skipped = 0
 
-    def bt_tick(self) -> BtStatus:
-        count = len(self.kids)
+    def bt_tick(self) -> Status:
+        count = len(self.child_nodes)
         if self.bt_state is not RUNNING:
             self.skipped = 0
         self.set_bt_status(RUNNING)
         while self.current < count:
-            child = self.kids[self.current]
+            child = self.child_nodes[self.current]
             before = child.bt_state
-            status = self._tick_child(self.current)
+            status = self.tick_child(self.current)
             if status is RUNNING:
                 return RUNNING
             if status is self._stop_on:
@@ -94,16 +71,19 @@ class _Ordered(Control):
         super().halt()
 
 
+@control(description="Ticks children in order; resumes a RUNNING child; restarts after a FAILURE.")
 class Sequence(_Ordered):
     """Ticks children in order; a RUNNING child is resumed next tick, a FAILURE restarts from the first."""
 
 
+@control(description="Like Sequence, but yields the tick after each child that completed at once.")
 class AsyncSequence(Sequence):
     """Like Sequence, but yields (RUNNING plus a wake-up) after each child that completed synchronously."""
 
     _asynchronous = True
 
 
+@control(description="Ticks children in order until one succeeds.")
 class Fallback(_Ordered):
     """Ticks children in order until one succeeds; RUNNING is resumed next tick."""
 
@@ -111,12 +91,14 @@ class Fallback(_Ordered):
     _all_done = FAILURE
 
 
+@control(description="Like Fallback, but yields the tick after each child that failed at once.")
 class AsyncFallback(Fallback):
     """Like Fallback, but yields (RUNNING plus a wake-up) after each child that failed synchronously."""
 
     _asynchronous = True
 
 
+@control(description="Like Sequence, but resumes at the failed child next time.")
 class SequenceWithMemory(Control):
     """Ticks children in order; after a FAILURE the next tick resumes at the failed child (a halt keeps the
     place too). After each child that succeeded synchronously it yields: RUNNING plus a wake-up."""
@@ -126,14 +108,14 @@ class SequenceWithMemory(Control):
         self.current = 0
         self.skipped = 0
 
-    def bt_tick(self) -> BtStatus:
-        count = len(self.kids)
+    def bt_tick(self) -> Status:
+        count = len(self.child_nodes)
         if self.bt_state is not RUNNING:
             self.skipped = 0
         self.set_bt_status(RUNNING)
         while self.current < count:
-            before = self.kids[self.current].bt_state
-            status = self._tick_child(self.current)
+            before = self.child_nodes[self.current].bt_state
+            status = self.tick_child(self.current)
             if status is RUNNING:
                 return RUNNING
             if status is FAILURE:
@@ -155,17 +137,17 @@ class SequenceWithMemory(Control):
 class _Reactive(Control):
     """ReactiveSequence / ReactiveFallback: every tick starts again from the first child."""
 
-    _stop_on: BtStatus = FAILURE  # the child status that ends the node
-    _otherwise: BtStatus = SUCCESS  # the result when every child passed
+    _stop_on: Status = FAILURE  # the child status that ends the node
+    _otherwise: Status = SUCCESS  # the result when every child passed
 
-    def bt_tick(self) -> BtStatus:
+    def bt_tick(self) -> Status:
         all_skipped = True
         self.set_bt_status(RUNNING)
-        for index in range(len(self.kids)):
-            status = self._tick_child(index)
+        for index in range(len(self.child_nodes)):
+            status = self.tick_child(index)
             all_skipped = all_skipped and status is SKIPPED
             if status is RUNNING:
-                for other in range(len(self.kids)):  # the others go back to IDLE
+                for other in range(len(self.child_nodes)):  # the others go back to IDLE
                     if other != index:
                         self.halt_child(other)
                 return RUNNING
@@ -178,6 +160,7 @@ class _Reactive(Control):
         return SKIPPED if all_skipped else self._otherwise
 
 
+@control(description="Re-evaluates every child each tick; a FAILURE halts the RUNNING one.")
 class ReactiveSequence(_Reactive):
     """Re-checks every child each tick; a child failing halts the RUNNING one."""
 
@@ -185,6 +168,7 @@ class ReactiveSequence(_Reactive):
     _otherwise = SUCCESS
 
 
+@control(description="Re-evaluates every child each tick; a SUCCESS halts the RUNNING one.")
 class ReactiveFallback(_Reactive):
     """Re-checks every child each tick; a child succeeding halts the RUNNING one."""
 
@@ -197,6 +181,13 @@ def _threshold(value: int, count: int) -> int:
     return max(count + value + 1, 0) if value < 0 else value
 
 
+@control(
+    ports=[
+        input_port("success_count", int, -1, "children that must succeed (-1: all)"),
+        input_port("failure_count", int, 1, "children that must fail (-1: all)"),
+    ],
+    description="Ticks all children; succeeds/fails when enough of them did.",
+)
 class Parallel(Control):
     """Ticks all unfinished children every tick; ``success_count`` / ``failure_count`` (-1 = all)."""
 
@@ -206,11 +197,11 @@ class Parallel(Control):
         self.success_total = 0
         self.failure_total = 0
 
-    def bt_tick(self) -> BtStatus:
-        count = len(self.kids)
-        success_port = int(self.ports.get("success_count"))
+    def bt_tick(self) -> Status:
+        count = len(self.child_nodes)
+        success_port = self.ports.require("success_count", int)
         success_threshold = _threshold(success_port, count)
-        failure_threshold = _threshold(int(self.ports.get("failure_count")), count)
+        failure_threshold = _threshold(self.ports.require("failure_count", int), count)
         if count < success_threshold or count < failure_threshold:
             raise TreeRuntimeError(
                 f"{self.bt_path}: {count} children cannot reach success_count={success_threshold} "
@@ -220,7 +211,7 @@ class Parallel(Control):
         skipped = 0
         for index in range(count):
             if index not in self.completed:
-                status = self._tick_child(index)
+                status = self.tick_child(index)
                 if status is SKIPPED:
                     skipped += 1
                 elif status is SUCCESS:
@@ -251,6 +242,10 @@ class Parallel(Control):
         super().halt()
 
 
+@control(
+    ports=[input_port("max_failures", int, 1, "failures that make the node fail (-1: all)")],
+    description="Ticks all children until every one completed; FAILURE when max_failures of them failed.",
+)
 class ParallelAll(Control):
     """Ticks all unfinished children until every one completed; FAILURE when at least ``max_failures`` of
     them failed (-1: all), otherwise SUCCESS. A failure does not stop the others."""
@@ -260,9 +255,9 @@ class ParallelAll(Control):
         self.completed: set[int] = set()
         self.failure_total = 0
 
-    def bt_tick(self) -> BtStatus:
-        count = len(self.kids)
-        failure_threshold = _threshold(int(self.ports.get("max_failures")), count)
+    def bt_tick(self) -> Status:
+        count = len(self.child_nodes)
+        failure_threshold = _threshold(self.ports.require("max_failures", int), count)
         if count < failure_threshold:
             raise TreeRuntimeError(f"{self.bt_path}: {count} children cannot reach max_failures={failure_threshold}")
         self.set_bt_status(RUNNING)
@@ -270,7 +265,7 @@ class ParallelAll(Control):
         for index in range(count):
             if index in self.completed:
                 continue
-            status = self._tick_child(index)
+            status = self.tick_child(index)
             if status is SUCCESS:
                 self.completed.add(index)
             elif status is FAILURE:
@@ -294,6 +289,7 @@ class ParallelAll(Control):
         super().halt()
 
 
+@control(description="If child 1 succeeds tick child 2, else child 3 (or FAILURE).", children=(2, 3))
 class IfThenElse(Control):
     """Child 1 is the condition (checked once per activation), child 2 the "then", child 3 the "else"."""
 
@@ -301,22 +297,22 @@ class IfThenElse(Control):
         super().__init__(ctx)
         self.branch = 0
 
-    def bt_tick(self) -> BtStatus:
+    def bt_tick(self) -> Status:
         self.set_bt_status(RUNNING)
         if self.branch == 0:
-            condition = self._tick_child(0)
+            condition = self.tick_child(0)
             if condition is RUNNING:
                 return RUNNING
             if condition is SUCCESS:
                 self.branch = 1
             elif condition is FAILURE:
-                if len(self.kids) == 3:
+                if len(self.child_nodes) == 3:
                     self.branch = 2
                 else:
                     return FAILURE
             else:  # a SKIPPED condition chooses no branch (BT.CPP throws a logic error here)
                 raise TreeRuntimeError(f"{self.bt_path}: the condition (first child) was skipped")
-        status = self._tick_child(self.branch)
+        status = self.tick_child(self.branch)
         if status is RUNNING:
             return RUNNING
         self.reset_children()
@@ -328,23 +324,24 @@ class IfThenElse(Control):
         super().halt()
 
 
+@control(description="Re-checks child 1 every tick; runs child 2 or child 3.", children=(2, 3))
 class WhileDoElse(Control):
     """Child 1 is re-checked every tick; it switches between child 2 and child 3, halting the other."""
 
-    def bt_tick(self) -> BtStatus:
+    def bt_tick(self) -> Status:
         self.set_bt_status(RUNNING)
-        condition = self._tick_child(0)
+        condition = self.tick_child(0)
         if condition is RUNNING:
             return RUNNING
-        status: BtStatus = IDLE
+        status: Status = IDLE
         if condition is SUCCESS:
-            if len(self.kids) == 3:
+            if len(self.child_nodes) == 3:
                 self.halt_child(2)
-            status = self._tick_child(1)
+            status = self.tick_child(1)
         elif condition is FAILURE:
-            if len(self.kids) == 3:
+            if len(self.child_nodes) == 3:
                 self.halt_child(1)
-                status = self._tick_child(2)
+                status = self.tick_child(2)
             else:
                 status = FAILURE
         if status is RUNNING:
@@ -355,6 +352,11 @@ class WhileDoElse(Control):
         return status
 
 
+@control(
+    ports=[input_port("catch_on_halt", bool, False, "also run the catch child when halted during the try block")],
+    description="Runs the children but the last as a Sequence; on a failure runs the last (catch) child and fails.",
+    children=(2, None),
+)
 class TryCatch(Control):
     """The children but the last are the "try" block, run as a Sequence; when one fails the last child (the
     "catch") runs to completion and the node FAILS. With ``catch_on_halt`` a halt of the try block also
@@ -366,8 +368,8 @@ class TryCatch(Control):
         self.skipped = 0
         self.in_catch = False
 
-    def bt_tick(self) -> BtStatus:
-        count = len(self.kids)
+    def bt_tick(self) -> Status:
+        count = len(self.child_nodes)
         if self.bt_state is not RUNNING:
             self.skipped = 0
             self.in_catch = False
@@ -375,7 +377,7 @@ class TryCatch(Control):
         tries = count - 1
         if not self.in_catch:
             while self.current < tries:
-                status = self._tick_child(self.current)
+                status = self.tick_child(self.current)
                 if status is RUNNING:
                     return RUNNING
                 if status is FAILURE:
@@ -392,7 +394,7 @@ class TryCatch(Control):
                 self.current = 0
                 self.skipped = 0
                 return SKIPPED if all_skipped else SUCCESS
-        status = self._tick_child(count - 1)
+        status = self.tick_child(count - 1)
         if status is RUNNING:
             return RUNNING
         self.reset_children()
@@ -401,11 +403,11 @@ class TryCatch(Control):
         return FAILURE
 
     def halt(self) -> None:
-        count = len(self.kids)
-        if self.ports.get("catch_on_halt") and not self.in_catch and self.bt_state is RUNNING and count >= 2:
+        count = len(self.child_nodes)
+        if self.ports.get("catch_on_halt", bool) and not self.in_catch and self.bt_state is RUNNING and count >= 2:
             for index in range(count - 1):
                 self.halt_child(index)
-            if self.kids[-1].execute_tick() is RUNNING:
+            if self.child_nodes[-1].execute_tick() is RUNNING:
                 self.halt_child(count - 1)
         self.current = 0
         self.skipped = 0
@@ -455,19 +457,19 @@ class Switch(Control):
         super().__init__(ctx)
         self.running_child = -1
 
-    def bt_tick(self) -> BtStatus:
+    def bt_tick(self) -> Status:
         match = self.cases
-        enums = dict(self._bt_enums)
-        if self.ports.has("variable"):
-            variable = to_text(self.ports.get("variable"))
+        enums = dict(self.enums)
+        variable = self.ports.get("variable", str)
+        if variable is not None:  # no variable: the default child, as BT.CPP
             for index in range(self.cases):
-                case = f"case_{index + 1}"
-                if self.ports.has(case) and switch_matches(variable, to_text(self.ports.get(case)), enums):
+                case = self.ports.get(f"case_{index + 1}", str)
+                if case is not None and switch_matches(variable, case, enums):
                     match = index
                     break
         if self.running_child not in (-1, match):
             self.halt_child(self.running_child)
-        status = self._tick_child(match)
+        status = self.tick_child(match)
         if status is SKIPPED:
             self.running_child = -1
         elif status is RUNNING:
@@ -482,48 +484,47 @@ class Switch(Control):
         super().halt()
 
 
-def _switch_spec(cases: int) -> NodeSpec:
-    kind = type(f"Switch{cases}", (Switch,), {"cases": cases, "__doc__": Switch.__doc__})
-    cases_ports = [PortSpec(f"case_{k}", IN, str, description=f"the value of case {k}") for k in range(1, cases + 1)]
-    ports = (PortSpec("variable", IN, str, description="the value to match"), *cases_ports)
-    return NodeSpec(
-        f"Switch{cases}",
-        NodeKind.CONTROL,
-        ports,
-        kind,
-        f"Ticks the child of the first of {cases} cases equal to variable, else the last (default) child.",
-        children=(cases + 1, cases + 1),
-    )
+def _switch_ports(cases: int) -> list[PortSpec]:
+    return [input_port("variable", str, description="the value to match"),
+            *(input_port(f"case_{k}", str, description=f"the value of case {k}") for k in range(1, cases + 1))]
 
 
-SPECS = (
-    control(Sequence, "Ticks children in order; resumes a RUNNING child; restarts after a FAILURE."),
-    control(AsyncSequence, "Like Sequence, but yields the tick after each child that completed at once."),
-    control(SequenceWithMemory, "Like Sequence, but resumes at the failed child next time."),
-    control(ReactiveSequence, "Re-evaluates every child each tick; a FAILURE halts the RUNNING one."),
-    control(Fallback, "Ticks children in order until one succeeds."),
-    control(AsyncFallback, "Like Fallback, but yields the tick after each child that failed at once."),
-    control(ReactiveFallback, "Re-evaluates every child each tick; a SUCCESS halts the RUNNING one."),
-    control(
-        Parallel,
-        "Ticks all children; succeeds/fails when enough of them did.",
-        (
-            PortSpec("success_count", IN, int, -1, "children that must succeed (-1: all)"),
-            PortSpec("failure_count", IN, int, 1, "children that must fail (-1: all)"),
-        ),
-    ),
-    control(
-        ParallelAll,
-        "Ticks all children until every one completed; FAILURE when max_failures of them failed.",
-        (PortSpec("max_failures", IN, int, 1, "failures that make the node fail (-1: all)"),),
-    ),
-    control(IfThenElse, "If child 1 succeeds tick child 2, else child 3 (or FAILURE).", children=(2, 3)),
-    control(WhileDoElse, "Re-checks child 1 every tick; runs child 2 or child 3.", children=(2, 3)),
-    control(
-        TryCatch,
-        "Runs the children but the last as a Sequence; on a failure runs the last (catch) child and fails.",
-        (PortSpec("catch_on_halt", IN, bool, False, "also run the catch child when halted during the try block"),),
-        children=(2, None),
-    ),
-    *(_switch_spec(cases) for cases in range(2, 7)),
+def _switch(cases: int) -> str:
+    return f"Ticks the child of the first of {cases} cases equal to variable, else the last (default) child."
+
+
+@control(ports=_switch_ports(2), description=_switch(2), children=(3, 3))
+class Switch2(Switch):
+    cases = 2
+
+
+@control(ports=_switch_ports(3), description=_switch(3), children=(4, 4))
+class Switch3(Switch):
+    cases = 3
+
+
+@control(ports=_switch_ports(4), description=_switch(4), children=(5, 5))
+class Switch4(Switch):
+    cases = 4
+
+
+@control(ports=_switch_ports(5), description=_switch(5), children=(6, 6))
+class Switch5(Switch):
+    cases = 5
+
+
+@control(ports=_switch_ports(6), description=_switch(6), children=(7, 7))
+class Switch6(Switch):
+    cases = 6
+
+
+NODES: tuple[type[Control], ...] = (
+    Sequence, AsyncSequence, SequenceWithMemory, ReactiveSequence, Fallback, AsyncFallback, ReactiveFallback, Parallel,
+    ParallelAll, IfThenElse, WhileDoElse, TryCatch, Switch2, Switch3, Switch4, Switch5, Switch6,
 )
+
+
+def register(registry: NodeRegistry) -> None:
+    """BT.CPP's built-in controls, registered as a plugin registers its nodes."""
+    for node in NODES:
+        registry.register(node)

@@ -1,67 +1,33 @@
 """BT.CPP 4.10 decorators, each following the corresponding ``src/decorators/*``: Inverter, ForceSuccess,
 ForceFailure, RetryUntilSuccessful, Repeat, Timeout, Delay, KeepRunningUntilFailure, RunOnce, Precondition,
 SkipUnlessUpdated and WaitValueUpdate (the Loop* family is in :mod:`bt_grasp.tree.builtins.loops`).
-Timeout and Delay read the injected simulated clock, never the wall clock."""
+Timeout and Delay read the injected simulated clock, never the wall clock.
+
+They are written as a plugin's decorators are (``docs/own-leaves.md``): declared with ``@decorator``, ticking
+and halting the child with ``tick_child`` and ``halt_child``, registered by :func:`register`."""
 
 from __future__ import annotations
 
-import py_trees
-
-from bt_grasp.tree.builtins.manifest import IN, STATUS_NAMES, decorator
-from bt_grasp.tree.context import NodeContext
 from bt_grasp.tree.exceptions import ScriptSyntaxError, TreeRuntimeError
-from bt_grasp.tree.node import BtNode, BtStatus
+from bt_grasp.tree.node_api import Decorator, NodeContext, NodeRegistry, Status, decorator, input_port
 from bt_grasp.tree.ports import EntryWatch
 from bt_grasp.tree.registry import PortSpec
 from bt_grasp.tree.scripting import Program, parse_script
 
 RUNNING, SUCCESS, FAILURE, SKIPPED, IDLE = (
-    BtStatus.RUNNING,
-    BtStatus.SUCCESS,
-    BtStatus.FAILURE,
-    BtStatus.SKIPPED,
-    BtStatus.IDLE,
+    Status.RUNNING,
+    Status.SUCCESS,
+    Status.FAILURE,
+    Status.SKIPPED,
+    Status.IDLE,
 )
+#: the literal statuses a port such as Precondition's ``else`` accepts
+STATUS_NAMES = ("SUCCESS", "FAILURE", "SKIPPED", "RUNNING")
 
 
-class Decorator(BtNode, py_trees.decorators.Decorator):
-    """Base of decorators; ``halt`` resets the child (halting it when RUNNING) then itself."""
-
-    def __init__(self, ctx: NodeContext) -> None:
-        (child,) = ctx.children
-        py_trees.decorators.Decorator.__init__(self, ctx.name, child)
-        self._bt_bind(ctx)
-        self.ports = ctx.ports
-        self.clock = ctx.clock
-        self.blackboard = ctx.blackboard  # the tree instance's, as a leaf's (BT.CPP ``config().blackboard``)
-        self.child: BtNode = child  # type: ignore[assignment]
-
-    def update(self) -> py_trees.common.Status:  # pragma: no cover - py_trees never calls it here
-        return self.status
-
-    def execute_tick(self) -> BtStatus:
-        """BT.CPP ``DecoratorNode::executeTick``: a child left SUCCESS or FAILURE goes back to IDLE."""
-        status = super().execute_tick()
-        if self.child.bt_state.completed:
-            self.child.reset_status()
-        return status
-
-    def tick_child(self) -> BtStatus:
-        status = self.child.execute_tick()
-        if status is IDLE:
-            raise TreeRuntimeError(f"{self.bt_path}: the child returned IDLE")
-        return status
-
-    def reset_child(self) -> None:
-        self.halt_child(0)
-
-    def halt(self) -> None:
-        self.reset_child()
-        self.reset_status()
-
-
+@decorator(description="Swaps SUCCESS and FAILURE.")
 class Inverter(Decorator):
-    def bt_tick(self) -> BtStatus:
+    def bt_tick(self) -> Status:
         self.set_bt_status(RUNNING)
         status = self.tick_child()
         if status.completed:
@@ -70,10 +36,11 @@ class Inverter(Decorator):
         return status
 
 
+@decorator(description="SUCCESS whenever the child completes.")
 class ForceSuccess(Decorator):
     _forced = SUCCESS
 
-    def bt_tick(self) -> BtStatus:
+    def bt_tick(self) -> Status:
         self.set_bt_status(RUNNING)
         status = self.tick_child()
         if status.completed:
@@ -82,14 +49,16 @@ class ForceSuccess(Decorator):
         return status
 
 
+@decorator(description="FAILURE whenever the child completes.")
 class ForceFailure(ForceSuccess):
     _forced = FAILURE
 
 
+@decorator(description="RUNNING after each child SUCCESS; FAILURE when it fails.")
 class KeepRunningUntilFailure(Decorator):
     """RUNNING after each child success (the child starts again next tick); FAILURE when the child fails."""
 
-    def bt_tick(self) -> BtStatus:
+    def bt_tick(self) -> Status:
         self.set_bt_status(RUNNING)
         status = self.tick_child()
         if status.completed:
@@ -110,14 +79,14 @@ class _Loop(Decorator):
     """
 
     _port = ""
-    _again: BtStatus = FAILURE  # the status that makes the loop go round
+    _again: Status = FAILURE  # the status that makes the loop go round
 
     def __init__(self, ctx: NodeContext) -> None:
         super().__init__(ctx)
         self.count = 0
 
-    def bt_tick(self) -> BtStatus:
-        limit = int(self.ports.get(self._port))
+    def bt_tick(self) -> Status:
+        limit = self.ports.require(self._port, int)
         looping = self.count < limit or limit == -1
         self.set_bt_status(RUNNING)
         while looping:
@@ -133,7 +102,7 @@ class _Loop(Decorator):
                 self.reset_child()
                 return status
             self.count += 1
-            limit = int(self.ports.get(self._port))
+            limit = self.ports.require(self._port, int)
             looping = self.count < limit or limit == -1
             self.reset_child()
             if before is IDLE and looping:
@@ -147,6 +116,10 @@ class _Loop(Decorator):
         super().halt()
 
 
+@decorator(
+    ports=[input_port("num_attempts", int, description="attempts before failing (-1: forever)", required=True)],
+    description="Ticks the child again after a FAILURE, up to num_attempts times.",
+)
 class RetryUntilSuccessful(_Loop):
     """Ticks the child again after each FAILURE, up to ``num_attempts`` attempts (-1: forever)."""
 
@@ -154,6 +127,10 @@ class RetryUntilSuccessful(_Loop):
     _again = FAILURE
 
 
+@decorator(
+    ports=[input_port("num_cycles", int, description="repetitions (-1: forever)", required=True)],
+    description="Ticks the child again after a SUCCESS, num_cycles times.",
+)
 class Repeat(_Loop):
     """Ticks the child again after each SUCCESS, ``num_cycles`` times (-1: forever)."""
 
@@ -161,6 +138,10 @@ class Repeat(_Loop):
     _again = SUCCESS
 
 
+@decorator(
+    ports=[input_port("msec", int, description="time limit in milliseconds", required=True)],
+    description="Halts the child and fails after msec of simulated time.",
+)
 class Timeout(Decorator):
     """Halts the RUNNING child and fails once ``msec`` of simulated time passed since it started
     (``msec`` 0: no limit). The time is checked when the node is ticked, once per control period."""
@@ -170,8 +151,8 @@ class Timeout(Decorator):
         self.started = False
         self.start_ns = 0
 
-    def bt_tick(self) -> BtStatus:
-        msec = int(self.ports.get("msec"))
+    def bt_tick(self) -> Status:
+        msec = self.ports.require("msec", int)
         now = self.clock.now_ns()
         if not self.started:
             self.started = True
@@ -179,7 +160,7 @@ class Timeout(Decorator):
             self.set_bt_status(RUNNING)
         elif msec > 0 and now - self.start_ns >= msec * 1_000_000 and self.child.bt_state is RUNNING:
             self.feedback_message = f"timed out after {msec} ms"
-            self.halt_child(0)
+            self.halt_child()
             self.started = False
             return FAILURE
         status = self.tick_child()
@@ -193,6 +174,10 @@ class Timeout(Decorator):
         super().halt()
 
 
+@decorator(
+    ports=[input_port("delay_msec", int, description="delay in milliseconds", required=True)],
+    description="Waits delay_msec of simulated time before ticking the child.",
+)
 class Delay(Decorator):
     """RUNNING until ``delay_msec`` of simulated time passed, then ticks the child."""
 
@@ -201,8 +186,8 @@ class Delay(Decorator):
         self.started = False
         self.start_ns = 0
 
-    def bt_tick(self) -> BtStatus:
-        delay_ns = int(self.ports.get("delay_msec")) * 1_000_000
+    def bt_tick(self) -> Status:
+        delay_ns = self.ports.require("delay_msec", int) * 1_000_000
         now = self.clock.now_ns()
         if not self.started:
             self.started = True
@@ -221,17 +206,21 @@ class Delay(Decorator):
         super().halt()
 
 
+@decorator(
+    ports=[input_port("then_skip", bool, True, "afterwards SKIPPED (true) or the same status (false)")],
+    description="Ticks the child until it completes once.",
+)
 class RunOnce(Decorator):
     """Ticks the child until it completes once; afterwards SKIPPED (``then_skip``) or that same status.
     The memory survives halts and resets, as in BT.CPP."""
 
     def __init__(self, ctx: NodeContext) -> None:
         super().__init__(ctx)
-        self.done: BtStatus | None = None
+        self.done: Status | None = None
 
-    def bt_tick(self) -> BtStatus:
+    def bt_tick(self) -> Status:
         if self.done is not None:
-            return SKIPPED if self.ports.get("then_skip") else self.done
+            return SKIPPED if self.ports.require("then_skip", bool) else self.done
         self.set_bt_status(RUNNING)
         status = self.tick_child()
         if status.completed:
@@ -240,6 +229,13 @@ class RunOnce(Decorator):
         return status
 
 
+@decorator(
+    ports=[
+        input_port("if", str, description="the condition script", required=True),
+        input_port("else", str, "FAILURE", "status when the condition is false", choices=STATUS_NAMES),
+    ],
+    description="Ticks the child only when the script `if` is true.",
+)
 class Precondition(Decorator):
     """Ticks the child when the ``if`` script is true (checked when the child is not running yet);
     otherwise returns ``else`` (FAILURE by default)."""
@@ -249,20 +245,20 @@ class Precondition(Decorator):
         self.child_running = False
         self._program: Program | None = None
         if ctx.ports.key("if") is None:
-            self._program = parse_script(ctx.ports.get("if"))
+            self._program = parse_script(ctx.ports.require("if", str))
 
     def _script(self) -> Program:
         if self._program is not None:
             return self._program
         try:
-            return parse_script(str(self.ports.get("if")))
+            return parse_script(self.ports.require("if", str))
         except ScriptSyntaxError as exc:
             raise TreeRuntimeError(f"{self.bt_path}: {exc}") from None
 
-    def bt_tick(self) -> BtStatus:
-        otherwise = BtStatus(self.ports.get("else"))
+    def bt_tick(self) -> Status:
+        otherwise = Status(self.ports.require("else", str))
         if not self.child_running:
-            self.child_running = self._script().truth(self._bt_blackboard, self._bt_enums)
+            self.child_running = self._script().truth(self.blackboard, self.enums)
         if not self.child_running:
             return otherwise
         status = self.tick_child()
@@ -276,19 +272,23 @@ class Precondition(Decorator):
         super().halt()
 
 
+def _entry_port() -> PortSpec:
+    return input_port("entry", object, description="the blackboard entry to watch ({key} or key)", required=True)
+
+
 class _EntryUpdated(Decorator):
     """SkipUnlessUpdated / WaitValueUpdate (BT.CPP ``EntryUpdatedDecorator``): the child is ticked only when
     the entry was written since this node last looked (a RUNNING child is resumed regardless)."""
 
-    _not_updated: BtStatus = SKIPPED
+    _not_updated: Status = SKIPPED
 
     def __init__(self, ctx: NodeContext) -> None:
         super().__init__(ctx)
         self.watch = EntryWatch(ctx.attributes.get("entry", ""))
         self.child_running = False
 
-    def bt_tick(self) -> BtStatus:
-        if not self.child_running and not self.watch.written_since(self._bt_blackboard):
+    def bt_tick(self) -> Status:
+        if not self.child_running and not self.watch.written_since(self.blackboard):
             return self._not_updated
         status = self.tick_child()
         self.child_running = status is RUNNING
@@ -299,54 +299,27 @@ class _EntryUpdated(Decorator):
         super().halt()
 
 
+@decorator(
+    ports=[_entry_port()], description="Ticks the child only when the entry was written since; else SKIPPED.",
+)
 class SkipUnlessUpdated(_EntryUpdated):
     _not_updated = SKIPPED
 
 
+@decorator(
+    ports=[_entry_port()], description="Ticks the child only when the entry was written since; else RUNNING.",
+)
 class WaitValueUpdate(_EntryUpdated):
     _not_updated = RUNNING
 
 
-_ENTRY = PortSpec("entry", IN, object, description="the blackboard entry to watch ({key} or key)")
-
-SPECS = (
-    decorator(Inverter, "Swaps SUCCESS and FAILURE."),
-    decorator(ForceSuccess, "SUCCESS whenever the child completes."),
-    decorator(ForceFailure, "FAILURE whenever the child completes."),
-    decorator(
-        RetryUntilSuccessful,
-        "Ticks the child again after a FAILURE, up to num_attempts times.",
-        (PortSpec("num_attempts", IN, int, description="attempts before failing (-1: forever)"),),
-    ),
-    decorator(
-        Repeat,
-        "Ticks the child again after a SUCCESS, num_cycles times.",
-        (PortSpec("num_cycles", IN, int, description="repetitions (-1: forever)"),),
-    ),
-    decorator(
-        Timeout,
-        "Halts the child and fails after msec of simulated time.",
-        (PortSpec("msec", IN, int, description="time limit in milliseconds"),),
-    ),
-    decorator(
-        Delay,
-        "Waits delay_msec of simulated time before ticking the child.",
-        (PortSpec("delay_msec", IN, int, description="delay in milliseconds"),),
-    ),
-    decorator(KeepRunningUntilFailure, "RUNNING after each child SUCCESS; FAILURE when it fails."),
-    decorator(
-        RunOnce,
-        "Ticks the child until it completes once.",
-        (PortSpec("then_skip", IN, bool, True, "afterwards SKIPPED (true) or the same status (false)"),),
-    ),
-    decorator(
-        Precondition,
-        "Ticks the child only when the script `if` is true.",
-        (
-            PortSpec("if", IN, str, description="the condition script"),
-            PortSpec("else", IN, str, "FAILURE", "status when the condition is false", STATUS_NAMES),
-        ),
-    ),
-    decorator(SkipUnlessUpdated, "Ticks the child only when the entry was written since; else SKIPPED.", (_ENTRY,)),
-    decorator(WaitValueUpdate, "Ticks the child only when the entry was written since; else RUNNING.", (_ENTRY,)),
+NODES: tuple[type[Decorator], ...] = (
+    Inverter, ForceSuccess, ForceFailure, RetryUntilSuccessful, Repeat, Timeout, Delay, KeepRunningUntilFailure,
+    RunOnce, Precondition, SkipUnlessUpdated, WaitValueUpdate,
 )
+
+
+def register(registry: NodeRegistry) -> None:
+    """BT.CPP's built-in decorators, registered as a plugin registers its nodes."""
+    for node in NODES:
+        registry.register(node)

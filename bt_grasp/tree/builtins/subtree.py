@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from bt_grasp.tree.builtins.decorators import Decorator
 from bt_grasp.tree.context import NodeContext
+from bt_grasp.tree.decorator_node import Decorator
 from bt_grasp.tree.node import BtStatus
 
 

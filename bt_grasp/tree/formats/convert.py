@@ -23,6 +23,7 @@ from bt_grasp.errors import InputError
 from bt_grasp.files.output_files import write_output_file
 from bt_grasp.tree.formats.document import Document, NodeDecl
 from bt_grasp.tree.formats.yaml_format import write_yaml
+from bt_grasp.tree.loader import read_single
 
 _PORT_TAGS = {"input": "input_port", "output": "output_port", "inout": "inout_port"}
 
@@ -221,7 +222,6 @@ def _node_lines(document: Document) -> set[int]:
 def convert_file(source: Path, target: Path) -> Document:
     """Read ``source`` (one file, includes not followed) and write it to ``target`` in the other format, its
     comments kept (see the module's docstring)."""
-    from bt_grasp.tree.loader import read_single
 
     document = read_single(source)
     text = document.texts[str(source)]  # the text read_single parsed (bounded, no DTD, no YAML tags)

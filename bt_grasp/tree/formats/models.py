@@ -6,7 +6,7 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from collections.abc import Iterable
 
-from bt_grasp.tree.registry import NO_DEFAULT, NodeSpec, PortDirection
+from bt_grasp.tree.registry import NodeSpec, PortDirection, model_type_name
 from bt_grasp.tree.values import to_text
 
 _PORT_TAG = {
@@ -14,8 +14,6 @@ _PORT_TAG = {
     PortDirection.OUTPUT: "output_port",
     PortDirection.INOUT: "inout_port",
 }
-#: the C++ type names Groot2 and BT.CPP print for bt_grasp's port types
-_TYPE_NAME = {int: "int", float: "double", bool: "bool", str: "std::string"}
 
 
 def tree_nodes_model(specs: Iterable[NodeSpec]) -> str:
@@ -26,9 +24,10 @@ def tree_nodes_model(specs: Iterable[NodeSpec]) -> str:
         element = ET.SubElement(models, spec.kind.value, {"ID": spec.name})
         for port in spec.ports:
             attributes = {"name": port.name}
-            if port.type in _TYPE_NAME:
-                attributes["type"] = _TYPE_NAME[port.type]
-            if port.default is not NO_DEFAULT:
+            type_name = model_type_name(port.type)  # int, double, bool, std::string, or the class's name
+            if type_name is not None:
+                attributes["type"] = type_name
+            if port.has_default:
                 attributes["default"] = (
                     to_text(port.default)
                     if not isinstance(port.default, bool)

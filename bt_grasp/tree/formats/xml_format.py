@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import logging
 import re
-from typing import Any
+from collections.abc import Iterator
+from typing import Protocol
 
 import defusedxml
 from defusedxml.ElementTree import DefusedXMLParser, ParseError
@@ -32,12 +33,23 @@ _PORT_TAGS = {"input_port": "input", "output_port": "output", "inout_port": "ino
 _MODEL_TAGS = EXPLICIT_TAGS | {"SubTree"}
 
 
+class Element(Protocol):
+    """An XML element as defusedxml's parser builds it (ElementTree's interface; defusedxml builds them with its own
+    copy of the pure-Python module, so ``xml.etree.ElementTree.Element`` is not their class)."""
+
+    tag: str
+    attrib: dict[str, str]
+    text: str | None
+
+    def __iter__(self) -> Iterator[Element]: ...
+
+
 class _LineRecordingParser(DefusedXMLParser):  # type: ignore[misc]
     """defusedxml's parser, also storing ``sourceline`` on every element."""
 
-    def _start(self, tag: str, attr_list: Any) -> Any:
-        element = super()._start(tag, attr_list)
-        element.sourceline = self.parser.CurrentLineNumber
+    def _start(self, tag: str, attr_list: list[str]) -> Element:
+        element: Element = super()._start(tag, attr_list)
+        element.sourceline = self.parser.CurrentLineNumber  # type: ignore[attr-defined]  # read by _line
         return element
 
 
@@ -45,12 +57,12 @@ class _LineRecordingParser(DefusedXMLParser):  # type: ignore[misc]
 MAX_XML_DEPTH = 100
 
 
-def parse_xml(data: bytes, source: str) -> Any:
+def parse_xml(data: bytes, source: str) -> Element:
     """The root element of ``data``; every problem is a :class:`TreeFileError` with its line."""
     parser = _LineRecordingParser(forbid_dtd=True, forbid_entities=True, forbid_external=True)
     try:
         parser.feed(data)
-        root = parser.close()
+        root: Element = parser.close()
     except ParseError as exc:
         line = exc.position[0] if getattr(exc, "position", None) else None
         message = re.sub(r": line \d+, column \d+$", "", str(exc))
@@ -72,15 +84,15 @@ def parse_xml(data: bytes, source: str) -> Any:
     return root
 
 
-def _line(element: Any) -> int:
+def _line(element: Element) -> int:
     return int(getattr(element, "sourceline", 0) or 0)
 
 
-def _children(element: Any) -> list[Any]:
+def _children(element: Element) -> list[Element]:
     return [c for c in element if isinstance(c.tag, str)]
 
 
-def _node(element: Any, source: str) -> NodeDecl:
+def _node(element: Element, source: str) -> NodeDecl:
     tag = element.tag
     line = _line(element)
     attributes = [(k, v) for k, v in element.attrib.items() if k != "ID"]
@@ -101,7 +113,7 @@ def _node(element: Any, source: str) -> NodeDecl:
     return NodeDecl(tag, tuple(attributes), children, source, line)
 
 
-def _model(element: Any, source: str) -> ModelDecl:
+def _model(element: Element, source: str) -> ModelDecl:
     line = _line(element)
     node_id = element.attrib.get("ID")
     if not node_id:

@@ -22,7 +22,6 @@ and aliases are errors, reported with their line.
 from __future__ import annotations
 
 import re
-from typing import Any
 
 import yaml
 
@@ -79,7 +78,7 @@ class _Reader:
             raise self.error(node, f"{what} must be a list")
         return list(node.value)
 
-    def scalar(self, node: yaml.Node, what: str) -> Any:
+    def scalar(self, node: yaml.Node, what: str) -> object:
         self.check(node)
         if not isinstance(node, yaml.ScalarNode):
             raise self.error(node, f"{what} must be a single value, not a {type(node).__name__[:-4].lower()}")
@@ -218,7 +217,7 @@ def read_yaml(data: bytes, source: str) -> Document:
 
 
 # ---- writing ---------------------------------------------------------------------------------------
-def _yaml_value(text: str) -> Any:
+def _yaml_value(text: str) -> int | bool | str:
     if _INT.fullmatch(text):
         return int(text)
     if text in ("true", "false"):
@@ -226,8 +225,8 @@ def _yaml_value(text: str) -> Any:
     return text
 
 
-def _node_data(decl: NodeDecl) -> Any:
-    body: dict[str, Any] = {}
+def _node_data(decl: NodeDecl) -> dict[str, object] | str:
+    body: dict[str, object] = {}
     if decl.subtree_id is not None:
         body["ID"] = decl.subtree_id
     for key, value in decl.attributes:
@@ -238,7 +237,7 @@ def _node_data(decl: NodeDecl) -> Any:
 
 
 def write_yaml(document: Document) -> str:
-    data: dict[str, Any] = {"btcpp_format": 4}
+    data: dict[str, object] = {"btcpp_format": 4}
     if document.main_tree is not None:
         data["main_tree_to_execute"] = document.main_tree
     if document.includes:
@@ -249,7 +248,7 @@ def write_yaml(document: Document) -> str:
         for model in document.models:
             ports = []
             for port in model.ports:
-                entry: dict[str, Any] = {"name": port.name, "direction": port.direction}
+                entry: dict[str, object] = {"name": port.name, "direction": port.direction}
                 if port.type_name:
                     entry["type"] = port.type_name
                 if port.default is not None:

@@ -16,7 +16,6 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any
 
 from bt_grasp.tree.blackboard import EMPTY, Blackboard
 from bt_grasp.tree.exceptions import TreeRuntimeError
@@ -43,7 +42,7 @@ class Env:
 
 
 class Expr:
-    def evaluate(self, env: Env) -> Any:
+    def evaluate(self, env: Env) -> object:
         raise NotImplementedError
 
 
@@ -53,9 +52,9 @@ def _not_init(side: str, op: str) -> TreeRuntimeError:
 
 @dataclass(frozen=True)
 class Literal(Expr):
-    value: Any
+    value: object
 
-    def evaluate(self, env: Env) -> Any:
+    def evaluate(self, env: Env) -> object:
         return self.value
 
 
@@ -65,7 +64,7 @@ class Name(Expr):
 
     name: str
 
-    def evaluate(self, env: Env) -> Any:
+    def evaluate(self, env: Env) -> object:
         if self.name in env.enums:
             return float(env.enums[self.name])
         entry = env.blackboard.entry(self.name)
@@ -79,7 +78,7 @@ class Unary(Expr):
     op: str  # "-", "!", "~"
     operand: Expr
 
-    def evaluate(self, env: Env) -> Any:
+    def evaluate(self, env: Env) -> object:
         value = self.operand.evaluate(env)
         if is_number(value):
             real = float(value)
@@ -117,7 +116,7 @@ def _divide(lhs: float, rhs: float) -> float:
     return lhs / rhs
 
 
-def arithmetic(op: str, lhs: Any, rhs: Any) -> Any:
+def arithmetic(op: str, lhs: object, rhs: object) -> object:
     """BT.CPP ``ExprBinaryArithmetic::evaluate`` on two values."""
     if lhs is EMPTY:
         raise _not_init("left", op)
@@ -158,19 +157,26 @@ class Binary(Expr):
     lhs: Expr
     rhs: Expr
 
-    def evaluate(self, env: Env) -> Any:
+    def evaluate(self, env: Env) -> object:
         return arithmetic(self.op, self.lhs.evaluate(env), self.rhs.evaluate(env))
 
 
-def _holds(op: str, lhs: Any, rhs: Any, reals: bool) -> bool:
+def _holds_real(op: str, lhs: float, rhs: float) -> bool:
+    """Reals compare within BT.CPP's epsilon for equality."""
     if op == "==":
-        return abs(lhs - rhs) <= EPSILON if reals else lhs == rhs
+        return abs(lhs - rhs) <= EPSILON
     if op == "!=":
-        return not (abs(lhs - rhs) <= EPSILON if reals else lhs == rhs)
+        return not abs(lhs - rhs) <= EPSILON
     return {"<": lhs < rhs, ">": lhs > rhs, "<=": lhs <= rhs, ">=": lhs >= rhs}[op]
 
 
-def compare(op: str, lhs: Any, rhs: Any, enums: Mapping[str, int]) -> bool:
+def _holds_bytes(op: str, lhs: bytes, rhs: bytes) -> bool:
+    """Strings compare as their bytes."""
+    return {"==": lhs == rhs, "!=": lhs != rhs, "<": lhs < rhs, ">": lhs > rhs, "<=": lhs <= rhs,
+            ">=": lhs >= rhs}[op]
+
+
+def compare(op: str, lhs: object, rhs: object, enums: Mapping[str, int]) -> bool:
     """One comparison of BT.CPP ``ExprComparison``: numbers as reals, strings as bytes, a string and a
     number by reading the string as a number (``true``, ``false`` and enum names included)."""
     if lhs is EMPTY:
@@ -178,13 +184,13 @@ def compare(op: str, lhs: Any, rhs: Any, enums: Mapping[str, int]) -> bool:
     if rhs is EMPTY:
         raise _not_init("right", op)
     if is_number(lhs) and is_number(rhs):
-        return _holds(op, float(lhs), float(rhs), True)
+        return _holds_real(op, float(lhs), float(rhs))
     if isinstance(lhs, str) and isinstance(rhs, str):
-        return _holds(op, lhs.encode(), rhs.encode(), False)
+        return _holds_bytes(op, lhs.encode(), rhs.encode())
     if isinstance(lhs, str) and is_number(rhs):
-        return _holds(op, to_real(lhs, enums), float(rhs), True)
+        return _holds_real(op, to_real(lhs, enums), float(rhs))
     if is_number(lhs) and isinstance(rhs, str):
-        return _holds(op, float(lhs), to_real(rhs, enums), True)
+        return _holds_real(op, float(lhs), to_real(rhs, enums))
     raise TreeRuntimeError(
         f"Can't mix different types in Comparison. Left operand [{type_name(lhs)}] right operand [{type_name(rhs)}]"
     )
@@ -197,7 +203,7 @@ class Compare(Expr):
     operands: tuple[Expr, ...]
     ops: tuple[str, ...]
 
-    def evaluate(self, env: Env) -> Any:
+    def evaluate(self, env: Env) -> object:
         lhs = self.operands[0].evaluate(env)
         for op, operand in zip(self.ops, self.operands[1:], strict=True):
             rhs = operand.evaluate(env)
@@ -215,7 +221,7 @@ class Ternary(Expr):
     then: Expr
     otherwise: Expr
 
-    def evaluate(self, env: Env) -> Any:
+    def evaluate(self, env: Env) -> object:
         value = self.condition.evaluate(env)
         if value is EMPTY:
             raise TreeRuntimeError("Any::cast failed because it is empty")
@@ -231,7 +237,7 @@ class Assign(Expr):
     op: str
     value: Expr
 
-    def evaluate(self, env: Env) -> Any:
+    def evaluate(self, env: Env) -> object:
         if not isinstance(self.target, Name):
             raise TreeRuntimeError("Assignment left operand not a blackboard entry")
         key = self.target.name
@@ -258,7 +264,7 @@ class Assign(Expr):
         entry.sequence_id += 1
         return new
 
-    def _assigned(self, key: str, declared: type | None, current: Any, value: Any, env: Env) -> Any:
+    def _assigned(self, key: str, declared: type | None, current: object, value: object, env: Env) -> object:
         if current is EMPTY and declared is None:
             return value
         if isinstance(value, str) and not isinstance(current, str):
@@ -280,7 +286,7 @@ class Assign(Expr):
                 f"The right operand has type [{type_name(value)}] and can't be converted ({exc})"
             ) from None
 
-    def _updated(self, current: Any, value: Any) -> Any:
+    def _updated(self, current: object, value: object) -> object:
         temp = current
         if is_number(value):
             if not is_number(current):
@@ -301,9 +307,9 @@ class Program:
     source: str
     statements: tuple[Expr, ...]
 
-    def run(self, blackboard: Blackboard, enums: Mapping[str, int]) -> Any:
+    def run(self, blackboard: Blackboard, enums: Mapping[str, int]) -> object:
         env = Env(blackboard, enums)
-        result: Any = None
+        result: object = None
         try:
             for statement in self.statements:
                 result = statement.evaluate(env)
@@ -314,7 +320,7 @@ class Program:
     def assigned_names(self) -> frozenset[str]:
         """Every blackboard entry the program assigns to (for load-time checks)."""
         names: set[str] = set()
-        pending: list[Any] = list(self.statements)
+        pending: list[object] = list(self.statements)
         while pending:
             expr = pending.pop()
             if isinstance(expr, Assign) and isinstance(expr.target, Name):

@@ -1,4 +1,4 @@
-"""The example plugin's nodes, written only against :mod:`bt_grasp.nodes`."""
+"""The example plugin's nodes, written only against :mod:`bt_grasp.nodes`, the way bt_grasp writes its own."""
 
 from __future__ import annotations
 
@@ -9,15 +9,15 @@ GRIPPER_TOO_NARROW = Reason("GRIPPER_TOO_NARROW", "The gripper is open less than
 
 
 @condition(ports=[input_port("min_mm", float, 50.0, "the least opening between the fingers, in millimetres")],
-           needs_robot=True)
+           needs_robot=True, reasons=[GRIPPER_TOO_NARROW])
 class GripperOpenAtLeast(RobotLeaf):
     """SUCCESS when the fingers are at least min_mm apart, else FAILURE with GRIPPER_TOO_NARROW."""
 
     def update(self) -> Status:
         width_mm = self.cell.robot.gripper_width_m() * 1000.0
-        wanted_mm = self.input_float("min_mm")
+        wanted_mm = self.ports.require("min_mm", float)
         if width_mm < wanted_mm:
-            return self.failed(GRIPPER_TOO_NARROW, f"the gripper is open {width_mm:.1f} mm, less than {wanted_mm:g} mm")
+            return self.fail(GRIPPER_TOO_NARROW, f"the gripper is open {width_mm:.1f} mm, less than {wanted_mm:g} mm")
         return Status.SUCCESS
 
 
@@ -26,14 +26,14 @@ class Dwell(Leaf):
     """RUNNING for the given simulated time, then SUCCESS (the arm holds still meanwhile)."""
 
     def initialise(self) -> None:
-        self.deadline = Deadline.after(self.clock, float(self.ports.get("seconds")))
+        self.deadline = Deadline.after(self.clock, self.ports.require("seconds", float))
 
     def update(self) -> Status:
         return Status.SUCCESS if self.deadline.passed() else Status.RUNNING
 
 
 def register(registry: NodeRegistry) -> None:
-    """The plugin's hook (BT.CPP's BT_REGISTER_NODES): its reason first, then its nodes."""
-    registry.register_reason(GRIPPER_TOO_NARROW)
-    registry.register(GripperOpenAtLeast.bt_spec)
-    registry.register(Dwell.bt_spec)
+    """The plugin's hook (BT.CPP's BT_REGISTER_NODES): each node registered as BT.CPP's registerNodeType<T> does;
+    GRIPPER_TOO_NARROW comes with GripperOpenAtLeast's declaration."""
+    registry.register(GripperOpenAtLeast)
+    registry.register(Dwell)

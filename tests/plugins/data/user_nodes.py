@@ -9,7 +9,6 @@
 from __future__ import annotations
 
 from bt_grasp.nodes import (
-    BtStatus,
     Control,
     Deadline,
     Decorator,
@@ -34,7 +33,7 @@ class CheckWeight(Leaf):
     """SUCCESS when the weight is at most max_grams."""
 
     def update(self) -> Status:
-        grams, limit = float(self.ports.get("grams")), float(self.ports.get("max_grams"))
+        grams, limit = self.ports.require("grams", float), self.ports.require("max_grams", float)
         if grams > limit:
             return self.fail(WEIGHT_OUT_OF_RANGE, f"{grams:g} g is more than {limit:g} g")
         return Status.SUCCESS
@@ -45,7 +44,7 @@ class WaitSim(Leaf):
     """RUNNING until the given simulated time has passed, then SUCCESS."""
 
     def initialise(self) -> None:
-        self.deadline = Deadline.after(self.clock, float(self.ports.get("seconds")))
+        self.deadline = Deadline.after(self.clock, self.ports.require("seconds", float))
 
     def update(self) -> Status:
         return Status.SUCCESS if self.deadline.passed() else Status.RUNNING
@@ -61,23 +60,23 @@ class RoundRobinFallback(Control):
         self.current = 0  # the child being tried (resumed when it was RUNNING)
         self.tried = 0  # how many children this activation has tried
 
-    def bt_tick(self) -> BtStatus:
-        count = len(self.kids)
-        if self.bt_state is not BtStatus.RUNNING:
+    def bt_tick(self) -> Status:
+        count = len(self.child_nodes)
+        if self.bt_state is not Status.RUNNING:
             self.current, self.tried = self.start, 0
-        self.set_bt_status(BtStatus.RUNNING)
+        self.set_bt_status(Status.RUNNING)
         while self.tried < count:
-            status = self._tick_child(self.current)
-            if status is BtStatus.RUNNING:
-                return BtStatus.RUNNING
-            if status is BtStatus.SUCCESS:
+            status = self.tick_child(self.current)
+            if status is Status.RUNNING:
+                return Status.RUNNING
+            if status is Status.SUCCESS:
                 self.start = (self.current + 1) % count
                 self.reset_children()
-                return BtStatus.SUCCESS
+                return Status.SUCCESS
             self.current = (self.current + 1) % count
             self.tried += 1
         self.reset_children()
-        return BtStatus.FAILURE
+        return Status.FAILURE
 
     def halt(self) -> None:
         self.tried = 0
@@ -92,15 +91,15 @@ class RateLimit(Decorator):
         super().__init__(ctx)
         self.last_start_ns: int | None = None
 
-    def bt_tick(self) -> BtStatus:
+    def bt_tick(self) -> Status:
         now = self.clock.now_ns()
-        period_ns = int(self.ports.get("period_msec")) * 1_000_000
-        if self.child.bt_state is not BtStatus.RUNNING:
+        period_ns = self.ports.require("period_msec", int) * 1_000_000
+        if self.child.bt_state is not Status.RUNNING:
             if self.last_start_ns is not None and now - self.last_start_ns < period_ns:
                 self.feedback_message = "rate limited"
-                return BtStatus.FAILURE
+                return Status.FAILURE
             self.last_start_ns = now
-        self.set_bt_status(BtStatus.RUNNING)
+        self.set_bt_status(Status.RUNNING)
         status = self.tick_child()
         if status.completed:
             self.reset_child()
@@ -110,4 +109,4 @@ class RateLimit(Decorator):
 def register(registry: NodeRegistry) -> None:
     registry.register_reason(WEIGHT_OUT_OF_RANGE)
     for cls in (CheckWeight, WaitSim, RoundRobinFallback, RateLimit):
-        registry.register(cls.bt_spec)
+        registry.register(cls)
