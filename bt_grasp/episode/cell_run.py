@@ -38,8 +38,9 @@ import numpy as np
 
 from bt_grasp.defaults import DEFAULT_MAX_TICKS
 from bt_grasp.episode.request import BlackboardValue
-from bt_grasp.episode.result import ChainStep, EpisodeResult, JsonValue, Judged, interrupted_result
+from bt_grasp.episode.result import ChainStep, EpisodeResult, Judged, interrupted_result
 from bt_grasp.errors import InputError
+from bt_grasp.files.json_types import JsonValue
 from bt_grasp.scene.goals import Goal, PickGoal
 
 if TYPE_CHECKING:
