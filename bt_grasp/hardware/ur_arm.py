@@ -14,10 +14,14 @@ A thin adapter, as ur_rtde's own examples drive a UR:
 * **The watchdog** (``rtde_set_watchdog`` through ur_rtde's ``setWatchdog``) is kicked from the tick loop: every
   ``servoJ`` writes its register, and :meth:`poll` kicks it in periods that sent none. While moving targets stream
   (a trajectory's samples on their way) it asks for :data:`WATCHDOG_MOTION_HZ` (a process stalled mid-motion stops
-  the program within 0.1 s); a hold (a target with no velocity: a trajectory's last sample, a settling or cancelled
-  motion) relaxes it to :data:`WATCHDOG_HOLD_HZ` at once (the tick that ends a motion may go on to perceive or plan
-  for a few hundred ms while the servo holds the arm still: a stall then moves nothing). A stall the watchdog ended
-  is reported ``WATCHDOG``.
+  the program within 0.25 s; the servo holding its last target has stood the arm still before that); a hold (a
+  target with no velocity: a trajectory's last sample, a settling or cancelled motion) relaxes it to
+  :data:`WATCHDOG_HOLD_HZ` at once (the tick that ends a motion may go on to perceive or plan for a few hundred ms
+  while the servo holds the arm still: a stall then moves nothing). A stall the watchdog ended is reported
+  ``WATCHDOG``: a gap in the writes to its register longer than it allowed, then a stopped program.
+* **A controller that went away**: ur_rtde's synchronous calls would wait for it (and try to reconnect, for
+  seconds), so each runs in a thread of its own with a bound (:data:`SYNC_TIMEOUT_S`), and nothing synchronous goes
+  to a controller whose state stopped coming (no new RTDE timestamp for :data:`LOST_AFTER_S`): ``CONNECTION_LOST``.
 * **The first motion** waits for ``confirm`` (the operator's yes; ``--yes`` skips it); the watchdog is armed then,
   not before (a prompt may wait longer than any watchdog).
 * **Stops**: :meth:`stop` sends ``stopJ`` (the Ctrl-C path and every fault's); after a fault the arm takes no more
@@ -45,7 +49,7 @@ from bt_grasp.hardware.cell_faults import (
     fault_from_state,
 )
 from bt_grasp.hardware.motion_guard import MotionGuard
-from bt_grasp.hardware.robotiq_client import GripperSocketClosed, Robotiq2F85Client
+from bt_grasp.hardware.robotiq_client import Robotiq2F85Client
 from bt_grasp.hardware.ur_lib import ur_rtde
 from bt_grasp.robot_description import ARM_JOINTS
 
@@ -53,7 +57,10 @@ log = logging.getLogger(__name__)
 
 SERVO_LOOKAHEAD_S = 0.1
 SERVO_GAIN = 300.0
-WATCHDOG_MOTION_HZ = 10.0
+#: the watchdog while targets stream: the program stops 0.25 s after the last write. The arm itself stops sooner: the
+#: controller's servo holds the last target, so a stalled stream stands the arm still within a few periods; the
+#: watchdog ends the program (a loaded 2-core machine stalled a tick loop of normal priority past 0.1 s mid-motion)
+WATCHDOG_MOTION_HZ = 4.0
 WATCHDOG_HOLD_HZ = 0.5
 #: a stream of moving targets that stopped without a hold counts as a hold after this long
 HOLD_AFTER_S = 0.05
@@ -297,6 +304,8 @@ class UrArm:
             while time.monotonic() < deadline:
                 if float(self.receive.getTimestamp()) != first:
                     return False
+                if not self.receive.isConnected():  # ur_rtde saw the end of the connection
+                    return True
                 time.sleep(0.002)
             return wait_s > 0
         except RuntimeError:
@@ -386,13 +395,11 @@ class UrArm:
     def _gripper(self, call: Any) -> None:
         try:
             call()
-        except GripperSocketClosed as closed:
-            if self._silent(LOST_AFTER_S):  # the gripper's socket went with the controller
-                self.lost = True
-                self._fault(CellFault(CellFaultKind.CONNECTION_LOST, f"the controller is gone ({closed.detail}, and no "
-                                      f"state came for {LOST_AFTER_S * 1000:.0f} ms)"))
-            self._fault(closed)
         except CellFault as fault:
+            if self._silent(LOST_AFTER_S):  # the gripper (the URCap's socket) went with the controller
+                self.lost = True
+                self._fault(CellFault(CellFaultKind.CONNECTION_LOST, f"the controller is gone ({fault.detail} from "
+                                      f"the gripper, and no state came for {LOST_AFTER_S * 1000:.0f} ms)"))
             self._fault(fault)
 
     def _set_watchdog(self, hz: float) -> None:

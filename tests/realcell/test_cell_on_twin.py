@@ -5,8 +5,8 @@ One twin (``scenes/tabletop.yaml``, seed 0, its protective stops unlockable afte
 test leaves it able to take the next run. Done-when 3: each fault is injected mid-motion into a run in a process of
 its own (``bt_grasp.bench.cell_faults.one_trial``, what ``bench cell-faults`` repeats) and must end the run with its
 own reason, the arm still and the fault seen within 1 s, and a log ``replay`` reads; a motion leaving the workspace
-box is refused before anything is sent. Done-when 1 (one seed through the real ur_rtde library) is the module's
-last test: a pick with ``trees/pick_with_recovery.xml`` judged by the twin's physics."""
+box is refused before anything is sent. Done-when 1's seed through the real ur_rtde library is
+``tests/test_readme_commands.py``'s ``bench twin --seeds 1``."""
 
 from __future__ import annotations
 
@@ -103,22 +103,3 @@ def test_a_run_asks_before_the_first_motion_and_a_non_terminal_must_say_yes(twin
     done = _bt("run", str(shuttle), "--cell", str(twin.cell_path))
     assert done.returncode == 2 and done.stdout == ""
     assert done.stderr.startswith("bt-grasp: error: --yes: a run on a real cell asks before the arm's first motion")
-
-
-@pytest.mark.slow
-def test_one_seed_picks_through_ur_rtde_judged_by_the_twins_physics(twin: TwinProcess, tmp_path: Path) -> None:
-    """Done-when 1's `make test` seed (`bench twin --seeds 20` is the figure): the README's `run TREE --cell` row."""
-    log, summary = tmp_path / "pick.mcap", tmp_path / "pick.json"
-    done = _bt("run", "trees/pick_with_recovery.xml", "--cell", str(twin.cell_path), "--yes", "--quiet", "--log",
-               str(log), "--summary-json", str(summary))
-    result = json.loads(summary.read_text())
-    assert done.returncode == 0, (result, done.stderr[-3000:])
-    assert result["success"] and result["ran_on"] == "twin" and result["clock"] == "wall"
-    assert result["judge"]["source"] == "the twin's physics judge" and result["judge"]["in_gripper"]
-    replay = _bt("replay", str(log), "--json", timeout=120)
-    assert replay.returncode == 0, replay.stderr
-    recorded = json.loads(replay.stdout)
-    assert recorded["metadata"]["ran_on"] == "twin" and recorded["metadata"]["clock"] == "wall"
-    assert recorded["result"]["success"] is True
-    resim = _bt("replay", str(log), "--resim", timeout=120)
-    assert resim.returncode == 2 and resim.stderr.count("\n") == 1 and "cannot be re-simulated" in resim.stderr
