@@ -61,7 +61,9 @@ SERVO_GAIN = 300.0
 #: controller's servo holds the last target, so a stalled stream stands the arm still within a few periods; the
 #: watchdog ends the program (a loaded 2-core machine stalled a tick loop of normal priority past 0.1 s mid-motion)
 WATCHDOG_MOTION_HZ = 4.0
-WATCHDOG_HOLD_HZ = 0.5
+#: the watchdog while the arm holds: perceiving (a camera's frame may take its 1 s timeout) and planning on a busy
+#: machine may take seconds between ticks, and a stall then moves nothing
+WATCHDOG_HOLD_HZ = 0.2
 #: a stream of moving targets that stopped without a hold counts as a hold after this long
 HOLD_AFTER_S = 0.05
 HOLD_SPEED_RAD_S = 0.01

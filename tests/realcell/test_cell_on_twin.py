@@ -103,3 +103,27 @@ def test_a_run_asks_before_the_first_motion_and_a_non_terminal_must_say_yes(twin
     done = _bt("run", str(shuttle), "--cell", str(twin.cell_path))
     assert done.returncode == 2 and done.stdout == ""
     assert done.stderr.startswith("bt-grasp: error: --yes: a run on a real cell asks before the arm's first motion")
+
+
+def test_the_speed_slider_slows_a_run_and_its_checks_follow(twin: TwinProcess, tmp_path: Path) -> None:
+    """The executor's tracking and settling checks run on trajectory time, which the slider slows: at 40 % the same
+    motion takes about 2.5 times as long and still succeeds (on wall time it would fail TRACKING_ERROR)."""
+    rtde_io = pytest.importorskip("rtde_io")
+    tree = tmp_path / "there_and_back.xml"
+    tree.write_text('<root BTCPP_format="4"><BehaviorTree ID="Go"><Sequence><MoveTo pose="0.50;-0.12;0.22"/>'
+                    '<MoveTo pose="0.40;0.12;0.25"/></Sequence></BehaviorTree></root>\n')
+    seconds = {}
+    io = rtde_io.RTDEIOInterface(twin.host)
+    try:
+        for number, fraction in enumerate((1.0, 1.0, 0.4)):  # the first brings the arm to where both others start
+            assert io.setSpeedSlider(fraction)
+            summary = tmp_path / f"slider-{number}.json"
+            done = _bt("run", str(tree), "--cell", str(twin.cell_path), "--yes", "--quiet", "--summary-json",
+                       str(summary))
+            result = json.loads(summary.read_text())  # the twin judges its pick goal: not this tree's, so exit 1
+            assert result["tree_status"] == "SUCCESS" and "Traceback" not in done.stderr, (result, done.stderr)
+            seconds[fraction] = result["wall_time_s"]
+    finally:
+        io.setSpeedSlider(1.0)
+        io.disconnect()
+    assert 1.6 < seconds[0.4] / seconds[1.0] < 3.2, seconds
