@@ -105,6 +105,7 @@ def test_a_run_asks_before_the_first_motion_and_a_non_terminal_must_say_yes(twin
     assert done.stderr.startswith("bt-grasp: error: --yes: a run on a real cell asks before the arm's first motion")
 
 
+@pytest.mark.slow
 def test_the_speed_slider_slows_a_run_and_its_checks_follow(twin: TwinProcess, tmp_path: Path) -> None:
     """The executor's tracking and settling checks run on trajectory time, which the slider slows: at 40 % the same
     motion takes about 2.5 times as long and still succeeds (on wall time it would fail TRACKING_ERROR)."""
