@@ -12,9 +12,6 @@ gripper's arc (about 10 mm of vertical travel over the stroke), and the body is 
 from __future__ import annotations
 
 import enum
-import hashlib
-import os
-import tempfile
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
@@ -24,7 +21,14 @@ import defusedxml.ElementTree as SafeET
 import numpy as np
 from numpy.typing import NDArray
 
-from bt_grasp.robot_description import GRIPPER_LINKS, MAX_OPENING_M, TCP_LINK, robot_urdf_path, robot_urdf_text
+from bt_grasp.robot_description import (
+    GRIPPER_LINKS,
+    MAX_OPENING_M,
+    TCP_LINK,
+    robot_urdf_path,
+    robot_urdf_text,
+    sealed_urdf_path,
+)
 
 
 class GripperName(enum.StrEnum):
@@ -180,16 +184,9 @@ def robot_urdf_with(gripper: GripperName) -> str:
 
 @cache
 def robot_urdf_path_with(gripper: GripperName) -> Path:
-    """The merged URDF with ``gripper`` as a file (cached by content beside bt_grasp's own)."""
+    """The merged URDF with ``gripper`` as a file only this process can reach (a sealed in-memory file, as
+    :func:`bt_grasp.robot_description.robot_urdf_path`: nothing written beside bt_grasp's files or trusted from a
+    cache)."""
     if gripper == GripperName.BT_GRASP:
         return robot_urdf_path()
-    text = robot_urdf_with(gripper)
-    digest = hashlib.sha256(text.encode()).hexdigest()[:16]
-    folder = robot_urdf_path().parent
-    path = folder / f"ur5_{gripper.value}_{digest}.urdf"
-    if not path.exists():
-        fd, tmp = tempfile.mkstemp(dir=folder, suffix=".urdf")
-        with os.fdopen(fd, "w") as handle:
-            handle.write(text)
-        os.replace(tmp, path)
-    return path
+    return sealed_urdf_path(f"ur5_{gripper.value}.urdf", robot_urdf_with(gripper))

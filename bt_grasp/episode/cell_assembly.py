@@ -30,6 +30,7 @@ from bt_grasp.behaviours.cell import Cell, make_cell
 from bt_grasp.clock import Clock
 from bt_grasp.episode.instruments import TimedPlanner
 from bt_grasp.interfaces import Camera, Robot
+from bt_grasp.seeds import Stream
 
 if TYPE_CHECKING:
     from pathlib import Path
@@ -123,10 +124,11 @@ def assemble_cell(devices: CellDevices, scene: Scene, seed: int, calibration: Ca
 
 
 def _real_services(cell: Cell, real: RealCellServices) -> None:
-    from bt_grasp.motion.kinematics import default_kinematics
+    from bt_grasp.motion.kinematics import SeededKinematics, default_kinematics
     from bt_grasp.motion.planner import MotionPlanner
 
-    cell.kinematics = default_kinematics(urdf_path=real.robot_urdf)
+    # the gripper's robot description, its IK restarts still on the run's stream (as make_cell seeds them)
+    cell.kinematics = SeededKinematics(default_kinematics(urdf_path=real.robot_urdf), cell.seeds.integer(Stream.IK))
     cell.planner = MotionPlanner(urdf_path=real.robot_urdf)
     cell.guard = real.guard
     cell.motion_clock = real.motion_clock

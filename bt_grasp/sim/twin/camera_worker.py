@@ -33,6 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bt_grasp.interfaces import CameraIntrinsics, Mount, RGBDFrame
+from bt_grasp.seeds import RunSeeds, Stream
 
 log = logging.getLogger(__name__)
 
@@ -67,7 +68,7 @@ class FrameStats:
     mean_render_ms: float
 
 
-def _worker(conn: Connection, scene_path: str, seed: int, robot_urdf: str | None, shm_name: str,
+def _worker(conn: Connection, scene_path: str, seed: int, gripper: str, shm_name: str,
             board: tuple[dict[str, str | int | float], list[list[float]]] | None = None) -> None:
     """The render process: build the world, then pose + render on request until told to stop. A request is a
     :class:`PoseSnapshot` and whether the depth imager's picture is wanted too."""
@@ -76,19 +77,22 @@ def _worker(conn: Connection, scene_path: str, seed: int, robot_urdf: str | None
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C reaches the whole process group: the twin stops us
     with contextlib.suppress(OSError):
         os.nice(WORKER_NICE)
-    from pathlib import Path  # deferred: the child imports what it renders with after its niceness is set
 
     import sapien
 
     from bt_grasp.scene.format import load_scene  # deferred: as above, in the render process only
     from bt_grasp.sim.depth_imager import DepthImager, DepthImagerModel  # deferred: as above
     from bt_grasp.sim.render_keeper import keep_renderer_warm  # deferred: as above
-    from bt_grasp.sim.simulated_d435 import DEPTH_IMAGER_STREAM  # deferred: as above
     from bt_grasp.sim.world import World  # deferred: as above
 
     keep_renderer_warm()
+    from bt_grasp.cell.grippers import GripperName, robot_urdf_path_with  # deferred: as above
+
+    # the robot description is made here: the twin's is a sealed in-memory file of the twin's process, which a
+    # spawned process cannot open
+    name = GripperName(gripper)
     world = World(load_scene(scene_path), seed, source=scene_path,
-                  robot_urdf=Path(robot_urdf) if robot_urdf is not None else None)
+                  robot_urdf=None if name == GripperName.BT_GRASP else robot_urdf_path_with(name))
     if board is not None:
         from bt_grasp.perception.charuco import BoardSpec  # deferred: as above
         from bt_grasp.sim.charuco import attach_board_to_link  # deferred: as above
@@ -102,7 +106,7 @@ def _worker(conn: Connection, scene_path: str, seed: int, robot_urdf: str | None
     depth_out = np.ndarray((h, w), dtype=np.float32, buffer=shm.buf, offset=h * w * 3)
     imager_out = np.ndarray((h, w), dtype=np.float32, buffer=shm.buf, offset=h * w * 7)
     cam = world.config.camera
-    rng = np.random.default_rng(np.random.SeedSequence(seed).spawn(DEPTH_IMAGER_STREAM + 1)[DEPTH_IMAGER_STREAM])
+    rng = RunSeeds(seed).generator(Stream.DEPTH_IMAGER)  # the simulated D435's stream, as a simulated run draws
     imager = DepthImager(camera, DepthImagerModel.d435(w, h), cam.noise, rng, cam.near_m, cam.far_m)
     entities = list(world.objects.values())
     camera.capture()  # the first picture pays the renderer's set-up
@@ -132,11 +136,13 @@ def _worker(conn: Connection, scene_path: str, seed: int, robot_urdf: str | None
 class TwinCamera:
     """The render process's handle in the twin: :meth:`capture` a frame of a :class:`PoseSnapshot`."""
 
-    def __init__(self, scene_path: str, seed: int, robot_urdf: str | None, intrinsics: CameraIntrinsics,
+    def __init__(self, scene_path: str, seed: int, gripper: str, intrinsics: CameraIntrinsics,
                  mount: Mount, board: tuple[dict[str, str | int | float], list[list[float]]] | None = None) -> None:
+        """``gripper``: the :class:`~bt_grasp.cell.grippers.GripperName` whose robot description the render process
+        builds its world with."""
         self.intrinsics = intrinsics
         self.mount = mount
-        self._args = (scene_path, seed, robot_urdf)
+        self._args = (scene_path, seed, gripper)
         self._board = board
         self._shm: SharedMemory | None = None
         self._process: BaseProcess | None = None

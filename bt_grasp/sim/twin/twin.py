@@ -109,8 +109,7 @@ class Twin:
             layout = BoardLayout()
             self.board = (layout, T_tool_board(self.gripper_model, layout))
         board_arg = None if self.board is None else (self.board[0].as_dict(), self.board[1].tolist())
-        self._camera = TwinCamera(str(self.scene_path), self.seed,
-                                  None if self.config.gripper == GripperName.BT_GRASP else str(urdf),
+        self._camera = TwinCamera(str(self.scene_path), self.seed, self.config.gripper.value,
                                   self.world.camera.intrinsics, self.world.camera.mount, board_arg)
         self.camera_port = CameraPort(self.config.host, self.config.camera_port, self._d435_description(),
                                       self.capture_d435, self.config.message_timeout_s)
