@@ -34,8 +34,8 @@ import rtde_receive
 from bt_grasp.bench.twin_process import start_twin
 from bt_grasp.cell.format import load_cell
 from bt_grasp.cell.grippers import ROBOTIQ_2F85, robot_urdf_path_with
+from bt_grasp.episode.cell_devices import guard_for
 from bt_grasp.episode.cell_scene import scene_for_cell
-from bt_grasp.hardware.cell_devices import guard_for
 from bt_grasp.motion.kinematics import ArmKinematics
 from bt_grasp.motion.planner import MotionPlanner, PlannerOptions
 from bt_grasp.motion.planning_scene import PlanningScene

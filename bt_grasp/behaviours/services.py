@@ -52,7 +52,7 @@ class Planner(Protocol):
 
 
 class MotionGuard(Protocol):
-    """A real cell's safety before motion (``bt_grasp.hardware.motion_guard``): every trajectory is checked whole
+    """A real cell's safety before motion (``bt_grasp.motion.guard``): every trajectory is checked whole
     before its first sample is sent."""
 
     def prepare(self, trajectory: Trajectory) -> Trajectory | str:

@@ -1,7 +1,7 @@
 """``bt-grasp calibrate --cell``: hand-eye calibration on a real cell (or a twin), as the simulated run does it.
 
 The same :class:`~bt_grasp.behaviours.calibration_job.CalibrationJob` the ``Calibrate`` leaf and ``bt-grasp calibrate
---scene`` run, on the cell's devices (``bt_grasp.hardware.cell_devices``), assembled as a run's cell is (the board
+--scene`` run, on the cell's devices (``bt_grasp.episode.cell_devices``), assembled as a run's cell is (the board
 from the cell file, the guard, the caps), ticked once a controller period by the cell's wall-clock stepper: views
 planned from the camera's nominal mounting and the board's nominal pose on the gripper, the arm moved to each
 (every motion checked before it is sent; views the guard refuses are skipped), the board seen, every hand-eye method
@@ -63,9 +63,9 @@ def calibrate_cell(cell_path: Path, poses: int, seed: int, confirm: Confirm | No
     from bt_grasp.behaviours.calibration_job import CalibrationJob
     from bt_grasp.cell.format import load_cell
     from bt_grasp.episode.cell_assembly import CellDevices, RealCellServices, assemble_cell
+    from bt_grasp.episode.cell_devices import describe, open_cell
     from bt_grasp.episode.cell_run import board_mount, grasp_settings_for
     from bt_grasp.episode.cell_scene import scene_for_cell
-    from bt_grasp.hardware.cell_devices import describe, open_cell
     from bt_grasp.hardware.cell_faults import CellFault
     from bt_grasp.hardware.realsense_settings import RealSenseSettings
     from bt_grasp.motion.trajectory import MotionLimits

@@ -3,7 +3,7 @@ of both), on the wall clock, with safety before motion.
 
 The composition beside the simulated one (``bt_grasp.episode.episode``): every input is read and checked first (the
 tree against the cell's scene, the cell file, the calibration), then the devices are opened
-(``bt_grasp.hardware.cell_devices``: nothing moves there), the cell is assembled by
+(``bt_grasp.episode.cell_devices``: nothing moves there), the cell is assembled by
 ``bt_grasp.episode.cell_assembly`` from :class:`~bt_grasp.episode.cell_assembly.CellDevices` as a simulated run's is,
 and the tree is ticked by the same :class:`~bt_grasp.tree.runner.TreeRunner` with the cell's wall-clock stepper
 (``bt_grasp.hardware.wall_time``), one tick per controller period.
@@ -46,7 +46,7 @@ from bt_grasp.scene.goals import Goal, PickGoal
 if TYPE_CHECKING:
     from bt_grasp.behaviours.cell import Cell
     from bt_grasp.cell.format import Cell as CellFile
-    from bt_grasp.hardware.cell_devices import RealCell
+    from bt_grasp.episode.cell_devices import RealCell
     from bt_grasp.hardware.cell_faults import CellFault
     from bt_grasp.hardware.realsense_settings import RealSenseSettings
     from bt_grasp.perception.calibration_file import CalibrationFile
@@ -174,7 +174,7 @@ class CellEpisode:
         self._ran = False
 
     def run(self, on_tick: Sequence[TickCallback] = ()) -> CellRunResult:
-        from bt_grasp.hardware.cell_devices import describe, open_cell
+        from bt_grasp.episode.cell_devices import describe, open_cell
         from bt_grasp.hardware.cell_faults import CellFault
 
         if self._ran:

@@ -3,7 +3,7 @@
 A thin adapter, as ur_rtde's own examples drive a UR:
 
 * **Motion** is streamed with ``servoJ`` at the controller's period (8 ms on a CB3): each target the executor sets
-  (a sample of a ruckig trajectory the cell's :class:`~bt_grasp.hardware.motion_guard.MotionGuard` checked whole
+  (a sample of a ruckig trajectory the cell's :class:`~bt_grasp.motion.guard.MotionGuard` checked whole
   before its first sample) is checked again (:meth:`MotionGuard.check_target`) and sent; a target that fails is not
   sent, the arm is stopped and the run ends ``SAFETY_LIMIT``. The controller's servo thread holds the last target
   when no new one comes. ``lookahead_time`` 0.1 s and ``gain`` 300 are ur_rtde's example values.
@@ -35,7 +35,7 @@ import math
 import threading
 import time
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -48,7 +48,6 @@ from bt_grasp.hardware.cell_faults import (
     ControllerState,
     fault_from_state,
 )
-from bt_grasp.hardware.motion_guard import MotionGuard
 from bt_grasp.hardware.robotiq_client import Robotiq2F85Client
 from bt_grasp.hardware.ur_lib import ur_rtde
 from bt_grasp.robot_description import ARM_JOINTS
@@ -82,10 +81,18 @@ STOP_TIMEOUT_S = 1.5
 STOP_DECEL_RAD_S2 = 10.0
 
 
+class TargetGuard(Protocol):
+    """What the arm asks of the cell's guard (:class:`bt_grasp.motion.guard.MotionGuard`, given by the composition
+    in ``bt_grasp.episode.cell_devices``: the hardware package plans and checks nothing itself)."""
+
+    def check_target(self, q: NDArray[np.float64], last_target: NDArray[np.float64] | None,
+                     measured: NDArray[np.float64]) -> str | None: ...
+
+
 class UrArm:
     """Implements :class:`bt_grasp.interfaces.Robot` (see the module docstring). :meth:`connect` before use."""
 
-    def __init__(self, arm: Arm, gripper: Robotiq2F85Client, guard: MotionGuard) -> None:
+    def __init__(self, arm: Arm, gripper: Robotiq2F85Client, guard: TargetGuard) -> None:
         self.arm = arm
         self.gripper = gripper
         self.guard = guard

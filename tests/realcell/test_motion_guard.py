@@ -11,8 +11,8 @@ import pytest
 
 from bt_grasp.cell.format import load_cell
 from bt_grasp.cell.grippers import ROBOTIQ_2F85, robot_urdf_path_with
-from bt_grasp.hardware.cell_devices import guard_for
-from bt_grasp.hardware.motion_guard import MotionGuard
+from bt_grasp.episode.cell_devices import guard_for
+from bt_grasp.motion.guard import MotionGuard
 from bt_grasp.motion.kinematics import ArmKinematics
 from bt_grasp.motion.trajectory import MotionLimits, Trajectory, time_parametrize
 

@@ -23,12 +23,12 @@ import numpy as np
 from bt_grasp.cell.format import Cell, cell_file_path
 from bt_grasp.cell.grippers import GRIPPERS, GripperModel, GripperName, robot_urdf_path_with
 from bt_grasp.errors import InputError
-from bt_grasp.hardware.motion_guard import GuardLimits, MotionGuard
 from bt_grasp.hardware.realsense_settings import RealSenseSettings
 from bt_grasp.hardware.robotiq_client import Robotiq2F85Client
 from bt_grasp.hardware.ur_arm import UrArm
 from bt_grasp.hardware.wall_time import CellStepper, MotionClock, WallClock
 from bt_grasp.interfaces import Camera, Mount
+from bt_grasp.motion.guard import GuardLimits, MotionGuard
 from bt_grasp.motion.kinematics import ArmKinematics
 
 log = logging.getLogger(__name__)
