@@ -56,9 +56,11 @@ def test_the_written_cell_file_loads_and_matches_the_scene(twin: TwinProcess) ->
     assert cell.gripper.pad_size_m == (0.022, 0.00635, 0.0375)
     assert cell.camera.kind == "twin" and cell.camera.mount == "eye-to-hand"
     assert cell.calibration is not None
-    # the same file (scenes/tabletop.calibration.yaml links to the copy bt_grasp ships in bt_grasp/assets/)
-    shipped = (REPO / "scenes" / "tabletop.calibration.yaml").resolve()
-    assert (twin.cell_path.parent / cell.calibration).resolve() == shipped
+    # a copy of the scene's, of the cell's own beside it: `calibrate --cell` replaces the copy, never the scene's file
+    # (scenes/tabletop.calibration.yaml links to the one bt_grasp ships in bt_grasp/assets/)
+    own = twin.cell_path.parent / cell.calibration
+    assert own.parent == twin.cell_path.parent and own.name.endswith(".calibration.yaml") and not own.is_symlink()
+    assert own.read_bytes() == (REPO / "scenes" / "tabletop.calibration.yaml").read_bytes()
     assert cell.table_plane.normal == (0.0, 0.0, 1.0) and cell.table_plane.offset_m == 0.0
     assert cell.workspace.min_m == (0.25, -0.35, 0.0) and cell.workspace.max_m == (0.75, 0.35, 0.5)
     assert cell.workspace.objects_up_to_m == 0.30 and cell.table_plane.x_m == (-0.15, 0.85)

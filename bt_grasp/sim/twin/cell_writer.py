@@ -10,7 +10,6 @@ fixtures (the scene's, placed in the base frame), the scene's work area (from th
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +17,9 @@ import yaml
 
 from bt_grasp.cell.format import CELL_VERSION, Cell
 from bt_grasp.cell.grippers import GRIPPERS, BoardLayout, GripperModel, GripperName, robot_urdf_path_with
-from bt_grasp.files.output_files import write_output_file
+from bt_grasp.errors import InputError
+from bt_grasp.files.output_files import copy_output_file, write_output_file
+from bt_grasp.files.search_path import CALIBRATION_PATH_VARIABLE, SHIPPED_CALIBRATIONS, find_named_file, looked_in
 from bt_grasp.geometry import inv
 from bt_grasp.scene.fixtures import Fixture
 from bt_grasp.scene.format import Scene
@@ -82,10 +83,9 @@ def cell_for(scene: Scene, scene_path: Path, config: TwinConfig, cell_path: Path
     table_corners = np.array([[tx + sx * table.size_m[0] / 2, ty + sy * table.size_m[1] / 2, 0.0, 1.0]
                               for sx in (-1, 1) for sy in (-1, 1)])
     table_in_base = (T_base_world @ table_corners.T).T[:, :3]
-    calibration = None
-    if scene.calibration is not None:
-        target = (scene_path.parent / scene.calibration).resolve()
-        calibration = os.path.relpath(target, cell_path.resolve().parent)
+    # a calibration file of the cell's own, beside the cell file (write_cell copies the scene's there): never the
+    # scene's, which `calibrate --cell` would overwrite (the shipped scenes' link into bt_grasp's own files)
+    calibration = None if scene.calibration is None else calibration_file_of(cell_path).name
     cam = scene.camera
     e2h = cam.eye_to_hand
     eih = cam.eye_in_hand
@@ -123,10 +123,25 @@ HEADER = """\
 """
 
 
+def calibration_file_of(cell_path: Path) -> Path:
+    """The calibration file a twin's cell file names: ``NAME.calibration.yaml`` beside ``NAME.yaml``."""
+    stem = cell_path.name.removesuffix(".yaml").removesuffix(".yml")
+    return cell_path.parent / f"{stem}.calibration.yaml"
+
+
 def write_cell(scene: Scene, scene_path: Path, config: TwinConfig, cell_path: Path,
                board: tuple[BoardLayout, np.ndarray] | None = None) -> Path:
-    """Write the cell file (whole, or not at all: InputError naming ``--write-cell``)."""
+    """Write the cell file (whole, or not at all: InputError naming ``--write-cell``) and, when the scene names a
+    calibration, a copy of it as the cell's own (:func:`calibration_file_of`; the twin's camera is the scene's, so
+    the scene's calibration holds until ``calibrate --cell`` replaces the copy)."""
     cell = cell_for(scene, scene_path, config, cell_path, board)
+    if scene.calibration is not None:
+        found = find_named_file(scene.calibration, scene_path.parent, CALIBRATION_PATH_VARIABLE,
+                                SHIPPED_CALIBRATIONS)
+        if found.path is None:
+            raise InputError(scene_path, f"the calibration file '{scene.calibration}' the scene names does not exist "
+                             f"({looked_in(found, CALIBRATION_PATH_VARIABLE)})")
+        copy_output_file(found.path, calibration_file_of(cell_path), "--write-cell", example="twin.cell.yaml")
     text = HEADER + yaml.safe_dump(cell.model_dump(mode="json"), sort_keys=False, default_flow_style=None,
                                    width=110)
     return write_output_file(cell_path, text, "--write-cell", example="twin.cell.yaml")
