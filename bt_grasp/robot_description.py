@@ -121,18 +121,20 @@ def robot_urdf_text() -> str:
 
 @cache
 def robot_urdf_path() -> Path:
-    """A path to the merged URDF that only this process can reach (:func:`sealed_memory_file`). Nothing is written
-    on disk and no cache is trusted: a file in a shared or working folder could be garbage, a FIFO or someone else's
-    robot (with ``XDG_CACHE_HOME`` empty it was written to ``./bt_grasp/`` in the working folder, and a file found
-    there was used as it was)."""
-    return sealed_memory_file(robot_urdf_text(), "ur5_bt_grasp.urdf")
+    """A path to the merged URDF that only this process can reach: an anonymous, sealed in-memory file
+    (``memfd_create``) for the process's life, read through ``/proc/self/fd``. Nothing is written on disk and no
+    cache is trusted: a file in a shared or working folder could be garbage, a FIFO or someone else's robot (with
+    ``XDG_CACHE_HOME`` empty it was written to ``./bt_grasp/`` in the working folder, and a file found there was
+    used as it was). A forked child inherits the descriptor, so the path works there too."""
+    return sealed_urdf_path("ur5_bt_grasp.urdf", robot_urdf_text())
 
 
-def sealed_memory_file(text: str, name: str) -> Path:
-    """``text`` in an anonymous, sealed in-memory file (``memfd_create``) for the process's life, read through
-    ``/proc/self/fd``. A forked child inherits the descriptor, so the path works there too."""
+def sealed_urdf_path(name: str, text: str) -> Path:
+    """``text`` as an anonymous, sealed in-memory file of this process (see :func:`robot_urdf_path`); cache the
+    result: each call makes a new descriptor."""
+    data = text.encode()
     fd = os.memfd_create(name, os.MFD_ALLOW_SEALING)  # not CLOEXEC: forked workers share it
-    view = memoryview(text.encode())
+    view = memoryview(data)
     while view:
         view = view[os.write(fd, view):]
     fcntl.fcntl(fd, fcntl.F_ADD_SEALS, fcntl.F_SEAL_SHRINK | fcntl.F_SEAL_GROW | fcntl.F_SEAL_WRITE | fcntl.F_SEAL_SEAL)

@@ -30,7 +30,7 @@ FLOORS: dict[str, int] = {
     "clock": 1, "geometry": 1, "interfaces": 1, "robot_description": 1, "defaults": 1, "seeds": 1,
     "files": 2,  # the trust boundary: bounded reads and writes of users' files
     "process": 2,  # process set-up: threads, deferred imports, environment strings, the code fingerprint
-    "scene": 3, "detector": 3, "cell": 3,  # scene files and goals; the learned detector; cell files
+    "scene": 3, "detector": 3, "cell": 4,  # scene files and goals; the learned detector; cell files
     "perception": 4, "motion": 4, "tree": 4,  # RGB-D in, results out; planning and execution; tree engine
     "behaviours": 5, "recording": 5, "control": 5,  # robot leaves; MCAP logs; the control API
     "faults": 6, "sim": 6, "hardware": 6, "nodes": 6,  # wrappers; the simulator; real devices; the node API

@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from bt_grasp.behaviours.services import CameraCalibration, MediaSink, NullSink, Planner
+from bt_grasp.behaviours.services import CameraCalibration, MediaSink, MotionGuard, NullSink, Planner
 from bt_grasp.clock import Clock
 from bt_grasp.interfaces import Camera, Robot
 from bt_grasp.perception.config import GraspSettings, PerceptionConfig
@@ -72,7 +72,9 @@ class Cell:
     ``calibration`` is filled by ``LoadCalibration``/``Calibrate`` (or ``--calibration``); leaves that need
     the camera pose fail with CALIBRATION_MISSING until then. ``board`` is the calibration board mounted in
     the cell (None: no board; ``Calibrate`` fails). Fault injectors replace ``robot``, ``camera``,
-    ``planner``, ``kinematics`` and ``calibration`` with wrappers of the same Protocols.
+    ``planner``, ``kinematics`` and ``calibration`` with wrappers of the same Protocols. A real cell adds ``guard``
+    (every trajectory checked before it is sent) and ``motion_clock`` (trajectory time, which the speed slider
+    slows; None: ``clock``).
     Build one with :func:`make_cell` (the run's settings) or directly (tests).
     """
 
@@ -92,6 +94,8 @@ class Cell:
     board: BoardMount | None = None
     media: MediaSink = field(default_factory=NullSink)
     workdir: Path = Path(".")
+    guard: MotionGuard | None = None
+    motion_clock: Clock | None = None
 
     @property
     def seeds(self) -> RunSeeds:
