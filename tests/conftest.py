@@ -10,7 +10,7 @@ pytest_plugins = ["skip_guard"]
 
 REPO = Path(__file__).resolve().parents[1]
 #: folders whose tests hold wall-clock bounds against a real-time process: marked ``serial``, run alone
-SERIAL_FOLDERS = ("twin", "realcell")
+SERIAL_FOLDERS = ("twin",)
 SCENE = REPO / "scenes" / "tabletop.yaml"
 
 
