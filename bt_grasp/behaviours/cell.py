@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from bt_grasp.behaviours.attempts import AttemptMemory
-from bt_grasp.behaviours.services import CameraCalibration, MediaSink, NullSink, Planner
+from bt_grasp.behaviours.services import CameraCalibration, MediaSink, MotionGuard, NullSink, Planner
 from bt_grasp.clock import Clock
 from bt_grasp.interfaces import Camera, Robot
 from bt_grasp.perception.config import GraspSettings, PerceptionConfig
@@ -73,8 +73,10 @@ class Cell:
     ``calibration`` is filled by ``LoadCalibration``/``Calibrate`` (or ``--calibration``); leaves that need
     the camera pose fail with CALIBRATION_MISSING until then. ``board`` is the calibration board mounted in
     the cell (None: no board; ``Calibrate`` fails). Fault injectors replace ``robot``, ``camera``,
-    ``planner``, ``kinematics`` and ``calibration`` with wrappers of the same Protocols. ``attempts`` is the
-    run's memory of what it tried (grasps, placements) and how each ended, which the leaves consult.
+    ``planner``, ``kinematics`` and ``calibration`` with wrappers of the same Protocols. A real cell adds ``guard``
+    (every trajectory checked before it is sent) and ``motion_clock`` (trajectory time, which the speed slider
+    slows; None: ``clock``). ``attempts`` is the run's memory of what it tried (grasps, placements) and how each
+    ended, which the leaves consult.
     Build one with :func:`make_cell` (the run's settings) or directly (tests).
     """
 
@@ -96,6 +98,8 @@ class Cell:
     #: the run's memory of its grasp and placement attempts (``bt_grasp.behaviours.attempts``)
     attempts: AttemptMemory = field(default_factory=AttemptMemory)
     workdir: Path = Path(".")
+    guard: MotionGuard | None = None
+    motion_clock: Clock | None = None
 
     @property
     def seeds(self) -> RunSeeds:

@@ -165,6 +165,6 @@ class PlaceIn(_PlaceBase):
 
         length, width, height = (float(v) for v in held.size_m)
         T_rest_tcp = make_T(np.eye(3), [0.0, 0.0, height / 2]) @ inv(T_tcp_obj)
-        boxes = gripper_boxes(float(self.cell.kinematics.opening_m))
+        boxes = gripper_boxes(float(self.cell.kinematics.opening_m), self.cell.kinematics.urdf_path)
         parts = tuple(ToolPart(b.size_m, T_rest_tcp @ b.T_tcp_box) for b in boxes)
         return HeldShape(length, width, height, held.shape == "round", parts)

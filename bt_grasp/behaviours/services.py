@@ -23,9 +23,10 @@ if TYPE_CHECKING:  # types only: importing motion/perception costs ~1 s (pinocch
     from bt_grasp.motion.kinematics import KinematicModel
     from bt_grasp.motion.planner import PlannerOptions, PlanResult
     from bt_grasp.motion.planning_scene import PlanningScene
+    from bt_grasp.motion.trajectory import Trajectory
     from bt_grasp.perception.results import GraspCandidate, PerceptionResult
 
-__all__ = ["CameraCalibration", "KinematicModel", "MediaSink", "NullSink", "Planner", "TrajectoryKind"]
+__all__ = ["CameraCalibration", "KinematicModel", "MediaSink", "MotionGuard", "NullSink", "Planner", "TrajectoryKind"]
 
 TrajectoryKind = Literal["planned", "executed"]
 
@@ -49,6 +50,15 @@ class Planner(Protocol):
         ...
 
     def checker(self, scene: PlanningScene, margin_m: float) -> CollisionChecker: ...
+
+
+class MotionGuard(Protocol):
+    """A real cell's safety before motion (``bt_grasp.motion.guard``): every trajectory is checked whole
+    before its first sample is sent."""
+
+    def prepare(self, trajectory: Trajectory) -> Trajectory | str:
+        """The trajectory as it may be sent (slowed to the cell's caps), or why it may not (one sentence)."""
+        ...
 
 
 class CameraCalibration(Protocol):

@@ -26,12 +26,26 @@ MOUNTS = tuple(m.value for m in Mount)
 def calibrate(
     scene: Path = typer.Option(Path("scenes/tabletop.yaml"), "--scene", help="Scene YAML file."),
     mount: Mount = typer.Option(Mount.EYE_TO_HAND, "--mount", help="Where the camera is."),
-    out: Path = typer.Option(..., "--out", help="Calibration YAML file to write."),
+    out: Path | None = typer.Option(None, "--out", help="Calibration YAML file to write (with --cell: the file the "
+                                    "cell file names)."),
+    cell: Path | None = typer.Option(None, "--cell", help="Calibrate a real cell's camera (or a twin's) instead: "
+                                     "the arm moves the board on its gripper through the views (docs/real-cell.md)."),
+    yes: bool = typer.Option(False, "--yes", help="With --cell: do not ask before the arm's first motion."),
     seed: int = typer.Option(0, "--seed", help="Seed of the world (camera noise) and of the view planner."),
     poses: int = typer.Option(20, "--poses", min=4, max=60, help="Number of board views to collect."),
     as_json: bool = typer.Option(False, "--json", help="Print exactly one JSON object."),
 ) -> None:
-    """Hand-eye calibrate the simulated camera with a ChArUco board and write the calibration file."""
+    """Hand-eye calibrate the simulated camera (or a real cell's: --cell) with a ChArUco board and write the
+    calibration file."""
+    if cell is not None:
+        from bt_grasp.cli.cell_calibrate_cmd import calibrate_on_cell
+
+        calibrate_on_cell(cell, out, poses, seed, yes, as_json)
+        return
+    if out is None:
+        from bt_grasp.errors import InputError
+
+        raise InputError("--out", "name the calibration file to write (--out calib.yaml)")
     from bt_grasp.episode.calibration import calibrate_in_sim
     from bt_grasp.errors import InputError
     from bt_grasp.perception.calibration_file import save_calibration

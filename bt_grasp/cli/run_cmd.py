@@ -140,7 +140,10 @@ def live_progress(console: Console) -> TickCallback:
 
 def run(
     tree: Path = typer.Argument(..., help="Tree file: BehaviorTree.CPP v4 XML or bt_grasp YAML."),
-    scene: Path = typer.Option(..., "--scene", help="Scene YAML file."),
+    scene: Path | None = typer.Option(None, "--scene", help="Scene YAML file (a run on the simulator)."),
+    cell: Path | None = typer.Option(None, "--cell", help="Cell YAML file: run on a real cell (a UR through ur_rtde "
+                                     "and a RealSense) or a twin of one, on the wall clock (docs/real-cell.md)."),
+    yes: bool = typer.Option(False, "--yes", help="With --cell: do not ask before the arm's first motion."),
     seed: int = typer.Option(0, "--seed", help="Seed of object poses, camera noise, planners and faults."),
     calibration: Path | None = typer.Option(None, "--calibration", help="Calibration YAML from `bt-grasp calibrate`."),
     log: Path | None = typer.Option(None, "--log", help="Write the run to this MCAP file."),
@@ -206,7 +209,22 @@ def run(
         "reach a loopback port)."
     ),
 ) -> None:
-    """Run a task tree on the simulated cell. Exit code 0 on task success (judged by physics), 1 on failure."""
+    """Run a task tree on the simulated cell (or a real one: --cell). Exit code 0 on task success (judged by physics),
+    1 on failure."""
+    if cell is not None or scene is None:
+        from bt_grasp.cli.cell_run_cmd import cell_request, refuse_simulator_options, run_cell
+
+        if scene is not None or cell is None:
+            raise InputError("--scene", "give one of --scene SCENE (the simulator) or --cell CELL (a real cell), "
+                             f"{'not both' if scene is not None else 'got neither'}")
+        refuse_simulator_options({"--faults": faults is not None, "--inject": bool(inject), "--live": live is not None,
+                                  "--realtime": realtime is not None, "--image-hz": image_hz > 0,
+                                  "--resident": resident, "--interactive": interactive, "--break": bool(break_),
+                                  "--control": control})
+        on_cell = cell_request(tree, cell, seed, calibration, log, max_ticks, set_, goal.value if goal else None,
+                               color, lift_height, tuple(leaves))
+        show = None if quiet else failure_line(Console(stderr=True))
+        raise typer.Exit(run_cell(on_cell, yes=yes, as_json=as_json, summary_json=summary_json, show_failure=show))
     # only what every run needs here: a --resident run's client hands the request over and imports neither the
     # episode (the simulator's modules) nor the control package (issue 27)
     from bt_grasp.episode.request import EpisodeRequest, parse_assignments

@@ -29,11 +29,13 @@ class Judged:
     objects_in_workspace: tuple[str, ...] = ()
     #: every object's final T_world_object (4x4): the end of the run's fingerprint (recording/fingerprint.py)
     object_poses: dict[str, list[list[float]]] = field(default_factory=dict)
+    #: who judged: the simulator's judge (a simulated run), the twin's physics judge, or a real cell's own checks
+    source: str = "simulator ground truth (judge only)"
 
     def to_json(self) -> JsonObject:
         poses: dict[str, JsonValue] = {n: [list(row) for row in T] for n, T in self.object_poses.items()}
         return {
-            "source": "simulator ground truth (judge only)",
+            "source": self.source,
             "goal": goal_json(self.goal),
             "task": self.goal.kind,
             "success": self.success,

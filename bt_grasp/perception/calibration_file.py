@@ -185,6 +185,25 @@ def load_calibration(path: str | Path, mount: str | None = None, *, quote: bool 
     return calibration
 
 
+#: a calibration's intrinsics and the source's agree when every focal length and principal point is this close, px
+INTRINSICS_TOLERANCE_PX = 0.01
+
+
+def intrinsics_problem(calibration: CalibrationFile, source: CameraIntrinsics) -> str | None:
+    """Why a calibration was not made with this source's colour intrinsics, or None."""
+    cal = calibration.intrinsics
+    if (cal.width_px, cal.height_px) != (source.width_px, source.height_px):
+        return (f"it was made for a {cal.width_px}x{cal.height_px} picture, but the source's colour stream is "
+                f"{source.width_px}x{source.height_px}")
+    off = max(abs(a - b) for a, b in ((cal.fx_px, source.fx_px), (cal.fy_px, source.fy_px),
+                                      (cal.cx_px, source.cx_px), (cal.cy_px, source.cy_px)))
+    if off > INTRINSICS_TOLERANCE_PX:
+        return (f"its intrinsics (fx {cal.fx_px:.2f}, fy {cal.fy_px:.2f}, cx {cal.cx_px:.2f}, cy {cal.cy_px:.2f} px) "
+                f"are not the source's (fx {source.fx_px:.2f}, fy {source.fy_px:.2f}, cx {source.cx_px:.2f}, "
+                f"cy {source.cy_px:.2f} px): it was made with another camera or resolution")
+    return None
+
+
 #: a calibration whose camera lies further than this from the scene's nominal mount was made for another pose
 NOMINAL_POSITION_TOLERANCE_M = 0.03
 NOMINAL_AXIS_TOLERANCE_DEG = 3.0
