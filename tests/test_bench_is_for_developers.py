@@ -21,7 +21,7 @@ def _docs_table() -> dict[str, str]:
     """docs/campaigns.md's table: bench command -> kind."""
     text = (REPO / "docs/campaigns.md").read_text()
     section = text[text.index("### Why each `bench` command is not an evaluation entry point"):]
-    rows = re.findall(r"^\| `bench (\w+)` \| ([\w -]+) \|", section, re.M)
+    rows = re.findall(r"^\| `bench ([\w-]+)` \| ([\w -]+) \|", section, re.M)
     return {name: kind.strip() for name, kind in rows}
 
 
