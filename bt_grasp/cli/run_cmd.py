@@ -184,8 +184,9 @@ def run(
         "(docs/interactive.md). Starts paused."
     ),
     break_: list[str] = typer.Option(
-        [], "--break", metavar="SPEC", help="With --interactive, pause at: node:NAME (before it starts), fail, "
-        "fail:REASON, bb:KEY (it changed), tick:N, time:S (repeatable)."
+        [], "--break", metavar="SPEC", help="With --interactive, pause at: node:NAME (before it starts), fail (a "
+        "leaf FAILURE not false by design, as replay --failures lists them), fail:REASON, fail:all (every leaf "
+        "FAILURE), bb:KEY (it changed), tick:N, time:S (repeatable)."
     ),
     control: bool = typer.Option(
         False, "--control", help="With --live: take commands from Foxglove (the Parameters and Publish panels of "

@@ -196,6 +196,7 @@ class Episode:
         observers: list[TickCallback] = []
         extras = None
         injector: Injector | None = None
+        ticked = [0]  # the last tick started (an interrupted run's result says where it stopped)
         try:
             cell = self._assemble(recorder, controller)
             injector = self._injector
@@ -215,8 +216,6 @@ class Episode:
             # the judge reads contacts every tick only for goals judged by placement (~0.1 ms a tick otherwise
             # spent on a pick, `bt-grasp bench budget`); reading changes nothing in the world
             observe = judge.observe if judge.places(self.inputs.goal) else None
-
-            ticked = [0]  # the last tick started (an interrupted run's result says where it stopped)
 
             def tick_hook(tick: int, tree: LoadedTree) -> None:
                 ticked[0] = tick
@@ -289,7 +288,7 @@ class Episode:
                 recorder.write_result(world.now_ns(), _logged_result(result.to_json(), request.log_epoch_ns))
         finally:
             if controller is not None:
-                controller.finish()
+                controller.finish(ticked[0])  # the view's last tick: the result's
             if injector is not None:
                 injector.close()  # a reused world starts the next episode as built
             if recorder is not None:
