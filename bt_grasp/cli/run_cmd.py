@@ -21,7 +21,7 @@ from bt_grasp.errors import InputError
 if TYPE_CHECKING:  # the episode package (numpy, pydantic, the simulator) is imported when a run starts
     from bt_grasp.control.breakpoints import Breakpoint
     from bt_grasp.episode import TickCallback
-    from bt_grasp.episode.request import BlackboardValue, EpisodeRequest
+    from bt_grasp.episode.request import EpisodeRequest
     from bt_grasp.episode.result import EpisodeResult
     from bt_grasp.scene.goals import Goal
     from bt_grasp.tree.loader import LoadedTree
@@ -201,14 +201,13 @@ def run(
     """Run a task tree on the simulated cell. Exit code 0 on task success (judged by physics), 1 on failure."""
     # only what every run needs here: a --resident run's client hands the request over and imports neither the
     # episode (the simulator's modules) nor the control package (issue 27)
-    from bt_grasp.episode.request import EpisodeRequest, parse_assignments
+    from bt_grasp.episode.request import EpisodeRequest, parse_assignments, run_blackboard
     from bt_grasp.files.output_files import check_output_file, write_output_file
     from bt_grasp.recording.reproducible import log_epoch_ns
 
-    blackboard: dict[str, BlackboardValue] = {"lift_height": lift_height}
-    if color is not None:  # not given: the scene's default (bt_grasp.scene.run_goal.default_color)
-        blackboard["color"] = color
-    blackboard.update(parse_assignments(set_))
+    # not given, no color: the scene's default (bt_grasp.scene.run_goal.default_color); a campaign's episode gets
+    # its blackboard by the same rule
+    blackboard = run_blackboard(parse_assignments(set_), color=color, lift_height=lift_height)
     request = EpisodeRequest(
         tree=tree,
         scene=scene,

@@ -212,11 +212,16 @@ def mismatch_with_mount(calibration: CalibrationFile, scene: Scene) -> str | Non
     return None
 
 
-def calibration_for_scene(scene: Scene, scene_path: str | Path, override: str | Path | None
-                          ) -> tuple[Path | None, CalibrationFile | None]:
+#: how a command line gives a calibration of its own (``run``, ``eval run``, ``bench pick``)
+CALIBRATION_OPTION = "pass --calibration FILE"
+
+
+def calibration_for_scene(scene: Scene, scene_path: str | Path, override: str | Path | None,
+                          *, give_one: str = CALIBRATION_OPTION) -> tuple[Path | None, CalibrationFile | None]:
     """The calibration a run uses: ``override`` (the ``--calibration`` flag) or the file the scene names
     (relative to the scene file). Bad input (missing, unreadable, made for another mount or camera pose) is
-    a ConfigError naming the file and line; no calibration at all is (None, None)."""
+    a ConfigError naming the file and line; no calibration at all is (None, None). ``give_one``: how the
+    caller's user gives a calibration instead (a campaign file has a key for it, not a flag)."""
     if override is not None:
         path = Path(override)
         calibration = load_calibration(path, mount=scene.camera.mount)
@@ -227,7 +232,7 @@ def calibration_for_scene(scene: Scene, scene_path: str | Path, override: str | 
         if not path.is_file():
             raise ConfigError(scene_path, f"the calibration file '{scene.calibration}' the scene names does not "
                               f"exist beside it; make it with `bt-grasp calibrate --scene {scene_path} --out {path}` "
-                              "or pass --calibration FILE", where=where)
+                              f"or {give_one}", where=where)
         calibration = load_calibration(path, mount=scene.camera.mount)
     else:
         return None, None
