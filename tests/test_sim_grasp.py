@@ -148,6 +148,10 @@ def test_no_product_code_moves_objects_by_hand(repo_root: Path) -> None:
         # a mesh/URDF object's entity placed where the scene draws it before it joins the scene (no time has
         # passed; World.settle then lets physics bring it to rest)
         "bt_grasp/sim/objects.py: set_pose(",
+        # the twin's render process: a copy of the world that is never stepped, posed each frame as the twin's
+        # physics world stands (arm and objects), only to be drawn; nothing in it is simulated
+        "bt_grasp/sim/twin/camera_worker.py: set_pose(",
+        "bt_grasp/sim/twin/camera_worker.py: set_qpos(",
         # socket.create_connection: a TCP probe of a Ray address, not a physics connection
         "bt_grasp/campaign/ray_engine.py: create_connection",
     }
