@@ -76,7 +76,9 @@ class CampaignFile(StrictModel):
     scenes: tuple[str | SceneEntry, ...] = Field(..., min_length=1)
     seeds: SeedRange | tuple[int, ...]  # {first, count} or an explicit list
     fault_plans: tuple[str | FaultPlanEntry, ...] = (NO_FAULTS,)  # "none", a file, or {name, file, inject}
-    blackboard: tuple[dict[str, str | int | float | bool], ...] = ({"color": "red", "lift_height": 0.15},)
+    #: each a parameter set: entries over `bt-grasp run`'s own (``run_blackboard``: lift_height 0.15, the colour of
+    #: the goal), as `--set KEY=VALUE` puts them; default: one empty set, i.e. exactly `bt-grasp run`'s episode
+    blackboard: tuple[dict[str, str | int | float | bool], ...] = ({},)
     calibration: str | None = None  # default calibration for every scene
     max_ticks: int = Field(12000, ge=1)  # per episode (100 Hz ticks of simulated time)
 
@@ -201,7 +203,7 @@ class Campaign:
             calibration=scene.calibration,
             faults=plan.file,
             inject=plan.inject,
-            blackboard=dict(params),
+            blackboard=run_blackboard(params),  # run's rule: the same settings, the same blackboard
             max_ticks=self.max_ticks,
             leaves=self.leaves,
         )

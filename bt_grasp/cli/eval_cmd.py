@@ -56,6 +56,9 @@ def progress_printer(console: Console) -> Callable[[Progress, ResultRow | Episod
             )
             label = f"{Path(str(item['tree'])).stem}/{item['scene']}/seed{item['seed']}/{item['fault_plan']}"
             what = f"{escape(label)} {verdict}"
+            for firing in item.get("faults") or []:
+                if firing.get("target") is not None and firing.get("target_touched") is False:
+                    what += f" [yellow](a fault pushed {escape(str(firing['target']))}: the tree never touched it)[/]"
         console.print(f"{head}  {what}", highlight=False, soft_wrap=True)
 
     return show

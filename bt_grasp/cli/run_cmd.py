@@ -87,6 +87,9 @@ def print_summary(console: Console, summary: EpisodeResult) -> None:
         console.print("  retries: " + ", ".join(f"{escape(k)} x{v}" for k, v in summary.retries.items()))
     if summary.faults_fired:
         console.print(f"  faults fired: {summary.faults_fired}")
+        for firing in summary.faults:  # what each hit; a push on an object the tree never touched says so
+            style = "yellow" if firing.missed else ""
+            console.print(f"    {escape(firing.sentence())}", style=style)
     if summary.log:
         console.print(f"  log: {escape(summary.log)}  (bt-grasp replay {escape(summary.log)})")
     chain = summary.failure_chain

@@ -280,6 +280,7 @@ class Episode:
                 log=str(request.log) if request.log else None,
                 seed=request.seed,
                 faults_fired=injector.fired if injector is not None else 0,
+                faults=injector.report() if injector is not None else (),
                 goal=self.inputs.goal,
                 planning=self.planning.stats(),
             )
