@@ -18,5 +18,5 @@ def columns() -> int:
 def wrap(text: str, *, indent: str = "", hang: str = "  ", width: int | None = None) -> str:
     """``text`` wrapped between words to ``width`` (the terminal's), its first line after ``indent``, the next
     after ``indent + hang``; a word longer than a line (a path) stands alone on its line, whole."""
-    return textwrap.fill(" ".join(text.split()), width or columns(), initial_indent=indent,
+    return textwrap.fill(text, width or columns(), initial_indent=indent,
                          subsequent_indent=indent + hang, break_long_words=False, break_on_hyphens=False)

@@ -83,6 +83,14 @@ def test_one_candidate_per_tick_until_one_is_reachable() -> None:
     assert "candidate 2" in tree.find("PlanGrasp").feedback_message
 
 
+def test_a_candidate_that_fails_is_named_once() -> None:
+    """Issue 43, finding 8: the feedback read "candidate 0: candidate 0: pre-grasp unreachable"."""
+    tree, _, _ = _setup(PLAN, FakeKinematics(failures=1), FakePlanner())
+    assert _ticks(tree, 1) == ["RUNNING"]
+    message = tree.find("PlanGrasp").feedback_message
+    assert message.startswith("candidate 0: ") and message.count("candidate 0") == 1, message
+
+
 #: the 5 cm cube's four footprint grasps, then the six grasps sampled from its fitted box that are not near-same
 #: as one of them (three top-down ones 15-20 mm off its centre, three from its sides)
 FOOTPRINT, SAMPLED = 4, 6
