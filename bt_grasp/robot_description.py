@@ -7,10 +7,9 @@ It is the UR5 of the ``example-robot-data`` wheel (BSD, from ros-industrial/univ
 
 from __future__ import annotations
 
-import hashlib
+import fcntl
 import os
 import sys
-import tempfile
 from dataclasses import dataclass
 from functools import cache
 from importlib.resources import files
@@ -122,18 +121,18 @@ def robot_urdf_text() -> str:
 
 @cache
 def robot_urdf_path() -> Path:
-    """Path of the merged URDF, written once per content into a cache folder."""
-    text = robot_urdf_text()
-    digest = hashlib.sha256(text.encode()).hexdigest()[:16]
-    cache_dir = Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "bt_grasp"
-    cache_dir.mkdir(parents=True, exist_ok=True)
-    path = cache_dir / f"ur5_bt_grasp_{digest}.urdf"
-    if not path.exists():
-        fd, tmp = tempfile.mkstemp(dir=cache_dir, suffix=".urdf")
-        with os.fdopen(fd, "w") as handle:
-            handle.write(text)
-        os.replace(tmp, path)
-    return path
+    """A path to the merged URDF that only this process can reach: an anonymous, sealed in-memory file
+    (``memfd_create``) for the process's life, read through ``/proc/self/fd``. Nothing is written on disk and no
+    cache is trusted: a file in a shared or working folder could be garbage, a FIFO or someone else's robot (with
+    ``XDG_CACHE_HOME`` empty it was written to ``./bt_grasp/`` in the working folder, and a file found there was
+    used as it was). A forked child inherits the descriptor, so the path works there too."""
+    data = robot_urdf_text().encode()
+    fd = os.memfd_create("ur5_bt_grasp.urdf", os.MFD_ALLOW_SEALING)  # not CLOEXEC: forked workers share it
+    view = memoryview(data)
+    while view:
+        view = view[os.write(fd, view):]
+    fcntl.fcntl(fd, fcntl.F_ADD_SEALS, fcntl.F_SEAL_SHRINK | fcntl.F_SEAL_GROW | fcntl.F_SEAL_WRITE | fcntl.F_SEAL_SEAL)
+    return Path(f"/proc/self/fd/{fd}")
 
 
 @cache

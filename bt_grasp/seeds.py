@@ -4,13 +4,14 @@ A run has one seed (``--seed``, a campaign row's, ...). Each consumer of randomn
 so that drawing more in one place never changes what another draws: the objects' poses do not move when the
 camera draws more noise, and a fault plan with one more fault leaves the grasps as they were. A stream is
 ``numpy.random.SeedSequence(seed, spawn_key=(stream,))``, which is exactly the n-th child of
-``SeedSequence(seed).spawn(...)``: the world's first three streams are the ones it has always drawn from.
+``SeedSequence(seed).spawn(...)``: the world's first four streams are the ones it has always drawn from.
 
 | stream | who draws from it |
 | --- | --- |
 | ``OBJECTS`` | the world: which objects a scene's draw keeps, their poses and rest orientations |
 | ``CAMERA`` | the simulated D435's depth and colour noise |
 | ``FAULTS`` | a fault plan's probabilistic triggers and random effects (one child per fault) |
+| ``DEPTH_IMAGER`` | the simulated D435's depth imager, when its two pictures are drawn (``camera record``) |
 | ``PLANNER`` | OMPL's searches and the planner's IK restarts (``PlannerOptions.seed``) |
 | ``CALIBRATION`` | the hand-eye calibration's sampled board views |
 | ``GRASPS`` | antipodal grasp sampling on an object's cloud |
@@ -35,11 +36,12 @@ class Stream(enum.IntEnum):
     OBJECTS = 0
     CAMERA = 1
     FAULTS = 2
-    PLANNER = 3
-    CALIBRATION = 4
-    GRASPS = 5
-    PERCEPTION = 6
-    IK = 7
+    DEPTH_IMAGER = 3
+    PLANNER = 4
+    CALIBRATION = 5
+    GRASPS = 6
+    PERCEPTION = 7
+    IK = 8
 
 
 #: the largest value :meth:`RunSeeds.integer` returns (libraries that take a 32-bit seed: OMPL)

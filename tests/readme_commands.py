@@ -1,4 +1,5 @@
-"""The commands of README.md's "Command line" table, and the CLI invocations a test source makes.
+"""The commands of README.md's "Command line" table (and docs/benchmarks.md's, where the developer benchmarks
+moved), and the CLI invocations a test source makes.
 
 Used by ``tests/test_readme_commands.py`` to check that every README command is run by some test. An
 invocation is read from a test's syntax tree, not its text: the string literals handed to the CLI, in a list
@@ -42,10 +43,11 @@ class Invocation:
     strings: frozenset[str]
 
 
-def readme_commands(readme: str) -> list[Command]:
-    """Every command the README's "## Command line" table lists, alternatives expanded, in order."""
-    _, found, rest = readme.partition("\n## Command line\n")
-    assert found, "README.md has no '## Command line' section"
+def readme_commands(readme: str, section: str = "Command line") -> list[Command]:
+    """Every command the "## Command line" table of README.md lists (or the table of another page's section:
+    docs/benchmarks.md's "## Commands"), alternatives expanded, in order."""
+    _, found, rest = readme.partition(f"\n## {section}\n")
+    assert found, f"no '## {section}' section"
     commands: list[Command] = []
     for line in rest.split("\n## ", 1)[0].splitlines():
         row = re.match(r"\|\s*`bt-grasp ([^`]+)`", line)

@@ -30,6 +30,12 @@ from readme_commands import Command, cli_invocations, invokes, readme_commands
 
 REPO = Path(__file__).resolve().parents[1]
 README = REPO / "README.md"
+BENCHMARKS = REPO / "docs" / "benchmarks.md"
+
+
+def all_commands() -> list[Command]:
+    """The README's commands and the developer benchmarks' (moved to docs/benchmarks.md: they keep their tests)."""
+    return [*readme_commands(README.read_text()), *readme_commands(BENCHMARKS.read_text(), "Commands")]
 BT_GRASP = Path(sys.executable).with_name("bt-grasp")  # the installed console script users run
 CALIB = REPO / "tests/data/calibration/tabletop_eye_to_hand.yaml"
 TABLETOP = "scenes/tabletop.yaml"
@@ -80,16 +86,19 @@ def _condition(summary: Any, criterion: str) -> dict[str, Any]:
 
 
 def test_the_readme_table_is_parsed_into_every_command() -> None:
-    """The parser finds what the table lists today (a parser that found nothing would make the next test vacuous)."""
+    """The parser finds what the tables list today (a parser that found nothing would make the next test vacuous):
+    the user's commands in the README, the developer benchmarks in docs/benchmarks.md."""
     names = {c.name for c in readme_commands(README.read_text())}
     expected = {
-        "run", "demo", "scene render", "scene validate", "calibrate", "tree validate", "tree show", "tree convert",
-        "tree run", "tree models", "replay", "bench plan", "bench perception", "bench sim", "bench tree",
-        "bench logging", "bench pick", "eval run", "eval report", "eval export", "bench eval",
-        "bench perception --noise-sweep", "bench follow", "bench tasks", "bench budget", "resident status",
-        "resident stop", "--version",
+        "init", "run", "demo", "scene render", "scene validate", "calibrate", "tree validate", "tree show",
+        "tree convert", "tree run", "tree models", "replay", "eval run", "eval report", "eval export",
+        "resident status", "resident stop", "--version",
     }
     assert expected <= names, expected - names  # a new row is for the next test to demand a test of
+    assert not {n for n in names if n.startswith("bench ")}, names  # developer benchmarks: docs/benchmarks.md
+    moved = {c.name for c in readme_commands(BENCHMARKS.read_text(), "Commands")}
+    assert {"bench plan", "bench perception", "bench sim", "bench tree", "bench logging", "bench pick", "bench eval",
+            "bench perception --noise-sweep", "bench follow", "bench tasks", "bench budget", "camera compare"} <= moved
 
 
 def test_an_invocation_counts_but_a_mention_does_not() -> None:
@@ -119,11 +128,11 @@ def test_an_invocation_counts_but_a_mention_does_not() -> None:
 
 def test_every_readme_command_is_invoked_by_a_test() -> None:
     invocations = [inv for path in sorted((REPO / "tests").rglob("*.py")) for inv in cli_invocations(path.read_text())]
-    missing = [c.name for c in readme_commands(README.read_text()) if not invokes(invocations, c)]
-    assert not missing, f"README commands that no test under tests/ invokes: {missing}"
+    missing = [c.name for c in all_commands() if not invokes(invocations, c)]
+    assert not missing, f"README (or docs/benchmarks.md) commands that no test under tests/ invokes: {missing}"
 
 
-@pytest.mark.parametrize("command", sorted({c.words for c in readme_commands(README.read_text())} - {("--version",)}),
+@pytest.mark.parametrize("command", sorted({c.words for c in all_commands()} - {("--version",)}),
                          ids=" ".join)
 def test_help_on_every_command(command: tuple[str, ...], capsys: pytest.CaptureFixture[str],
                                monkeypatch: pytest.MonkeyPatch) -> None:

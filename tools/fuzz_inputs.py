@@ -1,16 +1,20 @@
-"""Seeded fuzzing of what users open: damaged MCAP logs (`bt-grasp replay`) and results files (`eval report`).
+"""Seeded fuzzing of what users open and what reaches bt_grasp from outside: every surface of :data:`SURFACES`.
 
 Every case must be answered by exit 0 (the damage was harmless) or exit 2 with one sentence on stderr that
-names the file: never a traceback, never another exit code, never a hang (a per-case alarm), never an exhausted
-machine (an address-space limit on the worker), never a file written outside the case's own folder. Cases run
-in a worker process that is restarted when it dies.
+names the file: never a traceback, never another exit code, never a hang (a per-case alarm of
+:data:`CASE_TIMEOUT_S`), never a worker over :data:`CASE_MEMORY_BYTES` resident (its kernel high-water mark, reset
+before each case; an address-space limit stops a runaway), never a file written outside the case's own folder, and
+never a read of the job's trap (a file outside every case's folder that hostile names point at:
+``tools/fuzz_surfaces.py``). Cases run in a worker process that is restarted when it dies.
 
     python tools/fuzz_inputs.py --cases 2000 --seed 0          # prints the counts; exit 1 if any case failed
 
 Log mutations: bytes (truncated, bit-flipped, zeroed, inserted, spliced), records (a top-level record
 duplicated, chunks re-ordered, a length field set huge) and contents (the seed log re-written with the mcap
 library, so well-formed MCAP, with one bt_grasp message of the wrong shape, the wrong encoding, or messages
-duplicated and re-ordered). `tests/test_fuzz_inputs.py` runs a bounded number of these cases in the suite.
+duplicated and re-ordered). Issue 42's surfaces (files a mesh names, URDF trees, collision-cache entries, ONNX
+models, control messages, resident requests, crafted ``--resim`` logs) are in ``tools/fuzz_surfaces.py``.
+`tests/test_fuzz_inputs.py` runs a bounded number of cases in the suite.
 """
 
 from __future__ import annotations
@@ -36,15 +40,38 @@ from pathlib import Path
 from typing import Any
 
 REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # its sibling tools/fuzz_surfaces.py
+import fuzz_surfaces  # noqa: E402
+
 SEED_LOG = REPO / "tests" / "data" / "old_logs" / "format1.mcap"
-MEMORY_LIMIT = 3 << 30
-CASE_TIMEOUT_S = 30
+#: each case's bounds (issue 42): its time, and the worker's resident memory (kernel high-water mark)
+CASE_TIMEOUT_S = 10
+CASE_MEMORY_BYTES = 2 << 30
+#: the address space past which a worker's allocation fails (a safety stop; the renderer reserves ~2.4 GB)
+MEMORY_LIMIT = 6 << 30
 MAGIC = b"\x89MCAP0\r\n"
 
 LOG_KINDS = ("truncate", "flip", "ff_window", "zero", "insert", "splice", "duplicate_record", "reorder_chunks",
              "huge_length", "wrong_schema", "wrong_encoding", "rechunk", "hostile_strings")
 RESULTS_KINDS = ("type", "drop", "cut", "binary", "huge", "deep", "markup", "not_object", "nan", "encoding")
 LOG_VIEWS = ("summary", "json", "failures", "tick", "export_frames", "report", "topic", "leaf", "btlog", "foxglove")
+
+#: every surface the suite fuzzes, and the surfaces other work is adding now: a row each, filled (its kinds and its
+#: ``make``/``run`` functions, as in tools/fuzz_surfaces.py) when its code lands on this branch
+SURFACES: dict[str, tuple[str, ...] | None] = {
+    "log": LOG_KINDS,  # `replay LOG` and its views
+    "results": RESULTS_KINDS,  # `eval report`
+    "mesh": fuzz_surfaces.MESH_KINDS,  # `scene validate`: a mesh and the files it names
+    "urdf": fuzz_surfaces.URDF_KINDS,  # `scene validate`: a URDF object's link tree
+    "cache": fuzz_surfaces.CACHE_KINDS,  # the collision-shape cache's entries and folder
+    "model": fuzz_surfaces.MODEL_KINDS,  # `detector check`: an ONNX model
+    "control": fuzz_surfaces.CONTROL_KINDS,  # Foxglove parameters and /control/command messages
+    "resident": fuzz_surfaces.RESIDENT_KINDS,  # frames and requests to the resident process
+    "resim": fuzz_surfaces.RESIM_KINDS,  # `replay LOG --resim` of a crafted log
+    "camera_recording": None,  # a RealSense recording (.db3) read back (the hardware work: not on this branch yet)
+    "cell_file": None,  # a hardware cell file (the hardware work)
+    "twin_socket": None,  # the controller twin's sockets (RTDE, dashboard, gripper: the twin work)
+}
 
 GOOD_ROW: dict[str, Any] = {
     "campaign": "fuzz", "episode": "e0", "tree": "trees/pick.xml", "scene": "tabletop", "seed": 0,
@@ -340,6 +367,13 @@ def mutate_results(rng: random.Random, kind: str | None = None) -> tuple[str, by
 def _run_case(args: list[str]) -> tuple[int, str]:
     from bt_grasp.cli.main import main
 
+    if args and args[0] in fuzz_surfaces.RUNNERS:  # a surface that is not a command: answered as one
+        try:
+            return fuzz_surfaces.RUNNERS[args[0]](*args[1:])
+        except BaseException as exc:  # what the case is for: a crash must be seen, not hidden
+            import traceback
+
+            return -1, "Traceback: " + "".join(traceback.format_exception_only(type(exc), exc)).strip()
     out, err = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         try:
@@ -360,14 +394,19 @@ def _worker() -> None:
         raise TimeoutError("case took too long")
 
     signal.signal(signal.SIGALRM, on_alarm)
-    for line in sys.stdin:
-        args = json.loads(line)
-        signal.alarm(CASE_TIMEOUT_S)
-        try:
-            code, err = _run_case(args)
-        finally:
-            signal.alarm(0)
-        print(json.dumps({"code": code, "stderr": err[-2000:]}), flush=True)
+    try:
+        for line in sys.stdin:
+            args = json.loads(line)
+            signal.alarm(CASE_TIMEOUT_S)
+            try:
+                code, err = _run_case(args)
+            except TimeoutError as exc:  # raised by the alarm between two of a runner's own steps
+                code, err = -1, f"Traceback: {exc}"
+            finally:
+                signal.alarm(0)
+            print(json.dumps({"code": code, "stderr": err[-2000:]}), flush=True)
+    finally:
+        fuzz_surfaces.stop_resident()
 
 
 @dataclass
@@ -376,41 +415,57 @@ class Verdict:
     detail: str
 
 
-def judge(code: int, stderr: str, file_name: str) -> Verdict:
-    """Exit 0, or exit 2 with one line of stderr naming the file; anything else is a failure."""
+def judge(code: int, stderr: str, file_name: str | tuple[str, ...], *, notices: bool = False,
+          ran: bool = False) -> Verdict:
+    """Exit 0, or exit 2 with one line of stderr naming the file (any of ``file_name``); anything else is a
+    failure. ``notices``: lines a scene's loader says before (``object '...': ...``) may precede the refusal;
+    ``ran``: exit 1 is an answer too (a re-simulation that did not reproduce its log)."""
+    names = (file_name,) if isinstance(file_name, str) else file_name
     lines = [line for line in stderr.splitlines() if line.strip()]
     if "Traceback" in stderr or code == -1:
         return Verdict(False, f"crash: {stderr.strip()[-300:]}")
-    if code == 0:
+    if code == 0 or (ran and code == 1):
         return Verdict(True, "read")
-    if code == 2 and len(lines) == 1 and file_name in lines[0]:
+    said = [line for line in lines if not (notices and line.startswith("object '"))]
+    if code == 2 and len(said) == 1 and any(name in said[0] for name in names):
         return Verdict(True, "refused")
     return Verdict(False, f"exit {code} with {len(lines)} lines: {stderr.strip()[-300:]}")
 
 
 class Runner:
-    def __init__(self, cwd: Path, tmp: Path) -> None:
+    def __init__(self, cwd: Path, tmp: Path, own: Path | None = None) -> None:
         self.proc: subprocess.Popen[str] | None = None
         self.cwd, self.tmp = cwd, tmp
+        self.own = own or tmp.parent  # the worker's own cache and resident folders live here
 
     def _start(self) -> subprocess.Popen[str]:
         env = dict(os.environ, PYTHONPATH=str(REPO) + os.pathsep + os.environ.get("PYTHONPATH", ""),
-                   TMPDIR=str(self.tmp), MPLBACKEND="Agg")
+                   TMPDIR=str(self.tmp), MPLBACKEND="Agg", BT_GRASP_CACHE_DIR=str(self.own / "cache"),
+                   BT_GRASP_RESIDENT_DIR=str(self.own / "resident"),
+                   BT_GRASP_DECOMPOSITION_LIMIT_S="3")  # a damaged mesh can need CoACD: past 3 s one sentence
+
         return subprocess.Popen([sys.executable, str(Path(__file__).resolve()), "--worker"], stdin=subprocess.PIPE,
                                 stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, env=env, cwd=self.cwd)
 
-    def run(self, args: list[str], file_name: str) -> Verdict:
+    def run(self, args: list[str], file_name: str | tuple[str, ...], *, notices: bool = False,
+            ran: bool = False) -> Verdict:
         if self.proc is None or self.proc.poll() is not None:
             self.proc = self._start()
         assert self.proc.stdin is not None and self.proc.stdout is not None
+        with contextlib.suppress(OSError):  # the kernel's high-water mark of the worker, from this case on
+            Path(f"/proc/{self.proc.pid}/clear_refs").write_text("5")
         self.proc.stdin.write(json.dumps(args) + "\n")
         self.proc.stdin.flush()
         line = self.proc.stdout.readline()
         if not line:
             code = self._end()
             return Verdict(False, f"the worker died (signal or memory): {code}")
+        peak = _peak_bytes(self.proc.pid)
         answer = json.loads(line)
-        return judge(int(answer["code"]), str(answer["stderr"]), file_name)
+        verdict = judge(int(answer["code"]), str(answer["stderr"]), file_name, notices=notices, ran=ran)
+        if verdict.ok and peak > CASE_MEMORY_BYTES:
+            return Verdict(False, f"the worker's memory reached {peak >> 20} MiB")
+        return verdict
 
     def _end(self) -> int:
         """Close the worker's pipes (it leaves when its input ends) and wait for it; its exit code."""
@@ -428,24 +483,44 @@ class Runner:
             self._end()
 
 
+def _peak_bytes(pid: int) -> int:
+    try:
+        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    return 0
+
+
 @dataclass(frozen=True)
 class Case:
     name: str
-    kind: str  # "log:<mutation>" or "results:<mutation>"
+    kind: str  # "<surface>:<mutation>"
     view: str
     file: Path
     args: list[str]
+    names: tuple[str, ...] = ()  # what a refusal may name (the case's folder, a device it was given)
+    notices: bool = False
+    ran: bool = False
 
 
 #: case i is of kind KINDS[i % len(KINDS)]: any run of len(KINDS) cases exercises every kind once
-KINDS = tuple(f"log:{k}" for k in LOG_KINDS) + tuple(f"results:{k}" for k in RESULTS_KINDS)
+KINDS = tuple(f"{surface}:{k}" for surface, kinds in SURFACES.items() if kinds for k in kinds)
 
 
-def make_case(i: int, seed: int, folder: Path, corpus: Corpus) -> Case:
+def make_case(i: int, seed: int, folder: Path, corpus: Corpus, trap: dict[str, Path] | None = None) -> Case:
     """Case ``i`` of ``seed``: its input file written into ``folder`` (its own, empty), and its command line.
     The kind and the view go round (every kind and view in few cases); the damage itself is drawn."""
     rng = random.Random(seed * 1_000_003 + i)
     family, kind = KINDS[i % len(KINDS)].split(":")
+    if family in fuzz_surfaces.MAKERS:
+        assert trap is not None
+        args = fuzz_surfaces.MAKERS[family][1](kind, rng, folder, trap)
+        view = {"resim": "replay --resim", "model": "detector check", "cache": "collision shapes",
+                "control": "foxglove control", "resident": "resident"}.get(family, "scene validate")
+        return Case(f"{family} {i}", f"{family}:{kind}", view, folder, args, (str(folder), "/dev/zero"),
+                    notices=family in ("mesh", "urdf", "resim"), ran=family == "resim")
     if family == "log":
         kind, data = mutate_log(corpus, rng, kind)
         path = folder / f"case{i}.mcap"
@@ -467,12 +542,13 @@ def make_case(i: int, seed: int, folder: Path, corpus: Corpus) -> Case:
                 ["eval", "report", str(path), "--out", str(folder / "report.html")])
 
 
-def _listing(root: Path, skip: Path) -> set[tuple[str, int]]:
-    """Every file and folder under ``root`` except ``skip`` (the running case's own folder), with sizes."""
+def _listing(root: Path, skip: Path, own: tuple[Path, ...] = ()) -> set[tuple[str, int]]:
+    """Every file and folder under ``root`` except ``skip`` (the running case's own folder) and ``own`` (the
+    worker's collision cache and resident folder: bt_grasp's own, written by design), with sizes."""
     out = set()
     for dirpath, dirnames, filenames in os.walk(root):
         here = Path(dirpath)
-        if here == skip:
+        if here == skip or here in own:
             dirnames[:] = []
             continue
         for name in filenames + dirnames:
@@ -497,19 +573,27 @@ def _fuzz_part(indices: range, seed: int, corpus: Corpus, root: Path) -> Outcome
     cwd, worker_tmp, cases_dir = root / "cwd", root / "tmp", root / "cases"
     for folder in (cwd, worker_tmp, cases_dir):
         folder.mkdir(parents=True)
+    own = (root / "cache", root / "resident")
+    for folder in own:
+        folder.mkdir(mode=0o700)
     (cwd / "sentinel.txt").write_text("must not change\n")
-    runner = Runner(cwd, worker_tmp)
+    trap = fuzz_surfaces.make_trap(root / "trap")
+    runner = Runner(cwd, worker_tmp, root)
     try:
         for i in indices:
             folder = cases_dir / f"case{i}"
             folder.mkdir()
-            case = make_case(i, seed, folder, corpus)
-            before = _listing(root, folder)
-            verdict = runner.run(case.args, case.file.name)
-            after = _listing(root, folder)
+            case = make_case(i, seed, folder, corpus, trap)
+            before = _listing(root, folder, own)
+            verdict = runner.run(case.args, case.names or case.file.name, notices=case.notices, ran=case.ran)
+            after = _listing(root, folder, own)
             if verdict.ok and after != before:
                 changed = sorted(p for p, _ in after ^ before)
                 verdict = Verdict(False, f"wrote outside its folder: {changed[:3]}")
+            if verdict.ok and fuzz_surfaces.trap_was_read(trap):
+                verdict = Verdict(False, f"read {trap['secret']}, outside its folder")
+            if fuzz_surfaces.trap_was_read(trap):
+                os.utime(trap["secret"], (0, time.time()))
             outcome.kinds[case.kind] += 1
             outcome.views[case.view] += 1
             if verdict.ok:
@@ -520,13 +604,32 @@ def _fuzz_part(indices: range, seed: int, corpus: Corpus, root: Path) -> Outcome
                                         f"{verdict.detail}")
                 for leftover in worker_tmp.iterdir():  # so one leak is reported once, not by every later case
                     shutil.rmtree(leftover) if leftover.is_dir() else leftover.unlink()
-            shutil.rmtree(folder)
+            _remove(folder)
             done = sum(outcome.kinds.values())
             if done % 100 == 0:  # a long run under load shows where it is, and whether anything failed yet
                 print(f"{root.name}: {done} cases, {outcome.counts['failed']} failed", file=sys.stderr, flush=True)
     finally:
         runner.close()
+        _end_resident(root / "resident")
     return outcome
+
+
+def _end_resident(folder: Path) -> None:
+    """A worker that died leaves its resident running (its own session): end it by the pid its lock records."""
+    with contextlib.suppress(OSError, ValueError):
+        pid = int((folder / "resident.lock").read_text().strip())
+        if b"bt_grasp.resident.server" in Path(f"/proc/{pid}/cmdline").read_bytes():
+            os.kill(pid, signal.SIGKILL)
+
+
+def _remove(folder: Path) -> None:
+    """A case's folder, whatever a case left in it (a folder others may write: made writable again to go)."""
+    for dirpath, dirnames, _ in os.walk(folder):
+        for name in dirnames:
+            with contextlib.suppress(OSError):
+                if not os.path.islink(os.path.join(dirpath, name)):
+                    os.chmod(os.path.join(dirpath, name), 0o700)
+    shutil.rmtree(folder, ignore_errors=True)
 
 
 def fuzz(n: int, seed: int, jobs: int = 1) -> Outcome:
@@ -565,6 +668,9 @@ def main() -> int:
         print("FAIL", line)
     print(f"{args.cases} cases, seed {args.seed}: {outcome.counts['read']} read, {outcome.counts['refused']} refused "
           f"in one sentence, {outcome.counts['failed']} failed, in {outcome.seconds:.0f} s ({args.jobs} workers)")
+    print("surfaces:", ", ".join(f"{surface} {sum(v for k, v in outcome.kinds.items() if k.startswith(surface + ':'))}"
+                                 for surface, kinds in SURFACES.items() if kinds),
+          "(not yet on this branch: " + ", ".join(s for s, k in SURFACES.items() if not k) + ")")
     print("mutations:", ", ".join(f"{k} {v}" for k, v in sorted(outcome.kinds.items())))
     print("views:", ", ".join(f"{k} {v}" for k, v in sorted(outcome.views.items())))
     return 1 if outcome.failures else 0

@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 from bt_grasp.behaviours.cell import Cell
 from bt_grasp.behaviours.motion_job import MotionJob, PathFailure, PathFn, Segment
 from bt_grasp.behaviours.reasons import FailureReason
+from bt_grasp.seeds import Stream
 
 if TYPE_CHECKING:
     from bt_grasp.perception.calibration import CalibrationRun, ViewCollector
@@ -63,7 +64,7 @@ class CalibrationJob:
         try:
             self.targets = plan_calibration_poses(
                 plan, cell.kinematics, cell.robot.joint_positions(), settings,
-                np.random.default_rng(cell.seed), collision_free=checker.is_valid,
+                cell.seeds.generator(Stream.CALIBRATION), collision_free=checker.is_valid,
             )
         except ValueError as exc:
             self.error = str(exc)

@@ -33,7 +33,7 @@ class LoadCalibration(RobotLeaf):
                 FailureReason.CALIBRATION_MISSING, "no calibration file given (run with --calibration FILE)"
             )
         try:
-            calibration = load_calibration(Path(str(file)), mount=self.cell.camera.mount)
+            calibration = load_calibration(Path(str(file)), mount=self.cell.camera.mount, quote=False)
         except ConfigError as exc:
             return self.fail(FailureReason.CALIBRATION_MISSING, str(exc))
         self.cell.calibration = calibration

@@ -15,6 +15,7 @@ from bt_grasp.clock import Clock
 from bt_grasp.interfaces import Camera, Robot
 from bt_grasp.perception.config import GraspSettings, PerceptionConfig
 from bt_grasp.scene.format import Scene
+from bt_grasp.seeds import RunSeeds, Stream
 
 if TYPE_CHECKING:
     from bt_grasp.motion.executor import ExecutorOptions
@@ -92,14 +93,23 @@ class Cell:
     media: MediaSink = field(default_factory=NullSink)
     workdir: Path = Path(".")
 
+    @property
+    def seeds(self) -> RunSeeds:
+        """The run's seed streams (``bt_grasp.seeds``): every random draw a leaf makes comes from one of them."""
+        return RunSeeds(self.seed)
+
 
 def make_cell(
     robot: Robot, camera: Camera, clock: Clock, scene: Scene, seed: int,
     calibration: CameraCalibration | None = None, board: BoardMount | None = None,
 ) -> Cell:
-    """A cell with the run's settings: the planner seeded from the run's seed, perception from the scene."""
+    """A cell with the run's settings: the planner and the kinematics' IK restarts on their streams of the run's
+    seed (``bt_grasp.seeds``), perception from the scene."""
     # deferred: OMPL, pinocchio and coal come with it; a tree loads and validates without them
-    from bt_grasp.motion.planner import PlannerOptions
+    from bt_grasp.motion.kinematics import ArmKinematics, SeededKinematics
+    from bt_grasp.motion.planner import PlannerOptions  # deferred: as above
+
+    seeds = RunSeeds(seed)
 
     return Cell(
         robot=robot,
@@ -108,7 +118,8 @@ def make_cell(
         scene=scene,
         seed=seed,
         perception_config=PerceptionConfig.for_scene(scene),
-        planner_options=PlannerOptions(seed=seed + 1),
+        planner_options=PlannerOptions(seed=seeds.integer(Stream.PLANNER)),
+        kinematics=SeededKinematics(ArmKinematics(), seeds.integer(Stream.IK)),
         calibration=calibration,
         board=board,
     )

@@ -5,6 +5,7 @@ reasons, ``needs_robot``)."""
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
+from pathlib import Path
 
 from bt_grasp.behaviours import (
     calibration_leaves,
@@ -17,7 +18,7 @@ from bt_grasp.behaviours import (
     place_in,
     viewing,
 )
-from bt_grasp.errors import TreeFileError
+from bt_grasp.errors import ConfigError, TreeFileError, did_you_mean
 from bt_grasp.perception.results import Detection
 from bt_grasp.scene.format import Scene
 from bt_grasp.tree.builtins import builtin_registry
@@ -89,3 +90,42 @@ def check_tree_against_scene(nodes: Iterable[BtNode], scene: Scene) -> None:
         if problem and isinstance(node, Leaf):
             ctx = node.ctx
             raise TreeFileError(ctx.source or "tree", f"{node.name}: {problem}", where=ctx.line or None)
+
+
+#: the robot leaves' ports that filter perceived objects by a colour name or a learned class
+_COLOR_PORTS = {"SelectObject": "color", "ObjectCount": "color", "Perceive": "color", "FollowTarget": "color"}
+_CLASS_PORTS = {"SelectObject": "class"}
+
+
+def scene_notes(nodes: Iterable[BtNode], scene: Scene, scene_path: str) -> list[str]:
+    """What a tree looks for that the scene never holds (``tree validate --scene``): a literal colour no object of
+    the scene has, a literal class no object of it is. Not errors (a tree may handle "none found"), one sentence
+    each with the node's file:line; nothing is said where the scene cannot tell (an object whose colour is not a
+    colour name, or whose class is unknown)."""
+    # deferred: the detector's dataset module brings OpenCV; a tree validates without it
+    from bt_grasp.detector.dataset import object_class
+
+    colours = [o.color if isinstance(o.color, str) else None for o in scene.objects]
+    classes: list[str | None] = []
+    for o in scene.objects:
+        try:
+            classes.append(object_class(o.shape, o.mesh, Path(scene_path), o.name))
+        except ConfigError:
+            classes.append(None)
+    notes = []
+    for node in nodes:
+        if not isinstance(node, Leaf):
+            continue
+        for table, known, what in ((_COLOR_PORTS, colours, "colour"), (_CLASS_PORTS, classes, "class")):
+            port = table.get(node.bt_type)
+            if port is None or node.ports.key(port) is not None or None in known:
+                continue
+            wanted = str(node.ports.get(port) or "").strip()
+            names = sorted({k for k in known if k})
+            if wanted and wanted != "any" and wanted not in names:
+                where = f"{node.ctx.source}:{node.ctx.line}" if node.ctx.line else node.ctx.source
+                plural = f"{what}es" if what == "class" else f"{what}s"
+                notes.append(f"{where}: {node.bt_type} '{node.bt_path}' looks for the {what} '{wanted}', which no "
+                             f"object of {scene_path} has (its objects' {plural}: {', '.join(names) or 'none'})"
+                             f"{did_you_mean(wanted, names)}")
+    return notes

@@ -23,6 +23,7 @@ from bt_grasp.defaults import DEFAULT_LIFT_HEIGHT_M
 from bt_grasp.geometry import make_T, rot_z
 from bt_grasp.perception.antipodal import AntipodalSettings, near_same, rank_grasps, sampled_grasps
 from bt_grasp.perception.results import GraspCandidate
+from bt_grasp.seeds import Stream
 from bt_grasp.tree.node_api import Status, action, input_port, output_port
 
 if TYPE_CHECKING:
@@ -301,7 +302,8 @@ class PlanGrasp(RobotLeaf):
         T_base_camera = camera_pose(self.cell)
         viewpoint = None if T_base_camera is None else tuple(float(v) for v in T_base_camera[:3, 3])
         result = rank_grasps(target, self._objects, self.cell.grasp_settings, reachable=self._reachable,
-                             fixtures=fixtures, viewpoint_base_m=viewpoint)
+                             seed=self.cell.seeds.integer(Stream.GRASPS), fixtures=fixtures,
+                             viewpoint_base_m=viewpoint)
         if not result.ok:
             return self.fail(FailureReason.NOTHING_TO_GRASP, f"{result.status.value}: {result.message}")
         self.cell.media.grasps(result.candidates)
@@ -326,7 +328,8 @@ class PlanGrasp(RobotLeaf):
         assert self._candidates is not None
         settings = AntipodalSettings(pregrasp_offset_m=self.cell.grasp_settings.pregrasp_offset_m)
         more = sampled_grasps(self._target, self._objects, settings, reachable=self._reachable,
-                              fixtures=self._fixtures, viewpoint_base_m=self._viewpoint)
+                              seed=self.cell.seeds.integer(Stream.GRASPS), fixtures=self._fixtures,
+                              viewpoint_base_m=self._viewpoint)
         new = [c for c in more if not any(near_same(c, r) for r in self._ranked)]
         self._total += len(new)  # every candidate ranked, the skipped ones too (as the first ranking counts)
         new = new[max(0, self._skip - len(self._ranked)):]

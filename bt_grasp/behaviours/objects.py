@@ -21,7 +21,7 @@ from bt_grasp.behaviours.perceive import DETECTOR_PORTS, DetectorLeaf, perceive_
 from bt_grasp.behaviours.pose import Pose
 from bt_grasp.behaviours.reasons import PERCEPTION_REASONS, FailureReason
 from bt_grasp.detector.kinds import DetectorKind, parse_detector
-from bt_grasp.errors import TreeFileError
+from bt_grasp.errors import TreeFileError, did_you_mean
 from bt_grasp.tree.node_api import Leaf, Status, action, condition, input_port, output_port
 
 if TYPE_CHECKING:
@@ -335,20 +335,30 @@ class FixturePose(RobotLeaf):
 
     def update(self) -> Status:
         name = self.ports.require("fixture", str)
-        fixture = self.cell.scene.fixture(name)
-        if fixture is None:
-            return self.fail(FailureReason.BAD_INPUT, str(_fixture_problem(self.cell.scene, name)))
-        offset = _slot_offset(fixture, self.ports.require("slot", int), self.ports.require("slot_size", float))
-        if isinstance(offset, str):
-            return self.fail(FailureReason.BAD_INPUT, offset)
-        yaw = math.radians(float(fixture.yaw_deg))
-        x = fixture.center_xy_m[0] + math.cos(yaw) * offset[0] - math.sin(yaw) * offset[1]
-        y = fixture.center_xy_m[1] + math.sin(yaw) * offset[0] + math.cos(yaw) * offset[1]
-        world = Pose(x, y, float(fixture.surface_z_m), float(fixture.yaw_deg), "world")
-        pose = world.in_base(self.cell.scene.T_world_base())
+        pose = fixture_pose(self.cell.scene, name, self.ports.require("slot", int),
+                            self.ports.require("slot_size", float))
+        if isinstance(pose, str):
+            return self.fail(FailureReason.BAD_INPUT, pose)
         self.ports.set("pose", pose)
-        self.feedback_message = f"{fixture.kind} {name}: {pose}"
+        fixture = self.cell.scene.fixture(name)
+        self.feedback_message = f"{fixture.kind if fixture is not None else 'fixture'} {name}: {pose}"
         return Status.SUCCESS
+
+
+def fixture_pose(scene: Scene, name: str, slot: int = -1, slot_size_m: float = 0.10) -> Pose | str:
+    """FixturePose's answer: the centre of fixture ``name`` (or of its square ``slot``) on its surface, in the
+    base frame; or why there is none (one sentence). Shared with the dry run's stand-in (``--scene``)."""
+    fixture = scene.fixture(name)
+    if fixture is None:
+        return str(_fixture_problem(scene, name))
+    offset = _slot_offset(fixture, slot, slot_size_m)
+    if isinstance(offset, str):
+        return offset
+    yaw = math.radians(float(fixture.yaw_deg))
+    x = fixture.center_xy_m[0] + math.cos(yaw) * offset[0] - math.sin(yaw) * offset[1]
+    y = fixture.center_xy_m[1] + math.sin(yaw) * offset[0] + math.cos(yaw) * offset[1]
+    world = Pose(x, y, float(fixture.surface_z_m), float(fixture.yaw_deg), "world")
+    return world.in_base(scene.T_world_base())
 
 
 def _slot_offset(fixture: Fixture, slot: int, size_m: float) -> tuple[float, float] | str:
@@ -370,5 +380,5 @@ def _slot_offset(fixture: Fixture, slot: int, size_m: float) -> tuple[float, flo
 def _fixture_problem(scene: Scene, name: str) -> str | None:
     if scene.fixture(name) is not None:
         return None
-    known = ", ".join(f.name for f in scene.fixtures) or "none"
-    return f"no fixture named '{name}' in the scene (fixtures: {known})"
+    names = [f.name for f in scene.fixtures]
+    return f"no fixture named '{name}' in the scene (fixtures: {', '.join(names) or 'none'}){did_you_mean(name, names)}"

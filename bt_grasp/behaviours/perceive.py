@@ -23,6 +23,7 @@ from bt_grasp.behaviours.fixture_mask import without_fixtures
 from bt_grasp.behaviours.reasons import PERCEPTION_REASONS, FailureReason
 from bt_grasp.detector.kinds import DetectorKind, model_path, parse_detector
 from bt_grasp.interfaces import Mount, RGBDFrame
+from bt_grasp.seeds import Stream
 from bt_grasp.tree.exceptions import PortValueError
 from bt_grasp.tree.node_api import NodeContext, Status, action, condition, input_port, output_port
 
@@ -125,13 +126,14 @@ def perceive_once(leaf: RobotLeaf, color: str | None, accept_empty: bool = False
         known = ", ".join(config.color.ranges)
         return leaf.fail(FailureReason.BAD_INPUT, f"unknown colour '{color}'; known: {known}")
     if detector is None:
-        result = perceive(frame, T_base_camera, config, color or None)
+        result = perceive(frame, T_base_camera, config, color or None, seed=cell.seeds.integer(Stream.PERCEPTION))
     else:
         # deferred: Open3D and OpenCV come with it; a tree loads and validates without them
         from bt_grasp.perception.learned import join_boxes
 
         found = detector.detect(frame.color)
-        result = join_boxes(perceive(frame, T_base_camera, config), found.boxes, frame, T_base_camera, config,
+        seen = perceive(frame, T_base_camera, config, seed=cell.seeds.integer(Stream.PERCEPTION))
+        result = join_boxes(seen, found.boxes, frame, T_base_camera, config,
                             color or None)
         result = replace(result, timings_ms={**result.timings_ms, "detector_network": found.network_ms,
                                              "detector_decode": found.decode_ms})

@@ -5,15 +5,24 @@ leaves' are declared in :mod:`bt_grasp.behaviours.library`): ``--outcome NAME=fa
 ``--random SEED`` draws among them. :class:`RobotStandIns` gives the value a stand-in writes to
 each output port: a list of perceived objects (red, green and blue boxes) where the real leaf writes
 detections, a pose where it writes a pose, a width in metres for ``Grasp``; values only other robot leaves
-read (a grasp plan, a calibration, a track) are a :class:`bt_grasp.tree.dry_run.StandInValue`.
+read (a grasp plan, a calibration, a track) are a :class:`bt_grasp.tree.stand_in.StandInValue`. Given the run's
+scene (``tree run --dry --scene``), ``FixturePose`` writes the pose the real leaf computes from that scene, and fails
+with BAD_INPUT where the real one would (a fixture or slot the scene lacks).
 """
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
+from bt_grasp.behaviours.objects import fixture_pose
 from bt_grasp.behaviours.pose import Pose
+from bt_grasp.behaviours.reasons import FailureReason
 from bt_grasp.perception.results import Detection
-from bt_grasp.tree.dry_run import type_placeholder
-from bt_grasp.tree.registry import NodeSpec, PortSpec
+from bt_grasp.tree.registry import PortSpec
+from bt_grasp.tree.stand_in import StandIn, StandInRefusal, type_placeholder
+
+if TYPE_CHECKING:
+    from bt_grasp.scene.format import Scene
 
 
 def _box(label: str, x: float, y: float) -> Detection:
@@ -30,9 +39,20 @@ SEEN = (_box("red", 0.45, 0.10), _box("green", 0.45, 0.0), _box("blue", 0.45, -0
 
 
 class RobotStandIns:
-    """The :class:`bt_grasp.tree.dry_run.StandInCatalog` of bt_grasp's robot leaves."""
+    """The :class:`bt_grasp.tree.stand_in.StandInCatalog` of bt_grasp's robot leaves; ``scene``: the run's scene,
+    where fixtures are."""
 
-    def placeholder(self, spec: NodeSpec, port: PortSpec) -> object:
+    def __init__(self, scene: Scene | None = None) -> None:
+        self.scene = scene
+
+    def placeholder(self, node: StandIn, port: PortSpec) -> object:
+        spec = node.original
+        if spec.name == "FixturePose" and port.name == "pose" and self.scene is not None:
+            pose = fixture_pose(self.scene, node.ports.require("fixture", str), node.ports.require("slot", int),
+                                node.ports.require("slot_size", float))
+            if isinstance(pose, str):
+                raise StandInRefusal(FailureReason.BAD_INPUT.value, pose)
+            return pose
         if port.name == "objects":
             return SEEN
         if port.name in ("target", "object"):

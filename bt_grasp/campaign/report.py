@@ -18,7 +18,7 @@ from bt_grasp.campaign.results import read_report_rows
 from bt_grasp.campaign.rows import ReportEnvironment, ReportRow
 from bt_grasp.campaign.stats import Rate, success_rates, tree_label
 from bt_grasp.errors import InputError
-from bt_grasp.files.output_files import make_output_folder, write_output_file
+from bt_grasp.files.output_files import check_output_folder, make_output_folder, write_output_file
 
 MAX_FAILURE_ROWS = 200
 
@@ -169,8 +169,14 @@ def missed_faults(rows: Sequence[ReportRow]) -> int:
     return sum(1 for row in rows if missed(row))
 
 
+def figure_folder(out: Path) -> Path:
+    """Where a report's figures go: ``<out stem>_figures/`` beside it."""
+    return Path(out).with_name(Path(out).stem + "_figures")
+
+
 def build_report(results: Path, out: Path, compare: Path | None = None) -> list[Path]:
     """Write ``out`` (HTML) and its figures as PNG files in ``<out stem>_figures/``; returns every file written."""
+    check_output_folder(figure_folder(out), "--out", inputs=(results, compare))
     rows = _load(results)
     name = _name(rows, results)
     figures = [
@@ -199,7 +205,7 @@ def build_report(results: Path, out: Path, compare: Path | None = None) -> list[
             f"{_paired(rows, other, names)}"
         )
     out = Path(out)
-    fig_dir = make_output_folder(out.with_name(out.stem + "_figures"), "--out")
+    fig_dir = make_output_folder(figure_folder(out), "--out", inputs=(results, compare))
     written = [write_output_file(fig_dir / f"{fig.name}.png", fig.png, "--out") for fig in figures]
     images = {
         f.name: f'<img alt="{html.escape(f.title)}" src="data:image/png;base64,{base64.b64encode(f.png).decode()}">'

@@ -45,11 +45,18 @@ def read_rows(path: Path, *, repair: bool = False) -> list[JsonObject]:
     return [row for _, row in _numbered_rows(path, data[:end])]
 
 
+#: the longest row a results file may hold (bt_grasp writes about 1-2 KB a row)
+MAX_ROW_BYTES = 1 << 20
+
+
 def _numbered_rows(path: Path, data: bytes) -> list[tuple[int, JsonObject]]:
     rows: list[tuple[int, JsonObject]] = []
     for number, line in enumerate(data.splitlines(), start=1):
         if not line.strip():
             continue
+        if len(line) > MAX_ROW_BYTES:
+            raise InputError(path, f"a row of {len(line):,} bytes, more than the {MAX_ROW_BYTES:,} a row may be",
+                             number)
         try:
             row = json.loads(line.decode("utf-8"))
         except UnicodeDecodeError as exc:
@@ -68,8 +75,15 @@ def _numbered_rows(path: Path, data: bytes) -> list[tuple[int, JsonObject]]:
 
 #: more retries than any episode makes (the report draws one bar per count)
 MAX_RETRIES = 10_000
+#: the longest text a report reads from a row (a tree's path, a leaf's path, a reason), and the most leaves a row's
+#: retries may name: a 100 MB leaf name took `eval report` past 13 GB and two minutes
+MAX_FIELD_CHARS = 4096
+MAX_RETRIED_LEAVES = 1000
+#: the longest time a report draws (a week, in seconds): +-1.7e308 s ended in `ValueError: arange`
+MAX_TIME_S = 7 * 24 * 3600.0
+#: the most ticks an episode runs (a re-simulation's limit)
+MAX_TICKS = 10_000_000
 _TEXT = (str,)
-_OPTIONAL_TEXT = (str, type(None))
 
 
 def _is_int(value: object, low: int = -(2**63), high: int = 2**63 - 1) -> bool:
@@ -78,6 +92,19 @@ def _is_int(value: object, low: int = -(2**63), high: int = 2**63 - 1) -> bool:
 
 def _is_finite(value: object) -> bool:
     return (isinstance(value, float) and math.isfinite(value)) or _is_int(value)
+
+
+def _is_time(value: JsonValue) -> bool:
+    return _is_finite(value) and isinstance(value, int | float) and 0 <= value <= MAX_TIME_S
+
+
+def _is_label(value: JsonValue, optional: bool = False) -> bool:
+    return (optional and value is None) or (isinstance(value, str) and len(value) <= MAX_FIELD_CHARS)
+
+
+def _is_retries(value: JsonValue) -> bool:
+    return (isinstance(value, dict) and len(value) <= MAX_RETRIED_LEAVES
+            and all(len(k) <= MAX_FIELD_CHARS and _is_int(n, 0, MAX_RETRIES) for k, n in value.items()))
 
 
 def _check_text(value: str) -> bool:
@@ -89,28 +116,29 @@ def _check_text(value: str) -> bool:
     return True
 
 
+_TEXT_UP_TO = f"a string of at most {MAX_FIELD_CHARS} characters"
 _COLUMNS: dict[str, tuple[str, Callable[[JsonValue], bool]]] = {
     # column -> (what it must be, check)
-    "episode": ("a string", lambda v: isinstance(v, str)),
-    "tree": ("a string", lambda v: isinstance(v, str)),
-    "scene": ("a string", lambda v: isinstance(v, str)),
-    "fault_plan": ("a string", lambda v: isinstance(v, str)),
+    "episode": (_TEXT_UP_TO, _is_label),
+    "tree": (_TEXT_UP_TO, _is_label),
+    "scene": (_TEXT_UP_TO, _is_label),
+    "fault_plan": (_TEXT_UP_TO, _is_label),
     "seed": ("an integer", _is_int),
     "success": ("true or false", lambda v: isinstance(v, bool)),
-    "failure_reason": ("a string or null", lambda v: isinstance(v, _OPTIONAL_TEXT)),
-    "failed_leaf": ("a string or null", lambda v: isinstance(v, _OPTIONAL_TEXT)),
-    "ticks": ("an integer or null", lambda v: v is None or _is_int(v)),
-    "sim_time_s": ("a finite number", _is_finite),
-    "episode_wall_s": ("a finite number", _is_finite),
+    "failure_reason": (f"{_TEXT_UP_TO} or null", lambda v: _is_label(v, optional=True)),
+    "failed_leaf": (f"{_TEXT_UP_TO} or null", lambda v: _is_label(v, optional=True)),
+    "ticks": (f"an integer or null (0 to {MAX_TICKS:,})", lambda v: v is None or _is_int(v, 0, MAX_TICKS)),
+    "sim_time_s": (f"a finite number of seconds from 0 to {MAX_TIME_S:g}", _is_time),
+    "episode_wall_s": (f"a finite number of seconds from 0 to {MAX_TIME_S:g}", _is_time),
     "retries_total": (f"an integer from 0 to {MAX_RETRIES}", lambda v: _is_int(v, 0, MAX_RETRIES)),
-    "retries": (f"an object of leaf paths to retry counts (0 to {MAX_RETRIES})",
-                lambda v: isinstance(v, dict) and all(_is_int(n, 0, MAX_RETRIES) for n in v.values())),
+    "retries": (f"an object of at most {MAX_RETRIED_LEAVES} leaf paths (each {_TEXT_UP_TO}) to retry counts "
+                f"(0 to {MAX_RETRIES})", _is_retries),
 }
 _OPTIONAL_COLUMNS: dict[str, tuple[str, Callable[[JsonValue], bool]]] = {
-    "campaign": ("a string", lambda v: isinstance(v, str)),
-    "mcap": ("a string or null", lambda v: isinstance(v, _OPTIONAL_TEXT)),
+    "campaign": (_TEXT_UP_TO, _is_label),
+    "mcap": (f"{_TEXT_UP_TO} or null", lambda v: _is_label(v, optional=True)),
     # the failed leaf's path, its name in every output (rows written before it have only failed_leaf)
-    "failed_path": ("a string or null", lambda v: isinstance(v, _OPTIONAL_TEXT)),
+    "failed_path": (f"{_TEXT_UP_TO} or null", lambda v: _is_label(v, optional=True)),
     "params": ("an object", lambda v: isinstance(v, dict)),
     "environment": ("an object or null", lambda v: v is None or (
         isinstance(v, dict) and isinstance(v.get("libraries") or {}, dict))),

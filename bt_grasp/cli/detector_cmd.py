@@ -26,14 +26,16 @@ def check(
 ) -> None:
     """Open MODEL with onnxruntime, check it is a YOLO-OBB export and print its input size and classes."""
     from bt_grasp.detector.model import ObbModel
+    from bt_grasp.files.terminal_text import shown
 
     loaded = ObbModel.load(model, imgsz=imgsz)
     for name in class_names:
         loaded.class_id(name, source="--class")
     info = loaded.info
     anchors = "dynamic" if info.anchors is None else str(info.anchors)
-    typer.echo(f"{model}: YOLO-OBB, input {info.input_hw[0]}x{info.input_hw[1]}, {anchors} anchors, "
-               f"{len(info.names)} classes ({', '.join(info.names)})")
+    # the class names are the model file's text: shown, never obeyed (a name can hold terminal escapes)
+    typer.echo(shown(f"{model}: YOLO-OBB, input {info.input_hw[0]}x{info.input_hw[1]}, {anchors} anchors, "
+                     f"{len(info.names)} classes ({', '.join(info.names)})", newlines=False))
 
 
 @detector_app.command("dataset")
@@ -108,7 +110,9 @@ def train(
     md, js = card.write(out)
     typer.echo(f"{result.onnx}: trained {result.epochs_run} epochs in {result.seconds / 60:.1f} min; card {md}, {js}")
     if held_out is not None:
-        typer.echo(format_report(held_out))
+        from bt_grasp.files.terminal_text import shown
+
+        typer.echo(shown(format_report(held_out)))
 
 
 @detector_app.command("eval")
@@ -121,12 +125,13 @@ def evaluate(
     """mAP50, mAP50-95, the median angle error of elongated objects, per class, and the confusion between classes,
     measured through bt_grasp's own inference path (onnxruntime, its decoder and rotated NMS)."""
     from bt_grasp.detector.evaluate import evaluate_model, format_report
+    from bt_grasp.files.terminal_text import shown
 
     report = evaluate_model(model, dataset)
-    if as_json:
+    if as_json:  # JSON escapes control characters itself
         typer.echo(json.dumps({"model": str(model), "dataset": str(dataset), **report.to_json()}))
-    else:
-        typer.echo(format_report(report))
+    else:  # the class names are the model's and the dataset's text: shown, never obeyed
+        typer.echo(shown(format_report(report)))
 
 
 def register(app: typer.Typer) -> None:

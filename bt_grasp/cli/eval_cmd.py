@@ -203,9 +203,11 @@ def report(
     compare: Path | None = typer.Option(None, "--compare", help="A second results file to compare with (B)."),
 ) -> None:
     """A self-contained HTML report (no network needed) with success rates, failures, times, retries."""
-    from bt_grasp.campaign.report import build_report
+    from bt_grasp.campaign.report import build_report, figure_folder
+    from bt_grasp.files.output_files import check_output_folder
 
     _writable_file(out, "HTML", results, compare)
+    check_output_folder(figure_folder(out), "--out", inputs=(results, compare))  # before any work
     try:
         written = build_report(results, out, compare)
     except OSError as exc:

@@ -27,6 +27,7 @@ INTERRUPTED = 130  # the exit code of a command Ctrl-C ended (128 + SIGINT)
 #: ~30-60 ms of every command); anything else (``--help``, ``--version``, no command, a mistyped one, shell
 #: completion) imports them all. ``tests/test_cli_import_cost.py`` checks the table against the modules.
 COMMAND_MODULES: dict[str, tuple[str, ...]] = {
+    "init": ("init_cmd",),
     "scene": ("scene_cmd",),
     "demo": ("demo_cmd",),
     "run": ("run_cmd",),
@@ -89,6 +90,17 @@ def build_app(modules: tuple[str, ...]) -> typer.Typer:
     return app
 
 
+#: the longest error sentence printed: one that quotes a file's value of 5,000 characters is cut in its middle, the
+#: file and the place it names (its start) and what is expected (its end) kept
+MAX_SENTENCE_CHARS = 1000
+
+
+def _bounded(sentence: str) -> str:
+    if len(sentence) <= MAX_SENTENCE_CHARS:
+        return sentence
+    return sentence[: MAX_SENTENCE_CHARS - 300] + " [...] " + sentence[-290:]
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI; returns the process exit code."""
     args = sys.argv[1:] if argv is None else list(argv)
@@ -104,7 +116,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         rv = app(args=args, standalone_mode=False, prog_name="bt-grasp")  # also names the completion variable
     except BtGraspError as exc:  # its text may quote a file or a peer: control characters are shown, not obeyed
-        typer.echo(f"{ERROR_PREFIX}{shown(str(exc))}", err=True)
+        typer.echo(f"{ERROR_PREFIX}{_bounded(shown(str(exc), newlines=False))}", err=True)
         code = exc.exit_code
     except typer.Exit as exc:
         code = exc.exit_code

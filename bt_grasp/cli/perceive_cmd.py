@@ -30,7 +30,8 @@ def perceive(
                                       "for the only one connected."),
     scene: Path | None = typer.Option(None, "--scene", help="A scene file: its simulated D435, read through "
                                       "pyrealsense2 as a live device."),
-    seed: int = typer.Option(0, "--seed", help="The scene's seed (with --scene)."),
+    seed: int = typer.Option(0, "--seed", help="The run's seed: the scene's draw (with --scene) and, for any source, "
+                             "the streams perception, grasp sampling and IK draw from, as `run --seed` does."),
     mount: Mount | None = typer.Option(None, "--mount", help="Where the scene's camera is (default: the scene's)."),
     calibration: Path | None = typer.Option(None, "--calibration", help="Hand-eye calibration: results in the base "
                                             "frame (a scene's own by default); without one, in the camera frame."),
@@ -54,7 +55,8 @@ def perceive(
     spec = choose_source(source, device, scene, seed, mount)
     if log is not None:
         check_output_file(log, "--log", example="perceive.mcap")
-    request = PerceiveRequest(spec, calibration, detector, frames, log, camera_settings(filters, preset, timeout_ms))
+    request = PerceiveRequest(spec, calibration, detector, frames, log, camera_settings(filters, preset, timeout_ms),
+                              seed=seed)
     if as_json:
         summary = run_perceive(request)
         typer.echo(json.dumps(summary.as_json()))

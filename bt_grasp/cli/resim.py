@@ -12,13 +12,14 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import tempfile
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from bt_grasp.errors import LogFileError
+from bt_grasp.errors import InputError, LogFileError
 from bt_grasp.files.safe_path import check_relative_name, join_under
 from bt_grasp.scene.goals import Goal
 
@@ -108,7 +109,12 @@ def resimulate(log_path: Path, keep_log: Path | None = None, leaves: tuple[str, 
     with tempfile.TemporaryDirectory(prefix="bt_grasp_resim_") as tmp, \
             confined_to(Path(tmp), "a log's tree, scene, calibration and fault plan may name only the files the log "
                                    "carries, so this run cannot be re-simulated"):
-        report = _resimulate(log_path, Path(tmp), leaves)
+        try:
+            report = _resimulate(log_path, Path(tmp), leaves)
+        except InputError as exc:  # a file the log carries, named as the log names it (its folder is gone)
+            if exc.source == str(log_path):
+                raise
+            raise LogFileError(log_path, f"cannot be re-simulated: {_in_log(exc.message, tmp)}") from None
         if keep_log is not None:
             from bt_grasp.files.output_files import copy_output_file
 
@@ -116,6 +122,13 @@ def resimulate(log_path: Path, keep_log: Path | None = None, leaves: tuple[str, 
         else:
             report.new_log = ""
     return report
+
+
+def _in_log(sentence: str, workdir: str) -> str:
+    """A sentence about the files of a re-simulation's work folder, with each named as the log names it."""
+    sentence = re.sub(re.escape(workdir) + r"/([^\s':,()]*)", lambda m: "the log's " + os.path.normpath(m.group(1)),
+                      sentence)
+    return sentence.replace(workdir, "the log's files")
 
 
 def _resimulate(log_path: Path, workdir: Path, leaves: tuple[str, ...] = ()) -> ResimReport:
@@ -134,6 +147,7 @@ def _resimulate(log_path: Path, workdir: Path, leaves: tuple[str, ...] = ()) -> 
         raise LogFileError(log_path, "the log has no recorded tree or seed, so the run cannot be re-simulated")
     for name in tree_files:  # every tree file (includes too), in one folder as they were named
         _write_attachment(log_path, workdir, name, run.attachments[name])
+    includes = _recorded_include_links(log_path, meta, tree_files, workdir)
     main_name = Path(meta.get("tree_file", tree_files[0])).name
     tree = join_under(workdir / "tree", main_name, source=log_path, what="tree file name")
     scene = _attachment(run, "scene", workdir, log_path)
@@ -172,7 +186,13 @@ def _resimulate(log_path: Path, workdir: Path, leaves: tuple[str, ...] = ()) -> 
         from bt_grasp.control import Controller
 
         controller = Controller(replay=recorded_interventions)
-    summary = run_episode(request, controller=controller)
+    if includes is None:  # a log from before logs said where each include was found: beside, as it was named
+        summary = run_episode(request, controller=controller)
+    else:
+        from bt_grasp.tree.loader import recorded_includes
+
+        with recorded_includes(includes):
+            summary = run_episode(request, controller=controller)
     new_run = open_log(new_log)
     divergence = compare_tick_streams(run.ticks, new_run.ticks, stop_at_shorter=run.truncated)
     recorded_print, new_print = fingerprint_of_log(run), fingerprint_of_log(new_run)
@@ -187,6 +207,32 @@ def _resimulate(log_path: Path, workdir: Path, leaves: tuple[str, ...] = ()) -> 
     return ResimReport(len(run.ticks), len(new_run.ticks), divergence, recorded_success, summary.success,
                        str(new_log), difference, recorded_print.digest, new_print.digest,
                        len(recorded_interventions), _first_intervention_difference(recorded_interventions, applied))
+
+
+def _recorded_include_links(log_path: Path, meta: dict[str, str], tree_files: list[str], workdir: Path
+                            ) -> dict[tuple[str, str], Path] | None:
+    """The run metadata ``tree_includes`` (``[including file, path as written, included file]``, by attachment
+    name) as the loader's map: each include resolves to the log's own copy, never to a file of this machine.
+    None when the log has no such record (older logs: includes are looked for beside, inside the work folder)."""
+    if "tree_includes" not in meta:
+        return None
+    try:
+        rows = json.loads(meta["tree_includes"])
+    except (ValueError, RecursionError):
+        rows = None
+    if not isinstance(rows, list) or not all(
+            isinstance(r, list) and len(r) == 3 and all(isinstance(v, str) for v in r) for r in rows):
+        raise LogFileError(log_path, "its run metadata 'tree_includes' is not a list of [file, include, file]")
+    links: dict[tuple[str, str], Path] = {}
+    for source, written, target in rows:
+        for name in (source, target):
+            if name not in tree_files:
+                raise LogFileError(log_path, f"its run metadata 'tree_includes' names {name[:80]!r}, which is not a "
+                                   "tree file the log carries")
+        including = join_under(workdir, source, source=log_path, what="attachment name")
+        links[(os.path.realpath(including), written)] = join_under(workdir, target, source=log_path,
+                                                                   what="attachment name")
+    return links
 
 
 #: a recorded seed is a 64-bit integer; a re-simulation runs at most this many ticks (28 simulated hours)

@@ -209,6 +209,11 @@ def run(
         False, "--allow-remote-control", help="Accept --control on a --live-host other machines reach (no "
         "authentication: a warning is printed)."
     ),
+    control_files: Path | None = typer.Option(
+        None, "--control-files", metavar="DIR", help="With --control: a viewer may set a blackboard entry that names "
+        "a file (bb.calibration_file) only to a file under DIR (default: none at all; any user of this machine can "
+        "reach a loopback port)."
+    ),
 ) -> None:
     """Run a task tree on the simulated cell. Exit code 0 on task success (judged by physics), 1 on failure."""
     # only what every run needs here: a --resident run's client hands the request over and imports neither the
@@ -253,6 +258,10 @@ def run(
                          "(--control), not both; drop one of the two")
     if control and live is None:
         raise InputError("--control", "takes commands from a live viewer, so it needs --live")
+    if control_files is not None and not control:
+        raise InputError("--control-files", "names the folder a viewer's file names must lie in, so it needs --control")
+    if control_files is not None and not control_files.is_dir():
+        raise InputError("--control-files", f"'{control_files}' is not a folder")
     if interactive and as_json:
         raise InputError("--json", "an interactive run draws on the terminal; drop --json or --interactive")
     if interactive and resident:
@@ -284,7 +293,7 @@ def run(
         layouts = live_layout_folder(live is not None, request.log)  # removed when the run ends
         try:
             summary = _run_served(request, breakpoints, console, quiet=quiet, control=control,
-                                  allow_remote=allow_remote_control,
+                                  allow_remote=allow_remote_control, control_files=control_files,
                                   layout_folder=Path(layouts.name) if layouts is not None else None)
         finally:
             if layouts is not None:
@@ -299,7 +308,8 @@ def run(
 
 
 def _run_served(request: EpisodeRequest, breakpoints: tuple[Breakpoint, ...], console: Console, *, quiet: bool,
-                control: bool, allow_remote: bool, layout_folder: Path | None) -> EpisodeResult:
+                control: bool, allow_remote: bool, layout_folder: Path | None,
+                control_files: Path | None = None) -> EpisodeResult:
     """A run in this process, served live (with ``--control``, driven from the viewer) when asked."""
     on_tick = () if quiet else (live_progress(console),)
     if control:
@@ -309,7 +319,7 @@ def _run_served(request: EpisodeRequest, breakpoints: tuple[Breakpoint, ...], co
             console.print(line, highlight=False, markup=False)
 
         return run_foxglove_control(request, breakpoints, allow_remote=allow_remote, say=say,
-                                    on_tick=on_tick, layout_folder=layout_folder)
+                                    on_tick=on_tick, layout_folder=layout_folder, control_files=control_files)
     from bt_grasp.episode.episode import Episode
 
     episode = Episode(request)

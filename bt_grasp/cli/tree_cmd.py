@@ -20,6 +20,8 @@ from bt_grasp.files.output_files import check_output_file, write_output_file
 from bt_grasp.files.terminal_text import shown
 
 if TYPE_CHECKING:  # the tree package (py_trees) is imported when a command reads a tree, not for --help
+    from bt_grasp.clock import ManualClock
+    from bt_grasp.tree.dry_run import DryRunResult
     from bt_grasp.tree.registry import NodeRegistry
 
 tree_app = typer.Typer(
@@ -40,7 +42,10 @@ def tree_registry(leaves: list[str] | None = None, no_plugins: bool = False,
 
 
 def _fail(exc: InputError) -> typer.Exit:
-    typer.echo(f"{ERROR_PREFIX}{shown(exc.message)}", err=True)  # control characters shown, never obeyed
+    """One line per problem (``tree validate`` and ``tree run`` name every unknown node, each at its line)."""
+    lines = getattr(exc, "lines", None) or (exc.message,)
+    for line in lines:
+        typer.echo(f"{ERROR_PREFIX}{shown(line, newlines=False)}", err=True)  # control characters shown, never obeyed
     return typer.Exit(exc.exit_code)
 
 
@@ -54,11 +59,16 @@ def _show_tree_warnings() -> None:
 @tree_app.command("validate")
 def validate_cmd(
     file: Path = typer.Argument(..., help="XML or YAML tree file."),
+    scene: Path | None = typer.Option(
+        None, "--scene", help="Also check the tree against this scene file: a fixture it lacks is an error (with the "
+        "closest name), a colour or class none of its objects has a warning."
+    ),
     leaves: list[str] = leaves_option(),
     no_plugins: bool = no_plugins_option(),
     plugins: list[str] = plugin_option(),
 ) -> None:
-    """Check a tree file completely (nodes, ports, scripts, includes, subtrees) without running it."""
+    """Check a tree file completely (nodes, ports, scripts, includes, subtrees) without running it; every unknown
+    node is named, each at its file and line."""
     from bt_grasp.tree.loader import load_tree
 
     _show_tree_warnings()
@@ -67,10 +77,21 @@ def validate_cmd(
         from bt_grasp.behaviours.objects import check_detector_classes
 
         check_detector_classes(tree.nodes())  # a SelectObject's class against the tree's learned models
+        notes: list[str] = []
+        if scene is not None:
+            from bt_grasp.behaviours.library import check_tree_against_scene, scene_notes
+            from bt_grasp.scene.format import load_scene
+
+            loaded = load_scene(scene)
+            check_tree_against_scene(tree.nodes(), loaded)
+            notes = scene_notes(tree.nodes(), loaded, str(scene))
     except InputError as exc:
         raise _fail(exc) from None
+    for note in notes:
+        typer.echo(f"bt-grasp: warning: {shown(note, newlines=False)}", err=True)
     count = sum(1 for _ in tree.nodes())
-    typer.echo(f"{file}: OK ({count} nodes, main tree {tree.main_tree})")
+    fits = f", fits {scene}" if scene is not None else ""
+    typer.echo(f"{file}: OK ({count} nodes, main tree {tree.main_tree}{fits})")
 
 
 class ShowFormat(StrEnum):
@@ -173,17 +194,38 @@ def run_cmd(
     ),
     max_ticks: int = typer.Option(1000, "--max-ticks", min=1, help="Stop after this many ticks."),
     substitute: list[str] = typer.Option(
-        [], "--substitute", "-s", help="NODE=REPLACEMENT, e.g. Perceive=AlwaysSuccess or Approach=Running:3."
+        [], "--substitute", "-s", help="NODE=REPLACEMENT, e.g. Perceive=AlwaysSuccess or Approach=Running:3 (a "
+        "pattern that replaces no leaf is an error)."
     ),
     outcome: list[str] = typer.Option(
-        [], "--outcome", help="NAME=success, NAME=failure[:REASON] or NAME=running:N (leaf type, node name or path)."
+        [], "--outcome", help="NAME=OUTCOME[,OUTCOME...], one per call, the last repeating; each success, "
+        "failure[:REASON] or running:N[:failure[:REASON]]. NAME: a leaf's type or name, or a pattern (* ?) over its "
+        "full path."
+    ),
+    output_port: list[str] = typer.Option(
+        [], "--output-port", help="NAME.PORT=VALUE[,VALUE...]: what a stand-in writes to that output port, call by "
+        "call (else its type's default)."
     ),
     random_seed: int | None = typer.Option(
         None, "--random", help="Draw each robot leaf's outcome per attempt from this seed (success or a reason)."
     ),
     tick_hz: float = typer.Option(100.0, "--tick-hz", help="Simulated ticks per second."),
+    nodes_model: list[Path] = typer.Option(
+        [], "--nodes-model", help="A TreeNodesModel file (Groot2's, e.g. Nav2's nav2_tree_nodes.xml): a stand-in for "
+        "each action and condition it declares that no plugin provides (the tree's own models count too)."
+    ),
+    rules_file: Path | None = typer.Option(
+        None, "--substitution-rules", help="BehaviorTree.CPP's substitution-rule JSON (TestNodeConfigs, "
+        "SubstitutionRules), read as loadSubstitutionRuleFromJSON reads it; async_delay in simulated ms."
+    ),
+    scene: Path | None = typer.Option(
+        None, "--scene", help="Check the tree against this scene and take fixture poses (FixturePose) from it."
+    ),
+    export_btlog: Path | None = typer.Option(
+        None, "--export-btlog", help="Also write the walk as a Groot2 .btlog file (as replay --export-btlog does)."
+    ),
     as_json: bool = typer.Option(
-        False, "--json", help="Print one JSON object: status, ticks, blackboard, walk (per tick, the statuses)."
+        False, "--json", help="Print one JSON object: status, ticks, blackboard, walk (per tick), transitions."
     ),
     leaves: list[str] = leaves_option(),
     camera: str | None = typer.Option(
@@ -195,15 +237,11 @@ def run_cmd(
     no_plugins: bool = no_plugins_option(),
     plugins: list[str] = plugin_option(),
 ) -> None:
-    """Tick a tree with a simulated clock until it finishes, every robot leaf replaced by a stand-in (SUCCESS
-    unless --outcome or --random say otherwise); print the statuses of the nodes each tick walked; exit 0 on
-    SUCCESS, 1 otherwise. With --camera the perception leaves run on a camera's frames."""
-    from bt_grasp.behaviours.stand_ins import RobotStandIns
+    """Tick a tree with a simulated clock until it finishes, its leaves stood in for where no code runs them (robot
+    leaves; a TreeNodesModel's nodes; BT.CPP substitution rules), steered call by call (--outcome); print every
+    status change in order as BT.CPP's StdCoutLogger does (the full path for the name); exit 0 on SUCCESS, 1
+    otherwise. With --camera the perception leaves run on a camera's frames."""
     from bt_grasp.clock import ManualClock
-    from bt_grasp.episode.request import parse_assignments
-    from bt_grasp.tree.dry_run import DryRunPlan, format_walk, known_reason_names, load_dry, parse_outcome, run_dry
-    from bt_grasp.tree.node import BtStatus
-    from bt_grasp.tree.values import display
 
     _show_tree_warnings()
     try:
@@ -211,43 +249,129 @@ def run_cmd(
             raise InputError("--dry", "only dry runs exist here; `bt-grasp run` runs trees with the robot")
         if not tick_hz > 0:
             raise InputError("--tick-hz", f"must be positive, got {tick_hz}")
-        clock = ManualClock()
-        registry, catalog = tree_registry(leaves, no_plugins, plugins), RobotStandIns()
-        rules = tuple(parse_outcome(text) for text in outcome)
-        plan = DryRunPlan(rules, random_seed, catalog, known_reason_names(registry))
-        entries = parse_assignments(set_)
-        substitutions = _parse_substitutions(substitute)
         if calibration is not None and camera is None:
             raise InputError("--calibration", "is the camera's calibration: give it with --camera")
-        if camera is None:
-            tree = load_dry(file, registry, plan, substitutions=substitutions, clock=clock)
-            for key, value in entries.items():
-                tree.root_blackboard.set(key, value)
-            result = run_dry(tree, clock, max_ticks, 1.0 / tick_hz)
-        else:
-            from bt_grasp.sensing.dry_camera import dry_run_on_camera
-            from bt_grasp.sensing.source_spec import parse_camera_option
+        if export_btlog is not None:
+            from bt_grasp.files.output_files import check_output_file
 
-            result = dry_run_on_camera(file, registry, plan, parse_camera_option(camera), calibration, clock,
-                                       max_ticks, 1.0 / tick_hz, substitutions=substitutions, entries=entries)
+            check_output_file(export_btlog, "--export-btlog", example="run.btlog", inputs=(file,))
+        clock = ManualClock()
+        registry = tree_registry(leaves, no_plugins, plugins)
+        result = _dry_run(file, registry, clock, max_ticks, 1.0 / tick_hz, outcome, output_port, random_seed,
+                          substitute, nodes_model, rules_file, scene, camera, calibration, set_)
+        if export_btlog is not None:
+            _write_btlog(export_btlog, result)
     except InputError as exc:
         raise _fail(exc) from None
+    _print_dry_run(result, as_json, export_btlog)
+
+
+def _dry_run(file: Path, registry: NodeRegistry, clock: ManualClock, max_ticks: int, dt_s: float,
+             outcome: list[str], output_port: list[str], random_seed: int | None, substitute: list[str],
+             nodes_model: list[Path], rules_file: Path | None, scene: Path | None, camera: str | None,
+             calibration: Path | None, set_: list[str]) -> DryRunResult:
+    """Load and tick the tree as ``tree run --dry`` does (every argument checked first: InputError)."""
+    from bt_grasp.behaviours.stand_ins import RobotStandIns
+    from bt_grasp.episode.request import parse_assignments
+    from bt_grasp.tree.dry_run import DryRunPlan, known_reason_names, load_dry, run_dry
+    from bt_grasp.tree.model_stand_ins import read_nodes_model
+    from bt_grasp.tree.outcomes import parse_outcome, parse_output
+    from bt_grasp.tree.rules_file import read_rules_file
+
+    loaded_scene = None
+    if scene is not None:
+        from bt_grasp.behaviours.library import check_tree_against_scene
+        from bt_grasp.scene.format import load_scene
+        from bt_grasp.tree.loader import load_tree
+
+        loaded_scene = load_scene(scene)
+        check_tree_against_scene(load_tree(file, registry).nodes(), loaded_scene)  # as `run` refuses it
+    plan = DryRunPlan(tuple(parse_outcome(text) for text in outcome), random_seed, RobotStandIns(loaded_scene),
+                      known_reason_names(registry), tuple(parse_output(text) for text in output_port))
+    entries = parse_assignments(set_)
+    substitutions = _parse_substitutions(substitute)
+    models = [model for path in nodes_model for model in read_nodes_model(path)]
+    rules = read_rules_file(rules_file) if rules_file is not None else None
+    if camera is None:
+        tree = load_dry(file, registry, plan, substitutions=substitutions, clock=clock, rules=rules, models=models)
+        for key, value in entries.items():
+            tree.root_blackboard.set(key, value)
+        return run_dry(tree, clock, max_ticks, dt_s)
+    if rules is not None or models:
+        raise InputError("--camera", "runs bt_grasp's perception leaves for real; give --substitution-rules and "
+                         "--nodes-model without it")
+    from bt_grasp.sensing.dry_camera import dry_run_on_camera
+    from bt_grasp.sensing.source_spec import parse_camera_option
+
+    return dry_run_on_camera(file, registry, plan, parse_camera_option(camera), calibration, clock,
+                             max_ticks, dt_s, substitutions=substitutions, entries=entries)
+
+
+def _write_btlog(path: Path, result: DryRunResult) -> None:
+    """The walk as Groot2's .btlog, with ``replay --export-btlog``'s writer (times: simulated µs from tick 1)."""
+    import time
+
+    from bt_grasp.recording.btlog import Transition, write_walk_btlog
+    from bt_grasp.tree.introspect import tree_structure
+
+    assert result.tree is not None
+    moves = [Transition(t.time_ns // 1000, t.uid, t.new) for t in result.transitions]
+    write_walk_btlog(path, tree_structure(result.tree.root), result.tree.main_tree, time.time_ns(), moves)
+
+
+def _print_dry_run(result: DryRunResult, as_json: bool, btlog: Path | None) -> None:
+    from bt_grasp.tree.node import BtStatus
+    from bt_grasp.tree.values import display
+    from bt_grasp.tree.walk import stdout_lines
+
     status = result.status
     if as_json:  # typed: integers and reals stay numbers
         from bt_grasp.recording.jsonable import to_jsonable
 
         blackboard = {k: to_jsonable(v) for k, v in result.blackboard.items()}
-        walk = [tick.as_json() for tick in result.walk]
-        typer.echo(json.dumps({"status": status.value, "ticks": result.ticks, "blackboard": blackboard, "walk": walk}))
+        typer.echo(json.dumps({
+            "status": status.value, "ticks": result.ticks, "blackboard": blackboard,
+            "walk": [tick.as_json() for tick in result.walk],
+            "transitions": [move.as_json() for move in result.transitions],
+        }))
     else:  # as BT.CPP prints values: a real with six decimals
         finished = "" if status.completed else f" (not finished after {result.ticks} ticks)"
         typer.echo(f"{status.value} after {result.ticks} ticks{finished}")
         for key, entry in result.blackboard.items():
             text = display(entry)
             typer.echo(f"  {key} = {text if len(text) <= 100 else text[:97] + '...'}")
-        for line in format_walk(result.walk):
-            typer.echo(line)
+        for line in stdout_lines(result.walk, result.transitions):
+            typer.echo(shown(line, newlines=False))
+        if btlog is not None:
+            typer.echo(f"wrote {len(result.transitions)} transitions to {shown(str(btlog), newlines=False)}")
     raise typer.Exit(0 if status is BtStatus.SUCCESS else 1)
+
+
+@tree_app.command("stubs")
+def stubs_cmd(
+    model_file: Path = typer.Argument(..., help="A TreeNodesModel file (Groot2's; e.g. Nav2's nav2_tree_nodes.xml), "
+                                      "or a tree file holding one."),
+    out: Path = typer.Option(..., "--out", "-o", help="The plugin file to write (FILE.py)."),
+    force: bool = typer.Option(False, "--force", help="Overwrite OUT if it exists."),
+) -> None:
+    """Write a plugin file of typed stand-ins for the model's actions and conditions, in bt_grasp's node API (each
+    succeeds, writing its outputs' defaults): it loads with --leaves FILE.py and ticks; replace each update()."""
+    from bt_grasp.tree.model_stand_ins import read_nodes_model
+    from bt_grasp.tree.stubs import stubs_text
+
+    try:
+        if out.suffix != ".py":
+            raise InputError("--out", f"{out} must end in .py (a plugin file --leaves loads)")
+        check_output_file(out, "--out", example="my_nodes.py", inputs=(model_file,))
+        if out.exists() and not force:
+            raise InputError(out, "exists; pass --force to overwrite it")
+        text, count = stubs_text(read_nodes_model(model_file), model_file.name)
+        if count == 0:
+            raise InputError(model_file, "declares no action or condition to stand in for")
+        write_output_file(out, text, "--out", example="my_nodes.py")
+    except InputError as exc:
+        raise _fail(exc) from None
+    typer.echo(f"wrote {count} stand-in{'s' * (count != 1)} to {out} (load it with --leaves {out})")
 
 
 @tree_app.command("models")

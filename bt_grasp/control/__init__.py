@@ -29,6 +29,7 @@ from bt_grasp.control.commands import (
     SeedPolicy,
     SetBlackboard,
     SetBreakpoint,
+    SetBreakpoints,
     Source,
     Step,
     Stop,
@@ -43,6 +44,6 @@ __all__ = [
     "BreakKind", "Breakpoint", "ChooseObject", "ClearBreakpoint", "Command", "CommandError", "Controller",
     "DetectionView", "FailureView", "FaultFirer", "FireFault", "Intervention", "InterventionRecord",
     "InterventionSink", "NodeView", "Pause", "Restart", "Resume", "RunState", "SeedPolicy", "SetBlackboard",
-    "SetBreakpoint", "Source", "Step", "Stop", "check_breakpoints", "command_from_json", "command_to_json",
-    "is_intervention", "parse_breakpoint", "parse_breakpoints",
+    "SetBreakpoint", "SetBreakpoints", "Source", "Step", "Stop", "check_breakpoints", "command_from_json",
+    "command_to_json", "is_intervention", "parse_breakpoint", "parse_breakpoints",
 ]

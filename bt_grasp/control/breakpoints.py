@@ -30,6 +30,10 @@ SOURCE = "--break"
 SYNTAX = "node:NAME, fail, fail:REASON, fail:all, bb:KEY, tick:N or time:S"
 #: ``fail:all``'s target: every leaf FAILURE (reason codes are upper case, so no reason is named this)
 EVERY_FAILURE = "all"
+#: a run holds at most this many breakpoints (20,000 in one message stalled the tick loop for minutes)
+MAX_BREAKPOINTS = 100
+#: the longest spec (a node's path, a reason, an entry's name)
+MAX_SPEC_CHARS = 500
 
 
 class BreakKind(enum.StrEnum):
@@ -71,12 +75,14 @@ class Breakpoint:
 
 def parse_breakpoint(spec: str, source: str = SOURCE) -> Breakpoint:
     """The breakpoint a spec names; InputError (one sentence) on a bad spec."""
+    if len(spec) > MAX_SPEC_CHARS:
+        raise InputError(source, f"a breakpoint spec is at most {MAX_SPEC_CHARS} characters, got {len(spec)}")
     text = spec.strip()
     head, sep, tail = text.partition(":")
     tail = tail.strip()
 
     def bad(problem: str) -> InputError:
-        return InputError(source, f"'{spec}': {problem}; expected {SYNTAX}")
+        return InputError(source, f"{spec!r}: {problem}; expected {SYNTAX}")
 
     if head == "fail":
         if sep and not tail:
@@ -95,6 +101,8 @@ def parse_breakpoint(spec: str, source: str = SOURCE) -> Breakpoint:
             raise bad(f"'{tail}' is not a tick number") from None
         if tick < 0:
             raise bad("a tick is 0 or more")
+        if tick >= 2**63:
+            raise bad("a tick is below 2^63")
         return Breakpoint(BreakKind.TICK, tick=tick)
     if head == "time":
         try:

@@ -23,7 +23,7 @@ from collections import deque
 from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING, Protocol
 
-from bt_grasp.control.breakpoints import SOURCE, BreakKind, Breakpoint
+from bt_grasp.control.breakpoints import MAX_BREAKPOINTS, SOURCE, BreakKind, Breakpoint
 from bt_grasp.control.commands import (
     ChooseObject,
     ClearBreakpoint,
@@ -36,6 +36,7 @@ from bt_grasp.control.commands import (
     SeedPolicy,
     SetBlackboard,
     SetBreakpoint,
+    SetBreakpoints,
     Source,
     Step,
     Stop,
@@ -43,7 +44,7 @@ from bt_grasp.control.commands import (
     command_to_json,
     is_intervention,
 )
-from bt_grasp.control.edits import choose_object, detections_in, reading_ports, set_entry
+from bt_grasp.control.edits import choose_object, detections_in, names_a_file, reading_ports, set_entry
 from bt_grasp.control.state import (
     DetectionView,
     FailureView,
@@ -127,6 +128,7 @@ class Controller:
         self._sink: InterventionSink | None = None
         self._fire_fault: FaultFirer | None = None
         self._settings: tuple[str, ...] = ()
+        self._file_settings: tuple[str, ...] = ()
         #: set by a Restart: the episode ended so that the caller starts the next one with this seed policy
         self.restart: SeedPolicy | None = None
 
@@ -179,6 +181,7 @@ class Controller:
             self._hook(node)
         keys = list(tree.root_blackboard.keys())  # a Blackboard is not iterable
         self._settings = tuple(sorted(k for k in keys if self._is_setting(k)))
+        self._file_settings = tuple(k for k in self._settings if names_a_file(k, reading_ports(tree, k)))
         self._remember_blackboard()
 
     def between_ticks(self, tick: int, failures: Sequence[FailureEvent] = ()) -> bool:
@@ -265,8 +268,17 @@ class Controller:
             if command.breakpoint.kind is BreakKind.NODE:
                 self._check_node(command.breakpoint.target, CommandError)
             if command.breakpoint not in self._breakpoints:
+                if len(self._breakpoints) >= MAX_BREAKPOINTS:
+                    raise CommandError(f"a run holds at most {MAX_BREAKPOINTS} breakpoints; clear one first")
                 self._breakpoints.append(command.breakpoint)
             self._message = f"breakpoint {command.breakpoint.spec} set"
+        elif isinstance(command, SetBreakpoints):  # the set the controller holds now is replaced, whatever a view said
+            for bp in command.breakpoints:
+                if bp.kind is BreakKind.NODE:
+                    self._check_node(bp.target, CommandError)
+            self._breakpoints = list(dict.fromkeys(command.breakpoints))
+            count = len(self._breakpoints)
+            self._message = f"breakpoints set ({count})" if count else "breakpoints cleared"
         elif isinstance(command, ClearBreakpoint):
             if command.breakpoint is None:
                 self._breakpoints.clear()
@@ -401,7 +413,7 @@ class Controller:
             pause_reason=self._pause_reason if self._paused else "", finished=self._finished, nodes=tuple(nodes),
             blackboard=blackboard, last_failure=self._last_failure, detections=detections,
             breakpoints=tuple(b.spec for b in self._breakpoints), interventions=tuple(self._interventions),
-            message=self._message, tree_status=status, settings=self._settings,
+            message=self._message, tree_status=status, settings=self._settings, file_settings=self._file_settings,
         )
         with self._cond:
             self._state = state

@@ -51,6 +51,19 @@ def reading_ports(tree: LoadedTree, key: str) -> list[tuple[BtNode, PortSpec]]:
     return found
 
 
+#: port and entry names that name a file or folder: ``file``, ``calibration_file``, ``model_path``, ``out_dir``
+_FILE_NAMES = ("file", "path", "dir", "folder")
+
+
+def names_a_file(key: str, ports: Sequence[tuple[BtNode, PortSpec]]) -> bool:
+    """Whether blackboard entry ``key`` names a file: its name, or the name of a port reading it, is ``file``,
+    ``path``, ``dir`` or ``folder`` or ends so after an underscore (``calibration_file``). Such an entry set by
+    a viewer makes the run read (or write) that file, so a front end others can reach checks where it lies
+    (``bt_grasp.foxglove.control``). A plugin's port that takes a file is named so (docs/own-leaves.md)."""
+    names = [key, *(spec.name for _node, spec in ports)]
+    return any(n.lower() in _FILE_NAMES or n.lower().endswith(tuple("_" + w for w in _FILE_NAMES)) for n in names)
+
+
 def _fit(value: BlackboardScalar, spec: PortSpec) -> object:
     if spec.type is object:
         return value

@@ -93,6 +93,9 @@ class RunState:
     message: str = ""
     tree_status: str = "IDLE"
     settings: tuple[str, ...] = field(default_factory=tuple)  # entries a port reads: what may be set
+    #: the settings that name a file (``bt_grasp.control.edits.names_a_file``): a viewer may set them only to a
+    #: file under the folder the run's user named (``--control-files``)
+    file_settings: tuple[str, ...] = field(default_factory=tuple)
 
     @property
     def break_on_failure(self) -> bool:

@@ -31,10 +31,11 @@ def remote_control_warning(host: str) -> str:
 
 def run_foxglove_control(request: EpisodeRequest, breakpoints: tuple[Breakpoint, ...], *, allow_remote: bool,
                          say: Say, on_tick: tuple[TickCallback, ...] = (),
-                         layout_folder: Path | None = None) -> EpisodeResult:
+                         layout_folder: Path | None = None, control_files: Path | None = None) -> EpisodeResult:
     """Run an episode whose live server takes commands from its viewers (and, after a restart from them, the
     next one: same port, logs run-2.mcap, ...); returns the last episode's result. ``layout_folder``: where the
-    layout goes when the run has no log (the caller removes it)."""
+    layout goes when the run has no log (the caller removes it); ``control_files``: the folder a viewer's file
+    names must lie in (``--control-files``; None: no file may be named)."""
     from bt_grasp.control import Controller, SeedPolicy, check_breakpoints, parse_breakpoint
     from bt_grasp.episode.episode import Episode
     from bt_grasp.files.hosts import is_loopback
@@ -52,7 +53,8 @@ def run_foxglove_control(request: EpisodeRequest, breakpoints: tuple[Breakpoint,
     while True:
         episode = first if number == 0 else Episode(replace(request, seed=seed, log=_numbered(request.log, number)))
         controller = Controller(breakpoints, start_paused=True)
-        control = FoxgloveControl(controller, host=request.live_host, allow_remote=allow_remote)
+        control = FoxgloveControl(controller, host=request.live_host, allow_remote=allow_remote,
+                                  control_files=control_files)
         episode.on_live.append(_server(episode, control, say, layout_folder))
         result = episode.run(on_tick=on_tick, controller=controller)
         if controller.restart is None:

@@ -3,12 +3,16 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
 
 from bt_grasp.episode.request import EpisodeRequest
 from bt_grasp.episode.result import goal_json
+from bt_grasp.errors import InputError
+from bt_grasp.files.bounded_io import read_user_file
+from bt_grasp.files.safe_path import check_relative_name
 from bt_grasp.process.environment import versions_line
 from bt_grasp.scene.format import Scene
 from bt_grasp.scene.goals import Goal
@@ -28,7 +32,7 @@ def git_commit() -> str:
 def run_metadata(request: EpisodeRequest, scene: Scene, tree: LoadedTree, calibration: Path | None,
                  goal: Goal) -> dict[str, str]:
     r = request
-    return {
+    meta = {
         "seed": str(r.seed),
         "tree_file": str(r.tree),
         "scene_file": str(r.scene),
@@ -45,16 +49,53 @@ def run_metadata(request: EpisodeRequest, scene: Scene, tree: LoadedTree, calibr
         "main_tree": tree.main_tree,
         "leaves": ";".join(r.leaves),
     }
+    links = tree_include_links(tree)
+    if links:  # where each include was found, so that `replay --resim` reads the log's own copy of each
+        meta["tree_includes"] = json.dumps(links)
+    return meta
+
+
+def tree_attachment_names(tree: LoadedTree) -> dict[str, str]:
+    """Each tree file's attachment name, by its path as displayed: the main tree ``tree/<its name>``; an included
+    file the path its include wrote, from the including file's attachment folder (``tree/lib/pick.xml``, wherever
+    it was found: beside, on ``BT_GRASP_TREE_PATH`` or in the shipped library); an include written with an
+    absolute path or ``..`` out of ``tree/``, or a name another file took, ``tree/include-N/<its name>``."""
+    main = tree.document.source
+    names = {main: f"tree/{Path(main).name}"}
+    taken = set(names.values())
+    for link in tree.document.include_links:
+        if link.resolved in names:
+            continue
+        name = ""
+        if not os.path.isabs(link.path):
+            name = os.path.normpath(os.path.join(os.path.dirname(names[link.source]), link.path))
+            try:
+                check_relative_name(name, source=link.source)
+            except InputError:
+                name = ""
+        if not name.startswith("tree/") or name in taken:
+            name = f"tree/include-{len(taken)}/{Path(link.resolved).name}"
+        names[link.resolved] = name
+        taken.add(name)
+    return names
+
+
+def tree_include_links(tree: LoadedTree) -> list[list[str]]:
+    """Every include of the run as ``[including file's attachment, path as written, included file's attachment]``
+    (the run metadata ``tree_includes``: ``replay --resim`` resolves each include to the log's own file)."""
+    names = tree_attachment_names(tree)
+    return [[names[link.source], link.path, names[link.resolved]] for link in tree.document.include_links]
 
 
 def run_attachments(request: EpisodeRequest, tree: LoadedTree, calibration: Path | None) -> dict[str, bytes]:
     """The exact bytes of every input file (``replay --resim`` runs them again)."""
     files: dict[str, bytes] = {}
+    names = tree_attachment_names(tree)
     for name, text in tree.sources.items():
-        files[f"tree/{Path(name).name}"] = text.encode()
-    files[f"scene/{request.scene.name}"] = request.scene.read_bytes()
+        files[names.get(name, f"tree/{Path(name).name}")] = text.encode()
+    files[f"scene/{request.scene.name}"] = read_user_file(request.scene)  # bounded, as when they were loaded
     if calibration is not None:
-        files[f"calibration/{calibration.name}"] = calibration.read_bytes()
+        files[f"calibration/{calibration.name}"] = read_user_file(calibration)
     if request.faults is not None:
-        files[f"faults/{request.faults.name}"] = request.faults.read_bytes()
+        files[f"faults/{request.faults.name}"] = read_user_file(request.faults)
     return files

@@ -6,6 +6,7 @@ One package that a security review can read alone (``docs/security.md``):
 - ``bounded_yaml``: YAML parsed with bounds (no tags, no alias bombs);
 - ``config``: strict loading of the YAML files users write into frozen, validated models;
 - ``safe_path``: the one gate through which a name read from a file becomes a path;
+- ``search_path``: where a name a user's own file gives (an include, a scene's calibration) is looked for;
 - ``output_files``: the one gate for every file and folder written where a user says;
 - ``terminal_text``: text from files and peers made safe to print;
 - ``image_header``: a picture's size read from its header before anything is decoded.

@@ -105,8 +105,11 @@ def _nearest_line(path: KeyPath, lines: dict[KeyPath, int]) -> int | None:
         path = path[:-1]
 
 
-def validate(model: type[M], data: object, source: str | Path, lines: dict[KeyPath, int] | None = None) -> M:
-    """Validate parsed data against a model; the first problem becomes a one-sentence ConfigError."""
+def validate(model: type[M], data: object, source: str | Path, lines: dict[KeyPath, int] | None = None, *,
+             quote: bool = True) -> M:
+    """Validate parsed data against a model; the first problem becomes a one-sentence ConfigError. ``quote=False``:
+    the sentence names keys the model knows and lines, never a value or an unknown key of the file (a file named by
+    someone else, whose content the sentence would show them)."""
     if data is None:
         raise ConfigError(source, "the file is empty")
     if not isinstance(data, dict):
@@ -124,14 +127,14 @@ def validate(model: type[M], data: object, source: str | Path, lines: dict[KeyPa
         if kind == "extra_forbidden":
             parent = model
             allowed = _allowed_keys(parent, loc[:-1])
-            hint = did_you_mean(str(loc[-1]), allowed)
+            hint = did_you_mean(str(loc[-1]), allowed) if quote else ""
             hint += f" (expected one of: {', '.join(allowed)})" if allowed else ""
-            problem = f"unknown key '{loc[-1]}'{hint}"
+            problem = f"unknown key '{loc[-1]}'{hint}" if quote else f"an unknown key{hint}"
         elif kind == "missing":
             problem = f"missing required key '{key}'"
         else:
             problem = f"{key}: {err['msg'].removeprefix('Value error, ')}"
-            if "input" in err and not isinstance(err["input"], dict | list):
+            if quote and "input" in err and not isinstance(err["input"], dict | list):
                 problem += f" (got {err['input']!r})"
         line = _nearest_line(loc, lines or {})
         raise ConfigError(source, problem, where=line) from None

@@ -8,7 +8,9 @@ here first and refuses what no camera of bt_grasp's makes.
 
 from __future__ import annotations
 
+import io
 import struct
+import warnings
 
 #: the largest picture side a scene's camera has (``bt_grasp.scene.format.Camera.width_px``' limit)
 MAX_IMAGE_SIDE = 4096
@@ -48,3 +50,27 @@ def image_size(data: bytes) -> tuple[int, int] | None:
                 return None
             pos += 2 + length
     return None
+
+
+#: the largest side of a picture a mesh's material names (a texture): the renderer's own textures are at most
+#: 4096 a side, and a 20000 x 20000 PNG of 431 KB took 5.3 GB once decoded
+MAX_TEXTURE_SIDE = 4096
+
+
+def picture_size(data: bytes) -> tuple[int, int] | None:
+    """(width, height) of a picture in any format Pillow reads, from its header only: PNG and JPEG by
+    :func:`image_size`, other formats by Pillow's lazy ``Image.open``, which reads the header and decodes nothing
+    (its own decompression-bomb guard refuses a picture of over twice ``Image.MAX_IMAGE_PIXELS``: None then, as
+    for anything that is not a picture)."""
+    size = image_size(data)
+    if size is not None:
+        return size
+    from PIL import Image  # deferred: Pillow is imported only when a picture is not a PNG or JPEG
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # Pillow's DecompressionBombWarning: the caller refuses by the size
+            with Image.open(io.BytesIO(data)) as image:
+                return int(image.size[0]), int(image.size[1])
+    except Exception:  # any reader's failure on a picture that is not one (or is a bomb Pillow refuses)
+        return None

@@ -88,6 +88,12 @@ def check_output_file(path: str | Path, flag: str, *, example: str = "out.txt",
     return path
 
 
+def _inside(file: Path, folder: Path) -> bool:
+    """Whether ``file`` (links resolved) lies in ``folder`` (links resolved), at any depth."""
+    real, root = Path(os.path.realpath(file)), Path(os.path.realpath(folder))
+    return root in real.parents or real == root
+
+
 def _same_file(a: Path, b: Path) -> bool:
     try:
         return os.path.samefile(a, b)
@@ -95,10 +101,14 @@ def _same_file(a: Path, b: Path) -> bool:
         return False
 
 
-def check_output_folder(path: str | Path, flag: str) -> Path:
-    """``path`` if it is, or can be made, a plain folder to write files into; else :class:`InputError`. Creates
-    nothing (:func:`make_output_folder` does)."""
+def check_output_folder(path: str | Path, flag: str, *, inputs: Sequence[str | Path | None] = ()) -> Path:
+    """``path`` if it is, or can be made, a plain folder to write files into; else :class:`InputError`. ``inputs``:
+    the files the command reads, none of which may lie in the folder (a report's figures overwrote results saved
+    as ``X_figures/success.png``). Creates nothing (:func:`make_output_folder` does)."""
     path = Path(path)
+    for source in inputs:
+        if source is not None and _inside(Path(source), path):
+            raise InputError(flag, f"the output folder '{path}' holds the input file {source}; write elsewhere")
     try:
         info: os.stat_result | None = os.lstat(path)
     except (FileNotFoundError, NotADirectoryError):  # the parent is checked below
@@ -120,9 +130,9 @@ def check_output_folder(path: str | Path, flag: str) -> Path:
     return path
 
 
-def make_output_folder(path: str | Path, flag: str) -> Path:
+def make_output_folder(path: str | Path, flag: str, *, inputs: Sequence[str | Path | None] = ()) -> Path:
     """:func:`check_output_folder`, then the folder made (with its parents)."""
-    path = check_output_folder(path, flag)
+    path = check_output_folder(path, flag, inputs=inputs)
     try:
         path.mkdir(parents=True, exist_ok=True)
     except OSError as exc:

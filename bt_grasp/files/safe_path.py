@@ -10,6 +10,9 @@ are those of CPython's ``tarfile`` "data" filter (PEP 706), applied to names rat
 - the joined path, with every symbolic link already on disk resolved, stays inside the destination.
 
 :func:`join_under` is for relative paths that may have folders (a tree's ``lib/pick.xml``);
+:func:`named_file` is for a file name as mesh formats write them (a material's ``map_Kd``, a glTF ``uri``):
+``%20`` escapes, a ``file://`` prefix, ``./`` and backslashes are read as those formats mean them, then the same
+rules apply;
 :func:`file_component` is for a single file name made from a free-form label (a scene's name in a
 campaign), which it maps to a safe slug instead of refusing, so a run keeps going with a readable name.
 """
@@ -19,6 +22,7 @@ from __future__ import annotations
 import hashlib
 import re
 from pathlib import Path, PurePosixPath
+from urllib.parse import unquote
 
 from bt_grasp.errors import InputError
 
@@ -66,6 +70,17 @@ def join_under(root: Path, name: str, *, source: str | Path, what: str = "name")
     if target != base and base not in target.parents:
         raise InputError(source, f"{what} {name[:80]!r} leads outside {root} through a symbolic link")
     return base / relative
+
+
+def named_file(folder: Path, name: str, *, source: str | Path, what: str = "file name") -> Path:
+    """The file a mesh or material file names (``name`` as the format writes it: ``%20`` escapes, a ``file://``
+    prefix, ``./`` parts and backslashes allowed), inside ``folder``, or :class:`InputError`: an absolute name, a
+    drive (``C:\\textures\\wood.png``), ``..``, a URL or a link out of ``folder`` leaves it. Creates nothing."""
+    text = unquote(name.strip().removeprefix("file://")).replace("\\", "/")
+    if "://" in text:
+        raise InputError(source, f"{what} {name[:80]!r} is a URL; only files beside it are read")
+    parts = [part for part in text.split("/") if part != "."] if not text.startswith("/") else [text]
+    return join_under(folder, "/".join(parts), source=source, what=what)
 
 
 def file_component(label: str, *, max_len: int = 80) -> str:

@@ -32,15 +32,22 @@ parameter                 meaning (writable unless marked *read*)
 A message on :data:`COMMAND_TOPIC` is a command's JSON form (:func:`bt_grasp.control.command_from_json`:
 ``{"kind": "pause"}``, ``{"kind": "step", "n": 5}``, ``{"kind": "set_blackboard", "key": ..., "value": ...}``).
 
-Every value is checked before anything is sent: a bad one gets one sentence back (the live server sends it as a
-status message: Studio lists it under Problems) and the run goes on untouched. A refusal only the tick loop can
+Every value is checked before anything is sent, by the commands' one validation (:mod:`bt_grasp.control.commands`:
+finite numbers, bounded text and lists, at most 100 breakpoints, messages of at most 64 KiB): a bad one gets one
+sentence back (the live server sends it as a status message: Studio lists it under Problems) and the run goes on
+untouched. The ``breakpoints`` parameter replaces the set the controller holds when it takes it (one command),
+never a difference from a view the viewer saw earlier. A refusal only the tick loop can
 find (a value no port reading the entry accepts, an object index past the detections) comes back the same way
 once the controller has answered.
 
 Security: the Foxglove WebSocket protocol has no authentication, and the SDK's server does not say where a
 client connects from. Control is therefore accepted only when the live server listens on a loopback address
 (only this machine's viewers can reach it); on any other host it is refused unless ``allow_remote`` (the run
-command's ``--allow-remote-control``, which prints a warning). Nothing here imports the simulator or the
+command's ``--allow-remote-control``, which prints a warning). Any user of the machine can reach a loopback
+port, so a setting that names a file (``bb.calibration_file``: the run would read it as the run's user) is
+accepted from a viewer only when it lies under the folder the run's user named with ``--control-files DIR``
+(``control_files``; none by default), symbolic links resolved, and the refusal is the same sentence whether the
+file exists or not. Nothing here imports the simulator or the
 WebSocket server: :class:`bt_grasp.foxglove.live.LiveServer` carries the values to and from the protocol.
 """
 
@@ -49,31 +56,32 @@ from __future__ import annotations
 import json
 import logging
 import math
+import os
 import threading
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
-from bt_grasp.control.breakpoints import Breakpoint, parse_breakpoint
 from bt_grasp.control.commands import (
     ChooseObject,
-    ClearBreakpoint,
     Command,
     CommandError,
     FireFault,
+    MessageError,
     Pause,
     Restart,
     Resume,
     SeedPolicy,
     SetBlackboard,
-    SetBreakpoint,
+    SetBreakpoints,
     Source,
     Step,
     Stop,
-    command_from_json,
+    command_from_json_text,
+    parse_breakpoint_list,
 )
 from bt_grasp.control.controller import Controller
 from bt_grasp.control.state import RunState
-from bt_grasp.errors import InputError
 from bt_grasp.faults.model import FaultKind
 from bt_grasp.files.hosts import is_loopback
 from bt_grasp.files.json_types import JsonValue
@@ -88,12 +96,15 @@ BB_PREFIX = "bb."
 #: a parameter value as the run publishes it (what a client sets may be any value the protocol carries)
 ParamValue = bool | int | float | str | list[str]
 
+#: the most parameters one request may set (the control layout sets one at a time)
+MAX_PARAMETERS = 64
+
 READ_ONLY = ("run.tick", "run.sim_time_s", "run.status", "run.message", "run.last_failure", "detections",
              "fault.kinds")
 
 #: the sentences of a controller that are no refusal: an intervention applied ("tick 12: lift_height = 0.12"), a
 #: breakpoint set or cleared, an intervention sent while the run holds inside a tick (before a node)
-_APPLIED_PREFIXES = ("tick ", "breakpoint ")
+_APPLIED_PREFIXES = ("tick ", "breakpoint ", "breakpoints ")
 _WAITING = " waits for the end of tick "
 
 
@@ -126,13 +137,17 @@ class FoxgloveControl:
         allow_remote: ...unless this is set.
         choose_entry: the blackboard entry ``choose.object`` writes (the one the tree acts on).
         detections_entry: the entry holding the detections it chooses from.
+        control_files: the folder a setting that names a file may point into (``--control-files``); None: no
+            file may be named from a viewer.
     """
 
     def __init__(self, controller: Controller, *, host: str = "127.0.0.1", allow_remote: bool = False,
-                 choose_entry: str = "target", detections_entry: str = "objects") -> None:
+                 choose_entry: str = "target", detections_entry: str = "objects",
+                 control_files: Path | None = None) -> None:
         self._controller = controller
         self.host = host
         self.enabled = allow_remote or is_loopback(host)
+        self.control_files = control_files
         self._choose_entry = choose_entry
         self._detections_entry = detections_entry
         self._kinds = fault_kinds()
@@ -180,15 +195,20 @@ class FoxgloveControl:
         """Map the values a client set to commands and send them; a refused value sends nothing."""
         if not self.enabled:
             return Answer(problems=(self.refusal,))
+        if len(values) > MAX_PARAMETERS:
+            return Answer(problems=(f"a request sets at most {MAX_PARAMETERS} parameters, this one {len(values)}",))
         state = self._controller.state()
         sent: list[Command] = []
         problems: list[str] = []
         for name, value in values.items():
+            shown_name = name if len(name) <= 100 else name[:97] + "..."
             try:
                 commands = parameter_commands(name, value, state, self._kinds, self._choose_entry,
                                               self._detections_entry)
+                for command in commands:
+                    self._check_files(command, state)
             except CommandError as exc:
-                problems.append(f"parameter '{name}': {exc}")
+                problems.append(f"parameter {shown_name!r}: {exc}")
                 continue
             for command in commands:
                 self._controller.send(command, Source.FOXGLOVE)
@@ -202,17 +222,35 @@ class FoxgloveControl:
         if not self.enabled:
             return Answer(problems=(self.refusal,))
         try:
-            command = command_from_json(json.loads(data.decode("utf-8")))
-        except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-            return Answer(problems=(f"a message on {COMMAND_TOPIC} is a JSON command, and this one is not JSON "
-                                    f"({exc})",))
-        except (ValueError, RecursionError) as exc:  # an integer of 5,000 digits; nesting past Python's stack
-            return Answer(problems=(f"a message on {COMMAND_TOPIC} is a JSON command, and this one cannot be read "
-                                    f"({type(exc).__name__})",))
+            command = command_from_json_text(data)
+            self._check_files(command, self._controller.state())
+        except MessageError as exc:
+            return Answer(problems=(f"a message on {COMMAND_TOPIC} is a JSON command, and this one {exc}",))
         except CommandError as exc:
             return Answer(problems=(f"a message on {COMMAND_TOPIC}: {exc}",))
         self._controller.send(command, Source.FOXGLOVE)
         return Answer((command,))
+
+    def _check_files(self, command: Command, state: RunState) -> None:
+        """A blackboard edit of a setting that names a file: the file must lie under :attr:`control_files`
+        (see the module's Security paragraph); the sentence is the same whether the file exists or not."""
+        if not isinstance(command, SetBlackboard) or command.key not in state.file_settings:
+            return
+        if self.control_files is None:
+            raise CommandError(f"'{command.key}' names a file, and this run takes no file names from a viewer "
+                               "(start it with --control-files DIR to allow files under DIR)")
+        folder = Path(os.path.realpath(self.control_files))
+        given = os.path.join(os.getcwd(), str(command.value))
+        if not _under(os.path.normpath(given), folder) or not _under(os.path.realpath(given), folder):
+            raise CommandError(f"'{command.key}' names a file, and a file named from a viewer must lie under "
+                               f"{self.control_files} (--control-files); {str(command.value)[:200]!r} is not under "
+                               "it")
+
+
+def _under(path: str, folder: Path) -> bool:
+    """Whether ``path`` is ``folder`` or lies below it (as text: the caller resolves links when it should)."""
+    candidate = Path(path)
+    return candidate == folder or folder in candidate.parents
 
 
 def state_parameters(state: RunState, kinds: Sequence[str]) -> dict[str, ParamValue]:
@@ -282,16 +320,14 @@ def parameter_commands(name: str, value: object, state: RunState, kinds: Sequenc
             raise CommandError(f'it takes "same" or "next" (the seed of the new episode), got {_shown(value)}')
         return [Restart(SeedPolicy(value))]
     if name == "breakpoints":
-        return _breakpoint_commands(value, state)
+        return [SetBreakpoints(parse_breakpoint_list(value))]
     if name.startswith(BB_PREFIX):
         key = name[len(BB_PREFIX):]
         if key not in state.settings:
             known = ", ".join(state.settings) or "none"
-            raise CommandError(f"blackboard entry '{key}' is no setting of this tree (settings: {known})")
+            raise CommandError(f"blackboard entry '{key[:100]}' is no setting of this tree (settings: {known})")
         if not isinstance(value, str | int | float | bool):
             raise CommandError(f"a blackboard entry takes text, a number or true/false, got {_shown(value)}")
-        if isinstance(value, float) and not math.isfinite(value):
-            raise CommandError(f"a blackboard entry takes a finite number, got {value}")
         return [SetBlackboard(key, value)]
     if name == "choose.object":
         if value in ("", None):
@@ -313,28 +349,19 @@ def _bool(value: object) -> bool:
 
 
 def _int(value: object) -> int:
-    if isinstance(value, bool) or not isinstance(value, int | float) or value != int(value):
+    if isinstance(value, bool) or not isinstance(value, int | float) or (
+            isinstance(value, float) and not math.isfinite(value)) or value != int(value):
         raise CommandError(f"it takes a whole number of ticks, got {_shown(value)}")
     return int(value)
 
 
 def _shown(value: object) -> str:
-    return json.dumps(value) if isinstance(value, list | dict | str) or value is None else str(value)
-
-
-def _breakpoint_commands(value: object, state: RunState) -> list[Command]:
-    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
-        raise CommandError(f"breakpoints are a list of specs such as [\"fail\", \"tick:40\"], got {_shown(value)}")
-    wanted: list[Breakpoint] = []
-    for spec in value:
-        try:
-            wanted.append(parse_breakpoint(spec, "breakpoints"))
-        except InputError as exc:
-            raise CommandError(exc.problem) from None
-    current = [parse_breakpoint(spec) for spec in state.breakpoints]
-    commands: list[Command] = [ClearBreakpoint(bp) for bp in current if bp not in wanted]
-    commands += [SetBreakpoint(bp) for bp in dict.fromkeys(wanted) if bp not in current]
-    return commands
+    """A value a viewer sent, quoted in a sentence: JSON, at most 60 characters of it."""
+    try:
+        text = json.dumps(value) if isinstance(value, list | dict | str) or value is None else str(value)
+    except (ValueError, RecursionError):
+        text = type(value).__name__
+    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def _fault_commands(value: object, kinds: Sequence[str]) -> list[Command]:

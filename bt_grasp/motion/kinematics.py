@@ -374,3 +374,39 @@ class KinematicModel(Protocol):
         max_solutions: int | None = None,
         stop_if_current_converges: bool = False,
     ) -> tuple[list[Vec], IKResult]: ...
+
+
+class SeededKinematics:
+    """A :class:`KinematicModel` whose IK restarts draw from a run's stream (``bt_grasp.seeds.Stream.IK``) when a
+    caller gives no generator: each call a fresh generator on the same seed, as the model's own default (seed 0)
+    does, but the run's. Everything else is the wrapped model's."""
+
+    def __init__(self, inner: KinematicModel, seed: int) -> None:
+        self.inner = inner
+        self.seed = int(seed)
+
+    @property
+    def opening_m(self) -> float:
+        return self.inner.opening_m
+
+    def fk(self, q: NDArray[np.float64]) -> Mat4:
+        return self.inner.fk(q)
+
+    def fk_link(self, q: NDArray[np.float64], link: str) -> Mat4:
+        return self.inner.fk_link(q, link)
+
+    def _rng(self, rng: np.random.Generator | None) -> np.random.Generator:
+        return rng if rng is not None else np.random.default_rng(self.seed)
+
+    def ik(self, T_base_tcp_goal: Mat4, q_current: NDArray[np.float64], *, seeds: int = 8,
+           rng: np.random.Generator | None = None, options: IKOptions | None = None) -> IKResult:
+        return self.inner.ik(T_base_tcp_goal, q_current, seeds=seeds, rng=self._rng(rng), options=options)
+
+    def ik_solutions(
+        self, T_base_tcp_goal: Mat4, q_current: NDArray[np.float64], *, seeds: int = 8,
+        rng: np.random.Generator | None = None, options: IKOptions | None = None, max_solutions: int | None = None,
+        stop_if_current_converges: bool = False,
+    ) -> tuple[list[NDArray[np.float64]], IKResult]:
+        return self.inner.ik_solutions(T_base_tcp_goal, q_current, seeds=seeds, rng=self._rng(rng),
+                                       options=options, max_solutions=max_solutions,
+                                       stop_if_current_converges=stop_if_current_converges)

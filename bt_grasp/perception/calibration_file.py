@@ -31,6 +31,7 @@ from pydantic import Field, model_validator
 from bt_grasp.errors import ConfigError
 from bt_grasp.files.config import StrictModel, read_yaml, validate
 from bt_grasp.files.output_files import write_output_file
+from bt_grasp.files.search_path import CALIBRATION_PATH_VARIABLE, SHIPPED_CALIBRATIONS, find_named_file, looked_in
 from bt_grasp.geometry import Mat4, T_from_pos_quat_wxyz, T_from_xyz_rpy, quat_wxyz
 from bt_grasp.interfaces import CameraIntrinsics, Mount
 from bt_grasp.perception.charuco import BoardSpec
@@ -168,12 +169,13 @@ def save_calibration(calibration: CalibrationFile, path: str | Path) -> Path:
     return write_output_file(path, text, "--out", example="calibration.yaml")
 
 
-def load_calibration(path: str | Path, mount: str | None = None) -> CalibrationFile:
+def load_calibration(path: str | Path, mount: str | None = None, *, quote: bool = True) -> CalibrationFile:
     """Read and validate a calibration file; ConfigError (file:line: problem) on any problem, including a
-    calibration made for another camera mount than ``mount`` (when given)."""
+    calibration made for another camera mount than ``mount`` (when given). ``quote=False``: the sentence quotes
+    nothing of the file (a leaf reads the file a blackboard entry names, which a viewer may have set)."""
     expected_mount = mount
     data, lines = read_yaml(path)
-    calibration = validate(CalibrationFile, data, path, lines)
+    calibration = validate(CalibrationFile, data, path, lines, quote=quote)
     if expected_mount is not None and calibration.mount != expected_mount:
         raise ConfigError(
             path,
@@ -218,21 +220,25 @@ CALIBRATION_OPTION = "pass --calibration FILE"
 
 def calibration_for_scene(scene: Scene, scene_path: str | Path, override: str | Path | None,
                           *, give_one: str = CALIBRATION_OPTION) -> tuple[Path | None, CalibrationFile | None]:
-    """The calibration a run uses: ``override`` (the ``--calibration`` flag) or the file the scene names
-    (relative to the scene file). Bad input (missing, unreadable, made for another mount or camera pose) is
-    a ConfigError naming the file and line; no calibration at all is (None, None). ``give_one``: how the
-    caller's user gives a calibration instead (a campaign file has a key for it, not a flag)."""
+    """The calibration a run uses: ``override`` (the ``--calibration`` flag) or the file the scene names, looked
+    for beside the scene file, then in each folder of ``BT_GRASP_CALIBRATION_PATH``, then among the shipped scenes'
+    calibrations (``bt_grasp/files/search_path.py``). Bad input (missing, unreadable, made for another mount or
+    camera pose) is a ConfigError naming the file and line; no calibration at all is (None, None). ``give_one``:
+    how the caller's user gives a calibration instead (a campaign file has a key for it, not a flag)."""
     if override is not None:
         path = Path(override)
         calibration = load_calibration(path, mount=scene.camera.mount)
         where: int | None = None
     elif scene.calibration:
-        path = Path(scene_path).parent / scene.calibration
+        found = find_named_file(scene.calibration, Path(scene_path).parent, CALIBRATION_PATH_VARIABLE,
+                                SHIPPED_CALIBRATIONS)
         where = read_yaml(scene_path)[1].get(("calibration",))
-        if not path.is_file():
+        if found.path is None:
+            beside = Path(scene_path).parent / scene.calibration
             raise ConfigError(scene_path, f"the calibration file '{scene.calibration}' the scene names does not "
-                              f"exist beside it; make it with `bt-grasp calibrate --scene {scene_path} --out {path}` "
-                              f"or {give_one}", where=where)
+                              f"exist ({looked_in(found, CALIBRATION_PATH_VARIABLE)}); make it with `bt-grasp "
+                              f"calibrate --scene {scene_path} --out {beside}` or {give_one}", where=where)
+        path = found.path
         calibration = load_calibration(path, mount=scene.camera.mount)
     else:
         return None, None

@@ -88,8 +88,11 @@ def perceive(
     color: str | None = None,
     *,
     size_hint_m: tuple[float, float, float] | None = None,
+    seed: int = 0,
 ) -> PerceptionResult:
     """Find the objects standing on the table in one frame; ranked for the request (colour or size hint).
+
+    ``seed``: the table plane's RANSAC samples (a run passes its ``PERCEPTION`` stream: ``bt_grasp.seeds``).
 
     ``T_base_camera`` maps points from the camera's optical frame (OpenCV axes) into the robot base frame.
     ``color`` names a colour of ``config.color.ranges``; None ranks by size similarity to ``size_hint_m``
@@ -136,7 +139,7 @@ def perceive(
     height_sigma = 0.0
     with timer.stage("plane"):
         seg = noise_adapt.adapt_segmentation(seg, noise.sigma_after_m, config.noise)
-        plane = fit_table_plane(sparse, seg)
+        plane = fit_table_plane(sparse, seg, seed)
         if plane is not None:
             sparse_h = plane.height(np.asarray(sparse.points))
             height_sigma = noise_adapt.height_spread_m(sparse_h[np.abs(sparse_h) < seg.plane_distance_m])

@@ -18,17 +18,20 @@ from __future__ import annotations
 import re
 import struct
 import xml.etree.ElementTree as ET
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import defusedxml.ElementTree as SafeET
 
 from bt_grasp.errors import InputError, LogFileError
-from bt_grasp.files.json_types import JsonValue
+from bt_grasp.files.bounded_io import MAX_RESULTS_BYTES, read_user_file
+from bt_grasp.files.json_types import JsonObject, JsonValue
 from bt_grasp.files.output_files import write_output_file
 from bt_grasp.recording.messages import LoggedTreeNode
 from bt_grasp.recording.reader import RunLog
 from bt_grasp.recording.replay import status_changes
+from bt_grasp.tree.records import TreeNode
 from bt_grasp.tree.registry import NodeKind
 
 MAGIC = b"BTCPP4-FileLogger2"
@@ -164,6 +167,12 @@ def write_btlog(run: RunLog, path: str | Path) -> BtLog:
     if unknown is not None:
         raise LogFileError(run.path, f"node {unknown.uid} has the status {unknown.status[:40]!r}, which a .btlog "
                                      "cannot hold")
+    write_output_file(target, encode_btlog(xml, start_us, moves), "--export-btlog", example="run.btlog")
+    return BtLog(PROTOCOL, xml, start_us, tuple(moves), nodes)
+
+
+def encode_btlog(xml: str, start_us: int, moves: Sequence[Transition]) -> bytes:
+    """The bytes of a .btlog: header, tree XML, start time, transitions (see the module)."""
     body = bytearray(MAGIC)
     body += struct.pack("<B", PROTOCOL)
     xml_bytes = xml.encode("utf-8")
@@ -171,8 +180,35 @@ def write_btlog(run: RunLog, path: str | Path) -> BtLog:
     body += struct.pack("<q", start_us)
     for t in moves:
         body += t.timestamp_us.to_bytes(6, "little") + struct.pack("<HB", t.uid, STATUS_CODES[t.status])
-    write_output_file(target, bytes(body), "--export-btlog", example="run.btlog")
-    return BtLog(PROTOCOL, xml, start_us, tuple(moves), nodes)
+    return bytes(body)
+
+
+def logged_structure(node: TreeNode) -> LoggedTreeNode:
+    """A built tree's structure (``bt_grasp.tree.introspect.tree_structure``) as a log holds it."""
+    attributes: JsonObject = dict(node["attributes"])
+    return {"uid": node["uid"], "path": node["path"], "type": node["type"], "name": node["name"],
+            "kind": node["kind"], "attributes": attributes,
+            "children": [logged_structure(child) for child in node["children"]]}
+
+
+def write_walk_btlog(path: str | Path, structure: TreeNode, main_tree: str, start_unix_ns: int,
+                     moves: Sequence[Transition]) -> BtLog:
+    """Write a run that was never logged (a dry run's walk: every status change, timed in simulated µs since the
+    first tick) as a .btlog, with the writer ``replay --export-btlog`` uses."""
+    target = Path(path)
+    if target.suffix != ".btlog":
+        raise InputError("--export-btlog", f"{target} must end in .btlog (Groot2 opens only that)")
+    try:
+        xml = tree_xml(logged_structure(structure), main_tree)
+    except NotExportable as exc:
+        raise InputError("--export-btlog", f"the tree cannot be exported as .btlog: {exc}") from None
+    for move in moves:
+        if not 0 <= move.timestamp_us <= _MAX_TIME_US:
+            raise InputError("--export-btlog", f"a transition at {move.timestamp_us} µs lies outside the .btlog "
+                             "time range")
+    start_us = start_unix_ns // 1000
+    write_output_file(target, encode_btlog(xml, start_us, moves), "--export-btlog", example="run.btlog")
+    return BtLog(PROTOCOL, xml, start_us, tuple(moves), _xml_nodes(xml, target))
 
 
 def _xml_nodes(xml: str, path: Path) -> dict[int, dict[str, str]]:
@@ -190,10 +226,7 @@ def _xml_nodes(xml: str, path: Path) -> dict[int, dict[str, str]]:
 def read_btlog(path: str | Path) -> BtLog:
     """Parse a BT.CPP 4 FileLogger2 file; raises ``LogFileError`` for anything else."""
     p = Path(path)
-    try:
-        data = p.read_bytes()
-    except OSError as exc:
-        raise LogFileError(p, f"cannot be read: {exc.strerror or exc}") from exc
+    data = read_user_file(p, MAX_RESULTS_BYTES, error=LogFileError)  # a regular file, at most 1 GB
     if not data.startswith(MAGIC):
         raise LogFileError(p, "is not a BT.CPP FileLogger2 file (no BTCPP4-FileLogger2 header)")
     offset = len(MAGIC)

@@ -28,9 +28,7 @@ from foxglove_schemas_protobuf.SpherePrimitive_pb2 import SpherePrimitive
 from foxglove_schemas_protobuf.Vector3_pb2 import Vector3
 from numpy.typing import ArrayLike, NDArray
 
-from bt_grasp.files.bounded_io import read_user_file
 from bt_grasp.recording import schemas
-from bt_grasp.scene.meshes import MAX_MESH_BYTES
 
 if TYPE_CHECKING:
     from bt_grasp.scene.format import Scene
@@ -132,13 +130,14 @@ def object_model(geometry: MeshGeometry) -> bytes:
 
     vertices, faces = geometry.vertices_m, geometry.faces
     candidates: list[tuple[str, NDArray[np.float64], NDArray[np.int64]]] = []
+    drawn = next((v for v in geometry.visuals if v.sources), None)
     if geometry.visual_vertices_m is not None:
         candidates.append(("visual", *geometry.visual_mesh_m()))
-    elif geometry.visual_path != geometry.collision_path:
-        try:
-            data = read_user_file(geometry.visual_path, MAX_MESH_BYTES)
+    elif geometry.visual_path != geometry.collision_path and drawn is not None:
+        try:  # the bytes read and checked when the scene loaded: the file is not opened again
+            data = drawn.sources[0][1]
             visual = trimesh.load(io.BytesIO(data), file_type=geometry.visual_path.suffix.lower()[1:],
-                                   process=False, force="mesh")
+                                  process=False, force="mesh")
             if not isinstance(visual, trimesh.Trimesh):  # force="mesh" makes one (or raises)
                 raise TypeError(f"trimesh read a {type(visual).__name__}, not a mesh")
             candidates.append(("visual", np.asarray(visual.vertices) * np.asarray(geometry.scale), visual.faces))

@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import dataclasses
+import fcntl
+import os
+import signal
 import subprocess
 import sys
 import time
@@ -11,12 +14,26 @@ from pathlib import Path
 from typing import Any
 
 from bt_grasp.episode import EpisodeRequest, EpisodeResult
-from bt_grasp.errors import BtGraspError
-from bt_grasp.resident.protocol import authkey, code_version, home, request_adapter, result_adapter, socket_path
+from bt_grasp.errors import BtGraspError, InputError
+from bt_grasp.files.bounded_io import read_user_file
+from bt_grasp.resident.protocol import (
+    authkey,
+    code_version,
+    home,
+    lock_path,
+    request_adapter,
+    result_adapter,
+    socket_path,
+)
 from bt_grasp.resident.wire import WireError, client_handshake, receive, send
 
 START_TIMEOUT_S = 300.0
 HANDSHAKE_TIMEOUT_S = 30.0
+#: ``status`` and ``stop`` wait this long for an answer (the resident answers them at once, even while an
+#: episode runs); past it, ``stop`` ends the process by its recorded pid
+QUICK_TIMEOUT_S = 5.0
+#: after SIGTERM, how long ``stop`` waits before SIGKILL
+TERM_WAIT_S = 5.0
 
 
 class ResidentError(BtGraspError):
@@ -39,13 +56,13 @@ def _absolute(request: EpisodeRequest) -> EpisodeRequest:
     return dataclasses.replace(request, **changes)
 
 
-def _connect() -> Connection | None:
+def _connect(timeout_s: float = HANDSHAKE_TIMEOUT_S) -> Connection | None:
     try:
         conn = Client(str(socket_path()), family="AF_UNIX")
     except (FileNotFoundError, ConnectionRefusedError):
         return None
     try:
-        client_handshake(conn, authkey(), HANDSHAKE_TIMEOUT_S)
+        client_handshake(conn, authkey(), timeout_s)
     except (WireError, OSError) as exc:
         conn.close()
         raise ResidentError(f"the process on {socket_path()} failed the resident's handshake: {exc}") from None
@@ -115,23 +132,93 @@ def run_resident(request: EpisodeRequest) -> tuple[EpisodeResult, int]:
 
 def resident_status() -> tuple[int | None, Path]:
     """The pid of the resident process serving this user's folder (None: none runs), and the folder."""
-    conn = _connect()
+    conn = _connect(QUICK_TIMEOUT_S)
     if conn is None:
         return None, home()
     with conn:
         send(conn, "ping")
-        reply = receive(conn, HANDSHAKE_TIMEOUT_S)
+        reply = receive(conn, QUICK_TIMEOUT_S)
     pid = reply.get("pid")
     return (pid if isinstance(pid, int) else None), home()
 
 
 def stop_resident() -> int | None:
-    """Stop this user's resident process if one runs; returns its pid."""
-    conn = _connect()
-    if conn is None:
+    """Stop this user's resident process if one runs; returns its pid. It is asked first; when it does not
+    answer within :data:`QUICK_TIMEOUT_S` (wedged, stopped, or not a resident at all), the process that holds the
+    folder's lock is ended by the pid it recorded there, if it is this user's resident (SIGTERM, then SIGKILL)."""
+    try:
+        conn = _connect(QUICK_TIMEOUT_S)
+    except ResidentError:
+        conn = None
+    else:
+        if conn is None:
+            return _signal_recorded() if _lock_is_held() else None
+        try:
+            with conn:
+                send(conn, "stop")
+                reply = receive(conn, QUICK_TIMEOUT_S)
+            pid = reply.get("pid")
+            if isinstance(pid, int):
+                _wait_gone(pid, TERM_WAIT_S)
+                return pid
+        except (WireError, OSError, EOFError):
+            pass
+    return _signal_recorded()
+
+
+def _lock_is_held() -> bool:
+    """Whether a process holds the folder's resident lock (only a living resident does)."""
+    try:
+        fd = os.open(lock_path(), os.O_RDONLY | os.O_NOFOLLOW | os.O_CLOEXEC)
+    except OSError:
+        return False
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+    except BlockingIOError:
+        return True
+    finally:
+        os.close(fd)
+    return False
+
+
+def _signal_recorded() -> int | None:
+    """End the resident by the pid in its lock file: only while that lock is held (the pid is then the holder's,
+    not a reused number) and only a process of this user running ``bt_grasp.resident.server``."""
+    if not _lock_is_held():
         return None
-    with conn:
-        send(conn, "stop")
-        reply = receive(conn, HANDSHAKE_TIMEOUT_S)
-    pid = reply.get("pid")
-    return pid if isinstance(pid, int) else None
+    try:
+        pid = int(read_user_file(lock_path(), 64).decode().strip())
+        info = os.stat(f"/proc/{pid}")
+        command = read_user_file(Path(f"/proc/{pid}/cmdline"), 1 << 16)
+    except (InputError, ValueError, OSError):
+        raise ResidentError(f"the resident process does not answer and its pid cannot be read from {lock_path()}"
+                            ) from None
+    if info.st_uid != os.getuid() or b"bt_grasp.resident.server" not in command:
+        raise ResidentError(f"the process {pid} that holds {lock_path()} is not this user's resident; it is left "
+                            "alone")
+    os.kill(pid, signal.SIGCONT)  # a stopped process cannot act on SIGTERM
+    os.kill(pid, signal.SIGTERM)
+    if not _wait_gone(pid, TERM_WAIT_S):
+        os.kill(pid, signal.SIGKILL)
+        _wait_gone(pid, TERM_WAIT_S)
+    socket_path().unlink(missing_ok=True)
+    return pid
+
+
+def _wait_gone(pid: int, seconds: float) -> bool:
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return True
+        except PermissionError:
+            return False
+        if Path(f"/proc/{pid}/stat").exists():
+            try:
+                if read_user_file(Path(f"/proc/{pid}/stat"), 4096).split(b")")[-1].split()[0] == b"Z":
+                    return True  # a zombie: it has ended, its parent has not reaped it yet
+            except (InputError, IndexError):
+                return True
+        time.sleep(0.05)
+    return False

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from bt_grasp.errors import InputError
+from bt_grasp.files.private_folder import check_private
 from bt_grasp.process.code_fingerprint import code_fingerprint
 
 if TYPE_CHECKING:
@@ -30,50 +31,15 @@ KEY_BYTES = 32
 def home() -> Path:
     """A folder only this user can read: the socket, its key and the process's log live there.
 
-    A folder someone else could have prepared is refused (exit 2), never repaired: one owned by another user
-    (they could have put their own key and socket there, and the client would talk to their process), one
-    that is a symbolic link, or one writable by the group or others. A folder of this user's that is merely
-    readable by others is made private (0700)."""
+    A folder someone else could have prepared is refused (exit 2), never repaired
+    (:mod:`bt_grasp.files.private_folder`): one owned by another user (they could have put their own key and
+    socket there, and the client would talk to their process), one that is a symbolic link, or one writable by
+    the group or others. A folder of this user's that is merely readable by others is made private (0700)."""
     base = os.environ.get(ENV_DIR) or str(Path.home() / ".cache" / "bt_grasp" / "resident")
     path = Path(base)
     path.mkdir(mode=0o700, parents=True, exist_ok=True)
-    _check_private(path, ENV_DIR if os.environ.get(ENV_DIR) else "the resident folder")
+    check_private(path, ENV_DIR if os.environ.get(ENV_DIR) else "the resident folder", "the resident")
     return path
-
-
-def _unsafe_ancestor(path: Path) -> tuple[Path, str] | None:
-    """A folder on the way to ``path`` that someone else could use to swap the folder for their own: one owned by
-    another user than root or this one, or writable by the group or others without the sticky bit (``/tmp`` has
-    it: there others cannot rename what is not theirs). Both the path as given (the folders holding each of its
-    names, a symbolic link's included) and its real path are checked, the way OpenSSH's StrictModes does."""
-    given = path.absolute()
-    folders = {Path(os.path.realpath(p.parent)) for p in (given, *given.parents) if p != p.parent}
-    folders |= set(Path(os.path.realpath(given)).parents)
-    for folder in sorted(folders):
-        info = os.stat(folder)
-        if info.st_uid not in (0, os.getuid()):
-            return folder, f"belongs to user id {info.st_uid}"
-        if info.st_mode & 0o022 and not info.st_mode & stat.S_ISVTX:
-            return folder, f"is writable by others without the sticky bit (mode {stat.S_IMODE(info.st_mode):o})"
-    return None
-
-
-def _check_private(path: Path, source: str) -> None:
-    unsafe = _unsafe_ancestor(path)
-    if unsafe is not None:
-        raise InputError(source, f"{path} lies in {unsafe[0]}, which {unsafe[1]}: someone else could swap the folder "
-                         "for their own; the resident refuses it")
-    info = os.lstat(path)
-    if stat.S_ISLNK(info.st_mode) or not stat.S_ISDIR(info.st_mode):
-        raise InputError(source, f"{path} is not a plain folder (a symbolic link or a file); the resident refuses it")
-    if info.st_uid != os.getuid():
-        raise InputError(source, f"{path} belongs to user id {info.st_uid}, not to you; the resident refuses a "
-                         "folder another user controls")
-    if info.st_mode & 0o022:
-        raise InputError(source, f"{path} is writable by others (mode {stat.S_IMODE(info.st_mode):o}); the resident "
-                         "refuses a shared folder: point it at a private one")
-    if stat.S_IMODE(info.st_mode) != 0o700:
-        path.chmod(0o700)
 
 
 def lock_path() -> Path:

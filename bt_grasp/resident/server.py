@@ -1,7 +1,15 @@
-"""The resident episode process: accepts one episode request at a time on a Unix socket, runs it warm."""
+"""The resident episode process: accepts requests on a Unix socket and runs episodes warm, one at a time.
+
+Each episode runs in a thread of its own, under a deadline (:func:`request_deadline_s`: generous for its tick
+limit, and bounded): a request that never finishes (a plugin that hangs, a file that blocks a reader) cannot wedge
+the process. At the deadline the waiting client is told so, and the resident exits (a thread cannot be stopped
+from outside; the next client starts a fresh resident). Meanwhile the accepting thread keeps answering: ``status``
+and ``stop`` work while an episode runs (``stop`` ends the process at once), and further episode requests wait for
+their turn (each connection still has 15 s to prove its key and send its request)."""
 
 from __future__ import annotations
 
+import contextlib
 import fcntl
 import logging
 import os
@@ -33,6 +41,13 @@ REQUEST_TIMEOUT_S = 10.0
 CONNECTION_DEADLINE_S = HANDSHAKE_TIMEOUT_S + REQUEST_TIMEOUT_S
 #: how long a starting resident waits for the folder's lock before leaving it to the process that holds it
 LOCK_WAIT_S = 3.0
+#: an episode request's deadline: this much, plus this much per tick of its tick limit (a 12,000-tick episode gets
+#: 100 minutes; a loaded 2-core machine runs 5-20 ticks a second), at most MAX_DEADLINE_S;
+#: ``BT_GRASP_RESIDENT_DEADLINE_S`` sets one deadline for every request instead
+DEADLINE_BASE_S = 300.0
+DEADLINE_PER_TICK_S = 0.5
+MAX_DEADLINE_S = 6 * 3600.0
+DEADLINE_ENV = "BT_GRASP_RESIDENT_DEADLINE_S"
 
 
 def _watchdog(state: dict[str, float], idle_s: float) -> None:
@@ -43,11 +58,20 @@ def _watchdog(state: dict[str, float], idle_s: float) -> None:
             os._exit(0)
 
 
+def request_deadline_s(max_ticks: int) -> float:
+    """How long one episode request may take (see :data:`DEADLINE_BASE_S`)."""
+    fixed = os.environ.get(DEADLINE_ENV, "")
+    try:
+        if fixed and float(fixed) > 0:
+            return min(float(fixed), MAX_DEADLINE_S)
+    except ValueError:
+        pass
+    return min(DEADLINE_BASE_S + DEADLINE_PER_TICK_S * max(0, max_ticks), MAX_DEADLINE_S)
+
+
 def _handle(message: dict[str, Any], worlds: Any, version: str) -> tuple[str, dict[str, Any]]:
-    """The reply (kind, fields) to one message; a request that does not validate is an ``error`` reply."""
+    """The reply (kind, fields) to one episode request; a request that does not validate is an ``error`` reply."""
     kind = message["kind"]
-    if kind in ("ping", "stop"):
-        return "pong", {"pid": os.getpid(), "code_version": version}
     if kind != "run":
         return "error", {"message": f"unknown request {kind[:40]!r}", "exit_code": 2}
     if message.get("code_version") != version:
@@ -89,6 +113,67 @@ def _hold_the_lock() -> int | None:
     return fd  # kept open for the process's life; the kernel releases the lock however it ends
 
 
+def _max_ticks(message: dict[str, Any]) -> int:
+    request = message.get("request")
+    value = request.get("max_ticks") if isinstance(request, dict) else None
+    return value if isinstance(value, int) and not isinstance(value, bool) else 0
+
+
+class _Runner:
+    """Runs episode requests one at a time, each in its own thread under its deadline (see the module)."""
+
+    def __init__(self, worlds: Any, version: str, state: dict[str, float]) -> None:
+        self.worlds, self.version, self.state = worlds, version, state
+        self.turn = threading.Lock()  # one episode at a time; later requests wait in their threads
+        self.waiting = 0
+        self.count = threading.Lock()
+
+    def start(self, conn: Any, message: dict[str, Any]) -> None:
+        with self.count:
+            self.waiting += 1
+            self.state["busy"] = 1.0
+        threading.Thread(target=self._run, args=(conn, message), daemon=True).start()
+
+    def _run(self, conn: Any, message: dict[str, Any]) -> None:
+        stop = False
+        try:
+            with self.turn:
+                finished = threading.Event()
+                seconds = request_deadline_s(_max_ticks(message))
+                watchdog = threading.Thread(target=self._watch, args=(conn, finished, seconds), daemon=True)
+                watchdog.start()
+                try:
+                    kind, fields = _handle(message, self.worlds, self.version)
+                finally:
+                    finished.set()
+                send(conn, kind, **fields)
+                stop = kind == "stale"  # the code changed under it
+        except (WireError, OSError, EOFError) as exc:
+            log.warning("dropped a connection: %s", exc)
+        except Exception:  # whatever one request does, the resident goes on serving the others
+            log.exception("dropped a connection")
+        finally:
+            conn.close()
+            with self.count:
+                self.waiting -= 1
+                self.state["busy"] = float(self.waiting > 0)
+                self.state["last"] = time.monotonic()
+        if stop:
+            socket_path().unlink(missing_ok=True)
+            os._exit(0)
+
+    def _watch(self, conn: Any, finished: threading.Event, seconds: float) -> None:
+        if finished.wait(seconds):
+            return
+        log.error("an episode request did not finish within %.0f s; the resident process exits", seconds)
+        with contextlib.suppress(Exception):  # the client is told why, if it still listens
+            send(conn, "error", message=f"the episode did not finish within the resident's deadline of {seconds:.0f} "
+                 "s (see docs/security.md); the resident process ended, the next run starts a fresh one",
+                 exit_code=1)
+        socket_path().unlink(missing_ok=True)
+        os._exit(1)
+
+
 def serve(idle_s: float = IDLE_TIMEOUT_S) -> None:
     from bt_grasp.episode import WarmWorlds
 
@@ -103,7 +188,7 @@ def serve(idle_s: float = IDLE_TIMEOUT_S) -> None:
     path.chmod(0o600)
     state = {"busy": 0.0, "last": time.monotonic()}
     threading.Thread(target=_watchdog, args=(state, idle_s), daemon=True).start()
-    worlds = WarmWorlds()
+    runner = _Runner(WarmWorlds(), version, state)
     import bt_grasp.behaviours  # noqa: F401  (warm the imports before the first request)
 
     while True:
@@ -111,26 +196,30 @@ def serve(idle_s: float = IDLE_TIMEOUT_S) -> None:
             conn = listener.accept()
         except OSError:
             continue
-        state["busy"] = 1.0
-        stop = False
+        handed_over = False
         try:  # a bad client (wrong key, garbage, a huge declared length, silence) loses its connection, no more
             with deadline(conn, CONNECTION_DEADLINE_S):
                 server_handshake(conn, key, HANDSHAKE_TIMEOUT_S)
                 message = receive(conn, REQUEST_TIMEOUT_S)
-            kind, fields = _handle(message, worlds, version)
-            send(conn, kind, **fields)
-            stop = kind == "stale" or message["kind"] == "stop"  # the code changed under it, or asked to stop
+            if message["kind"] in ("ping", "stop"):  # answered at once, even while an episode runs
+                send(conn, "pong", pid=os.getpid(), code_version=version, busy=bool(state["busy"]))
+                if message["kind"] == "stop":
+                    conn.close()
+                    path.unlink(missing_ok=True)
+                    os._exit(0)
+            else:
+                runner.start(conn, message)
+                handed_over = True
         except (WireError, OSError, EOFError) as exc:
             log.warning("dropped a connection: %s", exc)
         except Exception:  # whatever one connection does, the resident goes on serving the others
             log.exception("dropped a connection")
         finally:
-            conn.close()
-            state["busy"] = 0.0
-            state["last"] = time.monotonic()
-        if stop:
-            path.unlink(missing_ok=True)
-            os._exit(0)
+            if not handed_over:
+                conn.close()
+                if not state["busy"]:
+                    state["last"] = time.monotonic()
+
 
 if __name__ == "__main__":
     logging.basicConfig(level=logging.WARNING, stream=sys.stderr)

@@ -3,7 +3,9 @@ to the object and the simulator builds from (no file is read twice, no decision 
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 from typing import Literal
 
@@ -20,7 +22,9 @@ class VisualPart:
     ``T_object_part`` (4x4, metres, scale applied), in ``rgba`` when given (a URDF's material colour for a file
     without a texture, or the material colour of a file whose texture image is missing), else the file's own
     materials. A file whose texture image is missing is drawn from ``vertices_m``/``faces`` (the part's frame,
-    scaled) instead of the file: the renderer refuses a file that names a missing image."""
+    scaled) instead of the file: the renderer refuses a file that names a missing image. ``sources``: what the
+    renderer is given for a drawn file, the file and the files it names as checked when read, names inside them
+    rewritten to these (``bt_grasp.scene.mesh_files.renderer_copy``; the file first): never ``path`` itself."""
 
     T_object_part: np.ndarray
     path: Path | None = None
@@ -30,10 +34,19 @@ class VisualPart:
     rgba: RGBA | None = None
     vertices_m: np.ndarray | None = None
     faces: np.ndarray | None = None
+    sources: tuple[tuple[str, bytes], ...] = ()
+
+    @cached_property
+    def _sources_digest(self) -> str:
+        digest = hashlib.sha256()
+        for name, data in self.sources:
+            digest.update(f"{name}\0{len(data)}\0".encode())
+            digest.update(data)
+        return digest.hexdigest()
 
     def _identity(self) -> tuple[object, ...]:
         return (self.path, self.scale, self.primitive, self.dims_m, self.rgba,
-                tuple(np.round(np.asarray(self.T_object_part, dtype=float), 12).ravel()))
+                tuple(np.round(np.asarray(self.T_object_part, dtype=float), 12).ravel()), self._sources_digest)
 
 
 @dataclass(frozen=True, eq=False)

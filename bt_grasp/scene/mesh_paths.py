@@ -15,6 +15,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from bt_grasp.errors import ConfigError, InputError
+from bt_grasp.files.bounded_io import read_user_file
 from bt_grasp.files.safe_path import check_relative_name
 
 log = logging.getLogger(__name__)
@@ -85,10 +86,11 @@ def _find_package(start: Path, name: str) -> Path | None:
 
 def _package_xml_name(folder: Path) -> str | None:
     manifest = folder / "package.xml"
-    try:
-        if not manifest.is_file() or manifest.stat().st_size > 1 << 20:
-            return None
-        match = _PACKAGE_NAME.search(manifest.read_text(errors="replace"))
-    except OSError:
+    if not manifest.is_file():
         return None
+    try:  # bounded, a regular file (a FIFO named package.xml is not one)
+        text = read_user_file(manifest, 1 << 20).decode("utf-8", errors="replace")
+    except InputError:
+        return None
+    match = _PACKAGE_NAME.search(text)
     return match.group(1) if match else None

@@ -3,10 +3,13 @@
 A ``shape: mesh`` object names an OBJ, STL, PLY, GLB, GLTF or DAE file; a ``shape: urdf`` object names a URDF
 describing one rigid body (:mod:`bt_grasp.scene.urdf_object`: mesh or primitive parts, each at its
 ``<origin>``). Paths are relative to the file that names them. Each file is read once, under a size limit, and
-checked: present and readable, a mesh at all, not empty, a collision mesh not degenerate (its vertices must span
-a volume), of a plausible size once scaled (at least 1 mm, at most the table's largest side), and a URDF's mass
-positive. A drawn file whose materials name a texture image that is missing is drawn in its material's colour
-(:mod:`bt_grasp.scene.mesh_textures`; the renderer would refuse it). The result is a
+checked: a regular file, a mesh at all, not empty, at most :data:`~bt_grasp.scene.mesh_files.MAX_MESH_FACES`
+triangles, a collision mesh not degenerate (its vertices must span a volume), of a plausible size once scaled (at
+least 1 mm, at most the table's largest side), and a URDF's mass positive. The files a mesh names (materials,
+textures, buffers) are read once too, inside the mesh's folder, and checked before any decoder sees them
+(:mod:`bt_grasp.scene.mesh_files`); trimesh parses only those bytes, and the renderer is given a copy of them
+(``VisualPart.sources``), never a path a file named. A drawn file whose materials name a texture image that is
+missing, or that lies outside its folder (never opened), is drawn in its material's colour. The result is a
 :class:`~bt_grasp.scene.mesh_geometry.MeshGeometry` attached to the object. Nothing is written anywhere.
 """
 
@@ -23,8 +26,17 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from bt_grasp.errors import ConfigError
-from bt_grasp.files.bounded_io import read_user_file
+from bt_grasp.files.bounded_io import MAX_MESH_BYTES, read_user_file
 from bt_grasp.files.config import KeyPath
+from bt_grasp.scene.mesh_files import (
+    MAX_MESH_FACES,
+    MAX_MESH_PIECES,
+    MAX_MESH_VERTICES,
+    MeshFiles,
+    checked_resolver,
+    read_mesh_files,
+    renderer_copy,
+)
 from bt_grasp.scene.mesh_geometry import MeshGeometry, Vec3, VisualPart
 from bt_grasp.scene.notices import notice
 from bt_grasp.scene.objects import DEFAULT_MESH_RGB, MESH_SUFFIXES
@@ -35,8 +47,6 @@ log = logging.getLogger(__name__)
 if TYPE_CHECKING:
     from bt_grasp.scene.objects import SceneObject
 
-#: the largest mesh or URDF file read, bytes
-MAX_MESH_BYTES = 64 << 20
 #: the smallest object: its largest extent, m
 MIN_EXTENT_M = 0.001
 #: vertices closer than this to a line or a plane (m) span no volume
@@ -54,14 +64,25 @@ def attach_geometry(objects: Sequence[SceneObject], table_size_m: float, source:
             continue
         key = ("objects", i, obj.shape)
         line = lines.get(key, lines.get(("objects", i)))
-        if obj.shape == "mesh":
-            assert obj.mesh is not None
-            geometry = read_mesh_object(folder / obj.mesh, obj.scale_xyz, source, line, obj.name)
-        else:
-            assert obj.urdf is not None
-            geometry = read_urdf_object(folder / obj.urdf, obj.scale_xyz, source, line, obj.name, packages)
-        _check_size(geometry, table_size_m, source, lines.get(("objects", i, "scale"), line), obj.name)
+        scale_line = lines.get(("objects", i, "scale"), line)
+        # numbers past float64's range (scale: 1e308) are refused below in one sentence, not warned about 34 times
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore", under="ignore"):
+            if obj.shape == "mesh":
+                assert obj.mesh is not None
+                geometry = read_mesh_object(folder / obj.mesh, obj.scale_xyz, source, line, obj.name, scale_line)
+            else:
+                assert obj.urdf is not None
+                geometry = read_urdf_object(folder / obj.urdf, obj.scale_xyz, source, line, obj.name, packages,
+                                            scale_line)
+        _check_size(geometry, table_size_m, source, scale_line, obj.name)
         obj.with_geometry(geometry)
+
+
+def _check_scaled(vertices: np.ndarray, source: str | Path, line: int | None, name: str) -> None:
+    """Vertices once scaled must still be finite numbers (``scale: 1e308`` made them infinite)."""
+    if not np.all(np.isfinite(vertices)):
+        raise ConfigError(source, f"object '{name}': once scaled, its vertices are not finite numbers: check 'scale' "
+                          "(the file's units times scale must be metres)", where=line)
 
 
 def _check_size(geometry: MeshGeometry, table: float, source: str | Path, line: int | None, name: str) -> None:
@@ -75,21 +96,23 @@ def _check_size(geometry: MeshGeometry, table: float, source: str | Path, line: 
                           "millimetre: check 'scale' (the file's units times scale must be metres)", where=line)
 
 
-def read_mesh_object(path: Path, scale: Vec3, source: str | Path, line: int | None, name: str) -> MeshGeometry:
+def read_mesh_object(path: Path, scale: Vec3, source: str | Path, line: int | None, name: str,
+                     scale_line: int | None = None) -> MeshGeometry:
     """A ``shape: mesh`` object's file, read and checked; errors name the scene file and the object's line."""
     loaded = _load_mesh_file(path, source, line, name, solid=True)
     _textured, fallback = _how_drawn(loaded, path, name)
     vertices = np.asarray(loaded.mesh.vertices, dtype=float) * np.asarray(scale)
+    _check_scaled(vertices, source, scale_line or line, name)
     faces = np.asarray(loaded.mesh.faces, dtype=np.int64)
     v, f = _arrays_if_untextured(loaded, fallback, scale)
     visual = VisualPart(T_object_part=np.eye(4), path=path.resolve(), scale=scale, rgba=fallback,
-                        vertices_m=v, faces=f)
+                        vertices_m=v, faces=f, sources=() if v is not None else renderer_copy(loaded.files))
     return _geometry(vertices, faces, hashlib.sha256(loaded.data).hexdigest(), path, scale, (visual,), None,
                      source, line, name, rgb=loaded.rgb, mass_kg=None, piece_faces=loaded.piece_faces)
 
 
 def read_urdf_object(path: Path, scale: Vec3, source: str | Path, line: int | None, name: str,
-                     packages: Mapping[str, Path] | None = None) -> MeshGeometry:
+                     packages: Mapping[str, Path] | None = None, scale_line: int | None = None) -> MeshGeometry:
     """A ``shape: urdf`` object (:mod:`bt_grasp.scene.urdf_object`: one rigid body, mesh or primitive parts);
     errors in the URDF name the URDF's line, a missing mesh the line that names it."""
     from bt_grasp.scene.urdf_object import read_urdf
@@ -115,6 +138,7 @@ def read_urdf_object(path: Path, scale: Vec3, source: str | Path, line: int | No
     visuals, drawn, rgb = _visual_parts(urdf.visuals, scale, name, lambda ref, ln: load(ref, ln, False))
     collision_path = next((p.geometry.path for p in urdf.collisions if isinstance(p.geometry, MeshRef)), path)
     where = urdf.collisions[0].line
+    _check_scaled(vertices * np.asarray(scale), source, scale_line or line, name)
     return _geometry(vertices * np.asarray(scale), faces, hasher.hexdigest(), collision_path, scale, visuals, drawn,
                      path, where, name, rgb=rgb, mass_kg=urdf.mass_kg, piece_faces=tuple(piece_faces))
 
@@ -189,7 +213,7 @@ def _visual_parts(parts: tuple[UrdfPart, ...], scale: Vec3, name: str,
             total = (g.scale[0] * scale[0], g.scale[1] * scale[1], g.scale[2] * scale[2])
             av, af = _arrays_if_untextured(loaded, rgba if fallback is not None else None, total)
             out.append(VisualPart(T_object_part=T, path=g.path.resolve(), scale=total, rgba=rgba, vertices_m=av,
-                                  faces=af))
+                                  faces=af, sources=() if av is not None else renderer_copy(loaded.files)))
             colour = rgba[:3] if rgba is not None else loaded.rgb
         else:
             dims = tuple(d * scale[0] for d in g.dims_m) if g.kind != "box" else tuple(
@@ -212,35 +236,51 @@ def _arrays_if_untextured(loaded: _LoadedMesh, fallback: tuple[float, float, flo
 
 @dataclass(frozen=True, eq=False)
 class _LoadedMesh:
-    """A mesh file read and checked: its bytes, the mesh, its pieces, its material colour."""
+    """A mesh file read and checked: its bytes, the mesh, its pieces, its material colour, the files it names."""
 
     data: bytes
     mesh: Any
     piece_faces: tuple[int, ...]  # the file's separate pieces (OBJ objects, scene nodes): their face counts
     rgb: Vec3 | None
+    files: MeshFiles
 
 
 def _how_drawn(loaded: _LoadedMesh, path: Path, name: str) -> tuple[bool, tuple[float, float, float, float] | None]:
     """Whether a drawn file shows its own texture, and the colour to draw it in instead when a texture image it
-    names is missing (said once). Asked only of drawn files: a collision file's materials never matter."""
-    from bt_grasp.scene.mesh_textures import missing_textures, texture_files
-
-    textures = texture_files(path, loaded.data)
-    missing = missing_textures(path, loaded.data)
-    if not missing:
-        return bool(textures), None
-    notice(log, f"object '{name}': {path.name} names texture image {missing[0].name}, which is missing "
-                f"({missing[0].parent}): drawn in its material colour")
-    return False, (*(loaded.rgb or DEFAULT_MESH_RGB), 1.0)
+    names is missing or lies outside its folder, or when the renderer cannot be given a checked copy of its files
+    (said once). Asked only of drawn files: a collision file's materials never matter."""
+    found = loaded.files
+    colour = (*(loaded.rgb or DEFAULT_MESH_RGB), 1.0)
+    outside = [ref for ref in found.outside if ref.kind == "texture"]
+    for ref in found.outside:  # never opened, never looked at: the sentence is the same whatever is there
+        notice(log, f"object '{name}': {path.name} names {ref.kind} file {ref.raw[:120]!r} outside its folder "
+                    f"({path.parent}): not read" + (", drawn in its material colour" if ref.kind == "texture" else ""))
+    missing = [(ref, n) for ref, n in found.missing if ref.kind == "texture"]
+    if missing:
+        missing_path = path.parent / missing[0][1]
+        notice(log, f"object '{name}': {path.name} names texture image {missing_path.name}, which is missing "
+                    f"({missing_path.parent}): drawn in its material colour")
+    if found.unstageable:
+        notice(log, f"object '{name}': {path.name}: {found.unstageable}, so it is drawn in its material colour")
+    if outside or missing or found.unstageable:
+        return False, colour
+    return bool(found.textures), None
 
 
 def _load_mesh_file(path: Path, source: str | Path, line: int | None, name: str, *, solid: bool,
                     urdf: bool = False) -> _LoadedMesh:
-    if urdf and not path.is_file():
-        raise ConfigError(source, f"names mesh file '{path}', which does not exist", where=line)
     data = _read(path, source, line, name)
-    mesh, piece_faces, rgb = _parse_mesh(data, path, source, line, name, solid=solid)
-    return _LoadedMesh(data, mesh, piece_faces, rgb)
+
+    def error(problem: str) -> ConfigError:
+        return ConfigError(source, f"object '{name}': mesh file '{path}' {problem}", where=line)
+
+    suffix = path.suffix.lower()
+    if suffix not in MESH_SUFFIXES:
+        raise ConfigError(source, f"object '{name}': '{path.name}' is not one of {', '.join(MESH_SUFFIXES)}",
+                          where=line)
+    files = read_mesh_files(path, data, error)
+    mesh, piece_faces, rgb = _parse_mesh(data, path, source, line, name, solid=solid, files=files)
+    return _LoadedMesh(data, mesh, piece_faces, rgb, files)
 
 
 def _read(path: Path, source: str | Path, line: int | None, name: str) -> bytes:
@@ -251,29 +291,37 @@ def _read(path: Path, source: str | Path, line: int | None, name: str) -> bytes:
 
 
 def _parse_mesh(data: bytes, path: Path, source: str | Path, line: int | None, name: str, *,
-                solid: bool = True) -> tuple[Any, tuple[int, ...], Vec3 | None]:
+                solid: bool = True, files: MeshFiles) -> tuple[Any, tuple[int, ...], Vec3 | None]:
     """The file's triangles as one mesh (its pieces, OBJ objects or scene nodes, joined in order), each piece's
-    face count, and the file's own colour."""
+    face count, and the file's own colour. trimesh reads only the checked bytes of ``files``."""
     import trimesh
 
     suffix = path.suffix.lower()
-    if suffix not in MESH_SUFFIXES:
-        raise ConfigError(source, f"object '{name}': '{path.name}' is not one of {', '.join(MESH_SUFFIXES)}",
-                          where=line)
     if not data.strip():
         raise ConfigError(source, f"object '{name}': mesh file '{path}' is empty", where=line)
     try:
-        resolver = trimesh.resolvers.FilePathResolver(str(path.parent))
+        resolver = checked_resolver(files)
         options: dict[str, Any] = {"split_objects": True, "group_material": False} if suffix == ".obj" else {}
         loaded = trimesh.load(io.BytesIO(data), file_type=suffix[1:], resolver=resolver, process=False, **options)
-        geometries = loaded.dump() if isinstance(loaded, trimesh.Scene) else [loaded]
-        pieces = [g for g in geometries if isinstance(g, trimesh.Trimesh) and len(g.faces) and len(g.vertices)]
+        instanced = _instanced(loaded) if isinstance(loaded, trimesh.Scene) else (0, 0)
+        if instanced[0] <= MAX_MESH_PIECES and instanced[1] <= MAX_MESH_FACES:
+            geometries = loaded.dump() if isinstance(loaded, trimesh.Scene) else [loaded]
+            pieces = [g for g in geometries if isinstance(g, trimesh.Trimesh) and len(g.faces) and len(g.vertices)]
     except Exception as exc:  # any parser failure of a third-party format reader is bad input here
         raise ConfigError(source, f"object '{name}': mesh file '{path}' cannot be read as a mesh "
                           f"({type(exc).__name__})", where=line) from None
+    if instanced[0] > MAX_MESH_PIECES or instanced[1] > MAX_MESH_FACES:  # a scene's nodes instance its meshes
+        raise ConfigError(source, f"object '{name}': mesh file '{path}' places {instanced[0]:,} pieces of "
+                          f"{instanced[1]:,} triangles in all, more than the {MAX_MESH_PIECES:,} pieces and "
+                          f"{MAX_MESH_FACES:,} triangles a mesh may have", where=line)
     if not pieces:
         raise ConfigError(source, f"object '{name}': mesh file '{path}' holds no triangles (an empty mesh)",
                           where=line)
+    face_count, vertex_count = sum(len(p.faces) for p in pieces), sum(len(p.vertices) for p in pieces)
+    if face_count > MAX_MESH_FACES or vertex_count > MAX_MESH_VERTICES:
+        raise ConfigError(source, f"object '{name}': mesh file '{path}' has {face_count:,} triangles and "
+                          f"{vertex_count:,} vertices, more than the {MAX_MESH_FACES:,} and "
+                          f"{MAX_MESH_VERTICES:,} a mesh may have (simplify it first)", where=line)
     vertices, faces = _join([(np.asarray(p.vertices, dtype=float), np.asarray(p.faces, dtype=np.int64))
                              for p in pieces])
     if not np.all(np.isfinite(vertices)):
@@ -284,6 +332,18 @@ def _parse_mesh(data: bytes, path: Path, source: str | Path, line: int | None, n
     rgb = next((c for c in (_material_rgb(p) for p in pieces) if c is not None), None)
     mesh = pieces[0] if len(pieces) == 1 else trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
     return mesh, tuple(len(p.faces) for p in pieces), rgb
+
+
+def _instanced(scene: Any) -> tuple[int, int]:
+    """The pieces a trimesh scene places and their triangles, each instance counted (before it is copied out)."""
+    pieces = faces = 0
+    for node in scene.graph.nodes_geometry:
+        pieces += 1
+        geometry = scene.geometry.get(scene.graph[node][1])
+        faces += len(getattr(geometry, "faces", ()))
+        if pieces > MAX_MESH_PIECES:
+            break
+    return pieces, faces
 
 
 def _check_spans_a_volume(vertices: np.ndarray, path: Path, source: str | Path, line: int | None, name: str) -> None:

@@ -40,6 +40,9 @@ from bt_grasp.scene.mesh_paths import MeshResolver
 
 #: joint types that keep the object one rigid body
 RIGID_JOINTS = ("fixed",)
+#: the most links (and joints) an object's URDF may have; its link tree is walked by iteration, never recursion
+#: (a 1,200-link chain of fixed joints was a RecursionError traceback)
+MAX_LINKS = 10_000
 
 
 @dataclass(frozen=True)
@@ -143,7 +146,11 @@ def _has_geometry(link: Any) -> bool:
 
 def _links(root: Any, path: Path) -> dict[str, Any]:
     links: dict[str, Any] = {}
-    for el in root.findall("link"):
+    found, joints = root.findall("link"), root.findall("joint")
+    if len(found) > MAX_LINKS or len(joints) > MAX_LINKS:
+        raise ConfigError(path, f"has {len(found):,} links and {len(joints):,} joints, more than the {MAX_LINKS:,} a "
+                          "URDF object may have", where=_line(root))
+    for el in found:
         name = el.get("name", "")
         if not name:
             raise ConfigError(path, "has a <link> without a name", where=_line(el))
@@ -176,58 +183,79 @@ def _rigid_tree(root: Any, links: dict[str, Any], has_geometry: dict[str, bool],
     return parent_of
 
 
-def _top(name: str, parent_of: dict[str, tuple[str, Any]], path: Path) -> str:
+def _top(name: str, parent_of: dict[str, tuple[str, Any]], path: Path, tops: dict[str, str]) -> str:
+    """The root of ``name``'s tree, by walking up (iteration; every link on the way remembered in ``tops``)."""
+    chain = [name]
     seen = {name}
-    while name in parent_of:
-        name = parent_of[name][0]
-        if name in seen:
-            raise ConfigError(path, f"its fixed joints form a loop through link '{name}'")
-        seen.add(name)
-    return name
+    while chain[-1] not in tops and chain[-1] in parent_of:
+        parent = parent_of[chain[-1]][0]
+        if parent in seen:
+            raise ConfigError(path, f"its fixed joints form a loop through link '{parent}'")
+        seen.add(parent)
+        chain.append(parent)
+    top = tops.get(chain[-1], chain[-1])
+    for link in chain:
+        tops[link] = top
+    return top
 
 
 def _body_root(parent_of: dict[str, tuple[str, Any]], has_geometry: dict[str, bool], links: dict[str, Any],
                path: Path) -> str:
     """The root link of the fixed-joint tree holding every link with geometry."""
-    tops = {name: _top(name, parent_of, path) for name, geo in has_geometry.items() if geo}
+    known: dict[str, str] = {}
+    tops = {name: _top(name, parent_of, path, known) for name, geo in has_geometry.items() if geo}
     roots = sorted(set(tops.values()))
     if len(roots) > 1:
         a, b = (next(n for n, t in tops.items() if t == r) for r in roots[:2])
         raise ConfigError(path, f"has {len(roots)} separate bodies (links '{a}' and '{b}' are not joined by fixed "
                           "joints); a URDF object must be one rigid body", where=_line(links[b]))
     root = roots[0]
+    holding = _holding_geometry(parent_of, has_geometry)
+    children: dict[str, list[str]] = {}
+    for child, (parent, _joint) in parent_of.items():
+        children.setdefault(parent, []).append(child)
     while not has_geometry[root]:  # a frame-only root (a 'world' fixed to the object): the object starts below it
-        children = [c for c, (p, _j) in parent_of.items() if p == root and _holds_geometry(c, parent_of, has_geometry)]
-        if len(children) != 1:
+        below = [c for c in children.get(root, []) if c in holding]
+        if len(below) != 1:
             break
-        root = children[0]
+        root = below[0]
     return root
 
 
-def _holds_geometry(name: str, parent_of: dict[str, tuple[str, Any]], has_geometry: dict[str, bool]) -> bool:
-    """Whether ``name`` or a link below it (through fixed joints) has geometry."""
-    return has_geometry[name] or any(p == name and _holds_geometry(c, parent_of, has_geometry)
-                                     for c, (p, _j) in parent_of.items())
+def _holding_geometry(parent_of: dict[str, tuple[str, Any]], has_geometry: dict[str, bool]) -> set[str]:
+    """The links that have geometry or have a link with geometry below them (through fixed joints): each link
+    with geometry marks its ancestors, walking up until a link already marked (iteration, linear in the links)."""
+    holding: set[str] = set()
+    for name, geo in has_geometry.items():
+        while geo and name not in holding:
+            holding.add(name)
+            if name not in parent_of:
+                break
+            name = parent_of[name][0]
+    return holding
 
 
 def _link_frames(body_root: str, parent_of: dict[str, tuple[str, Any]], links: dict[str, Any],
                  path: Path) -> dict[str, np.ndarray]:
-    """Every link of the body (in file order) -> its frame in the root link's frame."""
+    """Every link of the body (in file order) -> its frame in the root link's frame (each link's chain up to a
+    link already placed is walked by iteration, then composed down)."""
     frames: dict[str, np.ndarray] = {body_root: np.eye(4)}
-
-    def frame(name: str) -> np.ndarray | None:
-        if name in frames:
-            return frames[name]
-        if name not in parent_of:
-            return None  # another tree (a geometry-less frame not joined to the body)
-        parent, joint = parent_of[name]
-        T_parent = frame(parent)
-        if T_parent is None:
-            return None
-        frames[name] = T_parent @ _origin(joint, path)
-        return frames[name]
-
-    return {name: T for name in links if (T := frame(name)) is not None}
+    off_body: set[str] = set()  # links of another tree (a geometry-less frame not joined to the body)
+    for name in links:
+        chain: list[str] = []
+        on_chain: set[str] = set()
+        link = name
+        while link not in frames and link not in off_body and link in parent_of and link not in on_chain:
+            chain.append(link)
+            on_chain.add(link)
+            link = parent_of[link][0]
+        if link not in frames:
+            off_body.update(chain)
+            off_body.add(link)
+            continue
+        for child in reversed(chain):
+            frames[child] = frames[parent_of[child][0]] @ _origin(parent_of[child][1], path)
+    return {name: frames[name] for name in links if name in frames}
 
 
 # -- parts -----------------------------------------------------------------------------------------------------
@@ -238,8 +266,15 @@ def _numbers(text: str | None, count: int, what: str, path: Path, element: Any, 
     except ValueError:
         values = ()
     if len(values) != count or not all(np.isfinite(v) for v in values):
-        raise ConfigError(path, f"<{element.tag}> {what} '{text}' must be {count} numbers", where=_line(element))
+        raise ConfigError(path, f"<{element.tag}> {what} {_quoted(text)} must be {count} numbers",
+                          where=_line(element))
     return values
+
+
+def _quoted(text: str | None) -> str:
+    """An attribute's text as a sentence quotes it: at most 80 characters of it."""
+    shown = "" if text is None else text
+    return repr(shown if len(shown) <= 80 else shown[:77] + "...")
 
 
 def _origin(element: Any, path: Path) -> np.ndarray:
@@ -257,7 +292,7 @@ def _rgba(material: Any, path: Path) -> tuple[float, float, float, float] | None
         return None
     values = _numbers(color.get("rgba"), 4, "rgba", path, color, "")
     if not all(0.0 <= v <= 1.0 for v in values):
-        raise ConfigError(path, f"<color> rgba '{color.get('rgba')}' must be four numbers from 0 to 1",
+        raise ConfigError(path, f"<color> rgba {_quoted(color.get('rgba'))} must be four numbers from 0 to 1",
                           where=_line(color))
     return (values[0], values[1], values[2], values[3])
 
@@ -312,6 +347,6 @@ def _mass(link: Any, path: Path) -> float | None:
     except ValueError:
         value = float("nan")
     if not (np.isfinite(value) and value > 0):
-        raise ConfigError(path, f"link mass is {mass.get('value')!r}; a mass must be a positive number of kg",
+        raise ConfigError(path, f"link mass is {_quoted(mass.get('value'))}; a mass must be a positive number of kg",
                           where=_line(mass))
     return value

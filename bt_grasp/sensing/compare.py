@@ -332,8 +332,11 @@ def compare_case(scene_path: Path, seed: int, frames: int, detector: DetectorKin
 
     model = config.camera.noise
     bins = noise_bins(noisy_depth, quiet_depth, lambda z: float(depth_rms_m(z, model)))
-    from_file = run_perceive(PerceiveRequest(SourceSpec.recording(recording), calibration, detector, frames))
-    from_scene = run_perceive(PerceiveRequest(SourceSpec.simulated(scene_path, seed), None, detector, frames))
+    # the same run seed on both sides: the same perception, grasp and IK streams (``bt_grasp.seeds``)
+    from_file = run_perceive(PerceiveRequest(SourceSpec.recording(recording), calibration, detector, frames,
+                                             seed=seed))
+    from_scene = run_perceive(PerceiveRequest(SourceSpec.simulated(scene_path, seed), None, detector, frames,
+                                              seed=seed))
     count_a, count_b, same, centroid, grasp_mm, grasp_deg, classes = _objects_compared(from_file, from_scene)
     return CaseResult(name, seed, count_a, count_b, same, centroid, grasp_mm, grasp_deg, noisy, noise_free, classes,
                       bins, alignment)

@@ -23,6 +23,7 @@ from bt_grasp.interfaces import RGBDFrame
 from bt_grasp.perception.config import GraspSettings, PerceptionConfig
 from bt_grasp.perception.results import Detection, GraspResult, GraspStatus, PerceptionResult, PerceptionStatus
 from bt_grasp.scene.format import Scene
+from bt_grasp.seeds import RunSeeds, Stream
 from bt_grasp.sensing.placement import Placement
 
 if TYPE_CHECKING:
@@ -46,8 +47,11 @@ class Perceiver:
     """Perceives frames with one detector and one set of settings (see the module docstring)."""
 
     def __init__(self, config: PerceptionConfig, scene: Scene, detector: DetectorKind = DetectorKind.GEOMETRIC,
-                 grasp_settings: GraspSettings | None = None) -> None:
+                 grasp_settings: GraspSettings | None = None, seed: int = 0) -> None:
+        """``seed``: the run seed whose perception, grasp and IK streams the pipeline draws from (``bt_grasp.seeds``),
+        as a run with that seed does: a tree's dry run on the same frames with the same seed ranks the same grasps."""
         self.config = config
+        self.seeds = RunSeeds(seed)
         self.scene = scene
         self.detector_kind = detector
         self.grasp_settings = grasp_settings or GraspSettings()
@@ -86,13 +90,14 @@ class Perceiver:
         from bt_grasp.perception.pipeline import perceive
 
         if self._learned is None:
-            result = perceive(frame, T, config, None)
+            result = perceive(frame, T, config, None, seed=self.seeds.integer(Stream.PERCEPTION))
         else:
             # deferred: open3d (~1 s) only when a frame is perceived
             from bt_grasp.perception.learned import join_boxes
 
             found = self._learned.detect(frame.color)
-            result = join_boxes(perceive(frame, T, config), found.boxes, frame, T, config, None)
+            seen = perceive(frame, T, config, seed=self.seeds.integer(Stream.PERCEPTION))
+            result = join_boxes(seen, found.boxes, frame, T, config, None)
             result = replace(result, timings_ms={**result.timings_ms, "detector_network": found.network_ms,
                                                  "detector_decode": found.decode_ms})
         return without_fixtures(result, self.scene)
@@ -103,15 +108,15 @@ class Perceiver:
 
         assert isinstance(target, Detection)
         if not placement.calibrated:
-            return rank_grasps(target, result.others, self.grasp_settings,
+            return rank_grasps(target, result.others, self.grasp_settings, seed=self.seeds.integer(Stream.GRASPS),
                                viewpoint_base_m=tuple(float(v) for v in placement.T_pipeline_camera[:3, 3]))
         # deferred: pinocchio and OMPL only when grasps are tested for reach or planned
         from bt_grasp.motion.planning_scene import fixture_boxes
 
         fixtures = [(box.T_base_shape, box.size_m) for box in fixture_boxes(self.scene)]
         viewpoint = tuple(float(v) for v in placement.T_pipeline_camera[:3, 3])
-        found = rank_grasps(target, result.others, self.grasp_settings, reachable=self._reachable, fixtures=fixtures,
-                            viewpoint_base_m=viewpoint)
+        found = rank_grasps(target, result.others, self.grasp_settings, reachable=self._reachable,
+                            seed=self.seeds.integer(Stream.GRASPS), fixtures=fixtures, viewpoint_base_m=viewpoint)
         if not found.ok and found.status is not GraspStatus.OK:
             log.info("no grasp of %s: %s", target.label, found.message)
         return found
@@ -119,8 +124,8 @@ class Perceiver:
     def _reachable(self, T_grasp: NDArray[np.float64], T_pregrasp: NDArray[np.float64]) -> bool:
         """PlanGrasp's reach test from the home pose: the pre-grasp, then the grasp from there, have IK solutions."""
         # deferred: pinocchio and OMPL only when grasps are tested for reach or planned
-        from bt_grasp.motion.kinematics import default_kinematics
+        from bt_grasp.motion.kinematics import SeededKinematics, default_kinematics
 
-        kin = default_kinematics()
+        kin = SeededKinematics(default_kinematics(), self.seeds.integer(Stream.IK))  # as the run's cell.kinematics
         pre = kin.ik(T_pregrasp, self._q_home)
         return bool(pre.ok and kin.ik(T_grasp, pre.q).ok)

@@ -31,6 +31,8 @@ class PerceiveRequest:
     frames: int | None = None
     log: Path | None = None
     settings: RealSenseSettings = field(default_factory=RealSenseSettings)
+    #: the run seed whose perception, grasp and IK streams the pipeline draws from (``bt_grasp.seeds``)
+    seed: int = 0
 
 
 @dataclass(frozen=True)
@@ -61,7 +63,7 @@ def run_perceive(request: PerceiveRequest, on_frame: Callable[[FrameReport], Non
 
 def _run(opened: OpenedSource, request: PerceiveRequest, on_frame: Callable[[FrameReport], None] | None
          ) -> PerceiveSummary:
-    perceiver = Perceiver(opened.perception_config, opened.scene, request.detector)
+    perceiver = Perceiver(opened.perception_config, opened.scene, request.detector, seed=request.seed)
     frame_id = opened.placer.frame_id
     frames = request.frames if request.frames is not None else opened.default_frames
     writer = None

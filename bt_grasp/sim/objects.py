@@ -7,13 +7,20 @@ of a convex mesh, else its cached CoACD decomposition). A mesh object is drawn w
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import hashlib
+import os
+import shutil
+import tempfile
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import sapien
 
 from bt_grasp.errors import ConfigError
+from bt_grasp.files.safe_path import join_under
 from bt_grasp.geometry import Mat4, convex_hull_xy, make_T, rot_z
 from bt_grasp.scene.mesh_cache import collision_shapes
 from bt_grasp.scene.mesh_geometry import VisualPart
@@ -168,6 +175,8 @@ def _build_mesh_object(scene: sapien.Scene, placed: PlacedObject) -> sapien.Enti
     obj = placed.spec
     geometry = obj.geometry
     shapes = collision_shapes(geometry)
+    if not (np.isfinite(shapes.volume_m3) and shapes.volume_m3 > 0):  # a mass spread over no volume
+        raise ConfigError(geometry.collision_path, f"object '{obj.name}': its collision shapes enclose no volume")
     mass = obj.mass_or_default_kg
     density = mass / shapes.volume_m3 if mass is not None else float(obj.density_kg_m3 or 1000.0)
     material = sapien.physx.PhysxMaterial(obj.friction, obj.friction, 0.0)
@@ -209,14 +218,53 @@ def _visual_shape(obj: SceneObject, visual: VisualPart) -> sapien.render.RenderS
     elif visual.vertices_m is not None and visual.faces is not None:
         shape = _array_mesh_shape(visual.vertices_m, visual.faces, material)
     else:
-        assert visual.path is not None
-        try:
-            shape = sapien.render.RenderShapeTriangleMesh(str(visual.path), np.asarray(visual.scale, np.float32),
-                                                          material)
-        except RuntimeError as exc:  # a file the renderer cannot draw (read and checked by trimesh at load)
-            raise ConfigError(visual.path, f"object '{obj.name}': the renderer cannot draw this file ({exc})") from None
+        assert visual.path is not None and visual.sources
+        shape = _file_mesh_shape(obj, visual, material)
     shape.set_local_pose(local)
     return shape
+
+
+def _file_mesh_shape(obj: SceneObject, visual: VisualPart,
+                     material: sapien.render.RenderMaterial | None) -> sapien.render.RenderShapeTriangleMesh:
+    """A drawn mesh file, from the checked copy of it and the files it names (``visual.sources``), written to a
+    private folder (0700, made for this load) for the renderer, loaded, then removed: the renderer never sees a
+    path a file named, nor a file that was not checked. Loading is forced before the folder goes (``get_parts``:
+    the renderer reads files lazily, at the first picture otherwise). The folder's name is this process's and the
+    content's (the renderer keeps every model it loaded by path for the process's life: one name per content reuses
+    it, where a new name per load grew a worker by ~0.4 MB a mesh an episode)."""
+    assert visual.path is not None
+    with _staged(visual.sources) as main:
+        try:
+            shape = sapien.render.RenderShapeTriangleMesh(str(main), np.asarray(visual.scale, np.float32), material)
+            shape.get_parts()
+        except RuntimeError as exc:  # a file the renderer cannot draw (read and checked by trimesh at load)
+            problem = str(exc).replace(str(main.parent), str(visual.path.parent))
+            raise ConfigError(visual.path, f"object '{obj.name}': the renderer cannot draw this file ({problem})"
+                              ) from None
+    return shape
+
+
+@contextmanager
+def _staged(sources: tuple[tuple[str, bytes], ...]) -> Iterator[Path]:
+    """The files written under a new private folder (removed on leaving); yields the first file's path."""
+    digest = hashlib.sha256()
+    for name, data in sources:
+        digest.update(f"{name}\0{len(data)}\0".encode())
+        digest.update(data)
+    root = Path(tempfile.gettempdir()) / f"bt_grasp_mesh_{os.getuid()}_{os.getpid()}_{digest.hexdigest()[:32]}"
+    try:
+        root.mkdir(mode=0o700)
+    except FileExistsError:  # someone else's (or a link) at this name: a folder of a new name instead
+        root = Path(tempfile.mkdtemp(prefix="bt_grasp_mesh_"))
+    try:
+        for name, data in sources:
+            target = join_under(root, name, source=root, what="mesh file name")
+            target.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
+            with target.open("xb") as f:
+                f.write(data)
+        yield root / sources[0][0]
+    finally:
+        shutil.rmtree(root, ignore_errors=True)
 
 
 def _array_mesh_shape(vertices_m: np.ndarray, faces: np.ndarray,

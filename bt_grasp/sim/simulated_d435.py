@@ -19,11 +19,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from bt_grasp.seeds import RunSeeds, Stream
 from bt_grasp.sim.depth_imager import DepthImager, DepthImagerModel
 from bt_grasp.sim.world import World
 
-#: the stream of the world's seed sequence the depth imager's noise is drawn from (World uses 0, 1 and 2)
-DEPTH_IMAGER_STREAM = 3
 #: frames per second of the simulated D435's streams
 FPS = 30
 
@@ -47,8 +46,7 @@ class SimulatedD435:
         self.world = world
         camera = world.config.camera
         self.model = model or DepthImagerModel.d435(camera.width_px, camera.height_px)
-        seeds = np.random.SeedSequence(world.seed).spawn(DEPTH_IMAGER_STREAM + 1)
-        rng = np.random.default_rng(seeds[DEPTH_IMAGER_STREAM])
+        rng = RunSeeds(world.seed).generator(Stream.DEPTH_IMAGER)
         self.imager = DepthImager(world.camera, self.model, camera.noise, rng, camera.near_m, camera.far_m)
         self.steps_per_frame = max(1, round(1.0 / (FPS * world.dt_s)))
         self._number = 0

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass, field
+from typing import Protocol
 
 from bt_grasp.clock import Clock
 from bt_grasp.errors import TreeFileError
@@ -22,8 +23,24 @@ from bt_grasp.tree.node import BtNode, Conditions, WakeUp
 from bt_grasp.tree.ports import PortAccessor, blackboard_key
 from bt_grasp.tree.registry import NodeKind, NodeRegistry, NodeSpec
 from bt_grasp.tree.substitution import SubstitutionRule, substitute
-from bt_grasp.tree.validate import check_models, check_read_only_ports, resolve_node, resolve_subtree
+from bt_grasp.tree.validate import (
+    check_known_nodes,
+    check_models,
+    check_read_only_ports,
+    resolve_node,
+    resolve_subtree,
+)
 from bt_grasp.tree.values import literal_value
+
+
+class NodeReplacer(Protocol):
+    """BT.CPP's substitution rules, asked about every node as BT.CPP's ``instantiateTreeNode`` does
+    (:class:`bt_grasp.tree.test_node.RuleSet`): the leaf spec that replaces the node, named like it, or None. A
+    replaced control's children are built all the same and left out of the tree (their uids and blackboard
+    entries are BT.CPP's), a replaced SubTree's content is not built."""
+
+    def replace(self, kind: NodeKind, type_id: str, name: str, path: str) -> NodeSpec | None: ...
+
 
 SUBTREE_SPEC = NodeSpec(
     "SubTree", NodeKind.SUBTREE, (), lambda ctx: SubTreeNode(ctx, ""), "Runs a BehaviorTree on its own blackboard."
@@ -57,6 +74,7 @@ def main_tree_id(document: Document) -> str:
 def validate_document(document: Document, registry: NodeRegistry) -> str:
     """Check every tree of ``document`` (not only the main one) and its models; returns the main tree ID."""
     check_models(document, registry)
+    check_known_nodes(document, registry)
     check_read_only_ports(document)
 
     def walk(decl: NodeDecl) -> None:
@@ -121,8 +139,11 @@ class TreeBuilder:
     registry: NodeRegistry
     clock: Clock
     rules: tuple[SubstitutionRule, ...] = ()
+    replacer: NodeReplacer | None = None
     _uids: itertools.count[int] = field(default_factory=lambda: itertools.count(1))
     wake_up: WakeUp = field(default_factory=WakeUp)
+    #: the ``rules`` patterns that replaced a node
+    substituted: set[str] = field(default_factory=set)
 
     def build(self, main: str, root_blackboard: Blackboard) -> BtNode:
         return self._node(self.document.trees[main].root, root_blackboard, "", "", (main,))
@@ -143,9 +164,11 @@ class TreeBuilder:
         resolved = resolve_node(decl, self.registry, self.document)
         spec, name, ports = resolved.spec, resolved.name, resolved.ports
         path = prefix + name + (f"::{uid}" if name == decl.type_id else "")
-        replacement = substitute(self.rules, spec, decl.type_id, name, path)
-        if replacement is not None:
-            spec, ports = replacement, {}
+        foreign = spec.needs_robot or spec.name in self.registry.origins
+        match = substitute(self.rules, spec, decl.type_id, name, path, foreign=foreign)
+        if match is not None:
+            spec, ports = match[1], {}
+            self.substituted.add(match[0].pattern)
         for value in ports.values():  # before the children's, as BT.CPP creates a parent before its children
             if value.key is not None:
                 try:
@@ -153,6 +176,11 @@ class TreeBuilder:
                 except BlackboardTypeError as exc:
                     raise decl.error(f"{spec.name}: port '{value.port.name}': {exc}") from None
         children = tuple(self._node(c, bb, prefix, instance, stack) for c in decl.children)
+        replacer = self.replacer if match is None else None
+        replaced = replacer.replace(spec.kind, decl.type_id, name, path) if replacer is not None else None
+        if replaced is not None:  # BT.CPP: the children were made, and belong to no parent
+            spec, children = replaced, ()
+            ports = {k: v for k, v in ports.items() if replaced.port(k) is not None}
         ctx = self._context(
             decl,
             name=name,
@@ -191,6 +219,9 @@ class TreeBuilder:
             raise decl.error(f"cyclic SubTree: {' -> '.join((*stack, subtree_id))}")
         name = resolved.name
         path = prefix + name + (f"::{uid}" if name == subtree_id else "")
+        replaced = self.replacer.replace(NodeKind.SUBTREE, "SubTree", name, path) if self.replacer else None
+        if replaced is not None:  # BT.CPP: a replaced SubTree's content is never made
+            return self._replaced_subtree(decl, replaced, uid, bb, name, path, resolved.conditions)
         inner = Blackboard(bb, autoremap=resolved.autoremap)
         for port, value in resolved.remaps:
             key = blackboard_key(value, port)
@@ -217,3 +248,11 @@ class TreeBuilder:
         node.subtree_blackboard = inner
         node.subtree_path = sub_instance
         return node
+
+    def _replaced_subtree(self, decl: NodeDecl, spec: NodeSpec, uid: int, bb: Blackboard, name: str, path: str,
+                          conditions: Conditions) -> BtNode:
+        ctx = self._context(decl, name=name, type_id=spec.name, uid=uid, path=path, spec=spec,
+                            ports=PortAccessor({p.name: p for p in spec.ports}, {}, bb, path), blackboard=bb,
+                            children=(), conditions=conditions)
+        assert spec.factory is not None
+        return spec.factory(ctx)

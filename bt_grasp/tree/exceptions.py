@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from bt_grasp.errors import BtGraspError
+from bt_grasp.errors import BtGraspError, TreeFileError
 
 
 class TreeRuntimeError(BtGraspError):
@@ -38,3 +38,20 @@ class DeclarationError(ValueError):
     """A node, port or failure reason declared wrongly, or a name registered twice (one sentence).
 
     A ``ValueError``, so callers that caught those keep working; the plugin loader names the plugin with it."""
+
+
+class UnknownNodes(TreeFileError):
+    """A tree names several node types nothing registered: every one of them, each at its file and line
+    (``problems``, one sentence each). Its own message is the first, then how many more (``tree validate`` and
+    ``tree run`` print every one on its own line)."""
+
+    def __init__(self, problems: list[TreeFileError]) -> None:
+        first = problems[0]
+        self.problems = tuple(problems)
+        more = len(problems) - 1
+        super().__init__(first.source, f"{first.problem} (and {more} more unknown node{'s' * (more > 1)}; "
+                         "`bt-grasp tree validate` lists every one)", where=first.where)
+
+    @property
+    def lines(self) -> tuple[str, ...]:
+        return tuple(p.message for p in self.problems)

@@ -9,6 +9,8 @@ from __future__ import annotations
 import logging
 import os
 from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -17,9 +19,10 @@ import py_trees
 from bt_grasp.clock import Clock, ManualClock
 from bt_grasp.errors import TreeFileError
 from bt_grasp.files.bounded_io import read_user_file
+from bt_grasp.files.search_path import SHIPPED_TREES, TREE_PATH_VARIABLE, find_named_file, looked_in
 from bt_grasp.tree.blackboard import Blackboard
-from bt_grasp.tree.builder import TreeBuilder, validate_document
-from bt_grasp.tree.formats.document import Document
+from bt_grasp.tree.builder import NodeReplacer, TreeBuilder, validate_document
+from bt_grasp.tree.formats.document import Document, IncludeDecl, IncludeLink
 from bt_grasp.tree.formats.xml_format import read_xml
 from bt_grasp.tree.formats.yaml_format import read_yaml
 from bt_grasp.tree.introspect import to_btcpp_xml
@@ -46,7 +49,7 @@ def parse_bytes(data: bytes, display: str, fmt: str | None = None) -> Document:
     return document
 
 
-def _read_bytes(path: Path, display: str, where: tuple[str, int] | None = None) -> bytes:
+def _read_bytes(path: Path, display: str) -> bytes:
     try:
         if not path.exists():
             raise FileNotFoundError(path)
@@ -54,13 +57,46 @@ def _read_bytes(path: Path, display: str, where: tuple[str, int] | None = None) 
             raise IsADirectoryError(path)
         return read_user_file(path, error=TreeFileError)  # bounded: no device, pipe or giant file
     except FileNotFoundError:
-        if where is not None:
-            raise TreeFileError(where[0], f"included file '{display}' does not exist", where=where[1]) from None
         raise TreeFileError(display, "no such file") from None
     except IsADirectoryError:
         raise TreeFileError(display, "is a directory, not a tree file") from None
     except OSError as exc:
         raise TreeFileError(display, f"cannot read the file: {exc.strerror}") from None
+
+
+#: ``replay --resim``: the log's own files for each include, by (including file's real path, path as written);
+#: while set, an include is resolved here only (no folder, search path or shipped library is looked at)
+_recorded_includes: ContextVar[Mapping[tuple[str, str], Path] | None] = ContextVar("bt_grasp_recorded_includes",
+                                                                                  default=None)
+
+
+@contextmanager
+def recorded_includes(links: Mapping[tuple[str, str], Path]) -> Iterator[None]:
+    """Within the block, every include is resolved through ``links`` only: ``(os.path.realpath(including file),
+    path as written) -> the file to read``; an include not in it is refused (exit 2)."""
+    token = _recorded_includes.set(dict(links))
+    try:
+        yield
+    finally:
+        _recorded_includes.reset(token)
+
+
+def resolve_include(inc: IncludeDecl, including: str) -> str:
+    """The file an include names, as displayed: beside the including file, then each folder of
+    ``BT_GRASP_TREE_PATH``, then bt_grasp's shipped library (``bt_grasp/files/search_path.py``); an absolute
+    path as it is. Not found: one sentence naming every place looked."""
+    recorded = _recorded_includes.get()
+    if recorded is not None:
+        target = recorded.get((os.path.realpath(including), inc.path))
+        if target is None:
+            raise TreeFileError(inc.source, f"included file '{inc.path}' is not among the files the log carries, so "
+                                "this run cannot be re-simulated", where=inc.line)
+        return str(target)
+    found = find_named_file(inc.path, Path(os.path.dirname(including)), TREE_PATH_VARIABLE, SHIPPED_TREES)
+    if found.path is None:
+        raise TreeFileError(inc.source, f"included file '{inc.path}' does not exist: "
+                            f"{looked_in(found, TREE_PATH_VARIABLE)}", where=inc.line)
+    return str(found.path)
 
 
 def read_single(path: Path) -> Document:
@@ -70,9 +106,9 @@ def read_single(path: Path) -> Document:
 
 
 def _merge_includes(document: Document, display: str, stack: tuple[str, ...], seen: set[str]) -> None:
-    base = os.path.dirname(display)
     for inc in list(document.includes):
-        inc_display = os.path.normpath(os.path.join(base, inc.path))
+        inc_display = resolve_include(inc, display)
+        document.include_links.append(IncludeLink(display, inc.path, inc_display))
         key = os.path.realpath(inc_display)
         if key in stack:
             chain = " -> ".join([*(os.path.basename(s) for s in stack), os.path.basename(key)])
@@ -80,17 +116,17 @@ def _merge_includes(document: Document, display: str, stack: tuple[str, ...], se
         if key in seen:
             continue
         seen.add(key)
-        data = _read_bytes(Path(inc_display), inc_display, (inc.source, inc.line))
-        included = parse_bytes(data, inc_display)
+        included = parse_bytes(_read_bytes(Path(inc_display), inc_display), inc_display)
         _merge_includes(included, inc_display, (*stack, key), seen)
         for tree in included.trees.values():
             document.add_tree(tree)
         document.models.extend(included.models)
         document.texts.update(included.texts)
+        document.include_links.extend(included.include_links)
 
 
 def read_document(data: bytes, display: str, fmt: str | None = None) -> Document:
-    """Parse ``data`` and merge every file it includes (relative to the including file)."""
+    """Parse ``data`` and merge every file it includes (found by :func:`resolve_include`)."""
     document = parse_bytes(data, display, fmt)
     key = os.path.realpath(display)
     _merge_includes(document, display, (key,), {key})
@@ -118,6 +154,8 @@ class LoadedTree:
     sources: dict[str, str] = field(default_factory=dict)
     status: BtStatus = BtStatus.IDLE
     ticks: int = 0
+    #: the ``substitutions`` patterns that replaced at least one node
+    substituted: frozenset[str] = frozenset()
 
     def tick(self) -> BtStatus:
         """One control period, as BT.CPP's ``tickOnce``: a completed root is reset to IDLE first, then the root
@@ -172,16 +210,25 @@ def build_tree(
     *,
     substitutions: Mapping[str, str] | None = None,
     clock: Clock | None = None,
+    replacer: NodeReplacer | None = None,
 ) -> LoadedTree:
-    """Check ``document`` completely, then build its main tree."""
+    """Check ``document`` completely, then build its main tree (``replacer``: BT.CPP's substitution rules, see
+    :class:`bt_grasp.tree.builder.NodeReplacer`)."""
     rules = parse_rules(substitutions, registry)
     main = validate_document(document, registry)
     clock = clock or ManualClock()
     root_blackboard = Blackboard()
-    builder = TreeBuilder(document, registry, clock, rules)
+    builder = TreeBuilder(document, registry, clock, rules, replacer)
     root = builder.build(main, root_blackboard)
     logger.debug("built %s from %s", main, document.source)
-    return LoadedTree(root, root_blackboard, main, document, clock, dict(document.texts))
+    return LoadedTree(root, root_blackboard, main, document, clock, dict(document.texts),
+                      substituted=frozenset(builder.substituted))
+
+
+def read_tree_file(path: str | Path) -> Document:
+    """A tree file's declarations, every include merged (bounded reads), nothing checked against a registry."""
+    display = str(path)
+    return read_document(_read_bytes(Path(path), display), display)
 
 
 def load_tree(
@@ -194,14 +241,13 @@ def load_tree(
     """Load a BT.CPP v4 XML or YAML tree file (by extension; content sniffed otherwise).
 
     Args:
-        path: the file; includes are read relative to it
+        path: the file; an include is looked for beside the file that names it, then in each folder of
+            ``BT_GRASP_TREE_PATH``, then in bt_grasp's shipped library (``lib/pick.xml``, ``lib/place.xml``)
         registry: the node types the file may use
         substitutions: ``{"Perceive": "AlwaysSuccess", "Approach*": "Running:3"}`` (see ``substitution``)
         clock: simulated time for Timeout, Delay and Sleep (a new ``ManualClock`` when None)
     """
-    display = str(path)
-    document = read_document(_read_bytes(Path(path), display), display)
-    return build_tree(document, registry, substitutions=substitutions, clock=clock)
+    return build_tree(read_tree_file(path), registry, substitutions=substitutions, clock=clock)
 
 
 def load_tree_from_string(
@@ -213,6 +259,6 @@ def load_tree_from_string(
     substitutions: Mapping[str, str] | None = None,
     clock: Clock | None = None,
 ) -> LoadedTree:
-    """Like :func:`load_tree` for text in memory (includes are relative to the working directory)."""
+    """Like :func:`load_tree` for text in memory (includes are looked for from the working directory first)."""
     document = read_document(text.encode("utf-8"), source, fmt)
     return build_tree(document, registry, substitutions=substitutions, clock=clock)

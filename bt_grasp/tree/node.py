@@ -187,6 +187,9 @@ class BtNode(PyTreesBehaviour):
         self.bt_status_extra = "IDLE"
         #: called after every executeTick as ``listener(node, status_before, result)`` (runners, recorders)
         self.bt_listener: Callable[[BtNode, BtStatus, BtStatus], None] | None = None
+        #: called on every change of the stored status as ``hook(node, previous, new)``, halts and resets to IDLE
+        #: included: BT.CPP's ``subscribeToStatusChange`` (what its StatusChangeLogger and Groot2's log watch)
+        self.bt_on_change: Callable[[BtNode, BtStatus, BtStatus], None] | None = None
         #: called just before the node's own tick runs (after its pre-conditions let it), as ``hook(node)``:
         #: where BT.CPP has ``setPreTickFunction``; fault injectors watch leaf entries here
         self.bt_pre_tick: Callable[[BtNode], None] | None = None
@@ -259,16 +262,21 @@ class BtNode(PyTreesBehaviour):
     def set_bt_status(self, status: BtStatus) -> None:
         if status is BtStatus.IDLE or status is BtStatus.SKIPPED:
             raise ValueError("use reset_status() to make a node IDLE; SKIPPED is never stored")
-        self.bt_state = status
+        previous, self.bt_state = self.bt_state, status
         self.status = TO_PY[status]
         self.bt_status_extra = None
+        if previous is not status and self.bt_on_change is not None:
+            self.bt_on_change(self, previous, status)
 
     def reset_status(self) -> None:
         """BT.CPP ``resetStatus``: back to IDLE without halting (a SKIPPED marker survives)."""
-        if self.bt_state is not BtStatus.IDLE and self.bt_status_extra != "SKIPPED":
+        previous = self.bt_state
+        if previous is not BtStatus.IDLE and self.bt_status_extra != "SKIPPED":
             self.bt_status_extra = "IDLE"
         self.bt_state = BtStatus.IDLE
         self.status = Status.INVALID
+        if previous is not BtStatus.IDLE and self.bt_on_change is not None:
+            self.bt_on_change(self, previous, BtStatus.IDLE)
 
     def halt_node(self) -> None:
         """BT.CPP ``haltNode``: ``halt()`` then the ``_onHalted`` script."""

@@ -7,9 +7,13 @@ A rule maps a glob, matched against a leaf's registration ID, instance name or f
   ``FailureIs`` sees), ``Running:3`` (RUNNING 3 ticks, then SUCCESS), ``Running:3:Failure[:REASON]``.
 
 Rules apply to actions and conditions only; the first matching rule wins. A pattern with a wildcard
-(``*``, ``?``, ``[``) replaces robot leaves only (``*=AlwaysSuccess`` leaves ``Script``, ``SetBlackboard`` and
-the other built-in leaves alone); to replace any other leaf, name its type, name or path exactly
-(``Script=AlwaysSuccess``).
+(``*``, ``?``, ``[``) replaces the leaves of other projects and of the robot: robot leaves, and leaves a plugin or a
+TreeNodesModel brought (``Clear*=AlwaysFailure`` reaches Nav2's ``ClearEntireCostmap``); bt_grasp's and BT.CPP's
+own logic leaves stay as written (``*=AlwaysSuccess`` leaves ``Script``, ``SetBlackboard`` and ``SelectObject``
+alone); to replace one of those, name its type, name or path exactly (``Script=AlwaysSuccess``). A rule that
+replaces no node of the tree is an error of the dry run (``bt_grasp.tree.dry_run``), never silently nothing.
+
+BehaviorTree.CPP's own rule files (``--substitution-rules``) are :mod:`bt_grasp.tree.test_node`'s.
 """
 
 from __future__ import annotations
@@ -134,15 +138,16 @@ def parse_rules(rules: Mapping[str, str] | None, registry: NodeRegistry) -> tupl
 
 
 def substitute(
-    rules: tuple[SubstitutionRule, ...], spec: NodeSpec, type_id: str, name: str, path: str
-) -> NodeSpec | None:
-    """The replacement spec for a leaf, or None when no rule matches (or the node is not a leaf, or only a
-    wildcard rule matches a leaf that is not a robot leaf)."""
+    rules: tuple[SubstitutionRule, ...], spec: NodeSpec, type_id: str, name: str, path: str, *, foreign: bool
+) -> tuple[SubstitutionRule, NodeSpec] | None:
+    """The rule that replaces a leaf and the replacement spec, or None when no rule matches (or the node is not a
+    leaf, or only a wildcard rule matches a leaf that is not ``foreign``: a robot leaf, or one a plugin or a
+    TreeNodesModel brought)."""
     if spec.kind not in _LEAF_KINDS:
         return None
     for rule in rules:
-        if rule.wildcard and not spec.needs_robot:
+        if rule.wildcard and not foreign:
             continue
         if rule.matches(type_id, name, path):
-            return rule.spec_for(spec)
+            return rule, rule.spec_for(spec)
     return None

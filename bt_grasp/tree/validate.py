@@ -7,11 +7,12 @@ or runs a node.
 from __future__ import annotations
 
 import logging
+import re
 from dataclasses import dataclass, field
 
 from bt_grasp.errors import TreeFileError, did_you_mean
 from bt_grasp.tree.builtins import REMOVED_V3_NAMES
-from bt_grasp.tree.exceptions import PortValueError, ScriptSyntaxError, TreeRuntimeError
+from bt_grasp.tree.exceptions import PortValueError, ScriptSyntaxError, TreeRuntimeError, UnknownNodes
 from bt_grasp.tree.formats.document import Document, ModelDecl, NodeDecl
 from bt_grasp.tree.node import POST_CONDITIONS, PRE_CONDITIONS, Conditions
 from bt_grasp.tree.ports import PortValue, blackboard_key
@@ -69,8 +70,93 @@ def _unknown_node(decl: NodeDecl, registry: NodeRegistry, document: Document) ->
         return decl.error(f"'{type_id}' is a BehaviorTree.CPP 3.x node; version 4 calls it {REMOVED_V3_NAMES[type_id]}")
     if type_id in document.trees:
         return decl.error(f"'{type_id}' is a BehaviorTree; use it as <SubTree ID=\"{type_id}\"/>")
+    model = next((m for m in document.models if m.node_id == type_id and m.kind != "SubTree"), None)
+    if model is not None:
+        where = f"{model.source}:{model.line}"
+        if model.kind in ("Action", "Condition"):
+            return decl.error(f"unknown node '{type_id}': the TreeNodesModel at {where} declares it, but no plugin "
+                              "gives its code (`bt-grasp tree run --dry` stands in for it; `bt-grasp tree stubs` "
+                              "writes a plugin to start from)")
+        return decl.error(f"unknown node '{type_id}': the TreeNodesModel at {where} declares it a {model.kind}, whose "
+                          "behaviour only its code knows: give it with --leaves (a dry run stands in for actions and "
+                          "conditions only)")
     hint = did_you_mean(type_id, list(registry.names()))
     return decl.error(f"unknown node '{type_id}'{hint}")
+
+
+def _port_listing(spec: NodeSpec) -> str:
+    """``inputs: a, b; outputs: c`` (each direction that has ports), or that the node has none."""
+    groups = [(label, [p.name for p in spec.ports if p.direction.value == direction])
+              for label, direction in (("inputs", "input"), ("outputs", "output"), ("in/out", "inout"))]
+    listed = "; ".join(f"{label}: {', '.join(names)}" for label, names in groups if names)
+    return listed or f"{spec.name} has no ports"
+
+
+def _edits(a: str, b: str) -> int:
+    """Optimal-string-alignment distance (insertions, deletions, substitutions, swaps of neighbours)."""
+    previous2: list[int] = []
+    previous = list(range(len(b) + 1))
+    for i, ca in enumerate(a, 1):
+        current = [i]
+        for j, cb in enumerate(b, 1):
+            cost = min(previous[j] + 1, current[j - 1] + 1, previous[j - 1] + (ca != cb))
+            if i > 1 and j > 1 and ca == b[j - 2] and a[i - 2] == cb:
+                cost = min(cost, previous2[j - 2] + 1)
+            current.append(cost)
+        previous2, previous = previous, current
+    return previous[-1]
+
+
+def _attribute_hint(key: str, spec: NodeSpec) -> str:
+    """"; did you mean 'x' (output: ...)?" for an unknown attribute, or "".
+
+    A misspelling (the same name but for case, or one or two letters off: ``colr``, ``_skipif``) names the
+    port it misspells. Another word (``detections`` is no misspelling of ``detector``, an input choosing the
+    detector) names the port whose description uses that word (``target``: "the chosen detection"), so the hint
+    points the way the tree meant; else no hint (the listing of inputs and outputs is given)."""
+    extras = sorted(CONDITION_ATTRIBUTES | SPECIAL_ATTRIBUTES)
+    names = [p.name for p in spec.ports] + extras
+    lowered = key.lower()
+    allowed = 1 if len(key) <= 3 else 2
+    spelled = [n for n in names if n.lower() == lowered] or sorted(
+        (n for n in names if _edits(lowered, n.lower()) <= allowed), key=lambda n: _edits(lowered, n.lower()))
+    if spelled:
+        return did_you_mean(spelled[0], spelled[:1]) if spelled[0] in extras else _named(spec, spelled[0])
+    stems = {lowered, lowered.removesuffix("s")} if len(lowered) >= 4 else set()
+    for port in spec.ports:
+        words = set(re.findall(r"[a-z_]+", port.description.lower()))
+        if stems & (words | {w.removesuffix("s") for w in words}):
+            return _named(spec, port.name)
+    return ""
+
+
+def _named(spec: NodeSpec, name: str) -> str:
+    port = spec.port(name)
+    if port is None:
+        return ""
+    what = f": {port.description}" if port.description else ""
+    return f"; did you mean '{name}' ({port.direction.value}{what})?"
+
+
+def check_known_nodes(document: Document, registry: NodeRegistry) -> None:
+    """Every node type the document's trees name is registered: else one :class:`TreeFileError` (one unknown
+    node) or :class:`UnknownNodes` (every unknown node, in file order, each at its file and line)."""
+    problems: list[TreeFileError] = []
+
+    def walk(decl: NodeDecl) -> None:
+        if decl.type_id != "SubTree":
+            spec = registry.get(decl.type_id)
+            if spec is None or spec.kind is NodeKind.SUBTREE:
+                problems.append(_unknown_node(decl, registry, document))
+        for child in decl.children:
+            walk(child)
+
+    for tree in document.trees.values():
+        walk(tree.root)
+    if len(problems) == 1:
+        raise problems[0]
+    if problems:
+        raise UnknownNodes(problems)
 
 
 def resolve_node(decl: NodeDecl, registry: NodeRegistry, document: Document) -> ResolvedNode:
@@ -95,10 +181,8 @@ def resolve_node(decl: NodeDecl, registry: NodeRegistry, document: Document) -> 
             continue
         port = spec.port(key)
         if port is None:
-            known = [p.name for p in spec.ports]
-            listing = f"its ports are {', '.join(known)}" if known else f"{spec.name} has no ports"
-            hint = did_you_mean(key, known + sorted(CONDITION_ATTRIBUTES | SPECIAL_ATTRIBUTES))
-            raise decl.error(f"unknown attribute '{key}' for {spec.name} ({listing}){hint}")
+            raise decl.error(f"unknown attribute '{key}' for {spec.name} ({_port_listing(spec)})"
+                             f"{_attribute_hint(key, spec)}")
         try:
             ports[key] = PortValue.from_text(port, value, f"{decl.source}:{decl.line}")
         except PortValueError as exc:

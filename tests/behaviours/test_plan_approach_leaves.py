@@ -91,9 +91,26 @@ def test_a_candidate_that_fails_is_named_once() -> None:
     assert message.startswith("candidate 0: ") and message.count("candidate 0") == 1, message
 
 
-#: the 5 cm cube's four footprint grasps, then the six grasps sampled from its fitted box that are not near-same
-#: as one of them (three top-down ones 15-20 mm off its centre, three from its sides)
-FOOTPRINT, SAMPLED = 4, 6
+def _counts() -> tuple[int, int]:
+    """The 5 cm cube's footprint grasps (four), then how many grasps sampled from its fitted box are not near-same
+    as one of them: the sampling draws from the run's GRASPS stream (``bt_grasp.seeds``; ``fake_cell``'s seed 0),
+    so the count is the draw's, computed here with the very calls PlanGrasp makes."""
+    from bt_grasp.perception.antipodal import AntipodalSettings, near_same, rank_grasps, sampled_grasps
+    from bt_grasp.perception.config import GraspSettings
+    from bt_grasp.seeds import RunSeeds, Stream
+
+    seed = RunSeeds(0).integer(Stream.GRASPS)
+    target, objects, settings = detection(), (detection(), detection(x_m=0.3, label="blue")), GraspSettings()
+    ranked = rank_grasps(target, objects, settings, seed=seed).candidates
+    more = sampled_grasps(target, objects, AntipodalSettings(pregrasp_offset_m=settings.pregrasp_offset_m), seed=seed)
+    return len(ranked), len([c for c in more if not any(near_same(c, r) for r in ranked)])
+
+
+FOOTPRINT, SAMPLED = _counts()
+
+
+def test_the_cube_has_four_footprint_grasps_and_some_sampled_ones() -> None:
+    assert FOOTPRINT == 4 and SAMPLED >= 1
 
 
 @pytest.mark.parametrize(
@@ -101,9 +118,9 @@ FOOTPRINT, SAMPLED = 4, 6
     [
         # every pre-grasp unreachable: no sampled grasp is reachable either, so only the footprint's are tried
         (99, (), FOOTPRINT, "IK_UNREACHABLE"),
-        (0, (PlanStatus.NO_PATH,) * 10, FOOTPRINT + SAMPLED, "PLAN_FAILED"),  # reachable, but no path to any
-        (0, (PlanStatus.GOAL_IN_COLLISION,) * 10, FOOTPRINT + SAMPLED, "PLAN_FAILED"),  # every pre-grasp collides
-        (0, (PlanStatus.IK_UNREACHABLE,) * 10, FOOTPRINT + SAMPLED, "IK_UNREACHABLE"),  # the planner's IK fails
+        (0, (PlanStatus.NO_PATH,) * 99, FOOTPRINT + SAMPLED, "PLAN_FAILED"),  # reachable, but no path to any
+        (0, (PlanStatus.GOAL_IN_COLLISION,) * 99, FOOTPRINT + SAMPLED, "PLAN_FAILED"),  # every pre-grasp collides
+        (0, (PlanStatus.IK_UNREACHABLE,) * 99, FOOTPRINT + SAMPLED, "IK_UNREACHABLE"),  # the planner's IK fails
     ],
 )
 def test_no_candidate_reachable_fails_after_trying_each(
@@ -174,7 +191,7 @@ def test_skip_past_the_footprint_s_grasps_goes_on_to_the_sampled_ones() -> None:
     tree, _, _ = _setup(PLAN, FakeKinematics(), FakePlanner())
     tree.root_blackboard.set("skip", FOOTPRINT + 1)
     assert _ticks(tree, 3) == ["SUCCESS"]
-    assert "candidate 0 of 10" in tree.find("PlanGrasp").feedback_message
+    assert f"candidate 0 of {FOOTPRINT + SAMPLED}" in tree.find("PlanGrasp").feedback_message
 
 
 def test_approach_executes_the_planned_path_without_planning_again() -> None:

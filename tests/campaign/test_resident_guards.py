@@ -234,9 +234,9 @@ def test_item2_a_folder_inside_one_others_can_rename_in_is_refused(tmp_path: Pat
     _one_sentence(proc, "writable by others without the sticky bit")
     assert list(folder.iterdir()) == []
     open_to_all.chmod(0o1777)  # sticky, as /tmp: others cannot rename what is not theirs
-    from bt_grasp.resident.protocol import _unsafe_ancestor
+    from bt_grasp.files.private_folder import unsafe_ancestor
 
-    assert _unsafe_ancestor(folder) is None
+    assert unsafe_ancestor(folder) is None
 
 
 @pytest.mark.parametrize("content", [b"", b"short"])
@@ -291,3 +291,90 @@ def test_resident_status_and_stop_commands(resident, tmp_path: Path) -> None:  #
     proc.wait(timeout=30)
     again = subprocess.run([*BT, "resident", "status"], capture_output=True, text=True, timeout=60, env=env)
     assert again.returncode == 1 and "no resident process" in again.stdout
+
+
+# -- issue 42, finding 3: a request that never finishes cannot wedge the resident --------------------------------
+def _hanging_request(tmp_path: Path) -> object:
+    """An episode request whose work never ends: its plugin (the user's own code, run by the resident) sleeps at
+    import. A FIFO the scene's mesh named did the same before files were read bounded."""
+    from bt_grasp.episode import EpisodeRequest
+
+    plugin = tmp_path / "sleepy_leaves.py"
+    plugin.write_text("import time\ntime.sleep(600)\n")
+    return EpisodeRequest(tree=REPO / "trees/pick.xml", scene=REPO / "scenes/tabletop.yaml", seed=0,
+                          leaves=(str(plugin),))
+
+
+def _in_thread(request: object) -> dict[str, object]:
+    import threading
+
+    from bt_grasp.resident.client import run_resident
+
+    out: dict[str, object] = {}
+
+    def go() -> None:
+        try:
+            out["result"] = run_resident(request)  # type: ignore[arg-type]
+        except Exception as exc:  # the client's own answer: what the test looks at
+            out["error"] = exc
+
+    thread = threading.Thread(target=go, daemon=True)
+    thread.start()
+    out["thread"] = thread
+    return out
+
+
+def test_finding3_status_and_stop_answer_while_a_request_hangs(resident, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    """A scene that hung its reader, given to `run --resident`, wedged the resident for good: `resident status`
+    and `resident stop` failed their handshake after 30 s; only a signal ended it."""
+    proc, _sock = resident
+    out = _in_thread(_hanging_request(tmp_path))
+    time.sleep(3)  # the request is running (its plugin sleeps)
+    env = _env(Path(os.environ["BT_GRASP_RESIDENT_DIR"]))
+    t0 = time.monotonic()
+    status = subprocess.run([*BT, "resident", "status"], capture_output=True, text=True, timeout=60, env=env)
+    assert status.returncode == 0 and str(proc.pid) in status.stdout, status.stderr
+    assert time.monotonic() - t0 < 15
+    stop = subprocess.run([*BT, "resident", "stop"], capture_output=True, text=True, timeout=60, env=env)
+    assert stop.returncode == 0 and str(proc.pid) in stop.stdout, stop.stderr
+    proc.wait(timeout=15)
+    out["thread"].join(30)  # type: ignore[attr-defined]
+    assert "error" in out and "ended without answering" in str(out["error"]), out
+
+
+def test_finding3_a_request_past_its_deadline_ends_the_resident_and_the_client_is_told(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    folder = tmp_path / "resident"
+    env = {**_env(folder), "BT_GRASP_RESIDENT_DEADLINE_S": "8"}
+    monkeypatch.setenv("BT_GRASP_RESIDENT_DIR", str(folder))
+    proc = subprocess.Popen([sys.executable, "-m", "bt_grasp.resident.server", "120"], env=env,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 120
+        while not (folder / "episode.sock").exists() and time.monotonic() < deadline and proc.poll() is None:
+            time.sleep(0.05)
+        out = _in_thread(_hanging_request(tmp_path))
+        out["thread"].join(90)  # type: ignore[attr-defined]
+        assert "error" in out and "deadline" in str(out["error"]), out
+        assert proc.wait(timeout=30) != 0  # it left: the next client starts a fresh one
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        proc.wait(timeout=30)
+
+
+def test_finding3_stop_ends_a_resident_that_does_not_answer_by_its_recorded_pid(resident) -> None:  # type: ignore[no-untyped-def]
+    import signal
+
+    proc, _sock = resident
+    os.kill(proc.pid, signal.SIGSTOP)  # alive, holding its lock and socket, answering nothing
+    try:
+        env = _env(Path(os.environ["BT_GRASP_RESIDENT_DIR"]))
+        t0 = time.monotonic()
+        stop = subprocess.run([*BT, "resident", "stop"], capture_output=True, text=True, timeout=60, env=env)
+        assert stop.returncode == 0 and str(proc.pid) in stop.stdout, stop.stderr
+        assert time.monotonic() - t0 < 30
+        proc.wait(timeout=15)
+    finally:
+        if proc.poll() is None:
+            os.kill(proc.pid, signal.SIGCONT)

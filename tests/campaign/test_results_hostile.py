@@ -96,3 +96,58 @@ def test_item3_a_results_file_with_thousands_of_groups_is_drawn_in_seconds(shape
     if shape != "retries_at_the_limit":
         assert "t2999" in page  # the figures draw MAX_GROUPS_DRAWN groups; the page's tables still list every one
         assert MAX_GROUPS_DRAWN < 3000
+
+
+# -- issue 42, finding 7 ------------------------------------------------------------------------------------------
+def _report(results: Path, out: Path, capsys: pytest.CaptureFixture[str]) -> tuple[int, list[str]]:
+    code = main(["eval", "report", str(results), "--out", str(out)])
+    err = capsys.readouterr().err
+    return code, [x for x in err.splitlines() if x.strip()]
+
+
+@pytest.mark.parametrize("time_s", [1.7e308, -1.7e308])
+def test_finding7_times_far_past_any_run_are_refused_in_one_sentence(time_s: float, tmp_path: Path,
+                                                                     capsys: pytest.CaptureFixture[str]) -> None:
+    """Two rows with sim_time_s of +-1.7e308 (finite, so accepted) ended in `ValueError: arange`."""
+    results = tmp_path / "times.jsonl"
+    results.write_bytes(_line() + b"\n" + _line(episode="e1", sim_time_s=time_s) + b"\n")
+    code, lines = _report(results, tmp_path / "r.html", capsys)
+    assert code == 2 and len(lines) == 1 and "times.jsonl:2:" in lines[0] and "sim_time_s" in lines[0], lines
+    assert not (tmp_path / "r.html").exists()
+
+
+@pytest.mark.parametrize(("column", "size"), [("failed_leaf", 100 << 10), ("tree", 100 << 10), ("retries", 100 << 10),
+                                              ("failed_leaf", 4 << 20)])
+def test_finding7_a_field_of_megabytes_is_refused_before_anything_is_drawn(
+        column: str, size: int, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Six complete rows, one naming a 100 MB leaf, took `eval report` past 13 GB and two minutes. A field over
+    4,096 characters is refused by its column, a row over 1 MB by its size."""
+    import time
+
+    huge = "L" * size
+    value: Any = {huge: 1} if column == "retries" else huge
+    results = tmp_path / "huge.jsonl"
+    results.write_bytes(b"\n".join([_line(episode=f"e{i}", seed=i) for i in range(5)]
+                                   + [_line(episode="e5", seed=5, **{column: value})]) + b"\n")
+    start = time.monotonic()
+    code, lines = _report(results, tmp_path / "r.html", capsys)
+    assert code == 2 and len(lines) == 1 and "huge.jsonl:6:" in lines[0], lines
+    assert (column in lines[0]) if size < 1 << 20 else ("a row of" in lines[0]), lines[0]
+    assert time.monotonic() - start < 10 and len(lines[0]) < 400
+
+
+def test_finding7_the_report_s_figure_folder_is_never_one_of_its_inputs(tmp_path: Path,
+                                                                        capsys: pytest.CaptureFixture[str]) -> None:
+    """Results saved as X_figures/success.png were overwritten by the report's own figure."""
+    figures = tmp_path / "X_figures"
+    figures.mkdir()
+    results = figures / "success.png"
+    content = _line() + b"\n"
+    results.write_bytes(content)
+    code, lines = _report(results, tmp_path / "X.html", capsys)
+    assert code == 2 and len(lines) == 1 and "X_figures" in lines[0], lines
+    assert results.read_bytes() == content and not (tmp_path / "X.html").exists()
+    other = tmp_path / "ok.jsonl"
+    other.write_bytes(content)
+    code = main(["eval", "report", str(other), "--out", str(tmp_path / "X.html"), "--compare", str(results)])
+    assert code == 2 and results.read_bytes() == content

@@ -49,7 +49,7 @@ def test_the_pages_commands_work(example: tuple[Path, Path], tmp_path: Path,
                  "--outcome", "WaitSettled=failure:NOT_SETTLED"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert (out["status"], out["ticks"]) == ("SUCCESS", 1)
-    tick_1 = [(step["path"].rsplit("/", 1)[-1], step["status"]) for step in out["walk"][0]["runs"][0]]
+    tick_1 = [(move["path"].rsplit("/", 1)[-1], move["to"]) for move in out["transitions"] if move["tick"] == 1]
     assert ("WaitSettled::4", "FAILURE") in tick_1 and ("FailureIs::5", "SUCCESS") in tick_1  # NOT_SETTLED matched
     assert "failure_reason" not in out["blackboard"]  # the tree succeeded: the recovered failure is cleared
     assert main(["tree", "run", "--dry", "--leaves", str(plugin), str(tree)]) == 0  # no set-up: all succeed

@@ -98,7 +98,7 @@ def test_the_installed_example_is_found_by_its_entry_point(venv_python: Path, tm
     assert dry.returncode == 0, dry.stdout + dry.stderr
     out = json.loads(dry.stdout)
     assert (out["status"], out["ticks"]) == ("SUCCESS", 4)
-    tick_1 = [(step["type"], step["status"]) for step in out["walk"][0]["runs"][0]]
+    tick_1 = [(move["type"], move["to"]) for move in out["transitions"] if move["tick"] == 1]
     assert ("TestNode", "FAILURE") in tick_1 and ("FailureIs", "SUCCESS") in tick_1  # matched GRIPPER_TOO_NARROW
     assert "failure_reason" not in out["blackboard"]  # the tree succeeded: the recovered failure is cleared
 

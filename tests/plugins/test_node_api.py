@@ -61,8 +61,10 @@ def test_every_shipped_node_is_a_class_declared_and_registered_with_the_node_api
 
 
 SPEC_RECORDS = ("NodeSpec(", "PortSpec(")
-#: the registry's own records and the engine's two internal node types (the SubTree stand-in, a test stand-in)
-RECORD_MODULES = {"tree/registry.py", "tree/declare.py", "tree/builder.py", "tree/substitution.py"}
+#: the registry's own records and the engine's internal node types (the SubTree stand-in, a test stand-in, BT.CPP's
+#: TestNode of a substitution rule), and the node types a TreeNodesModel declares (records made from Groot2's data)
+RECORD_MODULES = {"tree/registry.py", "tree/declare.py", "tree/builder.py", "tree/substitution.py", "tree/test_node.py",
+                  "tree/model_stand_ins.py"}
 
 
 def test_no_other_way_to_declare_a_node_is_left_in_the_package() -> None:

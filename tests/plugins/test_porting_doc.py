@@ -4,8 +4,10 @@ the page's test file under pytest, and its package's entry point as an installed
 
 from __future__ import annotations
 
+import json
 import os
 import re
+import shlex
 import subprocess
 import sys
 import tomllib
@@ -20,6 +22,10 @@ from bt_grasp.tree.plugins import load_file
 REPO = Path(__file__).resolve().parents[2]
 PAGE = REPO / "docs" / "porting-btcpp.md"
 NAV2 = REPO / "tests" / "data" / "nav2" / "navigate_w_replanning_time.xml"
+#: section 4's files: Nav2's recovery tree and TreeNodesModel, the plugin of its controls, BT.CPP's rules as recorded
+RECOVERY_FILES = [NAV2.parent / name for name in ("navigate_to_pose_w_replanning_and_recovery.xml",
+                                                  "nav2_tree_nodes.xml", "nav2_controls.py")]
+RULES = REPO / "tests" / "tree_conformance" / "rules" / "nav2_recoveries_in_one_tick.rules.json"
 
 
 def _blocks(language: str) -> list[str]:
@@ -37,6 +43,10 @@ def _file(name: str) -> str:
 def workdir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     folder = tmp_path_factory.mktemp("porting")
     (folder / NAV2.name).write_bytes(NAV2.read_bytes())
+    for path in RECOVERY_FILES:
+        (folder / path.name).write_bytes(path.read_bytes())
+    (rules,) = _blocks("json")
+    (folder / "nav2_rules.json").write_text(rules)
     (folder / "nav2_nodes.py").write_text(_file("nav2_nodes.py"))
     (folder / "test_nav2_nodes.py").write_text(_file("test_nav2_nodes.py"))
     (toml,) = _blocks("toml")
@@ -83,12 +93,18 @@ COMMANDS = _commands()
 
 
 def test_the_page_has_its_commands() -> None:
-    assert len(COMMANDS) == 4
+    assert len(COMMANDS) == 8
+
+
+def test_the_pages_rule_file_is_the_one_btcpp_ran() -> None:
+    """Section 4's rules are the file the differential corpus ran through BT.CPP 4.10 (its walk recorded beside it)."""
+    (rules,) = _blocks("json")
+    assert json.loads(rules) == json.loads(RULES.read_text())
 
 
 @pytest.mark.parametrize(("command", "expected"), COMMANDS, ids=[c for c, _ in COMMANDS])
 def test_every_command_prints_what_the_page_shows(command: str, expected: list[str], workdir: Path) -> None:
-    argv = command.split()
+    argv = shlex.split(command)
     assert argv[0] == "bt-grasp"
     env = dict(os.environ, COLUMNS="200")
     if "--plugin" in argv:  # the installed package (its dist-info on the path, as pip leaves it)

@@ -360,3 +360,76 @@ def test_weak_item_image_sizes_are_read_from_headers_only() -> None:
     assert image_size(_png_header(30_000, 20_000)) == (30_000, 20_000)
     for junk in (b"", b"GIF89a....", b"\xff\xd8\xff", b"\xff\xd8\x00\x00", b"\x89PNG\r\n\x1a\n\x00"):
         assert image_size(junk) is None
+
+
+# -- issue 42: what the files a log carries name in turn ----------------------------------------------------------
+SHORT_TREE = (b'<root BTCPP_format="4" main_tree_to_execute="T"><BehaviorTree ID="T"><AlwaysSuccess/>'
+              b"</BehaviorTree></root>")
+
+
+def _mesh_log(tmp_path: Path, texture: str, extra: dict[str, bytes] | None = None) -> Path:
+    """A log whose scene draws a mesh the log carries (beside its tree), whose material names ``texture``."""
+    box = (REPO / "tests/data/meshes/box.obj").read_text()
+    attachments = {"tree/t.xml": SHORT_TREE, "scene/s.yaml": _outside_scene(Path("../tree/part.obj")),
+                   "tree/part.obj": ("mtllib part.mtl\nusemtl m\nvt 0 0\nvt 1 0\nvt 1 1\n" + box).encode(),
+                   "tree/part.mtl": f"newmtl m\nKd 0.2 0.2 0.8\nmap_Kd {texture}\n".encode(), **(extra or {})}
+    return _log(tmp_path / "mesh.mcap", attachments, {"tree_file": "t.xml", "max_ticks": "3"})
+
+
+@pytest.mark.parametrize("outside", ["image", "fifo", "absent"])
+def test_finding1_resim_never_reads_a_texture_outside_the_log_nor_tells_whether_it_exists(
+        outside: str, tmp_path: Path) -> None:
+    """A crafted log carrying a mesh whose .mtl names an absolute image path outside the log made `replay
+    --resim` read that image and draw it into the new log's camera frames; the 'missing texture' warning also told
+    whether the outside file exists. Now the name is never opened: whatever is there (an image, a FIFO that would
+    block any reader, nothing), the re-simulation says the same."""
+    import struct
+    import zlib
+
+    secret = tmp_path / "private" / "secret.png"
+    secret.parent.mkdir()
+    if outside == "image":
+        row = b"\x00" + b"\xff\x00\x00" * 4
+        body = zlib.compress(row * 4)
+
+        def chunk(kind: bytes, data: bytes) -> bytes:
+            return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+        secret.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", 4, 4, 8, 2, 0, 0, 0))
+                           + chunk(b"IDAT", body) + chunk(b"IEND", b""))
+    elif outside == "fifo":
+        os.mkfifo(secret)
+    log = _mesh_log(tmp_path, str(secret))
+    proc = _resim(log, tmp_path, tmp_path)
+    assert "Traceback" not in proc.stderr and proc.returncode in (0, 1, 2), proc.stderr[-3000:]
+    said = proc.stderr.replace(str(tmp_path), "TMP")
+    assert "outside" in said and "missing" not in said, said
+    assert _resim_dirs(tmp_path) == []
+
+
+def test_finding2_resim_refuses_a_texture_bomb_the_log_carries(tmp_path: Path) -> None:
+    """A 1.2 MB log carrying a 431 KB PNG that declares 20000 x 20000 took 5.3 GB in `--resim` (or a RuntimeError
+    traceback under a 4 GB limit)."""
+    import resource
+    import struct
+    import zlib
+
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+    bomb = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", 20000, 20000, 8, 2, 0, 0, 0))
+            + chunk(b"IDAT", zlib.compress(b"\x00" * 60001 * 8, 9)) + chunk(b"IEND", b""))
+    log = _mesh_log(tmp_path, "bomb.png", {"tree/bomb.png": bomb})
+    private = tmp_path / "tmpdir"
+    private.mkdir()
+
+    def limited() -> None:
+        resource.setrlimit(resource.RLIMIT_AS, (4 << 30, 4 << 30))
+
+    proc = subprocess.run([sys.executable, "-m", "bt_grasp.cli.main", "replay", str(log), "--resim"],
+                          capture_output=True, text=True, timeout=300, cwd=tmp_path, preexec_fn=limited,
+                          env={**os.environ, "TMPDIR": str(private)})
+    lines = [line for line in proc.stderr.splitlines() if line.strip()]
+    assert proc.returncode == 2 and len(lines) == 1 and "Traceback" not in proc.stderr, proc.stderr[-3000:]
+    assert "bomb.png" in lines[0] and "20000 x 20000" in lines[0], lines[0]
+    assert _resim_dirs(tmp_path) == []

@@ -14,7 +14,7 @@ import pytest
 
 from bt_grasp.scene import mesh_cache
 from bt_grasp.scene.format import load_scene
-from bt_grasp.scene.mesh_textures import missing_textures
+from bt_grasp.scene.mesh_files import read_mesh_files
 
 from .conftest import MESHES
 
@@ -38,7 +38,8 @@ def test_a_pybullet_style_urdf_is_placed_by_its_turned_origins() -> None:
 
 def test_a_texture_image_left_behind_is_drawn_in_the_material_colour(caplog: pytest.LogCaptureFixture) -> None:
     path = MESHES / "vhacd_style" / "visual.obj"
-    assert [p.name for p in missing_textures(path, path.read_bytes())] == ["texture_map.png"]
+    found = read_mesh_files(path, path.read_bytes(), ValueError)  # type: ignore[arg-type]
+    assert [name for _ref, name in found.missing] == ["texture_map.png"]
     with caplog.at_level(logging.WARNING):
         (visual,) = load_scene(MESHES / "scene_vhacd_urdf.yaml").objects[0].geometry.visuals
         load_scene(MESHES / "scene_vhacd_urdf.yaml")

@@ -55,6 +55,11 @@ def test_run_dry_json(tree_file: Path, capsys: pytest.CaptureFixture[str]) -> No
     result = json.loads(out)
     # tick 1: retry loops 3 times in one tick, Sleep starts (RUNNING); ticks at 10 ms: Sleep ends at tick 4
     assert code == 0 and [tick["status"] for tick in result.pop("walk")] == ["RUNNING"] * 3 + ["SUCCESS"]
+    transitions = result.pop("transitions")
+    assert transitions[0] == {"tick": 1, "time_s": 0.0, "path": "Sequence::1", "type": "Sequence", "from": "IDLE",
+                              "to": "RUNNING"}
+    assert transitions[-1] == {"tick": 4, "time_s": 0.03, "path": "Sequence::1", "type": "Sequence",
+                               "from": "SUCCESS", "to": "IDLE"}
     assert result == {"status": "SUCCESS", "ticks": 4, "blackboard": {"attempts": 3, "message": "done"}}
 
 

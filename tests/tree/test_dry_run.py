@@ -1,13 +1,15 @@
 """`bt-grasp tree run --dry`: every robot leaf a stand-in with no flag, outcomes steering the walk into the
 recovery branches, a reproducible random mode, one sentence for a bad outcome; wildcards leave Script alone.
 
-The expected walks are written out tick by tick: each line is a node that returned during the tick (or the
-root execution), indented by depth, with the status it returned."""
+The expected walks are written out as BT.CPP's StdCoutLogger shows them: every status change of every node in order
+(``path FROM -> TO``), with the tick it happened in; a completed control resets its children to IDLE, a halt
+brings a RUNNING node back to IDLE."""
 
 from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -33,57 +35,96 @@ def walk_lines(out: str) -> list[str]:
     return lines[next(i for i, line in enumerate(lines) if line.startswith("tick 1:")) :]
 
 
-def statuses(run: list[dict[str, str]]) -> list[tuple[str, str]]:
-    return [(step["path"].rsplit("/", 1)[-1], step["status"]) for step in run]
+def moves(result: dict[str, Any], *, resets: bool = True) -> list[str]:
+    """The walk as ``path FROM -> TO`` (``resets=False``: without the changes back to IDLE)."""
+    return [f"{t['path']} {t['from']} -> {t['to']}" for t in result["transitions"] if resets or t["to"] != "IDLE"]
 
 
 def test_stack_runs_dry_with_no_other_flag(capsys: pytest.CaptureFixture[str]) -> None:
     code, out, err = run_cli(capsys, "tree", "run", "--dry", STACK)
     assert (code, err) == (0, "") and out.startswith("SUCCESS after 1 ticks\n")
     # every stand-in succeeds: PerceiveAll writes three boxes, the real SelectObject picks the blue one,
-    # IsGrasped (SUCCESS) skips the pick, PlaceOn succeeds, MoveHome too: one tick
-    assert walk_lines(out) == [
+    # IsGrasped (SUCCESS) skips the pick, PlaceOn succeeds, MoveHome too: one tick. Each line is a status
+    # change (StdCoutLogger's columns); a completed Sequence resets its children to IDLE, then itself ends
+    lines = walk_lines(out)
+    assert lines[:9] == [
         "tick 1: SUCCESS",
-        "  stack [Sequence] SUCCESS",
-        "    LoadCalibration::2 [LoadCalibration] SUCCESS",
-        "    Script::3 [Script] SUCCESS",
-        "    RetryUntilSuccessful::4 [RetryUntilSuccessful] SUCCESS",
-        "      pick_then_stack [Sequence] SUCCESS",
-        "        PerceiveAll::6 [PerceiveAll] SUCCESS",
-        "        SelectObject::7 [SelectObject] SUCCESS",
-        "        PickObject::8 [SubTree] SUCCESS",
-        "          holding_or_pick [Fallback] SUCCESS",
-        "            IsGrasped::10 [IsGrasped] SUCCESS",
-        "        PlaceOnObject::50 [SubTree] SUCCESS",
-        "          RetryUntilSuccessful::51 [RetryUntilSuccessful] SUCCESS",
-        "            place_on_or_recover [Fallback] SUCCESS",
-        "              place_on [Sequence] SUCCESS",
-        "                IsGrasped::54 [IsGrasped] SUCCESS",
-        "                PlaceOn::55 [PlaceOn] SUCCESS",
-        "    MoveHome::73 [MoveHome] SUCCESS",
+        "[0.000]: stack                     IDLE -> RUNNING",
+        "[0.000]: LoadCalibration::2        IDLE -> SUCCESS",
+        "[0.000]: Script::3                 IDLE -> SUCCESS",
+        "[0.000]: RetryUntilSuccessful::4   IDLE -> RUNNING",
+        "[0.000]: pick_then_stack           IDLE -> RUNNING",
+        "[0.000]: PerceiveAll::6            IDLE -> SUCCESS",
+        "[0.000]: SelectObject::7           IDLE -> SUCCESS",
+        "[0.000]: PickObject::8             IDLE -> RUNNING",
     ]
+    assert [line[9:] for line in lines[9:] if not line.endswith("-> IDLE")] == [
+        "PickObject::8/holding_or_pick IDLE -> RUNNING",
+        "PickObject::8/IsGrasped::10 IDLE -> SUCCESS",
+        "PickObject::8/holding_or_pick RUNNING -> SUCCESS",
+        "PickObject::8             RUNNING -> SUCCESS",
+        "PlaceOnObject::50         IDLE -> RUNNING",
+        "PlaceOnObject::50/RetryUntilSuccessful::51 IDLE -> RUNNING",
+        "PlaceOnObject::50/place_on_or_recover IDLE -> RUNNING",
+        "PlaceOnObject::50/place_on IDLE -> RUNNING",
+        "PlaceOnObject::50/IsGrasped::54 IDLE -> SUCCESS",
+        "PlaceOnObject::50/PlaceOn::55 IDLE -> SUCCESS",
+        "PlaceOnObject::50/place_on RUNNING -> SUCCESS",
+        "PlaceOnObject::50/place_on_or_recover RUNNING -> SUCCESS",
+        "PlaceOnObject::50/RetryUntilSuccessful::51 RUNNING -> SUCCESS",
+        "PlaceOnObject::50         RUNNING -> SUCCESS",
+        "pick_then_stack           RUNNING -> SUCCESS",
+        "RetryUntilSuccessful::4   RUNNING -> SUCCESS",
+        "MoveHome::73              IDLE -> SUCCESS",
+        "stack                     RUNNING -> SUCCESS",
+    ]
+    assert lines[-1] == "[0.000]: stack                     SUCCESS -> IDLE"  # BT.CPP's tickOnce resets the root
     assert "  support = Detection(label='blue'" in out  # the stand-in's detections reached SelectObject
 
 
-#: one attempt of pick_with_recovery.xml when PlanGrasp fails with IK_UNREACHABLE: the recovery branch
-#: chosen by the reason (next_candidate_ik) adds 1 to skip; ForceFailure makes the attempt fail again
+#: one attempt of pick_with_recovery.xml when PlanGrasp fails with IK_UNREACHABLE, from its Attempt SubTree's
+#: failure: the recovery branch chosen by the reason (next_candidate_ik: FailureIs matches, skip += 1) runs, every
+#: child it completed is reset to IDLE by its parent, and ForceFailure fails the attempt again
 ATTEMPT_IK = [
-    ("attempt_or_recover", "FAILURE"),
-    ("Attempt::6", "FAILURE"),
-    ("attempt", "FAILURE"),
-    ("OpenGripper::8", "SUCCESS"),
-    ("Perceive::9", "SUCCESS"),
-    ("PlanGrasp::10", "FAILURE"),
-    ("ForceFailure::14", "FAILURE"),
-    ("Recover::15", "SUCCESS"),
-    ("recover", "SUCCESS"),
-    ("by_reason", "SUCCESS"),
-    ("next_candidate", "FAILURE"),
-    ("FailureIs::19", "FAILURE"),  # PLAN_FAILED? no
-    ("next_candidate_ik", "SUCCESS"),
-    ("FailureIs::22", "SUCCESS"),  # IK_UNREACHABLE? yes
-    ("Script::23", "SUCCESS"),  # skip += 1
+    "Attempt::6/OpenGripper::8 IDLE -> SUCCESS",
+    "Attempt::6/Perceive::9 IDLE -> SUCCESS",
+    "Attempt::6/PlanGrasp::10 IDLE -> FAILURE",
+    "Attempt::6/OpenGripper::8 SUCCESS -> IDLE",
+    "Attempt::6/Perceive::9 SUCCESS -> IDLE",
+    "Attempt::6/PlanGrasp::10 FAILURE -> IDLE",
+    "Attempt::6/attempt RUNNING -> FAILURE",
+    "Attempt::6/attempt FAILURE -> IDLE",
+    "Attempt::6 RUNNING -> FAILURE",
+    "ForceFailure::14 IDLE -> RUNNING",
+    "Recover::15 IDLE -> RUNNING",
+    "Recover::15/recover IDLE -> RUNNING",
+    "Recover::15/by_reason IDLE -> RUNNING",
+    "Recover::15/next_candidate IDLE -> RUNNING",
+    "Recover::15/FailureIs::19 IDLE -> FAILURE",  # PLAN_FAILED? no
+    "Recover::15/FailureIs::19 FAILURE -> IDLE",
+    "Recover::15/next_candidate RUNNING -> FAILURE",
+    "Recover::15/next_candidate_ik IDLE -> RUNNING",
+    "Recover::15/FailureIs::22 IDLE -> SUCCESS",  # IK_UNREACHABLE? yes
+    "Recover::15/Script::23 IDLE -> SUCCESS",  # skip += 1
+    "Recover::15/FailureIs::22 SUCCESS -> IDLE",
+    "Recover::15/Script::23 SUCCESS -> IDLE",
+    "Recover::15/next_candidate_ik RUNNING -> SUCCESS",
+    "Recover::15/next_candidate FAILURE -> IDLE",  # the Fallback resets the child that failed before
+    "Recover::15/next_candidate_ik SUCCESS -> IDLE",
+    "Recover::15/by_reason RUNNING -> SUCCESS",
+    "Recover::15/by_reason SUCCESS -> IDLE",
+    "Recover::15/recover RUNNING -> SUCCESS",
+    "Recover::15/recover SUCCESS -> IDLE",
+    "Recover::15 RUNNING -> SUCCESS",
+    "Recover::15 SUCCESS -> IDLE",
+    "ForceFailure::14 RUNNING -> FAILURE",
+    "Attempt::6 FAILURE -> IDLE",
+    "ForceFailure::14 FAILURE -> IDLE",
+    "attempt_or_recover RUNNING -> FAILURE",
+    "attempt_or_recover FAILURE -> IDLE",  # RetryUntilSuccessful resets it and asks for a wake-up
 ]
+#: the start of each retried attempt (the root ran again within the tick)
+RETRY = ["attempt_or_recover IDLE -> RUNNING", "Attempt::6 IDLE -> RUNNING", "Attempt::6/attempt IDLE -> RUNNING"]
 
 
 def test_an_outcome_steers_pick_with_recovery_into_its_ik_branch(capsys: pytest.CaptureFixture[str]) -> None:
@@ -92,16 +133,15 @@ def test_an_outcome_steers_pick_with_recovery_into_its_ik_branch(capsys: pytest.
     )
     result = json.loads(out)
     assert (code, err, result["status"], result["ticks"]) == (1, "", "FAILURE", 1)
-    (tick,) = result["walk"]
-    # tick 1, five root executions (RetryUntilSuccessful wakes the root after each failed attempt):
-    # run 1 starts the tree; runs 2-4 retry; run 5 is the fifth failed attempt: the retry gives up
-    assert tick["status"] == "FAILURE" and len(tick["runs"]) == 5
-    first, *middle, last = tick["runs"]
-    start = [("pick", "RUNNING"), ("Script::2", "SUCCESS"), ("LoadCalibration::3", "SUCCESS")]
-    assert statuses(first) == [*start, ("RetryUntilSuccessful::4", "RUNNING"), *ATTEMPT_IK]
-    for run in middle:
-        assert statuses(run) == [("pick", "RUNNING"), ("RetryUntilSuccessful::4", "RUNNING"), *ATTEMPT_IK]
-    assert statuses(last) == [("pick", "FAILURE"), ("RetryUntilSuccessful::4", "FAILURE"), *ATTEMPT_IK]
+    # tick 1, five root executions: RetryUntilSuccessful wakes the root after each failed attempt; the fifth
+    # failure makes it give up
+    assert result["walk"] == [{"tick": 1, "status": "FAILURE", "runs": 5}]
+    start = ["pick IDLE -> RUNNING", "Script::2 IDLE -> SUCCESS", "LoadCalibration::3 IDLE -> SUCCESS",
+             "RetryUntilSuccessful::4 IDLE -> RUNNING"]
+    last = ["RetryUntilSuccessful::4 RUNNING -> FAILURE", "Script::2 SUCCESS -> IDLE",
+            "LoadCalibration::3 SUCCESS -> IDLE", "RetryUntilSuccessful::4 FAILURE -> IDLE", "pick RUNNING -> FAILURE",
+            "pick FAILURE -> IDLE"]
+    assert moves(result) == [*start, *(RETRY + ATTEMPT_IK) * 5, *last]
     # the stand-in wrote what a real PlanGrasp writes on failure
     bb = result["blackboard"]
     assert (bb["failure_reason"], bb["failed_leaf"], bb["skip"]) == ("IK_UNREACHABLE", "PlanGrasp", 5)
@@ -109,48 +149,55 @@ def test_an_outcome_steers_pick_with_recovery_into_its_ik_branch(capsys: pytest.
 
 def test_a_grasp_that_closes_on_nothing_walks_the_regrasp_branch(capsys: pytest.CaptureFixture[str]) -> None:
     code, out, _ = run_cli(capsys, "tree", "run", "--dry", RECOVERY, "--outcome", "Grasp=failure:GRASP_EMPTY", "--json")
-    (tick,) = json.loads(out)["walk"]
-    assert code == 1 and len(tick["runs"]) == 5
-    # run 1 after the attempt (OpenGripper, Perceive, PlanGrasp, Approach SUCCESS; Grasp FAILURE): the two
+    result = json.loads(out)
+    assert code == 1 and result["walk"] == [{"tick": 1, "status": "FAILURE", "runs": 5}]
+    # after the attempt (OpenGripper, Perceive, PlanGrasp, Approach SUCCESS; Grasp FAILURE): the two
     # next_candidate branches fail on their FailureIs, regrasp matches GRASP_EMPTY and its robot leaves run
-    recovery = statuses(tick["runs"][0])[statuses(tick["runs"][0]).index(("ForceFailure::14", "FAILURE")) :]
-    assert recovery == [
-        ("ForceFailure::14", "FAILURE"),
-        ("Recover::15", "SUCCESS"),
-        ("recover", "SUCCESS"),
-        ("by_reason", "SUCCESS"),
-        ("next_candidate", "FAILURE"),
-        ("FailureIs::19", "FAILURE"),
-        ("next_candidate_ik", "FAILURE"),
-        ("FailureIs::22", "FAILURE"),
-        ("regrasp", "SUCCESS"),
-        ("Fallback::25", "SUCCESS"),
-        ("FailureIs::26", "SUCCESS"),  # GRASP_EMPTY
-        ("OpenGripper::28", "SUCCESS"),
-        ("Retreat::29", "SUCCESS"),
-        ("MoveHome::30", "SUCCESS"),
-        ("Script::31", "SUCCESS"),  # skip := 0
+    walk = moves(result, resets=False)
+    first = walk[walk.index("ForceFailure::14 IDLE -> RUNNING"): walk.index("ForceFailure::14 RUNNING -> FAILURE")]
+    assert first == [
+        "ForceFailure::14 IDLE -> RUNNING",
+        "Recover::15 IDLE -> RUNNING",
+        "Recover::15/recover IDLE -> RUNNING",
+        "Recover::15/by_reason IDLE -> RUNNING",
+        "Recover::15/next_candidate IDLE -> RUNNING",
+        "Recover::15/FailureIs::19 IDLE -> FAILURE",
+        "Recover::15/next_candidate RUNNING -> FAILURE",
+        "Recover::15/next_candidate_ik IDLE -> RUNNING",
+        "Recover::15/FailureIs::22 IDLE -> FAILURE",
+        "Recover::15/next_candidate_ik RUNNING -> FAILURE",
+        "Recover::15/regrasp IDLE -> RUNNING",
+        "Recover::15/Fallback::25 IDLE -> RUNNING",
+        "Recover::15/FailureIs::26 IDLE -> SUCCESS",  # GRASP_EMPTY
+        "Recover::15/Fallback::25 RUNNING -> SUCCESS",
+        "Recover::15/OpenGripper::28 IDLE -> SUCCESS",
+        "Recover::15/Retreat::29 IDLE -> SUCCESS",
+        "Recover::15/MoveHome::30 IDLE -> SUCCESS",
+        "Recover::15/Script::31 IDLE -> SUCCESS",  # skip := 0
+        "Recover::15/regrasp RUNNING -> SUCCESS",
+        "Recover::15/by_reason RUNNING -> SUCCESS",
+        "Recover::15/recover RUNNING -> SUCCESS",
+        "Recover::15 RUNNING -> SUCCESS",
     ]
 
 
 def test_a_running_outcome_spreads_over_ticks(capsys: pytest.CaptureFixture[str]) -> None:
     code, out, _ = run_cli(capsys, "tree", "run", "--dry", RECOVERY, "--outcome", "Lift=running:2")
     lines = walk_lines(out)
-    # tick 1: the attempt runs up to Lift, which stays RUNNING; ticks 2 and 3 resume at Lift (the Sequence
-    # has memory of its running child): RUNNING, then SUCCESS
-    assert code == 0 and lines[0] == "tick 1: RUNNING" and lines[13] == "            Lift::13 [Lift] RUNNING"
-    resumed = [
-        "  pick [Sequence] {0}",
-        "    RetryUntilSuccessful::4 [RetryUntilSuccessful] {0}",
-        "      attempt_or_recover [Fallback] {0}",
-        "        Attempt::6 [SubTree] {0}",
-        "          attempt [Sequence] {0}",
-        "            Lift::13 [Lift] {0}",
+    # tick 1: the attempt runs up to Lift, which stays RUNNING; tick 2 changes nothing (every node on the way
+    # stays RUNNING: no line); at tick 3 (20 ms later) Lift succeeds and the Sequences complete upwards
+    assert code == 0 and lines[0] == "tick 1: RUNNING"
+    assert lines[13] == "[0.000]: Attempt::6/Lift::13       IDLE -> RUNNING"
+    assert [line for line in lines[14:] if not line.endswith("-> IDLE")] == [
+        "tick 2: RUNNING",
+        "tick 3: SUCCESS",
+        "[0.020]: Attempt::6/Lift::13       RUNNING -> SUCCESS",
+        "[0.020]: Attempt::6/attempt        RUNNING -> SUCCESS",
+        "[0.020]: Attempt::6                RUNNING -> SUCCESS",
+        "[0.020]: attempt_or_recover        RUNNING -> SUCCESS",
+        "[0.020]: RetryUntilSuccessful::4   RUNNING -> SUCCESS",
+        "[0.020]: pick                      RUNNING -> SUCCESS",
     ]
-    assert lines[14:] == [
-        "tick 2: RUNNING", *(line.format("RUNNING") for line in resumed),
-        "tick 3: SUCCESS", *(line.format("SUCCESS") for line in resumed),
-    ]  # fmt: skip
 
 
 def test_a_named_non_robot_leaf_becomes_a_stand_in_only_when_asked(capsys: pytest.CaptureFixture[str]) -> None:
@@ -159,7 +206,8 @@ def test_a_named_non_robot_leaf_becomes_a_stand_in_only_when_asked(capsys: pytes
     )
     result = json.loads(out)
     # SelectObject fails in each of the 3 attempts -> the retry gives up -> FAILURE, reason written
-    assert code == 1 and len(result["walk"][0]["runs"]) == 3
+    assert code == 1 and result["walk"][0]["runs"] == 3
+    assert moves(result).count("SelectObject::7 IDLE -> FAILURE") == 3
     assert (result["blackboard"]["failure_reason"], result["blackboard"]["failed_leaf"]) == (
         "NO_DETECTION",
         "SelectObject",
@@ -170,16 +218,10 @@ def test_random_mode_is_reproducible_and_explores_failures(capsys: pytest.Captur
     outs = [run_cli(capsys, "tree", "run", "--dry", RECOVERY, "--random", "3", "--json")[1] for _ in range(2)]
     assert outs[0] == outs[1]
     result = json.loads(outs[0])
-    failed = {
-        (step["type"], step["status"])
-        for tick in result["walk"]
-        for run in tick["runs"]
-        for step in run
-        if step["status"] == "FAILURE"
-    }
+    failed = {(move["type"], move["to"]) for move in result["transitions"] if move["to"] == "FAILURE"}
     assert len(failed) >= 2  # not the all-success walk: some robot leaves failed and recovery branches ran
     other = run_cli(capsys, "tree", "run", "--dry", RECOVERY, "--random", "4", "--json")[1]
-    assert json.loads(other)["walk"] != result["walk"]
+    assert json.loads(other)["transitions"] != result["transitions"]
 
 
 @pytest.mark.parametrize(
@@ -187,8 +229,9 @@ def test_random_mode_is_reproducible_and_explores_failures(capsys: pytest.Captur
     [
         (
             "Teleport=success",
-            "--outcome 'Teleport=success': 'Teleport' is no leaf type, name or path of this tree (robot leaves: "
-            "Approach, Grasp, Lift, LoadCalibration, MoveHome, OpenGripper, Perceive, PlanGrasp, Retreat)",
+            "--outcome 'Teleport=success': the name 'Teleport' matches no leaf of this tree (by type, name or full "
+            "path; stand-ins: Approach, Grasp, Lift, LoadCalibration, MoveHome, OpenGripper, Perceive, PlanGrasp, "
+            "Retreat)",
         ),
         (
             "PlanGrasp=failure:SLIPPED",
@@ -198,9 +241,14 @@ def test_random_mode_is_reproducible_and_explores_failures(capsys: pytest.Captur
         ("PlanGrasp=failure:NOPE", "--outcome 'PlanGrasp=failure:NOPE': NOPE is not a failure reason bt_grasp knows"),
         (
             "PlanGrasp=explode",
-            "--outcome 'PlanGrasp=explode': the outcome must be NAME=success, NAME=failure[:REASON] or NAME=running:N",
+            "--outcome 'PlanGrasp=explode': 'explode' is not an outcome: the syntax is NAME=OUTCOME[,OUTCOME...], "
+            "each success, failure[:REASON] or running:N[:failure[:REASON]]",
         ),
-        ("PlanGrasp", "--outcome 'PlanGrasp': is not NAME=success, NAME=failure[:REASON] or NAME=running:N"),
+        ("PlanGrasp", "--outcome 'PlanGrasp': is not NAME=OUTCOME[,OUTCOME...], each success, failure[:REASON] or "
+                      "running:N[:failure[:REASON]]"),
+        ("Plan*=failure", "--outcome 'Plan*=failure': the pattern 'Plan*' matches no leaf of this tree (by type, name "
+                          "or full path; stand-ins: Approach, Grasp, Lift, LoadCalibration, MoveHome, OpenGripper, "
+                          "Perceive, PlanGrasp, Retreat)"),
     ],
 )
 def test_a_bad_outcome_is_one_sentence_and_exit_2(
@@ -214,7 +262,7 @@ def test_a_wildcard_substitutes_robot_leaves_only_unless_a_kind_is_named() -> No
     xml = '<Sequence><Script code="x := 1"/><Arm name="Move"/><Stub name="S"/></Sequence>'
     wild = Harness(xml, substitutions={"*": "AlwaysFailure"})
     # the Script ran as written and the Stub was built (never ticked: the Sequence stopped at the robot leaf
-    # Arm, the only node the wildcard replaced)
+    # Arm, the only node the wildcard replaced: Stub is bt_grasp's own here, not a plugin's or a model's)
     assert wild.tick() == "FAILURE" and wild.bb["x"] == 1 and wild["S"].ticks == 0
     assert [wild.node(name).bt_type for name in ("Script::2", "Move", "S")] == ["Script", "AlwaysFailure", "Stub"]
     named = Harness(xml, substitutions={"Script": "AlwaysFailure"})

@@ -70,12 +70,21 @@ def test_a_plugin_leaf_told_to_fail_fails_with_its_first_declared_reason(
     result = json.loads(out)
     assert result["blackboard"]["handled"] == "overload"  # FailureIs matched SCALE_OVERLOAD: the recovery ran
     assert "failure_reason" not in result["blackboard"]  # the tree succeeded: the reason is cleared
-    # tick 1, in tree order: the leaf failed with its reason, the Fallback's second child handled it
-    #   Fallback SUCCESS / CheckWeight FAILURE / overload SUCCESS / FailureIs SUCCESS / SetBlackboard SUCCESS
-    assert [(w["tick"], [(s["path"].rsplit("/", 1)[-1], s["status"]) for s in w["runs"][0]])
-            for w in result["walk"]] == [(1, [
-                ("Fallback::1", "SUCCESS"), ("CheckWeight::2", "FAILURE"), ("overload", "SUCCESS"),
-                ("FailureIs::4", "SUCCESS"), ("SetBlackboard::5", "SUCCESS")])]
+    # tick 1, in order: the leaf failed with its reason, the Fallback's second child handled it
+    assert [(t["tick"], t["path"], t["from"], t["to"]) for t in result["transitions"]] == [
+        (1, "Fallback::1", "IDLE", "RUNNING"),
+        (1, "CheckWeight::2", "IDLE", "FAILURE"),
+        (1, "overload", "IDLE", "RUNNING"),
+        (1, "FailureIs::4", "IDLE", "SUCCESS"),
+        (1, "SetBlackboard::5", "IDLE", "SUCCESS"),
+        (1, "FailureIs::4", "SUCCESS", "IDLE"),
+        (1, "SetBlackboard::5", "SUCCESS", "IDLE"),
+        (1, "overload", "RUNNING", "SUCCESS"),
+        (1, "CheckWeight::2", "FAILURE", "IDLE"),
+        (1, "overload", "SUCCESS", "IDLE"),
+        (1, "Fallback::1", "RUNNING", "SUCCESS"),
+        (1, "Fallback::1", "SUCCESS", "IDLE"),
+    ]
 
 
 def test_a_reason_the_plugin_leaf_does_not_declare_is_refused(

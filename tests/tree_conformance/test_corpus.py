@@ -3,8 +3,10 @@ itself did with it (recorded by tools/btcpp_diff/record.py into NAME.btcpp.json 
 
 Compared: the final status, the root blackboard (typed: int, real, str, bool), and for trees without
 wall-clock timers also the tick count, the root status of every tick, how many times each tick executed
-the root (wake-up re-runs), every node's status after each tick, the nodes' full paths, and each test
-leaf's ticks, starts and halts. Errors compare by phase (refused at load, or failed while ticking).
+the root (wake-up re-runs), every node's status after each tick, the nodes' full paths, each test
+leaf's ticks, starts and halts, and every status change of every node in order with its tick, halts to IDLE
+included (what BT.CPP's StatusChangeLogger, and so StdCoutLogger and Groot2's log, receive). Errors compare by
+phase (refused at load, or failed while ticking).
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ from record import corpus_trees, directives  # noqa: E402
 
 TREES = corpus_trees(CORPUS)
 ALWAYS = ("status", "blackboard")
-TICKED = ("ticks", "statuses", "runs", "nodes", "paths", "leaves")
+TICKED = ("ticks", "statuses", "runs", "nodes", "paths", "leaves", "transitions")
 
 
 def _phase(result: dict[str, Any]) -> str | None:

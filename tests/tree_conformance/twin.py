@@ -12,6 +12,7 @@ from bt_grasp.errors import TreeFileError
 from bt_grasp.tree import BtNode, load_tree
 from bt_grasp.tree.blackboard import EMPTY
 from bt_grasp.tree.exceptions import TreeRuntimeError
+from bt_grasp.tree.node import BtStatus
 
 from .leaves import Traces, conformance_registry
 
@@ -53,16 +54,25 @@ def run_tree(path: Path, max_ticks: int = 20, period_ms: int = 0) -> dict[str, A
     except TreeFileError as exc:
         return {"status": "ERROR", "error": {"phase": "load", "message": str(exc)}}
     nodes = _preorder(tree.root)[1:]
+    transitions: list[list[Any]] = []
+    ticks = 0
+
+    def changed(node: BtNode, previous: BtStatus, new: BtStatus) -> None:
+        transitions.append([ticks, node.bt_path, previous.value, new.value])
+
+    for node in tree.nodes():
+        node.bt_on_change = changed
     statuses: list[str] = []
     runs: list[int] = []
     snapshots: list[str] = []
     error = None
     status = "IDLE"
-    ticks = 0
     try:
         while ticks < max_ticks:
             ticks += 1
             status = tree.tick().value
+            if status in ("SUCCESS", "FAILURE"):  # BT.CPP's tickOnce resets a completed root at once
+                transitions.append([ticks, tree.root.bt_path, status, "IDLE"])
             statuses.append(status)
             runs.append(tree.runs)
             snapshots.append("".join(_LETTER[n.bt_state.value] for n in nodes))
@@ -85,5 +95,6 @@ def run_tree(path: Path, max_ticks: int = 20, period_ms: int = 0) -> dict[str, A
         "paths": [n.bt_path for n in nodes],
         "blackboard": blackboard,
         "leaves": traces.as_json(),
+        "transitions": transitions,
         "error": error,
     }

@@ -94,6 +94,16 @@ class IncludeDecl:
     line: int = 0
 
 
+@dataclass(frozen=True)
+class IncludeLink:
+    """One ``<include path>`` as it was resolved: the including file (as displayed), the path as written, and
+    the file read for it (as displayed). A log records these so that ``replay --resim`` reads its own copies."""
+
+    source: str
+    path: str
+    resolved: str
+
+
 @dataclass
 class Document:
     """One file's declarations, or (after includes are merged) all of them.
@@ -105,6 +115,7 @@ class Document:
         models: TreeNodesModel entries
         includes: ``<include path>`` entries as written
         texts: every file read, by path (for recordings)
+        include_links: every include as it was resolved (which file was read for it), in reading order
         format_version: the ``BTCPP_format`` attribute (None when absent)
     """
 
@@ -114,6 +125,7 @@ class Document:
     models: list[ModelDecl] = field(default_factory=list)
     includes: list[IncludeDecl] = field(default_factory=list)
     texts: dict[str, str] = field(default_factory=dict)
+    include_links: list[IncludeLink] = field(default_factory=list)
     format_version: str | None = "4"
     root_line: int = 1
 

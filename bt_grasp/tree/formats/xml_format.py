@@ -29,7 +29,9 @@ from bt_grasp.tree.formats.document import (
 
 logger = logging.getLogger(__name__)
 
-_PORT_TAGS = {"input_port": "input", "output_port": "output", "inout_port": "inout"}
+#: a model's port elements; ``bidirectional_port`` is Groot 1's name for ``inout_port`` (Nav2's nav2_tree_nodes.xml
+#: still writes it; BT.CPP reads only SubTree models and so never minds)
+_PORT_TAGS = {"input_port": "input", "output_port": "output", "inout_port": "inout", "bidirectional_port": "inout"}
 _MODEL_TAGS = EXPLICIT_TAGS | {"SubTree"}
 
 
