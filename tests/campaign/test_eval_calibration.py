@@ -5,7 +5,6 @@ Episodes run in-process on the stand-in backend (no simulator)."""
 
 from __future__ import annotations
 
-import shutil
 from pathlib import Path
 
 import pytest
@@ -29,10 +28,13 @@ def in_process(monkeypatch: pytest.MonkeyPatch) -> None:
 
 @pytest.fixture
 def uncalibrated(tmp_path: Path) -> Path:
-    """The tabletop scene copied alone into a folder of one's own: the calibration file it names is not beside it."""
+    """The tabletop scene in a folder of one's own, naming a calibration file that is nowhere: not beside it, not on
+    BT_GRASP_CALIBRATION_PATH, not among the shipped ones (the shipped scene's own name would be found there)."""
     scene = tmp_path / "mine" / "tabletop.yaml"
     scene.parent.mkdir()
-    shutil.copy(REPO / "scenes/tabletop.yaml", scene)
+    text = (REPO / "scenes/tabletop.yaml").read_text()
+    assert "calibration: tabletop.calibration.yaml" in text
+    scene.write_text(text.replace("calibration: tabletop.calibration.yaml", "calibration: my.calibration.yaml"))
     return scene
 
 
@@ -55,7 +57,7 @@ def test_a_refused_eval_run_leaves_nothing_and_calibration_is_an_option(
             "--keep-logs", "none", "--no-parquet"]
     code, _, err = _cli(capsys, *base)
     sentence = _one_sentence(err)
-    assert code == 2 and "tabletop.calibration.yaml" in sentence and "--calibration FILE" in sentence, sentence
+    assert code == 2 and "my.calibration.yaml" in sentence and "--calibration FILE" in sentence, sentence
     assert not out.exists(), sorted(p.name for p in out.rglob("*"))  # no OUT/NAME.campaign.yaml, no folder
     # what the sentence says to do works
     code, stdout, err = _cli(capsys, *base, "--calibration", str(CALIBRATION))
