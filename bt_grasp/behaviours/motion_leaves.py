@@ -276,7 +276,9 @@ class PlanGrasp(RobotLeaf):
                 self.feedback_message = f"candidate {rank} of {self._total}: {plan.candidate.reason}"
                 return Status.SUCCESS
             if self._next < len(self._candidates) or self._extend():
-                self.feedback_message = f"candidate {rank}: {self._last.sentence}"
+                sentence = self._last.sentence  # most already name their candidate: never "candidate 0: candidate 0:"
+                named = sentence.startswith("candidate ")
+                self.feedback_message = sentence if named else f"candidate {rank}: {sentence}"
                 return Status.RUNNING
         # a planner failure other than IK counts as PLAN_FAILED here, as before the typed seams
         unreachable = self._last.reason is FailureReason.IK_UNREACHABLE
