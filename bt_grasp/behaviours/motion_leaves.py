@@ -293,7 +293,9 @@ class PlanGrasp(RobotLeaf):
                                          f"{self._screened_text()}): {plan.candidate.reason}")
                 return Status.SUCCESS
             if self._next < len(self._candidates) or self._extend():
-                self.feedback_message = f"candidate {rank}: {self._last.sentence}"
+                sentence = self._last.sentence  # most already name their candidate: never "candidate 0: candidate 0:"
+                named = sentence.startswith("candidate ")
+                self.feedback_message = sentence if named else f"candidate {rank}: {sentence}"
                 return Status.RUNNING
         if self._tried == 0 and self._excluded:
             return self._all_excluded()

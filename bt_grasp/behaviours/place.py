@@ -40,7 +40,7 @@ from bt_grasp.behaviours.motion_leaves import (
 from bt_grasp.behaviours.objects import is_detection, object_list
 from bt_grasp.behaviours.pose import Pose
 from bt_grasp.behaviours.reasons import MOTION_REASONS, FailureReason, ReasonLike, reason_name
-from bt_grasp.geometry import Mat4, inv, make_T, rot_z
+from bt_grasp.geometry import Mat4, inv, make_T, rot_z, signed_mm
 from bt_grasp.motion.place_orientation import PlaceYaw, footprint_kind, footprint_turns_rad, place_yaws
 from bt_grasp.robot_description import MAX_OPENING_M, TCP_LINK
 from bt_grasp.scene.format import Scene, place_xy_problem
@@ -480,7 +480,7 @@ class _PlaceBase(RobotLeaf):
                 touched = self.job.current == "descend" and outcome.reason is FailureReason.TRACKING_ERROR
                 if self.job.current == "touch down":
                     # stalled on the surface, or no straight line down from the release pose: open there
-                    self.feedback_message = f"touch down ended {above * 1e3:+.0f} mm from the release pose"
+                    self.feedback_message = f"touch down ended {signed_mm(above, 'above', 'below')} the release pose"
                 elif touched and above <= self.ports.require("contact_window", float):
                     self.feedback_message = f"touched down {above * 1e3:.0f} mm above the target"
                 elif touched:

@@ -97,6 +97,7 @@ def run_task_bench(tasks: Sequence[Task], seeds: int, first_seed: int = 0, root:
                    progress: Progress | None = None) -> list[TaskFigures]:
     """Run every task on seeds ``first_seed .. first_seed + seeds - 1``; returns each task's figures."""
     from bt_grasp.episode import EpisodeRequest, WarmWorlds, run_episode
+    from bt_grasp.episode.request import run_blackboard
 
     out = []
     for task in tasks:
@@ -109,7 +110,7 @@ def run_task_bench(tasks: Sequence[Task], seeds: int, first_seed: int = 0, root:
         for seed in range(first_seed, first_seed + seeds):
             t0 = time.perf_counter()
             result = run_episode(EpisodeRequest(tree=tree, scene=scene, seed=seed,
-                                                blackboard={"color": "red", "lift_height": 0.15},
+                                                blackboard=run_blackboard(),  # `bt-grasp run`'s
                                                 max_ticks=task.max_ticks,
                                                 also_judge=() if strict is None else (strict,)), worlds=worlds)
             if strict is not None and figures.successes_strict is not None:

@@ -85,7 +85,7 @@ def load_inputs(request: EpisodeRequest) -> Inputs:
 
     scene = load_scene(request.scene)
     goal = request.goal if request.goal is not None else goal_for_run(scene, request.blackboard)
-    _check_goal(goal, request, scene)
+    check_goal(goal, scene, request.scene, given=request.goal is not None)
     from bt_grasp.perception.calibration_file import calibration_for_scene
 
     # --calibration, else the file the scene names beside it; another mount or camera pose is bad input
@@ -117,17 +117,20 @@ def _check_log_path(log_path: Path | None, inputs: tuple[Path | None, ...] = ())
     check_output_file(log_path, "--log", example="run.mcap", inputs=inputs)  # never over the run's own inputs
 
 
-def _check_goal(goal: Goal, request: EpisodeRequest, scene: Scene) -> None:
+def check_goal(goal: Goal, scene: Scene, scene_path: Path, *, given: bool) -> None:
+    """The judge can check ``goal`` on ``scene`` (read from ``scene_path``): InputError (naming ``--goal`` when the
+    goal was ``given``, else the scene) when no checker exists, or a pick's colour is no object's colour.
+    ``bt-grasp run`` and ``scene validate`` ask this of the same goal."""
     from bt_grasp.sim.judge import cannot_judge
 
     problem = cannot_judge(goal)
     if problem is not None:
-        raise InputError(request.scene if request.goal is None else "--goal", problem)
+        raise InputError("--goal" if given else scene_path, problem)
     if isinstance(goal, PickGoal) and goal.color and goal.object is None:
         colors = sorted({str(o.color) for o in scene.objects if o.color is not None})
         if goal.color not in colors:
             raise InputError("--color", f"the pick goal's colour '{goal.color}' is not the colour of any object "
-                                        f"of {request.scene} (colours there: {', '.join(colors) or 'none named'}); "
+                                        f"of {scene_path} (colours there: {', '.join(colors) or 'none named'}); "
                                         "give --color '' to pick any object")
 
 
@@ -196,6 +199,7 @@ class Episode:
         observers: list[TickCallback] = []
         extras = None
         injector: Injector | None = None
+        ticked = [0]  # the last tick started (an interrupted run's result says where it stopped)
         try:
             cell = self._assemble(recorder, controller)
             injector = self._injector
@@ -215,8 +219,6 @@ class Episode:
             # the judge reads contacts every tick only for goals judged by placement (~0.1 ms a tick otherwise
             # spent on a pick, `bt-grasp bench budget`); reading changes nothing in the world
             observe = judge.observe if judge.places(self.inputs.goal) else None
-
-            ticked = [0]  # the last tick started (an interrupted run's result says where it stopped)
 
             def tick_hook(tick: int, tree: LoadedTree) -> None:
                 ticked[0] = tick
@@ -288,6 +290,7 @@ class Episode:
                 log=str(request.log) if request.log else None,
                 seed=request.seed,
                 faults_fired=injector.fired if injector is not None else 0,
+                faults=injector.report() if injector is not None else (),
                 goal=self.inputs.goal,
                 planning=self.planning.stats(),
             )
@@ -299,7 +302,7 @@ class Episode:
                 recorder.write_result(world.now_ns(), _logged_result(result.to_json(), request.log_epoch_ns))
         finally:
             if controller is not None:
-                controller.finish()
+                controller.finish(ticked[0])  # the view's last tick: the result's
             if injector is not None:
                 injector.close()  # a reused world starts the next episode as built
             if recorder is not None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from bt_grasp.episode.instruments import PlanningStats
+from bt_grasp.faults.firing import FaultFiring
 from bt_grasp.files.json_types import JsonObject, JsonValue
 from bt_grasp.scene.goals import Goal
 
@@ -97,6 +98,9 @@ class EpisodeResult:
     failure_chain: tuple[ChainStep, ...] = ()
     #: the verdicts on the request's ``also_judge`` goals, in order (they decide nothing)
     also_judged: tuple[Judged, ...] = ()
+    #: every fault that fired, in order: when, armed by which leaf, the object a push hit and whether the tree
+    #: ever touched it (``FaultFiring.missed``: a fault that tested nothing the tree did)
+    faults: tuple[FaultFiring, ...] = ()
     #: wall time spent preparing the episode (inputs loaded, world built, tree wired) before its first tick;
     #: set by whoever prepared it (a campaign worker), 0 when nobody measured it. Not in ``to_json``: the log's
     #: result holds no wall-clock figure of preparation.
@@ -112,7 +116,7 @@ class EpisodeResult:
 
     def to_json(self) -> JsonObject:
         retries: dict[str, JsonValue] = {k: v for k, v in self.retries.items()}
-        return {
+        out: JsonObject = {
             "success": self.success,
             "tree_status": self.tree_status,
             "reason": self.reason,
@@ -131,6 +135,9 @@ class EpisodeResult:
             "faults_fired": self.faults_fired,
             "planning": {k: v for k, v in self.planning.to_json().items()},
         }
+        if self.faults:  # only when one fired: a run without faults records what it always did
+            out["faults"] = [f.to_json() for f in self.faults]
+        return out
 
 
 #: ``reason`` of a run a Ctrl-C ended (its result is not judged: ``success`` is null)

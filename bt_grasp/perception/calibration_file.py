@@ -233,12 +233,17 @@ def mismatch_with_mount(calibration: CalibrationFile, scene: Scene) -> str | Non
     return None
 
 
-def calibration_for_scene(scene: Scene, scene_path: str | Path, override: str | Path | None
-                          ) -> tuple[Path | None, CalibrationFile | None]:
+#: how a command line gives a calibration of its own (``run``, ``eval run``, ``bench pick``)
+CALIBRATION_OPTION = "pass --calibration FILE"
+
+
+def calibration_for_scene(scene: Scene, scene_path: str | Path, override: str | Path | None,
+                          *, give_one: str = CALIBRATION_OPTION) -> tuple[Path | None, CalibrationFile | None]:
     """The calibration a run uses: ``override`` (the ``--calibration`` flag) or the file the scene names, looked
     for beside the scene file, then in each folder of ``BT_GRASP_CALIBRATION_PATH``, then among the shipped scenes'
     calibrations (``bt_grasp/files/search_path.py``). Bad input (missing, unreadable, made for another mount or
-    camera pose) is a ConfigError naming the file and line; no calibration at all is (None, None)."""
+    camera pose) is a ConfigError naming the file and line; no calibration at all is (None, None). ``give_one``:
+    how the caller's user gives a calibration instead (a campaign file has a key for it, not a flag)."""
     if override is not None:
         path = Path(override)
         calibration = load_calibration(path, mount=scene.camera.mount)
@@ -251,7 +256,7 @@ def calibration_for_scene(scene: Scene, scene_path: str | Path, override: str | 
             beside = Path(scene_path).parent / scene.calibration
             raise ConfigError(scene_path, f"the calibration file '{scene.calibration}' the scene names does not "
                               f"exist ({looked_in(found, CALIBRATION_PATH_VARIABLE)}); make it with `bt-grasp "
-                              f"calibrate --scene {scene_path} --out {beside}` or pass --calibration FILE", where=where)
+                              f"calibrate --scene {scene_path} --out {beside}` or {give_one}", where=where)
         path = found.path
         calibration = load_calibration(path, mount=scene.camera.mount)
     else:

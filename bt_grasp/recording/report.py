@@ -294,14 +294,16 @@ def build_report(run: RunLog, html_path: Path, png_dir: Path | None = None, repe
     bars = _bars(run, labels)
     shown = {bar.row for bar in bars}
     rows = [row for row in rows if row in shown]  # leaves that never ran would be empty rows
+    fault_marks = _fault_marks(run)
     report.figures["gantt"] = report_figures.gantt(
-        rows, bars, [(f.stamp_ns * 1e-9, labels[f.uid]) for f in failures if f.uid in labels], _fault_marks(run))
+        rows, bars, [(f.stamp_ns * 1e-9, labels[f.uid]) for f in failures if f.uid in labels], fault_marks)
     fail_s = [f.stamp_ns * 1e-9 for f in failures]
     t, Q, width, names = _joint_series(run)
     if t.size:
-        report.figures["joints"] = report_figures.series(t, Q, names, "Joint angles", "rad", fail_s)
+        report.figures["joints"] = report_figures.series(t, Q, names, "Joint angles", "rad", fail_s, fault_marks)
         if np.isfinite(width).any():
-            report.figures["gripper"] = report_figures.series(t, width, ["opening"], "Gripper opening", "m", fail_s)
+            report.figures["gripper"] = report_figures.series(t, width, ["opening"], "Gripper opening", "m", fail_s,
+                                                              fault_marks)
     frames = _frames(run)
     for i, (_, png) in enumerate(frames):
         report.figures[f"frame_{i:02d}"] = png

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bt_grasp.geometry import Mat4
+from bt_grasp.geometry import Mat4, signed_mm
 from bt_grasp.interfaces import Mount
 from bt_grasp.scene.fixtures import Container
 from bt_grasp.scene.goals import ClearGoal, Goal, PickGoal, PlaceGoal, SortGoal, StackGoal
@@ -220,7 +220,7 @@ def _check_place(judge: Judge, goal: Goal) -> Verdict:
     bottom = extent.bottom_z_m - surface
     at = off <= goal.tolerance_m and abs(bottom) <= 0.005
     detail = (f"{goal.object} {off * 100:.1f} cm from the target (tolerance {goal.tolerance_m * 100:.1f} cm), "
-              f"its bottom {bottom * 1000:.0f} mm above the target surface")
+              f"its bottom {signed_mm(bottom, 'above', 'below')} the target surface")
     conditions = [Condition(Criterion.TARGET_EXISTS, True, goal.object),
                   *_placed_conditions(judge, [p], upright=goal.upright), Condition(Criterion.AT_TARGET, at, detail)]
     return Verdict(goal, tuple(conditions), goal.object)
@@ -237,7 +237,8 @@ def _check_stack(judge: Judge, goal: Goal) -> Verdict:
     dz = upper_at.bottom_z_m - lower_at.top_z_m
     ok = off <= goal.xy_tolerance_m and abs(dz) <= goal.z_tolerance_m and lower.upright
     detail = (f"{goal.object} {off * 100:.1f} cm off {goal.on}'s centre (at most {goal.xy_tolerance_m * 100:.0f}), "
-              f"{dz * 1000:+.0f} mm from resting on its top (at most {goal.z_tolerance_m * 1000:.0f})"
+              f"its bottom {signed_mm(dz, 'above', 'below')} {goal.on}'s top (at most "
+              f"{goal.z_tolerance_m * 1000:.0f} mm)"
               + ("" if lower.upright else f", {goal.on} tilts {lower.tilt_deg:.0f} deg"))
     conditions = [Condition(Criterion.TARGET_EXISTS, True, f"{goal.object} on {goal.on}"),
                   *_placed_conditions(judge, [top], upright=goal.upright), Condition(Criterion.ON_TOP, ok, detail)]
