@@ -34,7 +34,8 @@ demo: setup
 test: setup browser
 	$(BIN)/ruff check bt_grasp tests tools
 	$(BIN)/mypy
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n 2 -m "not serial" --durations=15
+	$(BIN)/python -m pytest -q -m serial
 
 lint: setup
 	$(BIN)/ruff check bt_grasp tests tools

@@ -92,3 +92,10 @@ def convex_hull_xy(points: NDArray[np.float64], decimals: int = 9) -> NDArray[np
 
     lower, upper = half(pts), half(pts[::-1])
     return np.array(lower[:-1] + upper[:-1], dtype=float)
+
+
+def signed_mm(value_m: float, positive: str, negative: str, decimals: int = 0) -> str:
+    """A signed distance in words, rounded to ``decimals`` of a millimetre: ``"3 mm above"``, ``"2 mm below"``,
+    ``"0 mm above"`` (never ``"-0 mm"``, never a sign the reader must decode)."""
+    mm = round(float(value_m) * 1000.0, decimals)
+    return f"{abs(mm):.{decimals}f} mm {negative if mm < 0 else positive}"

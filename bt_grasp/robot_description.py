@@ -126,8 +126,14 @@ def robot_urdf_path() -> Path:
     cache is trusted: a file in a shared or working folder could be garbage, a FIFO or someone else's robot (with
     ``XDG_CACHE_HOME`` empty it was written to ``./bt_grasp/`` in the working folder, and a file found there was
     used as it was). A forked child inherits the descriptor, so the path works there too."""
-    data = robot_urdf_text().encode()
-    fd = os.memfd_create("ur5_bt_grasp.urdf", os.MFD_ALLOW_SEALING)  # not CLOEXEC: forked workers share it
+    return sealed_urdf_path("ur5_bt_grasp.urdf", robot_urdf_text())
+
+
+def sealed_urdf_path(name: str, text: str) -> Path:
+    """``text`` as an anonymous, sealed in-memory file of this process (see :func:`robot_urdf_path`); cache the
+    result: each call makes a new descriptor."""
+    data = text.encode()
+    fd = os.memfd_create(name, os.MFD_ALLOW_SEALING)  # not CLOEXEC: forked workers share it
     view = memoryview(data)
     while view:
         view = view[os.write(fd, view):]

@@ -21,7 +21,7 @@ def _docs_table() -> dict[str, str]:
     """docs/campaigns.md's table: bench command -> kind."""
     text = (REPO / "docs/campaigns.md").read_text()
     section = text[text.index("### Why each `bench` command is not an evaluation entry point"):]
-    rows = re.findall(r"^\| `bench (\w+)` \| ([\w -]+) \|", section, re.M)
+    rows = re.findall(r"^\| `bench ([\w-]+)` \| ([\w -]+) \|", section, re.M)
     return {name: kind.strip() for name, kind in rows}
 
 
@@ -30,10 +30,10 @@ def _bench_commands() -> dict[str, str | None]:
     import typer
     from typer.main import get_command
 
-    from bt_grasp.cli import bench_cmd, bench_eval_cmd, bench_extra_cmd
+    from bt_grasp.cli import bench_cell_cmd, bench_cmd, bench_eval_cmd, bench_extra_cmd
 
     app = typer.Typer()
-    for module in (bench_extra_cmd, bench_cmd, bench_eval_cmd):
+    for module in (bench_extra_cmd, bench_cmd, bench_eval_cmd, bench_cell_cmd):
         module.register(app)
     group = get_command(app).commands["bench"]  # type: ignore[attr-defined]
     return {name: getattr(command, "rich_help_panel", None) for name, command in group.commands.items()}
@@ -47,7 +47,7 @@ def test_the_docs_give_every_bench_command_its_kind_and_it_sits_in_that_panel() 
     for name, kind in table.items():
         panel = commands[name]
         assert panel is not None and panel.startswith(KINDS[kind]), (name, kind, panel)
-    assert {n for n, k in table.items() if k == "episode benchmark"} == {"pick", "tasks", "eval"}
+    assert {n for n, k in table.items() if k == "episode benchmark"} == {"pick", "tasks", "eval", "twin"}
 
 
 def test_bench_help_shows_the_two_panels_and_the_entry_point(capsys: pytest.CaptureFixture[str],

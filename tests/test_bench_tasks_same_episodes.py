@@ -31,7 +31,9 @@ def test_bench_tasks_and_eval_run_stand_for_the_same_episodes(tmp_path: Path, mo
 
     def capture(request: Any, worlds: Any = None) -> Any:  # what run_episode was asked to run
         requests.append(request)
-        return SimpleNamespace(success=True, sim_time_s=1.0, reason=None, judged=SimpleNamespace(failed_condition=None))
+        also = tuple(SimpleNamespace(success=True) for _ in request.also_judge)  # what a clear task judges beside
+        return SimpleNamespace(success=True, sim_time_s=1.0, reason=None, tree_status="SUCCESS", also_judged=also,
+                               judged=SimpleNamespace(failed_condition=None))
 
     monkeypatch.setattr(episode_package, "run_episode", capture)
     monkeypatch.setattr(episode_package, "WarmWorlds", lambda: None)

@@ -126,13 +126,13 @@ def _comments_of_yaml(text: str) -> list[str]:
 
 
 def test_tree_convert_keeps_xml_comments_where_they_were(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    """All six comments of pick_with_recovery.xml survive XML -> YAML and XML -> XML (none did on main as it was),
+    """All seven comments of pick_with_recovery.xml survive XML -> YAML and XML -> XML (none did on main as it was),
     each right before the node it stood before; both outputs load to the same tree."""
     from bt_grasp.tree.loader import read_single
 
     source = REPO / "trees/pick_with_recovery.xml"
     expected = _comments_of_xml(source.read_text())
-    assert len(expected) == 6
+    assert len(expected) == 7
     as_yaml, as_xml = tmp_path / "r.yaml", tmp_path / "r.xml"
     assert main(["tree", "convert", str(source), str(as_yaml)]) == 0
     assert main(["tree", "convert", str(source), str(as_xml)]) == 0

@@ -92,13 +92,14 @@ def test_the_readme_table_is_parsed_into_every_command() -> None:
     expected = {
         "init", "run", "demo", "scene render", "scene validate", "calibrate", "tree validate", "tree show",
         "tree convert", "tree run", "tree models", "replay", "eval run", "eval report", "eval export",
-        "resident status", "resident stop", "--version",
+        "resident status", "resident stop", "--version", "twin",
     }
     assert expected <= names, expected - names  # a new row is for the next test to demand a test of
     assert not {n for n in names if n.startswith("bench ")}, names  # developer benchmarks: docs/benchmarks.md
     moved = {c.name for c in readme_commands(BENCHMARKS.read_text(), "Commands")}
     assert {"bench plan", "bench perception", "bench sim", "bench tree", "bench logging", "bench pick", "bench eval",
-            "bench perception --noise-sweep", "bench follow", "bench tasks", "bench budget", "camera compare"} <= moved
+            "bench perception --noise-sweep", "bench follow", "bench tasks", "bench budget", "camera compare",
+            "bench twin", "bench cell-faults"} <= moved
 
 
 def test_an_invocation_counts_but_a_mention_does_not() -> None:
@@ -187,17 +188,20 @@ def test_calibrate_writes_a_file_close_to_the_true_camera_pose(tmp_path: Path) -
     text = proc.stdout
     assert "hand-eye calibration (eye-to-hand): 4 views" in text, text
     assert "* simulator ground truth (judge only): the error against the true camera pose" in text, text
-    assert "true err mm*" in text and "true err deg*" in text, text
-    rows = [[cell.strip() for cell in line.split("│")[1:-1]] for line in text.splitlines() if line.count("│") == 8]
-    methods = {row[0].removesuffix(" (chosen)"): [float(v) for v in row[1:]] for row in rows}
-    chosen = [row for row in rows if row[0].endswith(" (chosen)")]
+    # a plain-text table within 80 columns (issue 43, finding 8): a header on two lines, the chosen row marked '>'
+    header = [line.split() for line in text.splitlines() if line.split()[:1] == ["method"]]
+    assert header == [["method", "scatter", "residual", "residual", "reproj", "true", "err", "true", "err"]], text
+    assert any(line.split() == ["mm", "mm", "deg", "px", "mm*", "deg*"] for line in text.splitlines()), text
+    rows = [match.groups() for line in text.splitlines() if (match := re.fullmatch(r"([ >]) ([a-z_+]+) +(\d.*)", line))]
+    methods = {name: [float(v) for v in values.split()] for _, name, values in rows}
+    chosen = [name for mark, name, _ in rows if mark == ">"]
     assert len(methods) >= 4 and len(chosen) == 1, text  # per-method residuals, one chosen
-    _scatter, residual_mm, residual_deg, reproj_px, true_mm, true_deg = (float(v) for v in chosen[0][1:])
+    _scatter, residual_mm, residual_deg, reproj_px, true_mm, true_deg = methods[chosen[0]]
     assert 0 < true_mm < 3.0 and 0 < true_deg < 0.5, chosen
     assert 0 < residual_mm < 3.0 and 0 < residual_deg < 0.5 and 0 < reproj_px < 2.0, chosen
     written = yaml.safe_load(out.read_text())
     assert written["mount"] == "eye-to-hand" and written["samples"] == 4
-    assert written["method"] == chosen[0][0].removesuffix(" (chosen)")
+    assert written["method"] == chosen[0]
     assert f"wrote {out} (method {written['method']}, 4 samples)" in text
     mount = yaml.safe_load((REPO / TABLETOP).read_text())["camera"]["eye_to_hand"]
     offset_m = math.dist(written["transform"]["xyz_m"], mount["position_m"])
@@ -238,7 +242,7 @@ def test_run_with_a_shipped_fault_plan_fires_it_and_recovers(tmp_path: Path) -> 
                               tree="trees/pick_with_recovery.xml")
     assert proc.returncode == 0, proc.stdout + proc.stderr
     # retries by the leaf's path (its name in every output: docs/recording.md, "One name per node")
-    perceive = "Attempt::6/Perceive::9"
+    perceive = "Attempt::6/Perceive::10"  # 9: the see_or_search Fallback round it (issue 46)
     assert summary["success"] is True and summary["faults_fired"] == 1 and summary["retries"] == {perceive: 1}
     assert "faults fired: 1" in proc.stdout and f"retries: {perceive} x1" in proc.stdout, proc.stdout
     info = _replay(log)
@@ -280,7 +284,7 @@ def test_run_goal_clear_succeeds_where_the_table_is_cleared(tmp_path: Path) -> N
     proc, summary = _run_pick(tmp_path, "clear", "--goal", "clear", tree="trees/clear_table.xml",
                               scene="scenes/clear_table.yaml", seed=0, calibration=None)
     assert proc.returncode == 0, proc.stdout + proc.stderr
-    assert summary["goal"] == {"kind": "clear", "into": None}
+    assert summary["goal"] == {"kind": "clear", "into": None, "upright": False, "set_down": False}
     assert _condition(summary, "area_clear")["met"] is True and summary["judge"]["objects_in_workspace"] == []
     assert "goal clear judged by physics: nothing left in the work area" in proc.stdout, proc.stdout
 
@@ -436,3 +440,67 @@ def test_bench_eval_one_seed_one_worker() -> None:
         assert run["episodes_per_min"] == pytest.approx(60 / run["wall_s"], rel=0.05), name
     assert r["same_fingerprints_across_worker_counts"] is True
     assert len(r["load_before"]) == len(r["load_after"]) == 3
+
+
+# --- a real cell's commands, against twins (issue 41; the rest of its tests: tests/realcell/) -----------------------
+
+
+@pytest.mark.sim
+@pytest.mark.real_client
+def test_twin_serves_until_ctrl_c_and_writes_its_cell_file(tmp_path: Path) -> None:
+    import signal
+    import time
+
+    from bt_grasp.bench.twin_process import free_loopback
+    from bt_grasp.cell.format import load_cell
+    from bt_grasp.hardware.twin_control import TwinControlError, twin_request
+
+    host, cell = free_loopback(salt=17), tmp_path / "twin.cell.yaml"
+    twin = subprocess.Popen([str(BT_GRASP), "twin", "--scene", TABLETOP, "--host", host, "--write-cell", str(cell)],
+                            cwd=REPO, env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 120
+        status: dict[str, Any] = {}
+        while time.monotonic() < deadline and twin.poll() is None and not status:
+            try:
+                status = twin_request(host, "status", timeout_s=2.0)
+            except TwinControlError:
+                time.sleep(0.2)
+        assert status.get("ok") and status["robot_mode"] == "RUNNING" and status["safety_mode"] == "NORMAL", status
+        assert load_cell(cell).arm.address == host
+    finally:
+        twin.send_signal(signal.SIGINT)
+        out, err = twin.communicate(timeout=60)
+    assert twin.returncode == 0 and "Traceback" not in err, err[-2000:]
+    assert f"serving ur5 on {host}: RTDE 30004, dashboard 29999, script 30003, gripper 63352" in out, out
+
+
+@pytest.mark.sim
+@pytest.mark.slow
+@pytest.mark.real_client
+def test_bench_twin_one_seed_through_ur_rtde_judged_by_the_twins_physics(tmp_path: Path) -> None:
+    """Done-when 1's seed in `make test` (the 20-seed figure is docs/real-cell.md's): its log replays, and
+    `replay --resim` says in one sentence why a wall-clock run cannot be re-simulated."""
+    r = _ok_json(_bt("bench", "twin", "--seeds", "1", "--log-dir", str(tmp_path), "--json"))
+    assert r["runs"] == 1 and r["successes"] == 1, r["rows"]
+    assert r["judged_by"] == "the twin's physics judge" and r["tree"] == "trees/pick_with_recovery.xml"
+    [row] = r["rows"]
+    assert 0 < row["wall_s"] < WALL_CAP_S and "rose" in row["judged"], row
+    [log] = list(tmp_path.glob("*.mcap"))
+    recorded = _replay(log)
+    assert recorded["metadata"]["ran_on"] == "twin" and recorded["metadata"]["clock"] == "wall"
+    assert recorded["result"]["success"] is True and recorded["result"]["judge"]["in_gripper"] is True
+    resim = _bt("replay", str(log), "--resim", timeout=120)
+    assert resim.returncode == 2 and resim.stderr.count("\n") == 1, resim.stderr
+    assert "on the wall clock" in resim.stderr and "cannot be re-simulated" in resim.stderr
+
+
+@pytest.mark.sim
+@pytest.mark.real_client
+def test_bench_cell_faults_one_trial_of_ctrl_c() -> None:
+    r = _ok_json(_bt("bench", "cell-faults", "--trials", "1", "--fault", "ctrl-c", "--json"))
+    fault = r["faults"]["ctrl-c"]
+    assert fault["trials"] == 1 and fault["expected"] == 1 and fault["replayed"] == 1, fault
+    assert fault["reasons"] == ["INTERRUPTED"]
+    assert len(fault["stop_ms"]) == 1 and 0 <= fault["stop_ms"][0] < 1000, fault
+    assert len(fault["seen_ms"]) == 1 and 0 <= fault["seen_ms"][0] < 1000, fault

@@ -154,6 +154,11 @@ def test_no_product_code_moves_objects_by_hand(repo_root: Path) -> None:
         "bt_grasp/sim/twin/camera_worker.py: set_qpos(",
         # socket.create_connection: a TCP probe of a Ray address, not a physics connection
         "bt_grasp/campaign/ray_engine.py: create_connection",
+        # socket.create_connection: a real cell's TCP clients (the gripper's URCap, a twin's camera and control
+        # ports), not physics connections
+        "bt_grasp/hardware/robotiq_client.py: create_connection",
+        "bt_grasp/hardware/twin_camera.py: create_connection",
+        "bt_grasp/hardware/twin_control.py: create_connection",
     }
     assert sorted(set(offenders) - allowed) == []
     _ = sapien  # the test module needs sapien installed

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from bt_grasp.behaviours.attempts import Attempt
 from bt_grasp.behaviours.cell import Cell
 from bt_grasp.behaviours.reasons import ReasonLike, reason_name
 from bt_grasp.perception.results import Detection
@@ -27,6 +28,19 @@ class RobotLeaf(Leaf):
         """:meth:`Leaf.fail`, the reason and sentence also logged to the run's media (the log, the live view)."""
         self.cell.media.log("WARN", self.name, f"{reason_name(reason)}: {sentence}")
         return super().fail(reason, sentence)
+
+    def tick_now(self) -> int:
+        """The control period (tick) the run is in."""
+        return int(self._bt_wake_up.period)
+
+    def end_attempt(self, reason: str | None, in_contact: bool = False) -> None:
+        """End the grasp attempt going (``bt_grasp.behaviours.attempts``): SUCCEEDED with ``reason`` None, else by
+        the reason (a stall ``in_contact`` rules out its neighbourhood); written to the log."""
+        self.log_attempt(self.cell.attempts.end(reason, self.bt_path, self.tick_now(), in_contact))
+
+    def log_attempt(self, attempt: Attempt | None) -> None:
+        if attempt is not None:
+            self.cell.media.attempt(attempt)
 
     def input_detection(self, port: str) -> Detection | None:
         """A perceived object from a port, or None when the port holds none (or something else)."""

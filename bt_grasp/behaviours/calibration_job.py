@@ -28,6 +28,13 @@ log = logging.getLogger(__name__)
 STILL_RAD_S = 5e-3
 #: ... for this many consecutive ticks before a capture
 STILL_TICKS = 10
+#: a capture counts only when the arm moved less than this (rad, any joint) while it was taken: on a real cell (or
+#: a twin) the picture takes wall time, and an arm still creeping under STILL_RAD_S pairs a picture with a pose it
+#: has left (1e-4 rad is 0.05 mm at half a metre); in simulation nothing moves while a picture is rendered
+STILL_DURING_CAPTURE_RAD = 1e-4
+#: after this many captures taken while the arm crept, the next one counts anyway (a view is not lost to a servo
+#: that never quite rests)
+MAX_RECAPTURES = 5
 
 
 class CalibrationJob:
@@ -53,6 +60,7 @@ class CalibrationJob:
         self.motion: MotionJob | None = None
         self.settling = False
         self.still = 0
+        self.recaptures = 0
         board = cell.board
         if board is None:
             self.error = "no calibration board is mounted in this cell"
@@ -109,11 +117,18 @@ class CalibrationJob:
         self.still = self.still + 1 if speed < STILL_RAD_S else 0
         if self.still < STILL_TICKS:
             return
-        self.settling = False
+        q = self.cell.robot.joint_positions()
         frame = self.cell.camera.capture()
+        crept = float(np.max(np.abs(self.cell.robot.joint_positions() - q)))
+        if crept > STILL_DURING_CAPTURE_RAD and self.recaptures < MAX_RECAPTURES:
+            self.recaptures += 1
+            self.still = 0
+            log.info("view %d: the arm moved %.2g rad while its picture was taken; taken again", self.visited + 1,
+                     crept)
+            return
+        self.settling, self.recaptures = False, 0
         if frame is not None:
             self.cell.media.frame(frame, None)
-        q = self.cell.robot.joint_positions()
         T_base_tool = self.cell.kinematics.fk_link(q, self.collector.settings.tool_link)
         self.progress = f"view {self.visited + 1}: {self.collector.add(frame, T_base_tool)}"
 

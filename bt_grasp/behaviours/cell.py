@@ -10,7 +10,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from bt_grasp.behaviours.services import CameraCalibration, MediaSink, NullSink, Planner
+from bt_grasp.behaviours.attempts import AttemptMemory
+from bt_grasp.behaviours.services import CameraCalibration, MediaSink, MotionGuard, NullSink, Planner
 from bt_grasp.clock import Clock
 from bt_grasp.interfaces import Camera, Encoder, Robot
 from bt_grasp.perception.config import GraspSettings, PerceptionConfig
@@ -72,7 +73,10 @@ class Cell:
     ``calibration`` is filled by ``LoadCalibration``/``Calibrate`` (or ``--calibration``); leaves that need
     the camera pose fail with CALIBRATION_MISSING until then. ``board`` is the calibration board mounted in
     the cell (None: no board; ``Calibrate`` fails). Fault injectors replace ``robot``, ``camera``,
-    ``planner``, ``kinematics`` and ``calibration`` with wrappers of the same Protocols.
+    ``planner``, ``kinematics`` and ``calibration`` with wrappers of the same Protocols. A real cell adds ``guard``
+    (every trajectory checked before it is sent) and ``motion_clock`` (trajectory time, which the speed slider
+    slows; None: ``clock``). ``attempts`` is the run's memory of what it tried (grasps, placements) and how each
+    ended, which the leaves consult.
     Build one with :func:`make_cell` (the run's settings) or directly (tests).
 
     ``perception_latency_s`` is the seam through which perception's delay reaches the tree: a capture's detections
@@ -97,6 +101,8 @@ class Cell:
     calibration: CameraCalibration | None = None
     board: BoardMount | None = None
     media: MediaSink = field(default_factory=NullSink)
+    #: the run's memory of its grasp and placement attempts (``bt_grasp.behaviours.attempts``)
+    attempts: AttemptMemory = field(default_factory=AttemptMemory)
     workdir: Path = Path(".")
     perception_latency_s: float = 0.0
     #: the conveyors' encoders, by the fixture's name (a belt the scene or cell declares one for)
@@ -110,6 +116,8 @@ class Cell:
         if self.perception_latency_s <= 0:
             return now
         return max(now, int(frame_stamp_ns) + round(self.perception_latency_s * 1e9))
+    guard: MotionGuard | None = None
+    motion_clock: Clock | None = None
 
     @property
     def seeds(self) -> RunSeeds:

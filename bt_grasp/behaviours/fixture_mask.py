@@ -10,7 +10,7 @@ from dataclasses import replace
 import numpy as np
 
 from bt_grasp.perception.results import Detection, PerceptionResult, PerceptionStatus
-from bt_grasp.scene.fixtures import Conveyor
+from bt_grasp.scene.conveyor import Conveyor
 from bt_grasp.scene.format import Scene
 
 #: a detection whose centre lies this close outside a fixture's outer footprint still counts as the fixture

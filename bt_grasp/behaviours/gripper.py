@@ -102,9 +102,11 @@ class Grasp(_GripperMove):
             return Status.RUNNING
         self.ports.set("width", width)
         if width > MAX_OPENING_M - 0.003:
+            self.end_attempt(FailureReason.TIMEOUT.value)
             return self.fail(FailureReason.TIMEOUT, f"the fingers did not close (still {width * 1e3:.1f} mm open)")
         empty_below = empty_below_m(planned_width_m(self.ports.get("grasp")))
         if width < empty_below:
+            self.end_attempt(FailureReason.GRASP_EMPTY.value)
             return self.fail(FailureReason.GRASP_EMPTY, f"the fingers closed to {width * 1e3:.1f} mm: nothing held")
         self.feedback_message = f"holding an object {width * 1e3:.1f} mm wide"
         return Status.SUCCESS

@@ -77,7 +77,7 @@ def between_pads_base_m(T_base_tcp: NDArray[np.float64], points_base_m: NDArray[
     pts = np.asarray(points_base_m, dtype=float).reshape(-1, 3)
     local = (pts - T[:3, 3]) @ T[:3, :3]
     inside = (np.abs(local[:, 0]) <= PAD_HALF_X_M) & (np.abs(local[:, 1]) <= max(0.0, width_m) / 2 + CONTACT_MARGIN_M)
-    return pts[inside]
+    return np.asarray(pts[inside], dtype=np.float64)
 
 
 def hang_allowance_m(held_base_m: Sequence[float] | NDArray[np.float64], centre_base_m: Sequence[float]) -> float:

@@ -18,6 +18,8 @@ from bt_grasp.behaviours import (
     perceive,
     place,
     place_in,
+    regrasp,
+    search,
     viewing,
 )
 from bt_grasp.errors import ConfigError, TreeFileError, did_you_mean
@@ -59,6 +61,11 @@ NODES: tuple[type[BtNode], ...] = (
     place.Place,
     place.PlaceOn,
     place_in.PlaceIn,
+    regrasp.GripBlocksPlace,
+    regrasp.SetDown,
+    regrasp.PlanRegrasp,
+    search.FindLost,
+    search.AttemptRules,
     place.MoveTo,
     viewing.LookAt,
     follow.FollowTarget,

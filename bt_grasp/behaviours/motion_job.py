@@ -60,7 +60,10 @@ class MotionJob:
             path = segment.path(self.cell.robot.joint_positions())
             if isinstance(path, PathFailure):
                 return path
-            self.executor = self._start(segment.name, path)
+            started = self._start(segment.name, path)
+            if isinstance(started, PathFailure):
+                return started
+            self.executor = started
             return None
         status = self.executor.update()
         self._executed_t.append(self.cell.clock.now_ns() * 1e-9)
@@ -85,7 +88,8 @@ class MotionJob:
             self.executor.cancel()
             self.executor = None
 
-    def _start(self, name: str, path: NDArray[np.float64]) -> TrajectoryExecutor:
+    def _start(self, name: str, path: NDArray[np.float64]) -> TrajectoryExecutor | PathFailure:
+        """The segment's trajectory, checked by the cell's guard (a real cell's) before anything of it is sent."""
         # deferred: ruckig comes with it; a tree loads and validates without it
         from bt_grasp.motion.executor import TrajectoryExecutor
 
@@ -95,8 +99,14 @@ class MotionJob:
         limits = self.cell.motion_limits
         rate_hz = self.cell.scene.physics.control_rate_hz
         trajectory = time_parametrize(np.asarray(path, dtype=float), limits, rate_hz=rate_hz, blend=True)
+        if self.cell.guard is not None:
+            checked = self.cell.guard.prepare(trajectory)
+            if isinstance(checked, str):
+                return PathFailure(FailureReason.SAFETY_LIMIT, f"{name}: refused before anything was sent: {checked}")
+            trajectory = checked
         self.cell.media.trajectory(name, trajectory.times_s, trajectory.q, "planned")
         options = self.cell.executor_options
-        executor = TrajectoryExecutor(self.cell.robot, trajectory, self.cell.clock, options)
+        clock = self.cell.motion_clock or self.cell.clock
+        executor = TrajectoryExecutor(self.cell.robot, trajectory, clock, options)
         executor.start()
         return executor

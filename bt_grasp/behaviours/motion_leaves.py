@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
+from bt_grasp.behaviours.attempts import AttemptKind, Exclusion, GraspFamily, grasp_family
 from bt_grasp.behaviours.base import RobotLeaf
 from bt_grasp.behaviours.grasp_plan import GraspPlan
 from bt_grasp.behaviours.gripper import empty_below_m, planned_width_m
@@ -217,8 +218,12 @@ class _MovingLeaf(RobotLeaf):
             return Status.RUNNING
         if isinstance(outcome, PathFailure):
             self.job.cancel()
+            self.failed_in(outcome.reason, self.job.current)
             return self.fail(outcome.reason, outcome.sentence)
         return self.finished()
+
+    def failed_in(self, reason: FailureReason, segment: str) -> None:
+        """The motion failed in ``segment`` (a leaf whose motion is part of an attempt ends it here)."""
 
     def terminate(self, new_status: Status) -> None:
         job = getattr(self, "job", None)
@@ -229,24 +234,33 @@ class _MovingLeaf(RobotLeaf):
 _GRASP = input_port("grasp", object, "{grasp}", "the grasp to approach (from PlanGrasp)")
 
 
-@action(
-    ports=[
-        input_port("target", object, "{target}", "the detection to grasp"),
-        input_port("objects", object, "{objects}", "every object seen (obstacles)"),
-        output_port("grasp", object, "the first reachable ranked candidate, with its planned approach (a GraspPlan)",
-                    default="{grasp}"),
-        input_port("skip", int, 0, "skip this many of the best candidates"),
-    ],
-    reasons=(
-        FailureReason.NO_DETECTION, FailureReason.NOTHING_TO_GRASP, FailureReason.IK_UNREACHABLE,
-        FailureReason.PLAN_FAILED,
-    ),
-    needs_robot=True,
+#: PlanGrasp's ports (PlanRegrasp adds its own to them)
+PLAN_GRASP_PORTS = (
+    input_port("target", object, "{target}", "the detection to grasp"),
+    input_port("objects", object, "{objects}", "every object seen (obstacles)"),
+    output_port("grasp", object, "the first reachable ranked candidate, with its planned approach (a GraspPlan)",
+                default="{grasp}"),
+    input_port("skip", int, 0, "skip this many of the best candidates"),
+    input_port("change_family_after", int, 2, "after this many failed grasps of one family (top, side, "
+               "long_axis, rim) on the target, the other families' candidates go first; one grasp that stalled "
+               "in contact is enough (0: never)"),
 )
+PLAN_GRASP_REASONS = (
+    FailureReason.NO_DETECTION, FailureReason.NOTHING_TO_GRASP, FailureReason.IK_UNREACHABLE,
+    FailureReason.PLAN_FAILED,
+)
+
+
+@action(ports=PLAN_GRASP_PORTS, reasons=PLAN_GRASP_REASONS, needs_robot=True)
 class PlanGrasp(RobotLeaf):
     """Rank grasps of the target (:func:`bt_grasp.perception.antipodal.rank_grasps`: the footprint's top-down
     ones, or for a tall object side grasps sampled from its cloud first) and keep the first whose whole
     approach is collision-free.
+
+    The run's memory of its attempts (``bt_grasp.behaviours.attempts``) screens them first: a candidate that
+    repeats a failed grasp of the target (same family, within 5 mm and 10 degrees) or lies near one that stalled
+    in contact (15 mm, 20 degrees) is left out, and after ``change_family_after`` failures of a family (or one
+    stall) the other families go first. The grasp kept opens an attempt that Approach, Grasp and Lift end.
 
     One candidate per tick (IK of the pre-grasp and grasp poses, the approach plan to the pre-grasp pose, then
     the straight descent from where that plan ends to the grasp pose with the fingers open, checked against
@@ -273,14 +287,22 @@ class PlanGrasp(RobotLeaf):
             plan = self._try(rank, self._candidates[self._next - 1])
             if plan is not None:
                 self.ports.set("grasp", plan)
-                self.feedback_message = f"candidate {rank} of {self._total}: {plan.candidate.reason}"
+                attempt = self.cell.attempts.open_grasp(self.bt_path, self.tick_now(), self._target,
+                                                        plan.T_base_tcp_grasp, plan.width_m, self._excluded)
+                self.feedback_message = (f"candidate {rank} of {self._total} ({attempt.family.value}"
+                                         f"{self._screened_text()}): {plan.candidate.reason}")
                 return Status.SUCCESS
             if self._next < len(self._candidates) or self._extend():
-                self.feedback_message = f"candidate {rank}: {self._last.sentence}"
+                sentence = self._last.sentence  # most already name their candidate: never "candidate 0: candidate 0:"
+                named = sentence.startswith("candidate ")
+                self.feedback_message = sentence if named else f"candidate {rank}: {sentence}"
                 return Status.RUNNING
+        if self._tried == 0 and self._excluded:
+            return self._all_excluded()
         # a planner failure other than IK counts as PLAN_FAILED here, as before the typed seams
         unreachable = self._last.reason is FailureReason.IK_UNREACHABLE
         reason = FailureReason.IK_UNREACHABLE if unreachable else FailureReason.PLAN_FAILED
+        self.cell.attempts.planning_failed(self._target, reason.value)
         return self.fail(reason, f"none of {self._total} grasps is reachable; last: {self._last.sentence}")
 
     def _rank(self) -> Status | None:
@@ -303,6 +325,7 @@ class PlanGrasp(RobotLeaf):
                              seed=self.cell.seeds.integer(Stream.GRASPS), fixtures=fixtures,
                              viewpoint_base_m=viewpoint)
         if not result.ok:
+            self.cell.attempts.planning_failed(target, FailureReason.NOTHING_TO_GRASP.value)
             return self.fail(FailureReason.NOTHING_TO_GRASP, f"{result.status.value}: {result.message}")
         self.cell.media.grasps(result.candidates)
         self._total = len(result.candidates)
@@ -310,7 +333,12 @@ class PlanGrasp(RobotLeaf):
         self._viewpoint, self._fixtures = viewpoint, fixtures
         skip = self.ports.get("skip", int) or 0
         self._skip = skip
-        self._candidates = list(result.candidates[skip:])
+        self._excluded: list[Exclusion] = []
+        self._tried = 0
+        self._families: dict[int, GraspFamily] = {}
+        self._candidates = self._screen(list(result.candidates[skip:]), skip)
+        if self._avoided and all(self._families[id(c)] in self._avoided for c in self._candidates):
+            self._extend()  # a family to change from: the grasps sampled from the cloud may offer another first
         self._scene = planning_scene(self, target, self._objects)
         self._descent_scene = planning_scene(self, target, self._objects, allow_target=True)
         return None
@@ -331,11 +359,55 @@ class PlanGrasp(RobotLeaf):
         new = [c for c in more if not any(near_same(c, r) for r in self._ranked)]
         self._total += len(new)  # every candidate ranked, the skipped ones too (as the first ranking counts)
         new = new[max(0, self._skip - len(self._ranked)):]
-        if not new:
+        screened = self._screen(new, len(self._ranked) + max(0, self._skip - len(self._ranked)))
+        if not screened:
             return False
-        self.cell.media.grasps(tuple(new))
-        self._candidates.extend(new)
+        self.cell.media.grasps(tuple(screened))
+        rest = self._candidates[self._next:] + screened  # the families to change from last, among all not yet tried
+        self._candidates[self._next:] = ([c for c in rest if self._families[id(c)] not in self._avoided]
+                                         + [c for c in rest if self._families[id(c)] in self._avoided])
         return True
+
+    def _screen(self, candidates: Sequence[GraspCandidate], first_rank: int) -> list[GraspCandidate]:
+        """The candidates the run's attempts leave (those repeating a failed grasp, or near one that stalled, are
+        left out and kept in ``_excluded``), the families to change from last (stable otherwise)."""
+        memory, target = self.cell.attempts, self._target
+        kept: list[tuple[GraspCandidate, GraspFamily]] = []
+        for i, c in enumerate(candidates):
+            family = grasp_family(c.T_base_tcp_grasp, c.width_m, target)
+            why = memory.grasp_exclusion(target, c.T_base_tcp_grasp, family, f"candidate {first_rank + i}")
+            if why is None:
+                kept.append((c, family))
+                self._families[id(c)] = family
+            else:
+                self._excluded.append(why)
+        after = self.ports.get("change_family_after", int)
+        failures = memory.family_failures(target)
+        self._avoided = memory.stalled_families(target) | (
+            {f for f, n in failures.items() if n >= after} if after and after > 0 else set())
+        first = [c for c, f in kept if f not in self._avoided]
+        return first + [c for c, f in kept if f in self._avoided]
+
+    def _screened_text(self) -> str:
+        parts = []
+        if self._excluded:
+            parts.append(f"{len(self._excluded)} left out by earlier attempts")
+        if self._avoided:
+            parts.append("changed from " + ", ".join(sorted(f.value for f in self._avoided)))
+        return "; " + "; ".join(parts) if parts else ""
+
+    def _all_excluded(self) -> Status:
+        """Every candidate repeats a failed attempt: nothing new to try on this object (a notice on the log)."""
+        first = self._excluded[0]
+        self.cell.attempts.planning_failed(self._target, FailureReason.NOTHING_TO_GRASP.value)
+        T = self._ranked[0].T_base_tcp_grasp if self._ranked else np.eye(4)
+        family = grasp_family(T, self._ranked[0].width_m if self._ranked else 0.0, self._target)
+        self.log_attempt(self.cell.attempts.skipped(
+            AttemptKind.GRASP, self.bt_path, self.tick_now(), self._target, T, family, "NOTHING_TO_GRASP",
+            self._excluded))
+        return self.fail(FailureReason.NOTHING_TO_GRASP,
+                         f"every one of {len(self._excluded)} grasp(s) of the target repeats a failed attempt; "
+                         f"first: {first.sentence()}")
 
     def _reachable(self, T_grasp: NDArray[np.float64], T_pregrasp: NDArray[np.float64]) -> bool:
         """Both poses have an IK solution from the arm's configuration (how sampled candidates are kept)."""
@@ -344,6 +416,7 @@ class PlanGrasp(RobotLeaf):
         return bool(pre.ok and kin.ik(T_grasp, pre.q).ok)
 
     def _try(self, rank: int, candidate: GraspCandidate) -> GraspPlan | None:
+        self._tried += 1
         kin, q = self.cell.kinematics, self._q
         pre = kin.ik(candidate.T_base_tcp_pregrasp, q)
         if not pre.ok:
@@ -401,6 +474,15 @@ class Approach(_MovingLeaf):
             Segment("to pre-grasp", to_pregrasp),
             Segment("descend" if down else "approach", descend),
         ]
+
+    def initialise(self) -> None:
+        super().initialise()
+        if self.job is not None:
+            self.cell.attempts.moving()  # the grasp PlanGrasp chose is being made
+
+    def failed_in(self, reason: FailureReason, segment: str) -> None:
+        # a stall on the straight way into the object is a stall in contact: its neighbourhood is ruled out
+        self.end_attempt(reason.value, in_contact=segment in ("descend", "approach"))
 
 
 def planned_path_fn(plan: GraspPlan, replan: PathFn) -> PathFn:
@@ -464,14 +546,20 @@ class Lift(_MovingLeaf):
     def check_during(self) -> Status | None:
         width = self.cell.robot.gripper_width_m()
         if width < self._empty_below:
+            self.end_attempt(FailureReason.SLIPPED.value)
             return self.fail(FailureReason.SLIPPED, f"the object slipped out: fingers at {width * 1e3:.1f} mm")
         return None
+
+    def failed_in(self, reason: FailureReason, segment: str) -> None:
+        self.end_attempt(reason.value)
 
     def finished(self) -> Status:
         width = self.cell.robot.gripper_width_m()
         if width < self._empty_below:
+            self.end_attempt(FailureReason.SLIPPED.value)
             return self.fail(FailureReason.SLIPPED, f"the object slipped out: fingers at {width * 1e3:.1f} mm")
         self.feedback_message = f"lifted, holding {width * 1e3:.1f} mm"
+        self.end_attempt(None)
         return Status.SUCCESS
 
 

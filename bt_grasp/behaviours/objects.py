@@ -16,7 +16,9 @@ from typing import TYPE_CHECKING, TypeGuard
 
 import numpy as np
 
+from bt_grasp.behaviours.attempts import AttemptMemory
 from bt_grasp.behaviours.base import RobotLeaf
+from bt_grasp.behaviours.cell import Cell
 from bt_grasp.behaviours.perceive import DETECTOR_PORTS, DetectorLeaf
 from bt_grasp.behaviours.pose import Pose
 from bt_grasp.behaviours.reasons import PERCEPTION_REASONS, FailureReason
@@ -135,6 +137,8 @@ class PerceiveAll(DetectorLeaf):
         input_port("order", str, "first", "which match: " + ", ".join(ORDERS), choices=ORDERS),
         input_port("point", Pose, "0;0",
                    "the point nearest/farthest measure from (a fixture: {pose} from FixturePose)"),
+        input_port("failed_last_after", int, 0, "an object with at least this many failed attempts in this run "
+                   "(grasps, placements) goes after the others, whatever the order (0: never)"),
         output_port("object", object, "the chosen object", default="{object}"),
     ],
     reasons=(FailureReason.BAD_INPUT, FailureReason.NO_DETECTION),
@@ -144,8 +148,25 @@ class SelectObject(Leaf):
     "any": every object), then by order (first in the list, nearest to or farthest from ``point`` -- a
     fixture's pose from FixturePose --, largest or smallest footprint). ``class`` names a class of the learned
     detector's model (objects from ``PerceiveAll detector="learned"``); a literal class the tree's model does not
-    have is a load error with the closest name. FAILURE: NO_DETECTION (nothing matches; with a class, also when
-    no object of the list was named by a learned detector), BAD_INPUT (``objects`` is not an object list)."""
+    have is a load error with the closest name. With ``failed_last_after`` N > 0, an object the run failed on N
+    times or more (the run's memory of its attempts) is chosen only when every other match failed as often: the
+    next in the order is tried. FAILURE: NO_DETECTION (nothing matches; with a class, also when no object of the
+    list was named by a learned detector), BAD_INPUT (``objects`` is not an object list)."""
+
+    def setup(self, **kwargs: object) -> None:
+        cell = kwargs.get("cell")
+        #: the run's memory of its attempts, when the node runs in a cell (a dry run has none)
+        self._memory: AttemptMemory | None = cell.attempts if isinstance(cell, Cell) else None
+
+    def _failed_last(self, found: list[Detection]) -> tuple[list[Detection], int]:
+        """``found`` with the objects that failed ``failed_last_after`` times or more left out (all of them, when
+        every one did), and how many were left out."""
+        after = self.ports.get("failed_last_after", int) or 0
+        memory = getattr(self, "_memory", None)
+        if after <= 0 or memory is None:
+            return found, 0
+        fresh = [d for d in found if memory.object_failures(d) < after]
+        return (fresh, len(found) - len(fresh)) if fresh else (found, 0)
 
     def update(self) -> Status:
         objects = object_list(self.ports.get("objects"))
@@ -165,6 +186,7 @@ class SelectObject(Leaf):
             seen = sorted({class_of(d) for d in objects if class_of(d)})
             classes = f" (classes seen: {', '.join(seen)})" if class_name and seen else ""
             return self.fail(FailureReason.NO_DETECTION.value, f"no {wanted} among {len(objects)} object(s){classes}")
+        found, passed_over = self._failed_last(found)
         order = self.ports.require("order", str)
         point = self.ports.require("point", Pose)
         chosen = found[0]
@@ -177,8 +199,9 @@ class SelectObject(Leaf):
         self.ports.set("object", chosen)
         c = chosen.centroid_base_m
         named = f"{class_of(chosen)} " if class_of(chosen) else ""
+        later = f" ({passed_over} failed before: later)" if passed_over else ""
         self.feedback_message = (f"{named}{chosen.label} {shape_class_of(chosen)} {chosen.shape} at "
-                                 f"({c[0]:.3f}, {c[1]:.3f}) of {len(found)} match(es)")
+                                 f"({c[0]:.3f}, {c[1]:.3f}) of {len(found)} match(es){later}")
         return Status.SUCCESS
 
 

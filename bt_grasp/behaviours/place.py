@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
+from bt_grasp.behaviours.attempts import AttemptKind, Exclusion, grasp_family
 from bt_grasp.behaviours.base import RobotLeaf
 from bt_grasp.behaviours.fixture_mask import inside_fixture
 from bt_grasp.behaviours.grasp_plan import MOVED_RAD, GraspPose
@@ -38,8 +39,8 @@ from bt_grasp.behaviours.motion_leaves import (
 )
 from bt_grasp.behaviours.objects import is_detection, object_list
 from bt_grasp.behaviours.pose import Pose
-from bt_grasp.behaviours.reasons import MOTION_REASONS, FailureReason
-from bt_grasp.geometry import Mat4, inv, make_T, rot_z
+from bt_grasp.behaviours.reasons import MOTION_REASONS, FailureReason, ReasonLike, reason_name
+from bt_grasp.geometry import Mat4, inv, make_T, rot_z, signed_mm
 from bt_grasp.motion.place_orientation import PlaceYaw, footprint_kind, footprint_turns_rad, place_yaws
 from bt_grasp.robot_description import MAX_OPENING_M, TCP_LINK
 from bt_grasp.scene.format import Scene, place_xy_problem
@@ -189,7 +190,9 @@ class _PlaceBase(RobotLeaf):
         self._rise_first = False  # the way out the last successful check found (a side grasp's)
         self._options: list[tuple[PlaceYaw, Mat4]] = []
         self._next = 0
-        self._rejected: list[tuple[PlaceYaw, PathFailure]] = []
+        self._rejected: list[tuple[PlaceYaw, PathFailure, Mat4]] = []
+        self._excluded: list[Exclusion] = []
+        self._recorded = False
         setup = self._setup_motion()
         if isinstance(setup, Status):
             self._early = setup
@@ -218,6 +221,12 @@ class _PlaceBase(RobotLeaf):
         options = self.orientations(pose, held, T_tcp_obj, surface)
         if isinstance(options, str):
             return self.fail(FailureReason.PLACE_BLOCKED, options)
+        self._held: Detection = held
+        self._grip_family = grasp_family(np.asarray(grasp.T_base_tcp_grasp, dtype=float),
+                                         float(getattr(grasp, "width_m", 0.0)), held)
+        options = self._screen(options)
+        if not options:
+            return self._all_tried_before()
         self._options = options
         self._height = height
         self._standing = height >= STANDING_RATIO * min(float(held.size_m[0]), float(held.size_m[1]))
@@ -237,6 +246,59 @@ class _PlaceBase(RobotLeaf):
         self._q_start = self.cell.robot.joint_positions()
         self.feedback_message = f"placing at {self._target_text}"
         return None
+
+    def _screen(self, options: list[tuple[PlaceYaw, Mat4]]) -> list[tuple[PlaceYaw, Mat4]]:
+        """The orientations the run's attempts leave: one that a placement of this object with this grip found
+        blocked, or failed at, before is left out (kept in ``_excluded``)."""
+        memory, kept = self.cell.attempts, []
+        for option, T_place in options:
+            what = f"turned {math.degrees(option.turn_rad):.0f} deg at {self._where(T_place)}"
+            why = memory.place_exclusion(self._held, self._T_tcp_obj, T_place, what)
+            if why is None:
+                kept.append((option, T_place))
+            else:
+                self._excluded.append(why)
+        return kept
+
+    def _all_tried_before(self) -> Status:
+        """Every orientation this grip allows failed before: PLACE_BLOCKED at once, nothing moved (a notice on the
+        log; the grip held cannot place the object: ``GripBlocksPlace``)."""
+        first = self._excluded[0]
+        self._recorded = True
+        self.log_attempt(self.cell.attempts.skipped(
+            AttemptKind.PLACE, self.bt_path, self.tick_now(), self._held, np.eye(4), self._grip_family,
+            FailureReason.PLACE_BLOCKED.value, self._excluded, grip=self._T_tcp_obj))
+        return self.fail(FailureReason.PLACE_BLOCKED,
+                         f"every one of {len(self._excluded)} place orientation(s) with this grip was tried before "
+                         f"and did not work; first: {first.sentence()}")
+
+    def covers_every_turn(self) -> bool:
+        """Whether the orientations tried are every one the held object's symmetry allows (turns on)."""
+        return _flag(self.ports.get("turns"))
+
+    def _record(self, reason: str | None, moved: bool) -> None:
+        """The placement ended (succeeded, failed moving, or every orientation blocked): on the run's memory and
+        the log, once."""
+        if self._recorded:
+            return
+        self._recorded = True
+        T_place = self._T_place if moved and self._T_place is not None else (
+            self._rejected[0][2] if self._rejected else None)
+        if T_place is None:
+            return
+        T_obj = T_place @ self._T_tcp_obj
+        place_pose = (float(T_obj[0, 3]), float(T_obj[1, 3]), float(self._surface),
+                      math.degrees(math.atan2(T_obj[1, 0], T_obj[0, 0])))
+        self.log_attempt(self.cell.attempts.place(
+            self.bt_path, self.tick_now(), self._held, self._T_tcp_obj, self._grip_family, place_pose,
+            self._T_place if moved else None, [T for _, _, T in self._rejected],
+            not moved and self.covers_every_turn(), reason, self._excluded, moved))
+
+    def fail(self, reason: ReasonLike, sentence: str) -> Status:
+        """FAILURE; a placement that had tried an orientation is recorded (``bt_grasp.behaviours.attempts``)."""
+        if self.phase != "choose" or self._rejected:
+            self._record(reason_name(reason), moved=self.phase != "choose")
+        return super().fail(reason, sentence)
 
     def orientations(self, pose: Pose, held: Detection, T_tcp_obj: Mat4, surface_z_m: float
                      ) -> list[tuple[PlaceYaw, Mat4]] | str:
@@ -352,7 +414,7 @@ class _PlaceBase(RobotLeaf):
         self._target_text = self._where(T_place)
         tried = self._try_option(option, T_place)
         if isinstance(tried, PathFailure):
-            self._rejected.append((option, tried))
+            self._rejected.append((option, tried, T_place))
             if self._next < len(self._options):
                 self.feedback_message = f"placing at {self._target_text}: {tried.sentence}"
                 return Status.RUNNING
@@ -377,7 +439,7 @@ class _PlaceBase(RobotLeaf):
 
     def _none_works(self) -> Status:
         """FAILURE: PLACE_BLOCKED when any orientation was reachable but blocked, else the first one's reason."""
-        failures = [f for _, f in self._rejected]
+        failures = [f for _, f, _ in self._rejected]
         blocked = [f for f in failures if f.reason is FailureReason.PLACE_BLOCKED]
         first = blocked[0] if blocked else failures[0]
         n = len(failures)
@@ -418,7 +480,7 @@ class _PlaceBase(RobotLeaf):
                 touched = self.job.current == "descend" and outcome.reason is FailureReason.TRACKING_ERROR
                 if self.job.current == "touch down":
                     # stalled on the surface, or no straight line down from the release pose: open there
-                    self.feedback_message = f"touch down ended {above * 1e3:+.0f} mm from the release pose"
+                    self.feedback_message = f"touch down ended {signed_mm(above, 'above', 'below')} the release pose"
                 elif touched and above <= self.ports.require("contact_window", float):
                     self.feedback_message = f"touched down {above * 1e3:.0f} mm above the target"
                 elif touched:
@@ -456,6 +518,7 @@ class _PlaceBase(RobotLeaf):
             return self.fail(outcome.reason, f"after release: {outcome.sentence}")
         self.feedback_message = f"placed at {self._target_text}"
         self._remember_place()
+        self._record(None, moved=True)
         return Status.SUCCESS
 
     def _placed_before(self) -> tuple[Detection, ...]:

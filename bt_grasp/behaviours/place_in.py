@@ -81,6 +81,9 @@ class PlaceIn(_PlaceBase):
     name from the blackboard the scene lacks, or not a container).
     """
 
+    def covers_every_turn(self) -> bool:
+        return True  # the spots tried are every way the container takes the object with this grip (the best 24)
+
     def check_scene(self, scene: Scene) -> str | None:
         """A literal fixture the scene lacks, or that is not a container, is a load error."""
         if self.ports.key("fixture") is not None:
@@ -162,6 +165,6 @@ class PlaceIn(_PlaceBase):
 
         length, width, height = (float(v) for v in held.size_m)
         T_rest_tcp = make_T(np.eye(3), [0.0, 0.0, height / 2]) @ inv(T_tcp_obj)
-        boxes = gripper_boxes(float(self.cell.kinematics.opening_m))
+        boxes = gripper_boxes(float(self.cell.kinematics.opening_m), self.cell.kinematics.urdf_path)
         parts = tuple(ToolPart(b.size_m, T_rest_tcp @ b.T_tcp_box) for b in boxes)
         return HeldShape(length, width, height, held.shape == "round", parts)

@@ -17,14 +17,16 @@ from bt_grasp.geometry import Mat4
 from bt_grasp.interfaces import RGBDFrame
 
 if TYPE_CHECKING:  # types only: importing motion/perception costs ~1 s (pinocchio, open3d)
+    from bt_grasp.behaviours.attempts import Attempt
     from bt_grasp.motion.cartesian import CartesianResult
     from bt_grasp.motion.collision import CollisionChecker
     from bt_grasp.motion.kinematics import KinematicModel
     from bt_grasp.motion.planner import PlannerOptions, PlanResult
     from bt_grasp.motion.planning_scene import PlanningScene
+    from bt_grasp.motion.trajectory import Trajectory
     from bt_grasp.perception.results import GraspCandidate, PerceptionResult
 
-__all__ = ["CameraCalibration", "KinematicModel", "MediaSink", "NullSink", "Planner", "TrajectoryKind"]
+__all__ = ["CameraCalibration", "KinematicModel", "MediaSink", "MotionGuard", "NullSink", "Planner", "TrajectoryKind"]
 
 TrajectoryKind = Literal["planned", "executed"]
 
@@ -48,6 +50,15 @@ class Planner(Protocol):
         ...
 
     def checker(self, scene: PlanningScene, margin_m: float) -> CollisionChecker: ...
+
+
+class MotionGuard(Protocol):
+    """A real cell's safety before motion (``bt_grasp.motion.guard``): every trajectory is checked whole
+    before its first sample is sent."""
+
+    def prepare(self, trajectory: Trajectory) -> Trajectory | str:
+        """The trajectory as it may be sent (slowed to the cell's caps), or why it may not (one sentence)."""
+        ...
 
 
 class CameraCalibration(Protocol):
@@ -82,6 +93,10 @@ class MediaSink(Protocol):
         """One control step of a visual-servoing leaf: its measurement, error and command (numbers by name)."""
         ...
 
+    def attempt(self, attempt: Attempt) -> None:
+        """A grasp or placement attempt that ended (the log's ``/bt/attempts``)."""
+        ...
+
 
 class NullSink:
     """A MediaSink that keeps nothing (a run without a log, a test)."""
@@ -103,4 +118,7 @@ class NullSink:
         return None
 
     def servo(self, name: str, values: Mapping[str, float | bool | str]) -> None:
+        return None
+
+    def attempt(self, attempt: Attempt) -> None:
         return None

@@ -95,7 +95,7 @@ class LookAt(_MovingLeaf):
     def check_scene(self, scene: Scene) -> str | None:
         """A literal view that is not a point, or that the arm cannot reach with the scene's nominal camera
         mount, is a load error (file:line before anything runs)."""
-        if scene.camera.mount != Mount.EYE_IN_HAND or self.ports.key("view") is not None:
+        if Mount(scene.camera.mount) != Mount.EYE_IN_HAND or self.ports.key("view") is not None:
             return None
         view = self.ports.require("view", str)
         if view == "workspace" or self.ports.key("target") is not None:

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import TypedDict
 
 from bt_grasp.defaults import DEFAULT_MAX_TICKS
+from bt_grasp.scene.goals import ClearGoal
 
 #: repository root (trees/ and scenes/ live there)
 REPO = Path(__file__).resolve().parents[2]
@@ -50,6 +51,8 @@ class TaskSummary(TypedDict):
     task: str
     episodes: int
     successes: int
+    #: a clear-into task judged also as before issue 46 (every object set down, not dropped, and upright)
+    successes_upright_set_down: int | None
     success_rate: float
     seeds: str
     failures: dict[str, int]
@@ -69,6 +72,7 @@ class TaskFigures:
     failed_seeds: list[int] = field(default_factory=list)
     sim_time_s: list[float] = field(default_factory=list)
     wall_time_s: list[float] = field(default_factory=list)
+    successes_strict: int | None = None
 
     def summary(self) -> TaskSummary:
         n = len(self.seeds)
@@ -76,6 +80,7 @@ class TaskFigures:
             "task": self.task,
             "episodes": n,
             "successes": self.successes,
+            "successes_upright_set_down": self.successes_strict,
             "success_rate": self.successes / n if n else 0.0,
             "seeds": f"{self.seeds[0]}..{self.seeds[-1]}" if self.seeds else "",
             "failures": dict(self.failures),
@@ -92,17 +97,24 @@ def run_task_bench(tasks: Sequence[Task], seeds: int, first_seed: int = 0, root:
                    progress: Progress | None = None) -> list[TaskFigures]:
     """Run every task on seeds ``first_seed .. first_seed + seeds - 1``; returns each task's figures."""
     from bt_grasp.episode import EpisodeRequest, WarmWorlds, run_episode
+    from bt_grasp.episode.request import run_blackboard
 
     out = []
     for task in tasks:
         tree, scene = task.paths(root)
         figures = TaskFigures(task.name)
+        strict = strict_clear(scene)
+        if strict is not None:
+            figures.successes_strict = 0
         worlds = WarmWorlds()
         for seed in range(first_seed, first_seed + seeds):
             t0 = time.perf_counter()
             result = run_episode(EpisodeRequest(tree=tree, scene=scene, seed=seed,
-                                                blackboard={"color": "red", "lift_height": 0.15},
-                                                max_ticks=task.max_ticks), worlds=worlds)
+                                                blackboard=run_blackboard(),  # `bt-grasp run`'s
+                                                max_ticks=task.max_ticks,
+                                                also_judge=() if strict is None else (strict,)), worlds=worlds)
+            if strict is not None and figures.successes_strict is not None:
+                figures.successes_strict += int(result.tree_status == "SUCCESS" and result.also_judged[0].success)
             figures.seeds.append(seed)
             figures.wall_time_s.append(time.perf_counter() - t0)
             figures.sim_time_s.append(result.sim_time_s)
@@ -119,3 +131,14 @@ def run_task_bench(tasks: Sequence[Task], seeds: int, first_seed: int = 0, root:
                 progress(task.name, seed, result.success, f"{why} ({unmet})" if unmet else why)
         out.append(figures)
     return out
+
+
+def strict_clear(scene: Path) -> ClearGoal | None:
+    """A clear-into goal of the scene as it was judged before issue 46 (every object also set down, not dropped,
+    and upright), to be judged beside it; None for any other goal."""
+    from bt_grasp.scene.format import load_scene
+
+    goal = load_scene(scene).goal
+    if not isinstance(goal, ClearGoal) or goal.into is None:
+        return None
+    return goal.model_copy(update={"upright": True, "set_down": True})

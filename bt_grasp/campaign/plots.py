@@ -15,10 +15,9 @@ from bt_grasp.campaign.rows import ReportRow
 from bt_grasp.campaign.stats import Rate, success_rates, tree_label
 
 if TYPE_CHECKING:
-    from matplotlib.axes import Axes
+    from matplotlib.artist import Artist
     from matplotlib.axis import Axis
     from matplotlib.figure import Figure
-    from matplotlib.typing import LegendLocType
 
 GROUPS = ("tree", "scene", "fault_plan")
 COLORS = ("#2b6cb0", "#dd6b20", "#38a169", "#805ad5", "#d53f8c", "#319795", "#718096")
@@ -84,10 +83,17 @@ def _integer_axis(axis: Axis) -> None:
     axis.set_major_locator(MaxNLocator(integer=True))
 
 
-def _tree_legend(ax: Axes, trees: _Trees, **kwargs: LegendLocType) -> None:
+def _tree_legend(fig: Figure, trees: _Trees) -> None:
     from matplotlib.patches import Patch
 
-    ax.legend(handles=[Patch(facecolor=trees.color(t), label=t) for t in trees.labels], fontsize=8, **kwargs)
+    _legend_below(fig, [Patch(facecolor=trees.color(t), label=t) for t in trees.labels])
+
+
+def _legend_below(fig: Figure, handles: Sequence[Artist]) -> None:
+    """The figure's legend below its axes, in space the layout keeps for it: never over a label, a bar or an error
+    bar (inside the axes, "lower right" sat on the success figure's n/N labels and error bars)."""
+    fig.legend(handles=list(handles), fontsize=8, loc="outside lower center", ncols=min(len(handles), 4),
+               frameon=False)
 
 
 def warm_up_rows(rows: Sequence[ReportRow]) -> set[int]:
@@ -117,7 +123,7 @@ def success_by_group(rows: Sequence[ReportRow], title: str) -> bytes:
         ax.barh(y, r.rate, color=color, alpha=0.8, label=r.group[0])
         ax.errorbar(r.rate, y, xerr=[[r.rate - lo], [hi - r.rate]], fmt="none", ecolor="black", capsize=3)
         ax.text(1.01, y, f"{r.successes}/{r.n}", va="center", fontsize=8)
-    _tree_legend(ax, trees, loc="lower right")
+    _tree_legend(fig, trees)
     ax.set_yticks(ys, [" / ".join(r.group) for r in rates], fontsize=8)
     ax.set_xlim(0, 1.12)
     ax.set_xlabel("success rate (bars: 95% Wilson interval)")
@@ -144,7 +150,7 @@ def failure_reasons(rows: Sequence[ReportRow]) -> bytes:
     ax.set_xlabel("failed episodes")
     _integer_axis(ax.xaxis)
     ax.set_title("failure reasons (failing leaf)")
-    ax.legend(fontsize=8, loc="lower right")
+    _tree_legend(fig, trees)
     return _png(fig)
 
 
@@ -156,19 +162,25 @@ def time_distributions(rows: Sequence[ReportRow]) -> bytes:
     fig = _figure(10, 3.4)
     axes = fig.subplots(1, 2)
     warm = warm_up_rows(rows)
-    steady = [r for i, r in enumerate(rows) if i not in warm] or list(rows)
+    steady = [r for i, r in enumerate(rows) if i not in warm]  # never all of them when every one was a warm-up
     left_out = len(rows) - len(steady)
-    wall_label = "wall time per episode [s]" + (
-        f"\n(each worker's first episode, which pays its warm-up, left out: {left_out})" if left_out else "")
+    wall_label = "wall time per episode [s]" + (  # on three lines: on one it ran past the figure's edge
+        f"\n(left out: {left_out}, each worker's first\nepisode, which pays its warm-up)" if left_out else "")
     column: Literal["sim_time_s", "episode_wall_s"]
     for ax, column, label, chosen in (
         (axes[0], "sim_time_s", "simulated time per episode [s]", rows),
         (axes[1], "episode_wall_s", wall_label, steady),
     ):
         trees = _trees(rows)
+        ax.set_xlabel(label)
+        if not chosen:  # a campaign so small that every episode was a worker's first: nothing steady to draw
+            ax.text(0.5, 0.5, f"every episode ({len(rows)}) was its worker's first:\nno steady wall time to show",
+                    transform=ax.transAxes, ha="center", va="center", fontsize=9)
+            ax.set_xticks([])
+            ax.set_yticks([])
+            continue
         data = [[float(r[column]) for r in chosen if trees.of(r) == t] for t in trees.labels]
         ax.boxplot(data, orientation="horizontal", tick_labels=trees.labels)
-        ax.set_xlabel(label)
         ax.grid(axis="x", alpha=0.3)
     fig.suptitle("time distributions")
     return _png(fig)
@@ -195,13 +207,13 @@ def retries(rows: Sequence[ReportRow]) -> bytes:
     axes[0].set_ylabel("episodes")
     _integer_axis(axes[0].xaxis)
     _integer_axis(axes[0].yaxis)
-    axes[0].legend(fontsize=8)
+    _tree_legend(fig, trees)
     by_leaf: Counter[str] = Counter()
     for r in rows:
         by_leaf.update(r["retries"])
     leaves = [k for k, _ in by_leaf.most_common(10)] or ["none"]
     left = [0] * len(leaves)
-    for tree in trees.labels:  # stacked by tree, in the trees' colours (the legend on the left)
+    for tree in trees.labels:  # stacked by tree, in the trees' colours (the figure's legend)
         per_tree: Counter[str] = Counter()
         for r in rows:
             if trees.of(r) == tree:
@@ -240,10 +252,11 @@ def comparison(a: Sequence[Rate], b: Sequence[Rate], names: tuple[str, str]) -> 
                 highs.append(hi - r.rate)
         ax.barh(ys, xs, height=0.38, color=color, alpha=0.8, label=name)
         ax.errorbar(xs, ys, xerr=[lows, highs], fmt="none", ecolor="black", capsize=2)
+    from matplotlib.patches import Patch
     ax.set_yticks(range(len(groups)), [" / ".join(g) for g in reversed(groups)], fontsize=8)
     ax.set_xlim(0, 1.05)
     ax.set_xlabel("success rate (bars: 95% Wilson interval)")
     ax.set_title(title)
-    ax.legend(fontsize=8, loc="lower right")
+    _legend_below(fig, [Patch(facecolor=c, alpha=0.8, label=n) for n, c in zip(names, COLORS, strict=False)])
     ax.grid(axis="x", alpha=0.3)
     return _png(fig)

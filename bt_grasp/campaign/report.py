@@ -159,6 +159,16 @@ def _paired(a: Sequence[ReportRow], b: Sequence[ReportRow], names: tuple[str, st
     )
 
 
+def missed_faults(rows: Sequence[ReportRow]) -> int:
+    """Episodes in which a fault pushed an object the tree never touched (``FaultFiring.missed``)."""
+    def missed(row: ReportRow) -> bool:
+        faults = row.get("faults")
+        return isinstance(faults, list) and any(
+            isinstance(f, dict) and f.get("target") is not None and f.get("target_touched") is False for f in faults)
+
+    return sum(1 for row in rows if missed(row))
+
+
 def figure_folder(out: Path) -> Path:
     """Where a report's figures go: ``<out stem>_figures/`` beside it."""
     return Path(out).with_name(Path(out).stem + "_figures")
@@ -202,6 +212,10 @@ def build_report(results: Path, out: Path, compare: Path | None = None) -> list[
         for f in figures
     }
     ok = sum(1 for r in rows if r["success"])
+    missed = missed_faults(rows)
+    warn = (f"<p class=warn>{missed} episode(s): a fault pushed an object the tree never touched, not one it "
+            "grasped (the results file's <code>faults</code> column names the object; to push the object the tree "
+            "grasps, name it in the fault plan: <code>params.object</code>).</p>") if missed else ""
     page = f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>bt_grasp campaign report: {html.escape(name)}</title>
 <style>{_CSS}</style><script>{_CHECK}</script></head>
@@ -209,7 +223,7 @@ def build_report(results: Path, out: Path, compare: Path | None = None) -> list[
 <h1>Campaign report: {html.escape(name)}</h1>
 <p>{len(rows)} episodes, {ok} succeeded ({_pct(ok / len(rows))}); results file {html.escape(str(results))}.
 Success is judged by physics (the simulator's ground truth, read only by the judge).</p>
-{images["success"]}
+{warn}{images["success"]}
 {sections[0]}
 <h2>Failure reasons</h2>{images["failures"]}
 <h2>Failed episodes</h2>{_failures_table(rows)}

@@ -48,6 +48,7 @@ class ResultRow(TypedDict):
     retries: dict[str, int]
     retries_total: int
     faults_fired: int
+    faults: list[JsonObject]  # each firing: label, kind, tick, leaf, target (an object pushed), target_touched
     ticks: int
     sim_time_s: float
     judge: JsonObject
@@ -84,6 +85,7 @@ class ReportRow(TypedDict):
     params: NotRequired[JsonObject]
     environment: NotRequired[ReportEnvironment | None]
     worker: NotRequired[JsonValue]  # not checked
+    faults: NotRequired[JsonValue]  # not checked: each firing's label, kind, tick, leaf, target, target_touched
 
 
 class ReportEnvironment(TypedDict, total=False):

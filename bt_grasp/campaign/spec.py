@@ -20,7 +20,7 @@ from pathlib import Path
 
 from pydantic import Field, field_validator, model_validator
 
-from bt_grasp.episode.request import BlackboardValue, EpisodeRequest
+from bt_grasp.episode.request import BlackboardValue, EpisodeRequest, run_blackboard
 from bt_grasp.errors import ConfigError, InputError
 from bt_grasp.files.bounded_io import read_user_file
 from bt_grasp.files.config import KeyPath, StrictModel, format_key_path, read_yaml, validate
@@ -28,6 +28,9 @@ from bt_grasp.files.output_files import write_output_file
 from bt_grasp.scene.goals import Goal
 
 NO_FAULTS = "none"
+#: how a campaign file gives a calibration of its own (the missing-calibration sentence's way out)
+CAMPAIGN_CALIBRATION = ("give the campaign file a 'calibration' key (every scene) or the scene's entry one "
+                        "({file: ..., calibration: ...})")
 MAX_EPISODES = 1_000_000
 #: seeds are 64-bit signed integers everywhere a result is written (results rows, Parquet)
 MAX_SEED = 2**63 - 1
@@ -73,7 +76,9 @@ class CampaignFile(StrictModel):
     scenes: tuple[str | SceneEntry, ...] = Field(..., min_length=1)
     seeds: SeedRange | tuple[int, ...]  # {first, count} or an explicit list
     fault_plans: tuple[str | FaultPlanEntry, ...] = (NO_FAULTS,)  # "none", a file, or {name, file, inject}
-    blackboard: tuple[dict[str, str | int | float | bool], ...] = ({"color": "red", "lift_height": 0.15},)
+    #: each a parameter set: entries over `bt-grasp run`'s own (``run_blackboard``: lift_height 0.15, the colour of
+    #: the goal), as `--set KEY=VALUE` puts them; default: one empty set, i.e. exactly `bt-grasp run`'s episode
+    blackboard: tuple[dict[str, str | int | float | bool], ...] = ({},)
     calibration: str | None = None  # default calibration for every scene
     max_ticks: int = Field(12000, ge=1)  # per episode (100 Hz ticks of simulated time)
 
@@ -198,7 +203,7 @@ class Campaign:
             calibration=scene.calibration,
             faults=plan.file,
             inject=plan.inject,
-            blackboard=dict(params),
+            blackboard=run_blackboard(params),  # run's rule: the same settings, the same blackboard
             max_ticks=self.max_ticks,
             leaves=self.leaves,
         )
@@ -359,7 +364,7 @@ def _scene_calibration(
 
     try:
         config = load_scene(scene_file)
-        return calibration_for_scene(config, scene_file, override)[0]
+        return calibration_for_scene(config, scene_file, override, give_one=CAMPAIGN_CALIBRATION)[0]
     except InputError as exc:
         raise ConfigError(path, f"{_where(key)} (scene) does not load: {exc.message}", _line(lines, key)) from None
 
@@ -386,31 +391,58 @@ def _line(lines: dict[KeyPath, int], key: KeyPath) -> int | None:
     return None
 
 
-def write_options_campaign(
-    trees: list[Path], scenes: list[Path], seeds: int, first_seed: int, name: str | None, out: Path | None,
-    *, max_ticks: int | None = None,
-) -> Path:
-    """The campaign file `eval run --tree T --scene S --seeds N` stands for, written into the output folder
-    (``NAME.campaign.yaml``: the run is resumable and its inputs are on record). Paths in it are absolute."""
-    import yaml
+def check_options_inputs(trees: list[Path], scenes: list[Path], calibration: Path | None, max_ticks: int,
+                         leaves: tuple[str, ...] = ()) -> None:
+    """`eval run --tree T --scene S [--calibration C]`'s inputs checked as ``bt-grasp run`` checks them, every
+    tree on every scene, before anything is written: a refusal names the user's own files and flags (the campaign
+    file these options stand for is not written yet, so it is never named, nor left behind)."""
+    from bt_grasp.episode import load_inputs  # deferred: start-up time (the episode module and its simulator)
 
-    for flag, paths in (("--tree", trees), ("--scene", scenes)):
+    given = [calibration] if calibration is not None else []
+    for flag, paths in (("--tree", trees), ("--scene", scenes), ("--calibration", given)):
         for path in paths:
             if not path.is_file():
                 raise InputError(flag, f"no such file '{path}'")
+    for tree, scene in itertools.product(trees, scenes):
+        load_inputs(EpisodeRequest(tree=tree, scene=scene, calibration=calibration, blackboard=run_blackboard(),
+                                   max_ticks=max_ticks, leaves=leaves))
+
+
+def options_campaign_path(trees: list[Path], scenes: list[Path], name: str | None, out: Path | None) -> Path:
+    """Where `eval run --tree T --scene S` writes the campaign file it stands for (``OUT/NAME.campaign.yaml``;
+    ``OUT`` defaults to ``out/NAME``, ``NAME`` to the stems of the trees and scenes)."""
     if name is None:
         name = "-".join(dict.fromkeys(p.stem for p in [*trees, *scenes]))
     if not re.fullmatch(NAME_PATTERN, name):
         raise InputError("--name", f"'{name[:120]}' may hold only letters, digits, '_', '.' and '-', not start with "
                                    "'.', and have at most 100 characters (it names the results file)")
     folder = Path("out") / name if out is None else out
+    return folder / f"{name}.campaign.yaml"
+
+
+def write_options_campaign(
+    trees: list[Path], scenes: list[Path], seeds: int, first_seed: int, name: str | None, out: Path | None,
+    *, max_ticks: int | None = None, calibration: Path | None = None,
+) -> Path:
+    """The campaign file `eval run --tree T --scene S --seeds N [--calibration C]` stands for, written into the
+    output folder (``NAME.campaign.yaml``: the run is resumable and its inputs are on record). Paths in it are
+    absolute. Check the inputs first (:func:`check_options_inputs`)."""
+    import yaml
+
+    for flag, paths in (("--tree", trees), ("--scene", scenes)):
+        for path in paths:
+            if not path.is_file():
+                raise InputError(flag, f"no such file '{path}'")
+    target = options_campaign_path(trees, scenes, name, out)
     data: dict[str, object] = {
-        "name": name,
+        "name": target.name.removesuffix(".campaign.yaml"),
         "description": "written by `bt-grasp eval run --tree ... --scene ...`",
         "trees": [str(p.resolve()) for p in trees],
         "scenes": [str(p.resolve()) for p in scenes],
         "seeds": {"first": first_seed, "count": seeds},
     }
+    if calibration is not None:
+        data["calibration"] = str(calibration.resolve())
     if max_ticks is not None:
         data["max_ticks"] = max_ticks
-    return write_output_file(folder / f"{name}.campaign.yaml", yaml.safe_dump(data, sort_keys=False), "--out")
+    return write_output_file(target, yaml.safe_dump(data, sort_keys=False), "--out")

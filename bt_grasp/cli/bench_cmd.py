@@ -161,7 +161,9 @@ def tasks(
         table.add_column(column, justify="left" if column in ("task", "failures") else "right")
     for f in rows:
         failures = ", ".join(f"{k} x{v}" for k, v in f["failures"].items()) or "-"
-        table.add_row(f["task"], f"{f['successes']}/{f['episodes']}", f"{f['success_rate']:.0%}",
+        strict = f["successes_upright_set_down"]
+        also = "" if strict is None else f" ({strict} set down upright)"  # a clear-into goal as judged before
+        table.add_row(f["task"], f"{f['successes']}/{f['episodes']}{also}", f"{f['success_rate']:.0%}",
                       f"{f['sim_time_s_median']:.1f}", f"{f['wall_time_s_median']:.1f}", failures)
     Console().print(table)
     Console().print(f"machine: {summary['machine']}")

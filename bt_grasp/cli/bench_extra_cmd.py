@@ -161,3 +161,32 @@ def budget(
         f"recording {overhead['recording']:.0f} us; total {overhead['total']:.0f} us",
         highlight=False, soft_wrap=True,
     )
+
+
+@bench_app.command("attempts", rich_help_panel=MICRO_BENCHMARKS)
+def attempts(
+    logs: list[Path] = typer.Argument(..., help="MCAP logs, or folders of them (e.g. a campaign's or bench pick "
+                                                 "--log-dir's)."),
+    as_json: bool = typer.Option(False, "--json", help="Print exactly one JSON object."),
+) -> None:
+    """Attempts counted from recorded runs' logs (/bt/attempts; rebuilt from the leaves' statuses in a log written
+    before it): repeats of a failed attempt (same object and family, within 5 mm and 10 deg; 15 mm and 20 deg of
+    a stall) and the attempts per failed episode."""
+    from bt_grasp.bench.attempts import summarise
+
+    summary = summarise(logs)
+    if as_json:
+        typer.echo(json.dumps(summary))
+        return
+    console = Console()
+    console.print(f"{summary['episodes']} episode(s), {summary['failed']} failed; "
+                  f"{summary['repeats']} repeated attempt(s) in {summary['episodes_with_repeats']} episode(s)",
+                  highlight=False)
+    spread = ", ".join(f"{n} attempt(s): {count}" for n, count in summary["attempts_per_failed_episode"].items())
+    console.print(f"attempts per failed episode: {spread or '-'} (median "
+                  f"{summary['attempts_per_failed_episode_median']}); mean attempts per episode "
+                  f"{summary['attempts_per_episode_mean']}", highlight=False)
+    for entry in summary["logs"]:
+        if entry["repeats"]:
+            pairs = ", ".join(f"#{b} repeats #{a}" for a, b in entry["repeats"])
+            console.print(f"  {entry['log']}: {pairs}", highlight=False, markup=False)

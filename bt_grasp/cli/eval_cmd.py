@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from enum import StrEnum
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -55,6 +56,9 @@ def progress_printer(console: Console) -> Callable[[Progress, ResultRow | Episod
             )
             label = f"{Path(str(item['tree'])).stem}/{item['scene']}/seed{item['seed']}/{item['fault_plan']}"
             what = f"{escape(label)} {verdict}"
+            for firing in item.get("faults") or []:
+                if firing.get("target") is not None and firing.get("target_touched") is False:
+                    what += f" [yellow](a fault pushed {escape(str(firing['target']))}: the tree never touched it)[/]"
         console.print(f"{head}  {what}", highlight=False, soft_wrap=True)
 
     return show
@@ -89,6 +93,10 @@ def run(
     name: str | None = typer.Option(
         None, "--name", help="Without a campaign file: the campaign's name (default: TREE-SCENE)."
     ),
+    calibration: Path | None = typer.Option(
+        None, "--calibration", help="Without a campaign file: the calibration YAML every episode loads (default: "
+        "the file each scene names beside it; a campaign file says it with its 'calibration' key)."
+    ),
     out: Path | None = typer.Option(
         None, "--out", help="Folder for the results (NAME.jsonl) and kept MCAP logs (default: out/NAME)."
     ),
@@ -118,13 +126,24 @@ def run(
         from bt_grasp.campaign.ray_engine import probe_address
 
         probe_address(ray)  # before anything else: an unreachable head is one sentence, within seconds
+    # plugin files as absolute paths: every worker loads them (on a Ray cluster, the same path on each node)
+    plugins = tuple(str(Path(v).absolute()) if v.endswith(".py") else v for v in leaves)
+    from bt_grasp.files.output_files import check_output_folder
+
     if campaign_file is None:
         if not trees or not scenes:
             raise InputError("eval run", "give a campaign file, or --tree and --scene (e.g. `bt-grasp eval run "
                                          "--tree trees/pick.xml --scene scenes/tabletop.yaml --seeds 50`)")
-        from bt_grasp.campaign.spec import write_options_campaign
+        from bt_grasp.campaign.spec import check_options_inputs, options_campaign_path, write_options_campaign
 
-        campaign_file = write_options_campaign(trees, scenes, seeds, first_seed, name, out, max_ticks=max_ticks)
+        target = options_campaign_path(trees, scenes, name, out)
+        out = target.parent
+        check_output_folder(out, "--out")
+        check_options_inputs(trees, scenes, calibration, max_ticks, plugins)  # as `run` checks them: nothing written
+        with _undone_if_refused(target):  # a refusal from here on leaves nothing behind either
+            campaign_file = write_options_campaign(trees, scenes, seeds, first_seed, name, out, max_ticks=max_ticks,
+                                                   calibration=calibration)
+            campaign = load_campaign(campaign_file, leaves=plugins, check_inputs=False)  # checked just above
     else:
         given = [flag for flag, value in (("--tree", trees), ("--scene", scenes), ("--name", name)) if value]
         if max_ticks != DEFAULT_MAX_TICKS:
@@ -132,14 +151,13 @@ def run(
         if given:
             raise InputError(given[0], f"does not go with a campaign file; {campaign_file} already names the trees, "
                                        "scenes and seeds")
-    # plugin files as absolute paths: every worker loads them (on a Ray cluster, the same path on each node)
-    plugins = tuple(str(Path(v).absolute()) if v.endswith(".py") else v for v in leaves)
-    campaign = load_campaign(campaign_file, leaves=plugins)
-    if out is None:
-        out = Path("out") / campaign.name
+        if calibration is not None:
+            raise InputError("--calibration", f"does not go with a campaign file; give {campaign_file} a "
+                                              "'calibration' key (every scene) or a scene entry one")
+        campaign = load_campaign(campaign_file, leaves=plugins)
+        if out is None:
+            out = Path("out") / campaign.name
     log_dir = out / "logs"
-    from bt_grasp.files.output_files import check_output_folder
-
     check_output_folder(out, "--out")
     check_output_folder(log_dir, "--out")  # kept logs go in <out>/logs: never through a link elsewhere
     if ray is not None:
@@ -195,6 +213,27 @@ def report(
     except OSError as exc:
         raise _cannot_write(out, exc) from None
     typer.echo(f"{written[0]}  (figures: {written[1].parent})")
+
+
+@contextmanager
+def _undone_if_refused(path: Path) -> Iterator[None]:
+    """Writes ``path`` (and the folders above it that do not exist yet) inside the block; if the block is refused,
+    removes what it wrote: a refused command leaves nothing behind. A file that was there before stays."""
+    from bt_grasp.errors import BtGraspError
+
+    existed = path.exists() or path.is_symlink()
+    made = [p for p in path.parents if not p.exists()]  # deepest first
+    try:
+        yield
+    except BtGraspError:
+        if not existed:
+            path.unlink(missing_ok=True)
+        for folder in made:
+            try:
+                folder.rmdir()  # only when empty
+            except OSError:
+                break
+        raise
 
 
 def _writable_file(out: Path, kind: str, *inputs: Path | None) -> None:

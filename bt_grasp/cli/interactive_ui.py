@@ -7,7 +7,7 @@ It draws the tree with live statuses, the blackboard (entries a port reads, whic
 p     pause / continue
 s     step one tick
 n     step N ticks (asks N)
-f     break on any leaf FAILURE: on / off
+f     break on a leaf FAILURE (``--break fail``: not the conditions false by design): on / off
 b     set a blackboard entry (asks ``KEY=VALUE``; the value is checked against the ports reading it)
 o     choose the object to act on (asks ``INDEX|LABEL [ENTRY]``; ENTRY defaults to ``target``)
 x     fire a fault of the catalogue now (asks ``KIND [KEY=VALUE,...]``)
@@ -140,6 +140,16 @@ def tree_text(state: RunState) -> Text:
     return text
 
 
+def failure_text(state: RunState) -> str:
+    """The "last failure" panel: the last leaf FAILURE that was not false by design (those ``replay --failures``
+    sets apart: a condition a Fallback asked), its path, its reason and what the leaf said."""
+    failure = state.last_failure
+    if failure is None:
+        return "none (conditions false by design are not listed)"
+    said = f"\n{failure.message}" if failure.message else ""
+    return f"tick {failure.tick}: {failure.path or failure.leaf}\nreason: {failure.reason or 'none given'}{said}"
+
+
 def status_line(state: RunState, number: int) -> str:
     if state.finished:
         what = "FINISHED"
@@ -236,9 +246,7 @@ class InteractiveApp(App[None]):
         self.query_one("#detections", Static).update(Text("\n".join(
             f"{d.index}: {d.label} at ({', '.join(f'{x:.3f}' for x in d.centroid_base_m)}) m"
             for d in state.detections) or "none yet"))
-        failure = state.last_failure
-        self.query_one("#failure", Static).update(Text(
-            f"tick {failure.tick}: {failure.leaf} {failure.reason or ''}: {failure.message}" if failure else "none"))
+        self.query_one("#failure", Static).update(Text(failure_text(state)))
         message = self._note or state.message
         if self.done.is_set():
             message = ("finished: " + "; ".join(self.summaries[-1:]) if self.error is None

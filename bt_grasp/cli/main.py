@@ -34,7 +34,7 @@ COMMAND_MODULES: dict[str, tuple[str, ...]] = {
     "tree": ("tree_cmd",),
     "calibrate": ("calibrate_cmd",),
     "replay": ("replay_cmd",),
-    "bench": ("bench_extra_cmd", "bench_cmd", "bench_eval_cmd"),
+    "bench": ("bench_extra_cmd", "bench_cmd", "bench_eval_cmd", "bench_cell_cmd"),
     "eval": ("eval_cmd",),
     "resident": ("resident_cmd",),
     "detector": ("detector_cmd",),

@@ -18,17 +18,19 @@ from rich.markup import escape
 from bt_grasp.cli.plugin_option import leaves_option
 
 if TYPE_CHECKING:  # the recording package (mcap, cv2) is imported when a log is replayed, not for --help
+    from bt_grasp.recording.attempt_view import AttemptRow
     from bt_grasp.recording.reader import RunLog
     from bt_grasp.recording.replay import FailureReport, StatusChange
     from bt_grasp.recording.replay_shapes import LeafState, TickView
 
 
 class _Views(TypedDict, total=False):
-    """The views asked for, as JSON: one tick, the failures, a leaf's history."""
+    """The views asked for, as JSON: one tick, the failures, a leaf's history, the attempts."""
 
     tick: TickView
     failures: list[dict[str, object]]
     leaf: list[LeafState]
+    attempts: list[AttemptRow]
 
 
 def _json(console: Console, value: object) -> None:
@@ -40,6 +42,8 @@ def replay_command(
     tick: int | None = typer.Option(None, "--tick", help="Show the tree, blackboard and arm at tick N."),
     failures: bool = typer.Option(False, "--failures", help="List every FAILURE and what ran next."),
     leaf: str | None = typer.Option(None, "--leaf", help="Status history of the node with this name."),
+    attempts: bool = typer.Option(False, "--attempts", help="Every grasp and placement attempt: where, how it ended, "
+                                  "what earlier attempts ruled out before it, and whether it repeats a failed one."),
     topic: str | None = typer.Option(None, "--topic", help="Print a topic's messages as JSON lines."),
     as_json: bool = typer.Option(False, "--json", help="Machine-readable output."),
     frames_dir: Path | None = typer.Option(None, "--export-frames", help="Write images as PNG here."),
@@ -80,10 +84,10 @@ def replay_command(
         from bt_grasp.recording.report import build_report
 
         html_path = report if report is not None else report_dir / "report.html"  # type: ignore[operator]
-        made = build_report(run, html_path, report_dir)
+        made = build_report(run, html_path, report_dir, repeated=_repeated(run))
         console.print(f"wrote the run report {escape(str(made.html_path))}"
                       + (f" and {len(made.pngs)} figures to {escape(str(report_dir))}" if made.pngs else ""))
-    other_views = tick is not None or failures or leaf or topic or as_json or frames_dir or btlog
+    other_views = tick is not None or failures or leaf or attempts or topic or as_json or frames_dir or btlog
     if (foxglove or report is not None or report_dir is not None) and not other_views:
         return
     views: _Views = {}
@@ -95,6 +99,10 @@ def replay_command(
         ]
     if leaf is not None:
         views["leaf"] = replay.leaf_history(run, leaf)
+    if attempts:
+        from bt_grasp.recording.attempt_view import attempt_rows
+
+        views["attempts"] = attempt_rows(run.attempts, _repeated(run))
     exports: dict[str, object] = {}
     if frames_dir is not None:
         frames = [str(p) for p in export_frames(run, frames_dir)]
@@ -128,6 +136,13 @@ def replay_command(
         console.print(f"wrote {len(frames)} frames to {escape(str(frames_dir))}")
     if btlog is not None:
         console.print(f"wrote {len(written.transitions)} transitions to {escape(str(btlog))}")
+
+
+def _repeated(run: RunLog) -> set[int]:
+    """The numbers of the run's attempts that repeat a failed earlier one (issue 46's rules)."""
+    from bt_grasp.behaviours.attempts import repeats
+
+    return {later for _, later in repeats([a for a in run.attempts if a.get("outcome") != "SKIPPED"])}
 
 
 def _print_foxglove(console: Console, run: RunLog, target: Path | None) -> None:
@@ -218,6 +233,18 @@ def _print_views(
         console.print(render.failures_table(replay.failures(run)))
     if "leaf" in views and leaf is not None:
         console.print(render.leaf_table(leaf, views["leaf"], max_rows))
+    if "attempts" in views:
+        from bt_grasp.recording.attempt_view import attempts_table
+
+        rows = views["attempts"]
+        if not rows:
+            console.print("no grasp or placement attempt recorded (a log written before /bt/attempts, log format "
+                          "4, has none: `bt-grasp bench attempts LOG` rebuilds its grasps)")
+        else:
+            console.print(attempts_table(rows))
+            repeats = [r["index"] for r in rows if r["repeats"]]
+            console.print(f"{len(rows)} attempt(s); " + (f"repeating a failed one: {repeats}" if repeats
+                                                        else "none repeats a failed one"))
 
 
 def register(app: typer.Typer) -> None:

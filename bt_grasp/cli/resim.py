@@ -140,6 +140,11 @@ def _resimulate(log_path: Path, workdir: Path, leaves: tuple[str, ...] = ()) -> 
 
     run = open_log(log_path)
     meta = run.metadata
+    if meta.get("ran_on") in ("twin", "robot"):
+        where = "a twin" if meta["ran_on"] == "twin" else "a robot"
+        raise LogFileError(log_path, f"was recorded on {where} ({meta.get('arm_address', 'a real cell')}) on the "
+                           "wall clock: its objects moved in a world no log holds and its time was not simulated, so "
+                           "it cannot be re-simulated (replay shows what it recorded)")
     for name in run.attachments:  # a log with any hostile name is refused whole, written or not
         check_relative_name(name, source=log_path, what="attachment name")
     tree_files = [n for n in run.attachments if n.startswith("tree/")]

@@ -11,17 +11,18 @@ from typing import TYPE_CHECKING
 
 import typer
 from rich.console import Console
-from rich.markup import escape
+from rich.text import Text
 
 from bt_grasp.cli.choices import GoalChoice
 from bt_grasp.cli.plugin_option import leaves_option
+from bt_grasp.cli.text_width import wrap
 from bt_grasp.defaults import DEFAULT_LIFT_HEIGHT_M, DEFAULT_MAX_TICKS
 from bt_grasp.errors import InputError
 
 if TYPE_CHECKING:  # the episode package (numpy, pydantic, the simulator) is imported when a run starts
     from bt_grasp.control.breakpoints import Breakpoint
     from bt_grasp.episode import TickCallback
-    from bt_grasp.episode.request import BlackboardValue, EpisodeRequest
+    from bt_grasp.episode.request import EpisodeRequest
     from bt_grasp.episode.result import EpisodeResult
     from bt_grasp.scene.goals import Goal
     from bt_grasp.tree.loader import LoadedTree
@@ -70,33 +71,52 @@ def judged_phrase(summary: EpisodeResult) -> str:
 
 
 def print_summary(console: Console, summary: EpisodeResult) -> None:
-    """The run's summary; every string that comes from the user's files (leaf names, reasons, paths) is
-    escaped, so Rich markup in a node's name (``[/]``, ``[link=...]``) prints as text instead of crashing."""
-    verdict = "[bold green]SUCCESS[/]" if summary.success else "[bold red]FAILURE[/]"
-    console.print(f"\n{verdict}  (tree: {escape(summary.tree_status)}, {escape(judged_phrase(summary))})")
-    if not summary.success:
+    """The run's summary, within the console's width (80 in a pipe): sentences wrap between words with a hanging
+    indent, no value is cut, and the `bt-grasp replay LOG` command stands alone on one line, whole, so it can be
+    copied. Text from the user's files (leaf names, reasons, paths) is printed as text, never as Rich markup."""
+    width = console.width
+
+    def say(text: str, indent: str = "  ", hang: str = "  ", styles: tuple[tuple[str, str], ...] = ()) -> None:
+        line = Text(wrap(text, indent=indent, hang=hang, width=width))
+        for part, style in styles:  # colour each part where it first stands
+            at = line.plain.find(part)
+            if part and at >= 0:
+                line.stylize(style, at, at + len(part))
+        console.print(line, soft_wrap=True, highlight=False)
+
+    verdict = "SUCCESS" if summary.success else "FAILURE"
+    console.print()
+    say(f"{verdict}  (tree: {summary.tree_status}, {judged_phrase(summary)})", indent="",
+        styles=((verdict, "bold green" if summary.success else "bold red"),))
+    unmet = summary.unmet()
+    if not summary.success and summary.tree_status == "SUCCESS" and unmet is not None:
+        # the tree succeeded and the goal did not: the headline is the goal's first unmet condition (issue 46)
+        say(f"goal not met: {unmet[0]}: {unmet[1]}", styles=((f"goal not met: {unmet[0]}", "red"),))
+    elif not summary.success:
         leaf = summary.failed_path or summary.failed_leaf  # the path: the leaf's name in every output
-        console.print(f"  reason: [red]{escape(str(summary.reason))}[/]  leaf: {escape(str(leaf))}")
-        if summary.judged.failed_condition is not None:
-            console.print(f"  goal not met: {escape(summary.judged.failed_condition)}")
-    console.print(
-        f"  ticks {summary.ticks}, simulated {summary.sim_time_s:.2f} s, "
-        f"wall {summary.wall_time_s:.2f} s, seed {summary.seed}"
-    )
+        say(f"reason: {summary.reason}  leaf: {leaf}", styles=((f"reason: {summary.reason}", "red"),))
+        if unmet is not None:
+            say(f"goal not met: {unmet[0]}: {unmet[1]}")
+    say(f"ticks {summary.ticks}, simulated {summary.sim_time_s:.2f} s, wall {summary.wall_time_s:.2f} s, "
+        f"seed {summary.seed}")
     if summary.retries:
-        console.print("  retries: " + ", ".join(f"{escape(k)} x{v}" for k, v in summary.retries.items()))
+        say("retries: " + ", ".join(f"{k} x{v}" for k, v in summary.retries.items()))
     if summary.faults_fired:
-        console.print(f"  faults fired: {summary.faults_fired}")
-    if summary.log:
-        console.print(f"  log: {escape(summary.log)}  (bt-grasp replay {escape(summary.log)})")
+        say(f"faults fired: {summary.faults_fired}")
+        for firing in summary.faults:  # what each hit; a push on an object the tree never touched says so
+            say(firing.sentence(), indent="    ", styles=((firing.sentence(), "yellow"),) if firing.missed else ())
+    if summary.log:  # each on a line of its own, never broken: a path and a command to copy
+        console.print(Text(f"  log: {summary.log}"), soft_wrap=True, highlight=False)
+        console.print(Text(f"  replay: bt-grasp replay {summary.log}"), soft_wrap=True, highlight=False)
     chain = summary.failure_chain
     if chain:  # last: the causal chain of the failures (conditions false by design left out)
-        console.print("  what failed, and what followed (oldest first):")
+        say("what failed, and what followed (oldest first):")
         if len(chain) > CHAIN_SHOWN:
-            console.print(f"    ... {len(chain) - CHAIN_SHOWN} earlier failures (bt-grasp replay LOG --failures)")
+            say(f"... {len(chain) - CHAIN_SHOWN} earlier failures (bt-grasp replay LOG --failures)", indent="    ")
         for step in chain[-CHAIN_SHOWN:]:
-            console.print(f"    tick {step.tick} ({step.sim_time_s:.2f} s) {escape(step.leaf_path)} "
-                          f"[red]{escape(str(step.reason or '-'))}[/] -> {escape(step.followed)}")
+            reason = str(step.reason or "-")
+            say(f"tick {step.tick} ({step.sim_time_s:.2f} s) {step.leaf_path} {reason} -> {step.followed}",
+                indent="    ", styles=((f" {reason} ->", "red"),))
 
 
 def failure_line(console: Console) -> Callable[[FailureEvent], None]:
@@ -106,37 +126,36 @@ def failure_line(console: Console) -> Callable[[FailureEvent], None]:
     def show(event: FailureEvent) -> None:
         text = (f"FAILED {event.path}: {event.reason or '-'} at tick {event.tick}, t={event.stamp_ns * 1e-9:.2f} s"
                 + (f" ({event.message})" if event.message else ""))
-        # on a terminal, over the progress line (which ends with a carriage return)
-        console.print(text.ljust(console.width - 1) if console.is_terminal else text, style="red", highlight=False,
-                      markup=False, soft_wrap=True)
+        # on a terminal, over the progress line (which ends with a carriage return); elsewhere wrapped to the width
+        console.print(text.ljust(console.width - 1) if console.is_terminal else wrap(text, width=console.width),
+                      style="red", highlight=False, markup=False, soft_wrap=True)
 
     return show
 
 
 def live_progress(console: Console) -> TickCallback:
-    """A tick hook that shows the active leaf, its feedback, the tick and the simulated time."""
-    state = {"last": ""}
+    """A tick hook that shows the active leaf, its feedback, the tick and the simulated time: one line redrawn in
+    place, on a terminal only (in a pipe or a file, progress is noise between the lines that matter)."""
 
     def hook(tick: int, tree: LoadedTree) -> None:
-        if not console.is_terminal and tick % 100:
+        if not console.is_terminal:
             return
         running = [n for n in tree.nodes() if n.bt_state.value == "RUNNING" and not n.children]
         leaf = running[-1] if running else None
         text = f"tick {tick:5d}  t={tree.clock.now_ns() * 1e-9:6.2f} s  " + (
             f"{leaf.name}: {leaf.feedback_message}" if leaf is not None else ""
         )
-        if console.is_terminal:
-            console.print(text[: console.width - 1], end="\r", highlight=False, soft_wrap=True, markup=False)
-        elif text != state["last"]:
-            console.print(text, highlight=False, markup=False)
-        state["last"] = text
+        console.print(text[: console.width - 1], end="\r", highlight=False, soft_wrap=True, markup=False)
 
     return hook
 
 
 def run(
     tree: Path = typer.Argument(..., help="Tree file: BehaviorTree.CPP v4 XML or bt_grasp YAML."),
-    scene: Path = typer.Option(..., "--scene", help="Scene YAML file."),
+    scene: Path | None = typer.Option(None, "--scene", help="Scene YAML file (a run on the simulator)."),
+    cell: Path | None = typer.Option(None, "--cell", help="Cell YAML file: run on a real cell (a UR through ur_rtde "
+                                     "and a RealSense) or a twin of one, on the wall clock (docs/real-cell.md)."),
+    yes: bool = typer.Option(False, "--yes", help="With --cell: do not ask before the arm's first motion."),
     seed: int = typer.Option(0, "--seed", help="Seed of object poses, camera noise, planners and faults."),
     calibration: Path | None = typer.Option(None, "--calibration", help="Calibration YAML from `bt-grasp calibrate`."),
     log: Path | None = typer.Option(None, "--log", help="Write the run to this MCAP file."),
@@ -184,8 +203,9 @@ def run(
         "(docs/interactive.md). Starts paused."
     ),
     break_: list[str] = typer.Option(
-        [], "--break", metavar="SPEC", help="With --interactive, pause at: node:NAME (before it starts), fail, "
-        "fail:REASON, bb:KEY (it changed), tick:N, time:S (repeatable)."
+        [], "--break", metavar="SPEC", help="With --interactive, pause at: node:NAME (before it starts), fail (a "
+        "leaf FAILURE not false by design, as replay --failures lists them), fail:REASON, fail:all (every leaf "
+        "FAILURE), bb:KEY (it changed), tick:N, time:S (repeatable)."
     ),
     control: bool = typer.Option(
         False, "--control", help="With --live: take commands from Foxglove (the Parameters and Publish panels of "
@@ -202,17 +222,31 @@ def run(
         "reach a loopback port)."
     ),
 ) -> None:
-    """Run a task tree on the simulated cell. Exit code 0 on task success (judged by physics), 1 on failure."""
+    """Run a task tree on the simulated cell (or a real one: --cell). Exit code 0 on task success (judged by physics),
+    1 on failure."""
+    if cell is not None or scene is None:
+        from bt_grasp.cli.cell_run_cmd import cell_request, refuse_simulator_options, run_cell
+
+        if scene is not None or cell is None:
+            raise InputError("--scene", "give one of --scene SCENE (the simulator) or --cell CELL (a real cell), "
+                             f"{'not both' if scene is not None else 'got neither'}")
+        refuse_simulator_options({"--faults": faults is not None, "--inject": bool(inject), "--live": live is not None,
+                                  "--realtime": realtime is not None, "--image-hz": image_hz > 0,
+                                  "--resident": resident, "--interactive": interactive, "--break": bool(break_),
+                                  "--control": control})
+        on_cell = cell_request(tree, cell, seed, calibration, log, max_ticks, set_, goal.value if goal else None,
+                               color, lift_height, tuple(leaves))
+        show = None if quiet else failure_line(Console(stderr=True))
+        raise typer.Exit(run_cell(on_cell, yes=yes, as_json=as_json, summary_json=summary_json, show_failure=show))
     # only what every run needs here: a --resident run's client hands the request over and imports neither the
     # episode (the simulator's modules) nor the control package (issue 27)
-    from bt_grasp.episode.request import EpisodeRequest, parse_assignments
+    from bt_grasp.episode.request import EpisodeRequest, parse_assignments, run_blackboard
     from bt_grasp.files.output_files import check_output_file, write_output_file
     from bt_grasp.recording.reproducible import log_epoch_ns
 
-    blackboard: dict[str, BlackboardValue] = {"lift_height": lift_height}
-    if color is not None:  # not given: the scene's default (bt_grasp.scene.run_goal.default_color)
-        blackboard["color"] = color
-    blackboard.update(parse_assignments(set_))
+    # not given, no color: the scene's default (bt_grasp.scene.run_goal.default_color); a campaign's episode gets
+    # its blackboard by the same rule
+    blackboard = run_blackboard(parse_assignments(set_), color=color, lift_height=lift_height)
     request = EpisodeRequest(
         tree=tree,
         scene=scene,

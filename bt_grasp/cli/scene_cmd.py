@@ -16,11 +16,26 @@ scene_app = typer.Typer(help="Inspect scene files.", no_args_is_help=True)
 
 @scene_app.command("validate")
 def validate(scene: Path = typer.Argument(..., help="Scene YAML file.")) -> None:
-    """Check a scene file and print a one-line summary."""
+    """Check a scene file as `bt-grasp run` checks it (its calibration file among them) and print a one-line
+    summary; a note when a run with no --goal or --color would refuse it."""
+    from bt_grasp.cli.text_width import wrap
+    from bt_grasp.episode.episode import check_goal
+    from bt_grasp.episode.request import run_blackboard
+    from bt_grasp.errors import InputError
+    from bt_grasp.perception.calibration_file import calibration_for_scene
     from bt_grasp.scene.format import load_scene
+    from bt_grasp.scene.run_goal import goal_for_run
 
     config = load_scene(scene)
-    typer.echo(f"{scene}: ok ({len(config.objects)} objects, camera {config.camera.mount})")
+    calibration_for_scene(config, scene, None)  # what `run` refuses: the file it names missing, another mount
+    note = ""
+    try:  # the goal a run with no --goal/--color judges: the scene's, else a pick of its default colour
+        check_goal(goal_for_run(config, run_blackboard()), config, scene, given=False)
+    except InputError as exc:
+        if config.goal is not None:
+            raise  # the scene's own goal cannot be judged: the file is wrong, whatever the options
+        note = "\n" + wrap(f"note: `bt-grasp run` with no --goal or --color refuses it: {exc.message}")
+    typer.echo(f"{scene}: ok ({len(config.objects)} objects, camera {config.camera.mount}){note}")
 
 
 @scene_app.command("render")

@@ -18,7 +18,7 @@ class ModelChoice(StrEnum):
 
 
 class GripperChoice(StrEnum):
-    """`twin --gripper`: the gripper models (``bt_grasp.sim.twin.gripper_models.GripperName``)."""
+    """`twin --gripper`: the gripper models (``bt_grasp.cell.grippers.GripperName``)."""
 
     robotiq_2f85 = "robotiq-2f85"
     bt_grasp = "bt-grasp"
@@ -49,6 +49,10 @@ def twin(
                                     help="Render the camera continuously at this rate (0: on request)."),
     control_port: int = typer.Option(30100, "--control-port", min=1024, max=65535,
                                      help="The twin's own port (faults, judge, camera)."),
+    camera_port: int = typer.Option(30101, "--camera-port", min=1024, max=65535,
+                                    help="The twin's camera port (a run's frames, as a D435 delivers them)."),
+    board: bool = typer.Option(False, "--board", help="Screw the ChArUco calibration board to the gripper (for "
+                               "`bt-grasp calibrate --cell`); the cell file then names it."),
     realtime: bool = typer.Option(True, "--realtime/--no-realtime", help="Ask for real-time scheduling of the "
                                   "controller's cycle, as a robot controller has (refused without the permission)."),
 ) -> int:
@@ -69,8 +73,8 @@ def twin(
         typer.echo(remote_warning(host), err=True)
     logging.basicConfig(level=logging.INFO, format="twin: %(levelname)s %(name)s: %(message)s", stream=sys.stderr)
     sys.setswitchinterval(0.001)  # the controller's thread gets the interpreter within 1 ms of wanting it
+    from bt_grasp.cell.grippers import GripperName
     from bt_grasp.sim.twin.config import MODELS, TwinConfig
-    from bt_grasp.sim.twin.gripper_models import GripperName
     from bt_grasp.sim.twin.twin import Twin, check_ports_free
 
     def taken(exc: OSError) -> InputError:
@@ -78,19 +82,19 @@ def twin(
                           "the port; give another loopback address such as 127.0.0.2)")
 
     try:
-        check_ports_free(host, control_port)
+        check_ports_free(host, control_port, camera_port)
     except OSError as exc:
         raise taken(exc) from None
 
     config = TwinConfig(host=host, model=MODELS[model.value], gripper=GripperName(gripper.value),
-                        unlock_delay_s=unlock_delay, control_port=control_port,
-                        realtime_priority=10 if realtime else None)
+                        unlock_delay_s=unlock_delay, control_port=control_port, camera_port=camera_port,
+                        board=board, realtime_priority=10 if realtime else None)
+    the_twin = Twin(scene, config, seed)
     if write_cell is not None:
         from bt_grasp.sim.twin.cell_writer import write_cell as write
 
-        write(config_scene, scene, config, write_cell)
+        write(config_scene, scene, config, write_cell, the_twin.board)
         typer.echo(f"cell file: {write_cell}")
-    the_twin = Twin(scene, config, seed)
     try:
         the_twin.start()
     except OSError as exc:
@@ -102,7 +106,7 @@ def twin(
     if camera_hz > 0:
         the_twin.camera("on", camera_hz)
     typer.echo(f"twin of {scene} serving {model.value} on {host}: RTDE 30004, dashboard 29999, script 30003, "
-               f"gripper 63352, control {control_port} (Ctrl-C stops)")
+               f"gripper 63352, control {control_port}, camera {camera_port} (Ctrl-C stops)")
     sys.stdout.flush()
     try:
         while not stop.wait(0.5):

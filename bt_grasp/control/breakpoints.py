@@ -5,8 +5,11 @@ A breakpoint is written as a spec (``--break SPEC`` on ``bt-grasp run``, repeata
 ==================  ===========================================================================================
 ``node:NAME``       before node NAME (a name, or a path such as ``pick/Perceive``) starts: the tick holds just
                     before the node's own tick, when the node is not already RUNNING (a new attempt)
-``fail``            after a tick in which a leaf returned FAILURE
-``fail:REASON``     ... a FAILURE with this reason code (``NO_DETECTION``, ``IK_UNREACHABLE``, ...)
+``fail``            after a tick in which a leaf returned FAILURE, unless the failure was false by design (a
+                    condition asked by a Fallback, or answering "no" without a reason: the failures
+                    ``replay --failures`` sets apart; ``bt_grasp.tree.failure_kinds``)
+``fail:REASON``     ... such a FAILURE with this reason code (``NO_DETECTION``, ``IK_UNREACHABLE``, ...)
+``fail:all``        after a tick in which a leaf returned FAILURE, those false by design included
 ``bb:KEY``          after a tick that changed blackboard entry KEY (of the main tree; its value differs)
 ``tick:N``          after tick N (``tick:0``: before the first tick)
 ``time:S``          at the first tick boundary at or after S simulated seconds
@@ -24,7 +27,9 @@ from dataclasses import dataclass
 from bt_grasp.errors import InputError
 
 SOURCE = "--break"
-SYNTAX = "node:NAME, fail, fail:REASON, bb:KEY, tick:N or time:S"
+SYNTAX = "node:NAME, fail, fail:REASON, fail:all, bb:KEY, tick:N or time:S"
+#: ``fail:all``'s target: every leaf FAILURE (reason codes are upper case, so no reason is named this)
+EVERY_FAILURE = "all"
 #: a run holds at most this many breakpoints (20,000 in one message stalled the tick loop for minutes)
 MAX_BREAKPOINTS = 100
 #: the longest spec (a node's path, a reason, an entry's name)
@@ -41,13 +46,20 @@ class BreakKind(enum.StrEnum):
 
 @dataclass(frozen=True)
 class Breakpoint:
-    """One breakpoint. ``target``: the node (NODE), the reason ('' for any: FAILURE), the entry (BLACKBOARD);
-    ``tick`` for TICK; ``time_s`` for TIME."""
+    """One breakpoint. ``target``: the node (NODE), the reason ('' for any failure not false by design,
+    :data:`EVERY_FAILURE` for every one: FAILURE), the entry (BLACKBOARD); ``tick`` for TICK; ``time_s`` for
+    TIME."""
 
     kind: BreakKind
     target: str = ""
     tick: int = 0
     time_s: float = 0.0
+
+    def stops_at(self, reason: str | None, by_design: bool) -> bool:
+        """Whether this FAILURE breakpoint stops at a leaf FAILURE with ``reason``."""
+        if self.target == EVERY_FAILURE:
+            return True
+        return not by_design and (not self.target or self.target == reason)
 
     @property
     def spec(self) -> str:

@@ -59,14 +59,13 @@ from bt_grasp.tree.introspect import bt_status_name
 if TYPE_CHECKING:
     from bt_grasp.tree.loader import LoadedTree
     from bt_grasp.tree.node import BtNode
+    from bt_grasp.tree.runner import FailureEvent
 
 log = logging.getLogger(__name__)
 
 #: while the run goes, the view is rebuilt at most this often (wall time: it changes only what is shown)
 VIEW_INTERVAL_S = 0.05
 
-#: a failure as the tick loop hands it over: (leaf path, leaf name, reason code or None, message)
-Failure = tuple[str, str, str | None, str]
 
 
 class InterventionSink(Protocol):
@@ -185,11 +184,12 @@ class Controller:
         self._file_settings = tuple(k for k in self._settings if names_a_file(k, reading_ports(tree, k)))
         self._remember_blackboard()
 
-    def between_ticks(self, tick: int, failures: Sequence[Failure] = ()) -> bool:
+    def between_ticks(self, tick: int, failures: Sequence[FailureEvent] = ()) -> bool:
         """After tick ``tick`` (0: before the first): apply commands, pause as asked; True: stop the run."""
         self._tick = tick
-        for path, name, reason, message in failures:
-            self._last_failure = FailureView(tick, name, path, reason, message)
+        for event in failures:  # the view's last failure: the last one that was not false by design
+            if not event.by_design:
+                self._last_failure = FailureView(tick, event.leaf, event.path, event.reason, event.message)
         hit = self._hit(tick, failures)
         self._last_time_s = self._now_ns() * 1e-9
         if tick > 0 and self._steps_left:
@@ -215,8 +215,12 @@ class Controller:
                 return False
             self._wait_for_command()
 
-    def finish(self) -> None:
-        """The run ended: the view says so (a front end may keep showing it)."""
+    def finish(self, tick: int | None = None) -> None:
+        """The run ended (after ``tick``, its last: the result's tick count): the view says so (a front end may
+        keep showing it). The tick loop consults no gate after the tick that ends the run, so the view's tick
+        is the one before until this sets it."""
+        if tick is not None:
+            self._tick = tick
         self._finished, self._paused = True, False
         self._publish(force=True)
 
@@ -353,7 +357,7 @@ class Controller:
                 return
             self._wait_for_command()
 
-    def _hit(self, tick: int, failures: Sequence[Failure]) -> str:
+    def _hit(self, tick: int, failures: Sequence[FailureEvent]) -> str:
         """Why a breakpoint stops the run after ``tick`` ('' when none does)."""
         now_s = self._now_ns() * 1e-9
         for bp in self._breakpoints:
@@ -362,9 +366,10 @@ class Controller:
             if bp.kind is BreakKind.TIME and self._last_time_s < bp.time_s <= now_s:
                 return f"breakpoint {bp.spec} (t = {now_s:.3f} s)"
             if bp.kind is BreakKind.FAILURE:
-                for path, _name, reason, _message in failures:
-                    if not bp.target or bp.target == reason:
-                        return f"breakpoint {bp.spec}: {path} failed ({reason or 'no reason'})"
+                for event in failures:
+                    if bp.stops_at(event.reason, event.by_design):
+                        design = ", false by design" if event.by_design else ""
+                        return f"breakpoint {bp.spec}: {event.path} failed ({event.reason or 'no reason'}{design})"
             if bp.kind is BreakKind.BLACKBOARD and tick > 0:
                 text = self._entry_text(bp.target)
                 if text != self._bb_seen.get(bp.target, text):

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from bt_grasp.detector.evaluate import EvalReport
+from bt_grasp.files.output_files import write_output_file
 
 CARD_MD = "MODEL_CARD.md"
 CARD_JSON = "MODEL_CARD.json"
@@ -150,7 +151,6 @@ class ModelCard:
         return "\n".join(lines) + "\n"
 
     def write(self, folder: Path) -> tuple[Path, Path]:
-        from bt_grasp.files.output_files import write_output_file
 
         md = write_output_file(folder / CARD_MD, self.to_markdown(), "--out")
         js = write_output_file(folder / CARD_JSON, json.dumps(self.to_json(), indent=2) + "\n", "--out")

@@ -34,6 +34,9 @@ from numpy.typing import NDArray
 
 from bt_grasp.detector.obb import DEFAULT_CONF, batch_probiou
 from bt_grasp.errors import InputError
+from bt_grasp.files.bounded_io import read_user_file
+from bt_grasp.files.config import read_yaml
+from bt_grasp.files.image_header import image_size
 
 #: Ultralytics' OBB validation thresholds
 EVAL_CONF = 0.01
@@ -80,6 +83,7 @@ class ClassMetrics:
     ap50_95: float
     elongated: int  # elongated labels matched by a prediction of their class (the angle errors' count)
     median_angle_error_deg: float | None
+    scored: int = 0  # the predictions AP scores: every one the model gave at EVAL_CONF (0.01) or more
 
 
 @dataclass(frozen=True)
@@ -218,7 +222,7 @@ def evaluate(truths: Sequence[Boxes], preds: Sequence[Boxes], names: Sequence[st
         errs = angle_errors[c]
         per_class.append(ClassMetrics(names[c], n_labels, int(((pred_cls == c) & (conf > DEFAULT_CONF)).sum()),
                                       float(ap[0]), float(ap.mean()), len(errs),
-                                      float(np.median(errs)) if errs else None))
+                                      float(np.median(errs)) if errs else None, scored=int(mine.sum())))
     every_error = [e for c in range(nc) for e in angle_errors[c]]
     ap_table = np.array(aps) if aps else np.zeros((0, len(IOU_THRESHOLDS)))
     return EvalReport(
@@ -246,7 +250,6 @@ def dataset_names(folder: Path) -> tuple[str, ...]:
     data = folder / "data.yaml"
     if not data.is_file():
         raise DatasetError(folder, "is not a dataset: it has no data.yaml (make one with `bt-grasp detector dataset`)")
-    from bt_grasp.files.config import read_yaml
 
     try:
         doc, _ = read_yaml(data)  # bounded: size, nesting, aliases
@@ -279,8 +282,6 @@ def read_image(path: Path) -> NDArray[np.uint8]:
     """One dataset picture (BGR), read bounded: a regular file of at most 64 MB whose header (PNG, JPEG) says at
     most 8192 pixels a side, so a FIFO, a link to /dev/zero or a small file saying 50,000 x 50,000 is one
     sentence, not a hang or an exhausted machine (found by the pre-review attack)."""
-    from bt_grasp.files.bounded_io import read_user_file
-    from bt_grasp.files.image_header import image_size
 
     data = read_user_file(path, MAX_DATASET_IMAGE_BYTES, error=DatasetError)
     size = image_size(data)
@@ -299,7 +300,6 @@ def read_labels(label_file: Path, width_px: int, height_px: int, nc: int) -> Box
     if not label_file.is_file():
         raise DatasetError(label_file, "no such label file (every image needs one; empty for no object)")
     xywhr, classes = [], []
-    from bt_grasp.files.bounded_io import read_user_file
 
     try:
         text = read_user_file(label_file, error=DatasetError).decode("utf-8")  # bounded: no FIFO, no giant file
@@ -333,7 +333,7 @@ def check_same_classes(model_names: Sequence[str], model: Path, names: Sequence[
 
 def evaluate_model(model_path: Path, dataset: Path, *, imgsz: int | None = None) -> EvalReport:
     """Run ``model_path`` through bt_grasp's inference path on every image of ``dataset`` and score it."""
-    from bt_grasp.detector.model import ObbModel
+    from bt_grasp.detector.model import ObbModel  # deferred: onnxruntime loads only when a model is evaluated
 
     names = dataset_names(dataset)
     images = dataset_images(dataset)
@@ -351,21 +351,28 @@ def evaluate_model(model_path: Path, dataset: Path, *, imgsz: int | None = None)
 
 
 def format_report(report: EvalReport) -> str:
-    """The report as text: the totals, a table per class, the confusion matrix."""
+    """The report as text (80 columns): the totals, a table per class, the confusion matrix. The table's
+    ``preds`` are the predictions its AP scores (score >= 0.01, as Ultralytics validates); ``> 0.25`` those the
+    pipeline keeps, which the angle errors and the confusion matrix pair with labels."""
     angle = "n/a" if report.median_angle_error_deg is None else f"{report.median_angle_error_deg:.1f} deg"
     lines = [f"{report.images} images, {report.labels} labels: mAP50 {report.map50:.3f}, mAP50-95 "
-             f"{report.map50_95:.3f}, median angle error of elongated objects {angle} ({report.angle_errors})",
-             f"{'class':<12} {'labels':>6} {'preds':>6} {'AP50':>6} {'AP50-95':>7} {'angle deg (n)':>14}"]
+             f"{report.map50_95:.3f},",
+             f"median angle error of elongated objects {angle} ({report.angle_errors})",
+             f"preds: the predictions AP scores (score >= {EVAL_CONF:g}); > {DEFAULT_CONF:g}: those the",
+             "pipeline keeps (the angle errors and the confusion matrix pair only these)",
+             f"{'class':<12} {'labels':>6} {'preds':>6} {'> ' + format(DEFAULT_CONF, 'g'):>6} {'AP50':>6} "
+             f"{'AP50-95':>7} {'angle deg (n)':>14}"]
     for c in report.per_class:
-        if not c.labels and not c.predictions:
+        if not c.labels and not c.scored and not c.predictions:
             continue
         ang = "-" if c.median_angle_error_deg is None else f"{c.median_angle_error_deg:.1f} ({c.elongated})"
-        lines.append(f"{c.name:<12} {c.labels:>6} {c.predictions:>6} {c.ap50:>6.3f} {c.ap50_95:>7.3f} {ang:>14}")
+        lines.append(f"{c.name[:12]:<12} {c.labels:>6} {c.scored:>6} {c.predictions:>6} {c.ap50:>6.3f} "
+                     f"{c.ap50_95:>7.3f} {ang:>14}")
     used = [i for i in range(len(report.names)) if any(report.confusion[i]) or any(r[i] for r in report.confusion)]
     used.append(len(report.names))
     labels = [*report.names, "backgr"]
-    lines.append("confusion (rows: true, columns: predicted, score > 0.25, IoU >= 0.5):")
+    lines.append(f"confusion (rows: true, columns: predicted, score > {DEFAULT_CONF:g}, IoU >= {MATCH_IOU:g}):")
     lines.append(" " * 12 + "".join(f"{labels[j][:7]:>8}" for j in used))
     for i in used:
-        lines.append(f"{labels[i]:<12}" + "".join(f"{report.confusion[i][j]:>8}" for j in used))
+        lines.append(f"{labels[i][:12]:<12}" + "".join(f"{report.confusion[i][j]:>8}" for j in used))
     return "\n".join(lines)

@@ -40,6 +40,7 @@ from bt_grasp.detector.letterbox import letterbox, to_input_tensor
 from bt_grasp.detector.obb import DEFAULT_CONF, DEFAULT_IOU, OrientedDetection, decode
 from bt_grasp.errors import InputError, did_you_mean
 from bt_grasp.files.bounded_io import MAX_MODEL_BYTES, read_user_file
+from bt_grasp.files.config import read_yaml
 
 #: onnxruntime threads for one model: 1 is steadier than 2 on a busy 2-core machine (PLATFORM-NOTES)
 DEFAULT_THREADS = 1
@@ -89,7 +90,6 @@ def _parse_names(raw: object, source: Path, where: str) -> tuple[str, ...]:
 
 
 def _read_card(path: Path) -> dict[str, Any]:
-    from bt_grasp.files.config import read_yaml
 
     try:
         data, _ = read_yaml(path)  # bounded: size, nesting, aliases

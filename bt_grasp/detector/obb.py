@@ -47,8 +47,8 @@ class OrientedDetection:
 
     def corners_px(self) -> NDArray[np.float64]:
         """The 4 corners (4, 2) in Ultralytics' ``xywhr2xyxyxyxy`` order."""
-        return xywhr_to_corners(np.array([[self.cx_px, self.cy_px, self.width_px, self.height_px,
-                                           self.angle_rad]]))[0]
+        corners = xywhr_to_corners(np.array([[self.cx_px, self.cy_px, self.width_px, self.height_px, self.angle_rad]]))
+        return np.asarray(corners[0], dtype=np.float64)
 
     @property
     def long_axis_rad(self) -> float:

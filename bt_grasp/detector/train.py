@@ -32,6 +32,10 @@ import yaml
 
 from bt_grasp.detector.evaluate import DatasetError, dataset_images, dataset_names
 from bt_grasp.errors import InputError
+from bt_grasp.files.bounded_io import read_user_file
+from bt_grasp.files.bounded_yaml import load_value
+from bt_grasp.files.config import read_yaml
+from bt_grasp.files.output_files import copy_output_file
 
 #: the network: Ultralytics' YOLO11 OBB family at the "n" scale, built from its YAML
 ARCHITECTURE = "yolo11n-obb.yaml"
@@ -110,7 +114,6 @@ def dataset_command(folder: Path) -> str | None:
     manifest = folder / "manifest.yaml"
     if not manifest.is_file():
         return None
-    from bt_grasp.files.config import read_yaml
 
     try:
         doc, _ = read_yaml(manifest)  # bounded: size, nesting, aliases
@@ -127,7 +130,7 @@ def dataset_command(folder: Path) -> str | None:
 
 def require_training_extra() -> None:
     """The training extra is installed (found without importing it), or a one-sentence error says how to get it."""
-    from importlib.util import find_spec
+    from importlib.util import find_spec  # deferred: start-up time (only when training checks its extra)
 
     for package in ("torch", "torchvision", "ultralytics", "onnxslim"):
         try:
@@ -166,7 +169,7 @@ def write_data_yaml(path: Path, datasets: Sequence[Path], val: Path | None, name
 
 
 def versions() -> dict[str, str]:
-    from importlib.metadata import PackageNotFoundError, version
+    from importlib.metadata import PackageNotFoundError, version  # deferred: as above
 
     out = {"python": platform.python_version()}
     for package in ("bt-grasp", "ultralytics", "torch", "torchvision", "onnx", "onnxslim", "onnxruntime"):
@@ -216,8 +219,6 @@ def check_resumable(run_dir: Path, request: TrainRequest, names: Sequence[str]) 
     args_file, data_file = run_dir / "args.yaml", run_dir / "data.yaml"
     if not last.is_file() or not args_file.is_file() or not data_file.is_file():
         raise InputError("--resume", f"{run_dir} holds no interrupted run (weights/last.pt, args.yaml and data.yaml)")
-    from bt_grasp.files.bounded_io import read_user_file
-    from bt_grasp.files.bounded_yaml import load_value
 
     docs = []
     for path in (args_file, data_file):
@@ -285,7 +286,6 @@ def train_model(request: TrainRequest) -> TrainResult:
         best = run_dir / "weights" / "last.pt"
     exported = Path(str(YOLO(str(best), task="obb").export(format="onnx", imgsz=request.imgsz, opset=ONNX_OPSET,
                                                              simplify=True, dynamic=False, device="cpu")))
-    from bt_grasp.files.output_files import copy_output_file
 
     onnx_path = copy_output_file(exported, out / f"{request.name}.onnx", "--out", example="model.onnx")
     epochs_run, metrics = _last_row(run_dir / "results.csv")

@@ -5,6 +5,9 @@ devices are (a simulated world's robot and camera, or a real cell's), it is put 
 
 1. the services on the devices (:func:`~bt_grasp.behaviours.cell.make_cell`): the planner seeded from the
    run's seeds, perception settings from the scene, the calibration if one was loaded, the board if mounted;
+   a real cell's devices bring more (:class:`RealCellServices`): the robot description with their gripper (the
+   kinematics and the planner's collision model), the motion guard and trajectory clock, the speed caps as motion
+   limits and grasp synthesis for their gripper;
 2. the planning instrument (:class:`~bt_grasp.episode.instruments.TimedPlanner`: counts the run's plans for
    its result; changes nothing);
 3. the log's media sink (pictures the leaves hand to the log), when the run is recorded or watched;
@@ -27,16 +30,34 @@ from bt_grasp.behaviours.cell import Cell, make_cell
 from bt_grasp.clock import Clock
 from bt_grasp.episode.instruments import TimedPlanner
 from bt_grasp.interfaces import Camera, Encoder, Robot
+from bt_grasp.seeds import Stream
 
 if TYPE_CHECKING:
-    from bt_grasp.behaviours.services import CameraCalibration
+    from pathlib import Path
+
+    from bt_grasp.behaviours.services import CameraCalibration, MotionGuard
     from bt_grasp.faults.injector import Injector
     from bt_grasp.faults.physics import PhysicsHook
     from bt_grasp.faults.plan import FaultPlan
+    from bt_grasp.motion.trajectory import MotionLimits
     from bt_grasp.perception.calibration import BoardMount
+    from bt_grasp.perception.config import GraspSettings
     from bt_grasp.recording.writer import RunRecorder
     from bt_grasp.scene.format import Scene
     from bt_grasp.tree.loader import LoadedTree
+
+
+@dataclass(frozen=True)
+class RealCellServices:
+    """What a real cell's devices bring to the services: the robot description with its gripper (kinematics and
+    collision model), the guard every trajectory passes before it is sent, trajectory time (the speed slider slows
+    it), the cell's caps as motion limits and grasp synthesis for its gripper."""
+
+    robot_urdf: Path
+    guard: MotionGuard
+    motion_clock: Clock
+    motion_limits: MotionLimits
+    grasp_settings: GraspSettings
 
 
 @dataclass(frozen=True)
@@ -54,6 +75,7 @@ class CellDevices:
     board: BoardMount | None = None  # the calibration board mounted in the cell (None: none)
     perception_latency_s: float = 0.0
     encoders: Mapping[str, Encoder] = field(default_factory=dict)  # conveyors' encoders by fixture name
+    real: RealCellServices | None = None  # a real cell's (None: the simulator's, bt_grasp's own gripper)
 
 
 @dataclass(frozen=True)
@@ -92,6 +114,8 @@ def assemble_cell(devices: CellDevices, scene: Scene, seed: int, calibration: Ca
     cell = make_cell(devices.robot, devices.camera, devices.clock, scene, seed, calibration=calibration,
                      board=devices.board, perception_latency_s=devices.perception_latency_s)
     cell.encoders = dict(devices.encoders)
+    if devices.real is not None:
+        _real_services(cell, devices.real)
     planning = TimedPlanner(cell.planner)
     cell.planner = planning
     if recorder is not None:
@@ -105,3 +129,17 @@ def assemble_cell(devices: CellDevices, scene: Scene, seed: int, calibration: Ca
         site = _Site(cell, faults.tree, faults.physics, faults.seed_sequence)
         injector = install_faults(faults.plan, site, recorder)
     return AssembledCell(cell, planning, injector)
+
+
+def _real_services(cell: Cell, real: RealCellServices) -> None:
+    from bt_grasp.motion.kinematics import SeededKinematics, default_kinematics
+    from bt_grasp.motion.planner import MotionPlanner
+
+    # the gripper's robot description, its IK restarts still on the run's stream (as make_cell seeds them)
+    cell.kinematics = SeededKinematics(default_kinematics(urdf_path=real.robot_urdf), cell.seeds.integer(Stream.IK))
+    cell.planner = MotionPlanner(urdf_path=real.robot_urdf)
+    cell.guard = real.guard
+    cell.motion_clock = real.motion_clock
+    cell.motion_limits = real.motion_limits
+    cell.grasp_settings = real.grasp_settings
+    cell.perception_config = cell.perception_config.model_copy(update={"grasp": real.grasp_settings})

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from bt_grasp.episode.request import BlackboardValue, EpisodeRequest
-from bt_grasp.episode.result import ChainStep, EpisodeResult, Judged, interrupted_result
+from bt_grasp.episode.result import GOAL_NOT_MET, ChainStep, EpisodeResult, Judged, interrupted_result
 from bt_grasp.episode.worlds import FreshWorlds, WorldSource
 from bt_grasp.errors import InputError
 from bt_grasp.scene.goals import CollectGoal, Goal, PickGoal
@@ -85,7 +85,7 @@ def load_inputs(request: EpisodeRequest) -> Inputs:
 
     scene = load_scene(request.scene)
     goal = request.goal if request.goal is not None else goal_for_run(scene, request.blackboard)
-    _check_goal(goal, request, scene)
+    check_goal(goal, scene, request.scene, given=request.goal is not None)
     from bt_grasp.perception.calibration_file import calibration_for_scene
 
     # --calibration, else the file the scene names beside it; another mount or camera pose is bad input
@@ -117,17 +117,20 @@ def _check_log_path(log_path: Path | None, inputs: tuple[Path | None, ...] = ())
     check_output_file(log_path, "--log", example="run.mcap", inputs=inputs)  # never over the run's own inputs
 
 
-def _check_goal(goal: Goal, request: EpisodeRequest, scene: Scene) -> None:
+def check_goal(goal: Goal, scene: Scene, scene_path: Path, *, given: bool) -> None:
+    """The judge can check ``goal`` on ``scene`` (read from ``scene_path``): InputError (naming ``--goal`` when the
+    goal was ``given``, else the scene) when no checker exists, or a pick's colour is no object's colour.
+    ``bt-grasp run`` and ``scene validate`` ask this of the same goal."""
     from bt_grasp.sim.judge import cannot_judge
 
     problem = cannot_judge(goal)
     if problem is not None:
-        raise InputError(request.scene if request.goal is None else "--goal", problem)
+        raise InputError("--goal" if given else scene_path, problem)
     if isinstance(goal, PickGoal) and goal.color and goal.object is None:
         colors = sorted({str(o.color) for o in scene.objects if o.color is not None})
         if goal.color not in colors:
             raise InputError("--color", f"the pick goal's colour '{goal.color}' is not the colour of any object "
-                                        f"of {request.scene} (colours there: {', '.join(colors) or 'none named'}); "
+                                        f"of {scene_path} (colours there: {', '.join(colors) or 'none named'}); "
                                         "give --color '' to pick any object")
 
 
@@ -199,6 +202,7 @@ class Episode:
         observers: list[TickCallback] = []
         extras = None
         injector: Injector | None = None
+        ticked = [0]  # the last tick started (an interrupted run's result says where it stopped)
         try:
             cell = self._assemble(recorder, controller)
             injector = self._injector
@@ -218,8 +222,6 @@ class Episode:
             # the judge reads contacts every tick only for goals judged by placement (~0.1 ms a tick otherwise
             # spent on a pick, `bt-grasp bench budget`); reading changes nothing in the world
             observe = judge.observe if judge.places(self.inputs.goal) else None
-
-            ticked = [0]  # the last tick started (an interrupted run's result says where it stopped)
 
             def tick_hook(tick: int, tree: LoadedTree) -> None:
                 ticked[0] = tick
@@ -253,6 +255,9 @@ class Episode:
                 if recorder is not None:
                     recorder.write_result(world.now_ns(), interrupted_result(ticked[0], world.now_ns(), request.seed))
                 raise
+            unfinished = cell.attempts.finish(outcome.ticks)  # an attempt still going when the run ended
+            if unfinished is not None:
+                cell.media.attempt(unfinished)
             # a placement goal's "resting for 1 s after release" needs the world to run on a little
             for _ in range(judge.settle_ticks(self.inputs.goal)):
                 world.step_tick()
@@ -261,16 +266,22 @@ class Episode:
             last = outcome.last_failure
             success = verdict.success and outcome.status == "SUCCESS"
             reason = None
+            # the tree succeeded and the goal did not: the goal's first unmet condition is why, not a leaf's
+            # failure the tree recovered from (a leaf's reason only when the tree failed)
+            goal_not_met = not success and outcome.status == "SUCCESS"
             if not success:
                 reason = last.reason if last else ("MAX_TICKS" if outcome.status == "RUNNING" else None)
+                if goal_not_met:
+                    reason = GOAL_NOT_MET
                 if outcome.stopped:
                     reason = "STOPPED"  # an operator ended the run (bt_grasp.control)
+            blamed = None if success or goal_not_met else last
             result = EpisodeResult(
                 success=success,
                 tree_status=outcome.status,
                 reason=reason,
-                failed_leaf=None if success else (last.leaf if last else None),
-                failed_path=None if success else (last.path if last else None),
+                failed_leaf=blamed.leaf if blamed else None,
+                failed_path=blamed.path if blamed else None,
                 failure_chain=tuple(ChainStep(e.tick, e.stamp_ns * 1e-9, e.path, e.reason, e.followed)
                                     for e in outcome.chain),
                 ticks=outcome.ticks,
@@ -278,9 +289,11 @@ class Episode:
                 wall_time_s=outcome.wall_time_s,
                 retries=outcome.retries,
                 judged=judged(verdict, judge.object_poses()),
+                also_judged=tuple(judged(judge.check(g)) for g in request.also_judge),
                 log=str(request.log) if request.log else None,
                 seed=request.seed,
                 faults_fired=injector.fired if injector is not None else 0,
+                faults=injector.report() if injector is not None else (),
                 goal=self.inputs.goal,
                 planning=self.planning.stats(),
             )
@@ -292,7 +305,7 @@ class Episode:
                 recorder.write_result(world.now_ns(), _logged_result(result.to_json(), request.log_epoch_ns))
         finally:
             if controller is not None:
-                controller.finish()
+                controller.finish(ticked[0])  # the view's last tick: the result's
             if injector is not None:
                 injector.close()  # a reused world starts the next episode as built
             if recorder is not None:

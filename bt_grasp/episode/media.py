@@ -7,6 +7,7 @@ from collections.abc import Callable, Mapping, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from bt_grasp.behaviours.attempts import Attempt
 from bt_grasp.behaviours.services import TrajectoryKind
 from bt_grasp.interfaces import RGBDFrame
 from bt_grasp.perception.results import GraspCandidate, PerceptionResult
@@ -79,3 +80,6 @@ class RecorderSink:
 
     def servo(self, name: str, values: Mapping[str, float | bool | str]) -> None:
         self.recorder.write_event(self.now_ns(), "servo", {"leaf": name, **values})
+
+    def attempt(self, attempt: Attempt) -> None:
+        self.recorder.write_attempt(self.now_ns(), attempt.to_json())

@@ -6,6 +6,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from bt_grasp.defaults import DEFAULT_LIFT_HEIGHT_M
 from bt_grasp.defaults import DEFAULT_MAX_TICKS as DEFAULT_MAX_TICKS
 from bt_grasp.errors import InputError
 from bt_grasp.scene.goals import Goal
@@ -56,6 +57,24 @@ class EpisodeRequest:
     #: the log's time origin fixed (ns since 1970, from ``SOURCE_DATE_EPOCH``): the log then holds no wall-clock
     #: reading, so the same request writes the same bytes (``bt_grasp.recording.reproducible``); None: now
     log_epoch_ns: int | None = None
+    #: more goals the judge checks at the end besides ``goal`` (``EpisodeResult.also_judged``; they decide
+    #: nothing): a benchmark's figures under another definition of the same task, from the same run
+    also_judge: tuple[Goal, ...] = ()
+
+
+def run_blackboard(entries: Mapping[str, BlackboardValue] | None = None, *, color: str | None = None,
+                   lift_height: float = DEFAULT_LIFT_HEIGHT_M) -> dict[str, BlackboardValue]:
+    """The one rule for what a run puts on the main blackboard before its first tick, whoever asks for it
+    (``bt-grasp run``, a campaign's episode, ``bench tasks``): ``lift_height`` (``--lift-height``, default 0.15 m),
+    ``color`` only when one is given (``--color``; else the goal's: the scene's declared goal, else a pick of
+    the scene's default colour, :func:`bt_grasp.scene.run_goal.default_color`), then ``entries`` over them
+    (``--set KEY=VALUE``; a campaign's ``blackboard`` row). The same settings give the same blackboard, so the
+    same episode."""
+    out: dict[str, BlackboardValue] = {"lift_height": lift_height}
+    if color is not None:
+        out["color"] = color
+    out.update(entries or {})
+    return out
 
 
 def parse_assignments(items: Sequence[str], source: str = "--set") -> dict[str, BlackboardValue]:

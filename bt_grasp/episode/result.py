@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from bt_grasp.episode.instruments import PlanningStats
+from bt_grasp.faults.firing import FaultFiring
 from bt_grasp.files.json_types import JsonObject, JsonValue
 from bt_grasp.scene.goals import Goal
 
@@ -29,11 +30,13 @@ class Judged:
     objects_in_workspace: tuple[str, ...] = ()
     #: every object's final T_world_object (4x4): the end of the run's fingerprint (recording/fingerprint.py)
     object_poses: dict[str, list[list[float]]] = field(default_factory=dict)
+    #: who judged: the simulator's judge (a simulated run), the twin's physics judge, or a real cell's own checks
+    source: str = "simulator ground truth (judge only)"
 
     def to_json(self) -> JsonObject:
         poses: dict[str, JsonValue] = {n: [list(row) for row in T] for n, T in self.object_poses.items()}
         return {
-            "source": "simulator ground truth (judge only)",
+            "source": self.source,
             "goal": goal_json(self.goal),
             "task": self.goal.kind,
             "success": self.success,
@@ -67,8 +70,9 @@ class ChainStep:
 class EpisodeResult:
     """``success``: the goal judged met by physics AND the tree returned SUCCESS.
 
-    ``reason``/``failed_leaf``: the last leaf FAILURE (or ``MAX_TICKS`` when the tick limit ran out, or
-    ``GOAL_NOT_MET`` with the judge's failed condition when the tree succeeded but the goal was not met).
+    ``reason``/``failed_leaf``: the last leaf FAILURE when the tree failed (or ``MAX_TICKS`` when the tick limit
+    ran out); ``GOAL_NOT_MET`` and no leaf when the tree succeeded but the goal was not met (the judge's first
+    unmet condition, ``judged.failed_condition``, says why).
     ``failed_path``: that leaf's path, its one name in every output (``tree show``, logs, replay, reports).
     """
 
@@ -92,6 +96,11 @@ class EpisodeResult:
     failed_path: str | None = None
     #: every leaf FAILURE that was not by design, in order, with what followed it (the run summary's last lines)
     failure_chain: tuple[ChainStep, ...] = ()
+    #: the verdicts on the request's ``also_judge`` goals, in order (they decide nothing)
+    also_judged: tuple[Judged, ...] = ()
+    #: every fault that fired, in order: when, armed by which leaf, the object a push hit and whether the tree
+    #: ever touched it (``FaultFiring.missed``: a fault that tested nothing the tree did)
+    faults: tuple[FaultFiring, ...] = ()
     #: wall time spent preparing the episode (inputs loaded, world built, tree wired) before its first tick;
     #: set by whoever prepared it (a campaign worker), 0 when nobody measured it. Not in ``to_json``: the log's
     #: result holds no wall-clock figure of preparation.
@@ -101,9 +110,13 @@ class EpisodeResult:
     def object_lift_m(self) -> float:
         return self.judged.object_lift_m
 
+    def unmet(self) -> tuple[str, str] | None:
+        """The goal's first unmet condition and what the judge measured (None when the goal was met)."""
+        return next(((c, d) for c, met, d in self.judged.conditions if not met), None)
+
     def to_json(self) -> JsonObject:
         retries: dict[str, JsonValue] = {k: v for k, v in self.retries.items()}
-        return {
+        out: JsonObject = {
             "success": self.success,
             "tree_status": self.tree_status,
             "reason": self.reason,
@@ -122,10 +135,16 @@ class EpisodeResult:
             "faults_fired": self.faults_fired,
             "planning": {k: v for k, v in self.planning.to_json().items()},
         }
+        if self.faults:  # only when one fired: a run without faults records what it always did
+            out["faults"] = [f.to_json() for f in self.faults]
+        return out
 
 
 #: ``reason`` of a run a Ctrl-C ended (its result is not judged: ``success`` is null)
 INTERRUPTED = "INTERRUPTED"
+#: ``reason`` of a run whose tree succeeded and whose goal was not met (``judged.failed_condition`` says which
+#: condition; no leaf is blamed: the failures the tree recovered from are in ``failure_chain``)
+GOAL_NOT_MET = "GOAL_NOT_MET"
 
 
 def interrupted_result(tick: int, now_ns: int, seed: int) -> JsonObject:

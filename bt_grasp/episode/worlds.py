@@ -21,6 +21,28 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 
+_AT_EXIT: list[bool] = []  # whether the exit handler below is registered (once per process)
+
+
+def _collect_frozen_at_exit() -> None:
+    """At the interpreter's exit, unfreeze and collect what :class:`WarmWorlds` froze. Frozen objects are never
+    collected, not even at exit: the planners' reference cycles were still alive when the interpreter tore down
+    OMPL's bindings, and nanobind printed 28 lines of "leaked ... ompl" to the stderr of every script that ran an
+    episode on warm worlds (the campaign workers left by ``os._exit``; a library's user has no such exit). An exit
+    handler runs before the teardown, so the cycles go while their bindings still exist: nothing leaks, nothing is
+    printed."""
+    if _AT_EXIT:
+        return
+    import atexit
+
+    def collect() -> None:
+        gc.unfreeze()
+        gc.collect()
+
+    atexit.register(collect)
+    _AT_EXIT.append(True)
+
+
 class WorldSource(Protocol):
     """Gives the world for one episode, as if built anew for ``(scene, seed)``."""
 
@@ -50,6 +72,7 @@ class WarmWorlds:
     def __init__(self) -> None:
         self.world: World | None = None
         self.built = 0
+        _collect_frozen_at_exit()
 
     def world_for(self, scene: Scene, seed: int, source: Path) -> World:
         from bt_grasp.sim.render_keeper import keep_renderer_warm

@@ -20,7 +20,8 @@ from bt_grasp.errors import InputError
 from bt_grasp.faults.armed import ArmedFault
 from bt_grasp.faults.camera import FaultyCamera
 from bt_grasp.faults.effects import SERVICE_KINDS, START, Wrapped
-from bt_grasp.faults.model import ObjectNudgeParams, ServiceFailParams
+from bt_grasp.faults.firing import FaultFiring
+from bt_grasp.faults.model import FaultKind, ObjectNudgeParams, ServiceFailParams
 from bt_grasp.faults.plan import Fault, FaultPlan
 from bt_grasp.faults.robot import FaultyRobot
 from bt_grasp.faults.services import FaultyKinematics, FaultyPlanner
@@ -73,6 +74,9 @@ class Injector:
         self._tick = 0  # the last tick finished
         self._in_after_tick = False
         self._faults = [_Armed(f, i) for i, f in enumerate(plan.faults)]
+        #: the objects a finger touched so far, watched (after every tick) only when a fault may push one
+        self.touched: set[str] = set()
+        self._watch_touches = any(f.kind is FaultKind.OBJECT_NUDGE for f in plan.faults)
         #: the run's fault stream (``install_faults`` sets it): faults fired by hand draw from it too
         self.seed_sequence: np.random.SeedSequence | None = None
         check_fault_plan(plan, leaves, None)
@@ -118,6 +122,8 @@ class Injector:
     def after_tick(self, tick: int) -> None:
         """Called after every tick: tick triggers, timers, episodes that end with their leaf's attempt."""
         self._tick = tick
+        if self._watch_touches:
+            self.touched |= self.wrapped.physics.objects_touching_fingers()
         self._in_after_tick = True
         try:
             self._after_tick(tick)
@@ -135,12 +141,26 @@ class Injector:
                 np.random.SeedSequence(seq.entropy, spawn_key=(*seq.spawn_key, index)))
         armed = _Armed(fault, index)
         self._faults.append(armed)
+        self._watch_touches |= fault.kind is FaultKind.OBJECT_NUDGE
         self._tick = tick
         self._in_after_tick = True
         try:
             self._arm(armed, None)
         finally:
             self._in_after_tick = False
+
+    def report(self) -> tuple[FaultFiring, ...]:
+        """Every firing so far, in order, with the object each push hit and whether the tree touched it."""
+        out = []
+        for record in self.firings:
+            details = record.get("details")
+            target = details.get("object") if isinstance(details, dict) else None
+            name = target if isinstance(target, str) else None
+            tick, leaf = record.get("tick"), record.get("leaf")
+            out.append(FaultFiring(str(record.get("label")), str(record.get("kind")), tick if isinstance(tick, int)
+                                   else 0, leaf if isinstance(leaf, str) else None, name,
+                                   None if name is None else name in self.touched))
+        return tuple(out)
 
     def close(self) -> None:
         """The run ended: undo what is still pending (a weakened grip's friction), so a world reused for

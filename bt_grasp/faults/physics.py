@@ -33,6 +33,10 @@ class PhysicsHook(Protocol):
 
     def set_velocity(self, name: str, velocity_m_s: tuple[float, float, float]) -> None: ...
 
+    def objects_touching_fingers(self) -> frozenset[str]:
+        """The objects a finger pad touches now (read only: nothing in the world changes)."""
+        ...
+
     def weaken_grip(self, friction: float | None, force_n: float | None
                     ) -> tuple[dict[str, float], Callable[[], None]]:
         """Lower pad friction and/or finger force; returns what changed and how to restore the friction."""
@@ -40,7 +44,10 @@ class PhysicsHook(Protocol):
 
 
 def choose_object(physics: PhysicsHook, name: str | None, color: str | None) -> str:
-    """The object to push: the one named, else the scene's object of the tree's colour, else the first."""
+    """The object to push: the one named (``params.object``), else the first of the scene's objects whose colour is
+    the blackboard's ``color`` when the run starts, else the scene's first object. The rule of ``run`` and of a
+    campaign's episodes alike (they start with the same blackboard: ``bt_grasp.episode.request.run_blackboard``);
+    the run's result says when the object pushed is one the tree never touched."""
     names = physics.object_names()
     if name is not None:
         if name not in names:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -85,6 +87,10 @@ class FaultyKinematics:
     @property
     def opening_m(self) -> float:
         return self.inner.opening_m
+
+    @property
+    def urdf_path(self) -> Path:
+        return self.inner.urdf_path
 
     def fk(self, q: NDArray[np.float64]) -> Mat4:
         return self.inner.fk(q)

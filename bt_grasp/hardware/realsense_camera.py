@@ -205,6 +205,9 @@ class RealSenseCamera:
     def close(self) -> None:
         """Stop streaming (idempotent)."""
         if self._pipeline is not None:
+            if self._playback is not None:  # no frame in flight while the pipeline stops: librealsense's playback
+                with contextlib.suppress(RuntimeError):  # sensor can race its callback at stop (librealsense #9446;
+                    self._playback.pause()  # one abort seen here in a 2-worker test run under load 25)
             with contextlib.suppress(RuntimeError):  # stopped already (a device unplugged)
                 self._pipeline.stop()
             self._pipeline = None

@@ -83,7 +83,7 @@ def cartesian_path(q_start: NDArray[np.float64], T_base_tcp_goal: Mat4, scene: P
         return CartesianResult(CartesianStatus.INVALID_INPUT, message="bad start configuration or goal pose")
     if not (opts.step_m > 0 and opts.step_rad > 0 and opts.max_joint_step_rad > 0):
         return CartesianResult(CartesianStatus.INVALID_INPUT, message="steps and bounds must be positive")
-    checker = collision_checker(scene, float(opts.margin_m), kin.opening_m)
+    checker = collision_checker(scene, float(opts.margin_m), kin.opening_m, kin.urdf_path)
     if not checker.is_valid(q0):
         return CartesianResult(CartesianStatus.COLLISION, message=f"start collides: {checker.colliding_pairs(q0)}")
     T_start = kin.fk(q0)

@@ -14,13 +14,14 @@ import math
 import warnings
 from dataclasses import dataclass
 from functools import lru_cache
+from pathlib import Path
 
 import coal
 import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from bt_grasp.motion.kinematics import ArmKinematics, default_kinematics
+from bt_grasp.motion.kinematics import ArmKinematics, default_kinematics, other_robot
 from bt_grasp.motion.planning_scene import Box, PlanningScene, Shape
 from bt_grasp.robot_description import DISABLED_COLLISION_PAIRS, MAX_OPENING_M
 
@@ -180,13 +181,24 @@ class CollisionChecker:
         return PathCheck(True, checked)
 
 
+def robot_collision_model(opening_m: float = MAX_OPENING_M, urdf_path: Path | None = None) -> RobotCollisionModel:
+    """The robot's collision model per gripper opening and robot description (``urdf_path``: another gripper's;
+    None: bt_grasp's own), shared."""
+    return _shared_collision_model(opening_m, other_robot(urdf_path))
+
+
 @lru_cache(maxsize=4)
-def robot_collision_model(opening_m: float = MAX_OPENING_M) -> RobotCollisionModel:
-    return RobotCollisionModel(default_kinematics(opening_m))
+def _shared_collision_model(opening_m: float, urdf_path: Path | None) -> RobotCollisionModel:
+    return RobotCollisionModel(default_kinematics(opening_m, urdf_path))
+
+
+def collision_checker(scene: PlanningScene, margin_m: float = 0.0, opening_m: float = MAX_OPENING_M,
+                      urdf_path: Path | None = None) -> CollisionChecker:
+    """A cached checker per (scene, margin, opening, robot description): building one copies the robot's geometry."""
+    return _shared_checker(scene, margin_m, opening_m, other_robot(urdf_path))
 
 
 @lru_cache(maxsize=32)
-def collision_checker(scene: PlanningScene, margin_m: float = 0.0, opening_m: float = MAX_OPENING_M
-                      ) -> CollisionChecker:
-    """A cached checker per (scene, margin, opening): building one copies the robot's geometry."""
-    return CollisionChecker(robot_collision_model(opening_m), scene, margin_m=margin_m)
+def _shared_checker(scene: PlanningScene, margin_m: float, opening_m: float, urdf_path: Path | None
+                    ) -> CollisionChecker:
+    return CollisionChecker(robot_collision_model(opening_m, urdf_path), scene, margin_m=margin_m)

@@ -12,12 +12,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
 from bt_grasp.geometry import Mat4, inv
 from bt_grasp.motion.collision import robot_collision_model
+from bt_grasp.motion.kinematics import other_robot
 from bt_grasp.robot_description import ARM_JOINTS, GRIPPER_LINKS, MAX_OPENING_M
 
 #: the links rigidly attached to the tool: where they are follows from the tool pose alone (the gripper and the
@@ -34,10 +36,15 @@ class ToolBox:
     T_tcp_box: Mat4
 
 
+def gripper_boxes(opening_m: float = MAX_OPENING_M, urdf_path: Path | None = None) -> tuple[ToolBox, ...]:
+    """The gripper's collision boxes with the fingers ``opening_m`` apart (the planning model's), tcp frame;
+    ``urdf_path``: the robot with another gripper (None: bt_grasp's own)."""
+    return _gripper_boxes(opening_m, other_robot(urdf_path))
+
+
 @lru_cache(maxsize=4)
-def gripper_boxes(opening_m: float = MAX_OPENING_M) -> tuple[ToolBox, ...]:
-    """The gripper's collision boxes with the fingers ``opening_m`` apart (the planning model's), tcp frame."""
-    model = robot_collision_model(opening_m)
+def _gripper_boxes(opening_m: float, urdf_path: Path | None) -> tuple[ToolBox, ...]:
+    model = robot_collision_model(opening_m, urdf_path)
     kin = model.kin
     q = np.zeros(kin.model.nq)
     data = kin.model.createData()

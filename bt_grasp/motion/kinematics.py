@@ -337,10 +337,22 @@ class ArmKinematics:
         return best
 
 
+def other_robot(urdf_path: Path | None) -> Path | None:
+    """``urdf_path`` unless it is bt_grasp's own robot description (then None): the one key of the shared models."""
+    if urdf_path is None or Path(urdf_path) == robot_urdf_path():
+        return None
+    return Path(urdf_path)
+
+
+def default_kinematics(opening_m: float = MAX_OPENING_M, urdf_path: Path | None = None) -> ArmKinematics:
+    """A shared model per gripper opening and robot description (building one parses the URDF: ~10 ms);
+    ``urdf_path``: the robot with another gripper (``bt_grasp.cell.grippers``), None: bt_grasp's own."""
+    return _shared_kinematics(opening_m, other_robot(urdf_path))
+
+
 @cache
-def default_kinematics(opening_m: float = MAX_OPENING_M) -> ArmKinematics:
-    """A shared model per gripper opening (building one parses the URDF: ~10 ms)."""
-    return ArmKinematics(opening_m)
+def _shared_kinematics(opening_m: float, urdf_path: Path | None) -> ArmKinematics:
+    return ArmKinematics(opening_m, urdf_path)
 
 
 class KinematicModel(Protocol):
@@ -348,6 +360,11 @@ class KinematicModel(Protocol):
 
     @property
     def opening_m(self) -> float: ...
+
+    @property
+    def urdf_path(self) -> Path:
+        """The robot description the model was built from (its gripper's geometry and TCP)."""
+        ...
 
     def fk(self, q: NDArray[np.float64]) -> Mat4: ...
 
@@ -388,6 +405,10 @@ class SeededKinematics:
     @property
     def opening_m(self) -> float:
         return self.inner.opening_m
+
+    @property
+    def urdf_path(self) -> Path:
+        return self.inner.urdf_path
 
     def fk(self, q: NDArray[np.float64]) -> Mat4:
         return self.inner.fk(q)

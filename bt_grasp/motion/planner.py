@@ -29,6 +29,7 @@ import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
@@ -185,12 +186,14 @@ class GoalSet:
 class MotionPlanner:
     """Plans arm motions for a gripper opening (the collision model's fingers sit at that opening)."""
 
-    def __init__(self, opening_m: float = MAX_OPENING_M) -> None:
+    def __init__(self, opening_m: float = MAX_OPENING_M, urdf_path: Path | None = None) -> None:
+        """``urdf_path``: the robot with another gripper (``bt_grasp.cell.grippers``); None: bt_grasp's own."""
         self.opening_m = float(opening_m)
-        self.kin = default_kinematics(self.opening_m)
+        self.kin = default_kinematics(self.opening_m, urdf_path)
+        self.urdf_path = urdf_path
 
     def checker(self, scene: PlanningScene, margin_m: float) -> CollisionChecker:
-        return collision_checker(scene, float(margin_m), self.opening_m)
+        return collision_checker(scene, float(margin_m), self.opening_m, self.urdf_path)
 
     def straight_line(self, q_start: NDArray[np.float64], T_base_tcp_goal: Mat4, scene: PlanningScene
                       ) -> CartesianResult:

@@ -98,7 +98,7 @@ class Trajectory:
 
     @functools.cached_property
     def _times(self) -> list[float]:
-        return self.times_s.tolist()
+        return [float(t) for t in self.times_s]
 
     @functools.cached_property
     def _stacked(self) -> Vec:

@@ -129,14 +129,14 @@ def _random_tilt(direction: Vec, rng: np.random.Generator, tilt_rad: float) -> V
     """``direction`` turned by ``tilt_rad`` about a random axis perpendicular to it."""
     a = np.cross(direction, rng.normal(size=3))
     a /= np.linalg.norm(a)
-    return Rotation.from_rotvec(a * tilt_rad).apply(direction)
+    return np.asarray(Rotation.from_rotvec(a * tilt_rad).apply(direction), dtype=np.float64)
 
 
 def _frame_with_z(z: Vec, reference_x: Vec, roll_rad: float) -> NDArray[np.float64]:
     x = reference_x - (reference_x @ z) * z
     x /= np.linalg.norm(x)
     R = np.stack([x, np.cross(z, x), z], axis=1)
-    return R @ Rotation.from_euler("z", roll_rad).as_matrix()
+    return np.asarray(R @ Rotation.from_euler("z", roll_rad).as_matrix(), dtype=np.float64)
 
 
 def _sample_eye_to_hand(plan: ViewPlan, s: CalibrationSettings, rng: np.random.Generator) -> tuple[Mat4, Mat4]:
@@ -181,7 +181,7 @@ def _visible(plan: ViewPlan, T_base_tool: Mat4, T_base_board: Mat4, s: Calibrati
     # the camera must look at the printed side (board -z faces the camera) at a moderate angle
     to_cam = -T_cam_board[:3, 3] / np.linalg.norm(T_cam_board[:3, 3])
     cos_angle = float(-T_cam_board[:3, 2] @ to_cam)
-    return cos_angle > np.cos(np.deg2rad(s.max_view_angle_deg))
+    return bool(cos_angle > np.cos(np.deg2rad(s.max_view_angle_deg)))
 
 
 def _links_above_table(kin: Kinematics, q: Vec, s: CalibrationSettings, table_z: float) -> bool:

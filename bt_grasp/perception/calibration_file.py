@@ -104,25 +104,25 @@ class CalibrationFile(StrictModel):
     @property
     def tool_link(self) -> str:
         """The link whose pose an eye-in-hand camera's pose is composed with (``tool0`` for eye-to-hand)."""
-        return self.parent_frame if self.mount == Mount.EYE_IN_HAND else "tool0"
+        return self.parent_frame if Mount(self.mount) == Mount.EYE_IN_HAND else "tool0"
 
     @property
     def T_base_camera(self) -> Mat4:
         """Eye-to-hand: the camera pose in the base frame. (Eye-in-hand: use :meth:`T_base_camera_at`.)"""
-        if self.mount != Mount.EYE_TO_HAND:
+        if Mount(self.mount) != Mount.EYE_TO_HAND:
             raise ValueError("an eye-in-hand camera moves: use T_base_camera_at(T_base_tool) or T_tool_camera")
         return self.transform.T
 
     @property
     def T_tool_camera(self) -> Mat4:
         """Eye-in-hand: the camera pose in the ``tool_link`` frame."""
-        if self.mount != Mount.EYE_IN_HAND:
+        if Mount(self.mount) != Mount.EYE_IN_HAND:
             raise ValueError("an eye-to-hand camera is not on the tool: use T_base_camera")
         return self.transform.T
 
     def T_base_camera_at(self, T_base_tool: Mat4 | None = None) -> Mat4:
         """The camera pose in the base frame at capture time (eye-in-hand needs ``T_base_tool`` then)."""
-        if self.mount == Mount.EYE_TO_HAND:
+        if Mount(self.mount) == Mount.EYE_TO_HAND:
             return self.transform.T
         if T_base_tool is None:
             raise ValueError("an eye-in-hand calibration needs T_base_tool at capture time")
@@ -185,6 +185,25 @@ def load_calibration(path: str | Path, mount: str | None = None, *, quote: bool 
     return calibration
 
 
+#: a calibration's intrinsics and the source's agree when every focal length and principal point is this close, px
+INTRINSICS_TOLERANCE_PX = 0.01
+
+
+def intrinsics_problem(calibration: CalibrationFile, source: CameraIntrinsics) -> str | None:
+    """Why a calibration was not made with this source's colour intrinsics, or None."""
+    cal = calibration.intrinsics
+    if (cal.width_px, cal.height_px) != (source.width_px, source.height_px):
+        return (f"it was made for a {cal.width_px}x{cal.height_px} picture, but the source's colour stream is "
+                f"{source.width_px}x{source.height_px}")
+    off = max(abs(a - b) for a, b in ((cal.fx_px, source.fx_px), (cal.fy_px, source.fy_px),
+                                      (cal.cx_px, source.cx_px), (cal.cy_px, source.cy_px)))
+    if off > INTRINSICS_TOLERANCE_PX:
+        return (f"its intrinsics (fx {cal.fx_px:.2f}, fy {cal.fy_px:.2f}, cx {cal.cx_px:.2f}, cy {cal.cy_px:.2f} px) "
+                f"are not the source's (fx {source.fx_px:.2f}, fy {source.fy_px:.2f}, cx {source.cx_px:.2f}, "
+                f"cy {source.cy_px:.2f} px): it was made with another camera or resolution")
+    return None
+
+
 #: a calibration whose camera lies further than this from the scene's nominal mount was made for another pose
 NOMINAL_POSITION_TOLERANCE_M = 0.03
 NOMINAL_AXIS_TOLERANCE_DEG = 3.0
@@ -196,7 +215,7 @@ def mismatch_with_mount(calibration: CalibrationFile, scene: Scene) -> str | Non
     camera = scene.camera
     if calibration.mount != camera.mount:
         return f"it is for an {calibration.mount} camera, but the scene's camera is mounted {camera.mount}"
-    if camera.mount == Mount.EYE_TO_HAND:
+    if Mount(camera.mount) == Mount.EYE_TO_HAND:
         T_base_world = np.linalg.inv(scene.T_world_base())
         position = (T_base_world @ [*camera.eye_to_hand.position_m, 1.0])[:3]
         axis = (T_base_world @ [*camera.eye_to_hand.look_at_m, 1.0])[:3] - position
@@ -214,12 +233,17 @@ def mismatch_with_mount(calibration: CalibrationFile, scene: Scene) -> str | Non
     return None
 
 
-def calibration_for_scene(scene: Scene, scene_path: str | Path, override: str | Path | None
-                          ) -> tuple[Path | None, CalibrationFile | None]:
+#: how a command line gives a calibration of its own (``run``, ``eval run``, ``bench pick``)
+CALIBRATION_OPTION = "pass --calibration FILE"
+
+
+def calibration_for_scene(scene: Scene, scene_path: str | Path, override: str | Path | None,
+                          *, give_one: str = CALIBRATION_OPTION) -> tuple[Path | None, CalibrationFile | None]:
     """The calibration a run uses: ``override`` (the ``--calibration`` flag) or the file the scene names, looked
     for beside the scene file, then in each folder of ``BT_GRASP_CALIBRATION_PATH``, then among the shipped scenes'
     calibrations (``bt_grasp/files/search_path.py``). Bad input (missing, unreadable, made for another mount or
-    camera pose) is a ConfigError naming the file and line; no calibration at all is (None, None)."""
+    camera pose) is a ConfigError naming the file and line; no calibration at all is (None, None). ``give_one``:
+    how the caller's user gives a calibration instead (a campaign file has a key for it, not a flag)."""
     if override is not None:
         path = Path(override)
         calibration = load_calibration(path, mount=scene.camera.mount)
@@ -232,7 +256,7 @@ def calibration_for_scene(scene: Scene, scene_path: str | Path, override: str | 
             beside = Path(scene_path).parent / scene.calibration
             raise ConfigError(scene_path, f"the calibration file '{scene.calibration}' the scene names does not "
                               f"exist ({looked_in(found, CALIBRATION_PATH_VARIABLE)}); make it with `bt-grasp "
-                              f"calibrate --scene {scene_path} --out {beside}` or pass --calibration FILE", where=where)
+                              f"calibrate --scene {scene_path} --out {beside}` or {give_one}", where=where)
         path = found.path
         calibration = load_calibration(path, mount=scene.camera.mount)
     else:

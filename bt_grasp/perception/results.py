@@ -48,7 +48,8 @@ class OrientedBox:
     def corners(self) -> NDArray[np.float64]:
         """The 8 corners (8, 3), base frame."""
         signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=float)
-        return np.asarray(self.center_m) + (signs * np.asarray(self.extents_m) / 2) @ self.rotation.T
+        return np.asarray(np.asarray(self.center_m) + (signs * np.asarray(self.extents_m) / 2) @ self.rotation.T,
+                          dtype=np.float64)
 
 
 class PerceptionStatus(enum.Enum):

@@ -166,6 +166,8 @@ class RunLog:
     time_origin_ns: int = 0
     #: an interactive run's interventions (/control/interventions), each with its ``stamp_ns``
     interventions: list[LoggedIntervention] = field(default_factory=list)
+    #: the run's grasp and placement attempts (/bt/attempts; log format 4), each with its ``stamp_ns``
+    attempts: list[JsonObject] = field(default_factory=list)
 
     @property
     def ticks_recovered(self) -> int:
@@ -392,6 +394,7 @@ def open_log(path: str | Path) -> RunLog:
     results: list[LoggedResult] = []
     logs: list[LogLine] = []
     interventions: list[LoggedIntervention] = []
+    attempts: list[JsonObject] = []
     for raw in scan.messages:  # every message but the arm states is decoded and checked once, here, in file order
         topic, stamp = raw.topic, raw.log_time_ns - origin
         if topic == topics.JOINT_STATE:  # one per tick: decoded and checked only when one is shown
@@ -405,6 +408,8 @@ def open_log(path: str | Path) -> RunLog:
             events.append({"stamp_ns": stamp, **_json_at(p, raw, origin, validate.event_message)})
         elif topic == topics.FAULTS:
             faults.append({"stamp_ns": stamp, **_json_at(p, raw, origin, validate.fault_message)})
+        elif topic == topics.ATTEMPTS:
+            attempts.append({"stamp_ns": stamp, **_json_at(p, raw, origin, validate.attempt_message)})
         elif topic == topics.TRAJECTORY:
             trajectories.append(_trajectory({"stamp_ns": stamp,
                                              **_json_at(p, raw, origin, validate.trajectory_message)}))
@@ -446,6 +451,7 @@ def open_log(path: str | Path) -> RunLog:
         _robot_raw=robot_raw,
         time_origin_ns=origin,
         interventions=interventions,
+        attempts=attempts,
     )
 
 

@@ -52,17 +52,20 @@ def summary_table(s: ReplaySummary) -> Table:
     else:
         ok = bool(s["success"])
         outcome = Text("SUCCESS" if ok else "FAILURE", style="green" if ok else "bold red")
+    meta = s.get("metadata") or {}
+    on_cell = meta.get("ran_on") in ("twin", "robot")  # a real cell's run (or a twin's): wall-clock time
     rows: list[tuple[str, str | Text]] = [
         ("log", s["file"]),
         ("tree", s["tree"] or "-"),
-        ("scene", s["scene"] or "-"),
+        ("cell", f"{meta.get('cell_file', '-')} (the {meta['ran_on']} at {meta.get('arm_address', '?')}, "
+                 "wall clock)") if on_cell else ("scene", s["scene"] or "-"),
         ("seed", "-" if s["seed"] is None else str(s["seed"])),
         ("fault plan", s["fault_plan"] or "-"),
         ("result", outcome),
         ("reason", str(s["reason"]) if s["reason"] else "-"),
         ("failed leaf", str(s.get("failed_path") or s["failed_leaf"]) if s["failed_leaf"] else "-"),
         ("ticks", f"{s['ticks']} (ticks {s['first_tick']}..{s['last_tick']})" if s["ticks"] else "0"),
-        ("sim duration", f"{s['sim_duration_s']:.3f} s"),
+        ("wall duration" if on_cell else "sim duration", f"{s['sim_duration_s']:.3f} s"),
         ("retries", str(s["retries"])),
     ]
     for name, count in s["retries_per_leaf"].items():

@@ -25,6 +25,7 @@ from bt_grasp.recording.replay_shapes import (
     TickView,
     TopicRecord,
 )
+from bt_grasp.tree.failure_kinds import false_by_design
 
 _RECOVERY_LIMIT = 6
 
@@ -151,7 +152,7 @@ def failures(run: RunLog) -> list[FailureReport]:
         root_failed = bool(ancestors) and reached == len(ancestors)
         if root_failed or (info is not None and not ancestors and not info.is_leaf):
             kind = FailureKind.OUTCOME
-        elif _by_design(nodes, info, ch.failure_reason):
+        elif _false_by_design(nodes, info, ch.failure_reason):
             kind = FailureKind.BY_DESIGN
         else:
             kind = FailureKind.RECOVERED
@@ -161,17 +162,14 @@ def failures(run: RunLog) -> list[FailureReport]:
     return reports
 
 
-def _by_design(nodes: dict[int, NodeInfo], info: NodeInfo | None, reason: str | None) -> bool:
-    """A condition asked by a Fallback (the next child is the other answer), a condition answering "no"
-    with no reason, or a control/decorator failing by itself (``ForceFailure``)."""
+def _false_by_design(nodes: dict[int, NodeInfo], info: NodeInfo | None, reason: str | None) -> bool:
+    """The tick loop's rule (``bt_grasp.tree.failure_kinds``) applied to a logged node; a node the log does not
+    describe is by design when it gave no reason."""
     if info is None:
         return reason is None
-    if not info.is_leaf:
-        return reason is None
-    if info.kind != "Condition":
-        return False
     parent = nodes.get(info.parent) if info.parent is not None else None
-    return reason is None or (parent is not None and "Fallback" in parent.type)
+    return false_by_design(is_leaf=info.is_leaf, kind=info.kind, parent_type=parent.type if parent else None,
+                           reason=reason)
 
 
 def _mark_result_leaf(run: RunLog, reports: list[FailureReport]) -> None:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import base64
 import html
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TypeVar
@@ -24,6 +24,7 @@ from bt_grasp.files.json_types import JsonValue
 from bt_grasp.files.output_files import make_output_folder, write_output_file
 from bt_grasp.geometry import make_T
 from bt_grasp.recording import replay, report_figures, topics
+from bt_grasp.recording.attempt_view import attempt_rows, attempts_html
 from bt_grasp.recording.interventions import interventions_html
 from bt_grasp.recording.reader import RunLog
 from bt_grasp.recording.replay_shapes import AnnotatedNode
@@ -279,8 +280,10 @@ img{max-width:100%;border:1px solid #ddd;margin:6px 0}
 """
 
 
-def build_report(run: RunLog, html_path: Path, png_dir: Path | None = None) -> Report:
-    """Write the report page (and the PNG figures to ``png_dir``); returns what was written."""
+def build_report(run: RunLog, html_path: Path, png_dir: Path | None = None, repeated: Collection[int] = ()
+                 ) -> Report:
+    """Write the report page (and the PNG figures to ``png_dir``); returns what was written. ``repeated``: the
+    numbers of the attempts that repeat a failed earlier one (``bt_grasp.behaviours.attempts.repeats``)."""
     report = Report(Path(html_path))
     s = replay.summary(run)
     rows, labels = _leaf_rows(run)
@@ -291,14 +294,16 @@ def build_report(run: RunLog, html_path: Path, png_dir: Path | None = None) -> R
     bars = _bars(run, labels)
     shown = {bar.row for bar in bars}
     rows = [row for row in rows if row in shown]  # leaves that never ran would be empty rows
+    fault_marks = _fault_marks(run)
     report.figures["gantt"] = report_figures.gantt(
-        rows, bars, [(f.stamp_ns * 1e-9, labels[f.uid]) for f in failures if f.uid in labels], _fault_marks(run))
+        rows, bars, [(f.stamp_ns * 1e-9, labels[f.uid]) for f in failures if f.uid in labels], fault_marks)
     fail_s = [f.stamp_ns * 1e-9 for f in failures]
     t, Q, width, names = _joint_series(run)
     if t.size:
-        report.figures["joints"] = report_figures.series(t, Q, names, "Joint angles", "rad", fail_s)
+        report.figures["joints"] = report_figures.series(t, Q, names, "Joint angles", "rad", fail_s, fault_marks)
         if np.isfinite(width).any():
-            report.figures["gripper"] = report_figures.series(t, width, ["opening"], "Gripper opening", "m", fail_s)
+            report.figures["gripper"] = report_figures.series(t, width, ["opening"], "Gripper opening", "m", fail_s,
+                                                              fault_marks)
     frames = _frames(run)
     for i, (_, png) in enumerate(frames):
         report.figures[f"frame_{i:02d}"] = png
@@ -323,6 +328,8 @@ def build_report(run: RunLog, html_path: Path, png_dir: Path | None = None) -> R
              f"{_esc(run.metadata.get('log_format', '1'))}</p>",
              "<h2>Summary</h2><table>" + "".join(f"<tr><th>{k}</th><td>{v}</td></tr>" for k, v in summary_rows)
              + "</table>"]
+    parts.append("<h2>Attempts (grasps and placements) and what each ruled out</h2>"
+                 + attempts_html(attempt_rows(run.attempts, repeated)))
     parts.append("<h2>Failures and recovery</h2>")
     if failures:
         items = []

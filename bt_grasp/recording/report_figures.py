@@ -21,6 +21,15 @@ if TYPE_CHECKING:
 
 STATUS_COLOURS = {"RUNNING": "#4a7fd6", "SUCCESS": "#3aa657", "FAILURE": "#d64545", "SKIPPED": "#b0b0b0"}
 FAULT_COLOUR = "#e07b00"
+#: a Gantt bar is drawn at least this share of the run long (0.5 %: 4 pixels of the 10-inch figure's axis)
+MIN_BAR_FRACTION = 0.005
+#: the joint plot's curves, drawn in order: each thinner than the one before and broken by gaps, so a curve that
+#: lies on an earlier one (the UR5's wrist joints at home are both -1.57 rad) leaves the earlier one in sight
+CURVE_WIDTHS = (3.2, 2.7, 2.3, 1.9, 1.5, 1.2, 1.0)
+#: and their colours: none of them the red of a failure's line nor the orange of a fault's
+CURVE_COLOURS = ("#1f77b4", "#2ca02c", "#9467bd", "#8c564b", "#17becf", "#e377c2", "#7f7f7f")
+CURVE_DASHES: tuple[str | tuple[int, tuple[int, ...]], ...] = (
+    "-", (0, (6, 2)), (0, (4, 2, 1, 2)), (0, (2, 2)), (0, (8, 3, 2, 3)), (0, (1, 2)), (0, (3, 3)))
 
 
 @dataclass(frozen=True)
@@ -56,24 +65,29 @@ def _png(fig: Figure) -> bytes:
 def gantt(rows: Sequence[str], bars: Sequence[Bar], failures: Sequence[tuple[float, str]],
           faults: Sequence[tuple[float, str]] = ()) -> bytes:
     """One row per leaf (tree order, top to bottom); a black tick where a leaf failed; a dashed orange line
-    with its name where an injected fault fired."""
+    with its name where an injected fault fired. A bar is drawn at least :data:`MIN_BAR_FRACTION` of the run long:
+    a leaf that finishes within a tick (10 ms of a 20 s run: a third of a pixel) would leave its row empty."""
     plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(10, 0.42 * max(len(rows), 3) + 1.2))
+    fig, ax = plt.subplots(figsize=(10, 0.42 * max(len(rows), 3) + 1.6), layout="constrained")
     index = {name: i for i, name in enumerate(rows)}
+    ends = [bar.start_s + bar.length_s for bar in bars] + [t for t, _ in failures] + [t for t, _ in faults]
+    starts = [bar.start_s for bar in bars]
+    shortest = MIN_BAR_FRACTION * ((max(ends) - min(starts)) if starts and ends else 0.0)
     for status, colour in STATUS_COLOURS.items():
         spans: dict[int, list[tuple[float, float]]] = {}
         for bar in bars:
             if bar.status == status and bar.row in index:
-                spans.setdefault(index[bar.row], []).append((bar.start_s, max(bar.length_s, 0.004)))
+                spans.setdefault(index[bar.row], []).append((bar.start_s, max(bar.length_s, shortest, 0.004)))
         for i, span in spans.items():
             ax.broken_barh(span, (i - 0.35, 0.7), facecolors=colour)
     for t, row in failures:
         if row in index:
             ax.plot([t], [index[row]], marker="v", color="black", markersize=7)
-    for t, text in faults:
+    for t, text in faults:  # the line across the rows, its name above the axes (over the bars it hid them)
         ax.axvline(t, color=FAULT_COLOUR, linestyle="--", linewidth=1.2)
-        ax.annotate(f"fault: {text}", (t, -0.6), rotation=90, fontsize=7, color=FAULT_COLOUR, va="top",
-                    ha="right", annotation_clip=False)
+        ax.annotate(f"fault: {text}", (t, 1.0), xycoords=("data", "axes fraction"), xytext=(0, 2),
+                    textcoords="offset points", fontsize=7, color=FAULT_COLOUR, ha="center", va="bottom",
+                    annotation_clip=False)
     ax.set_yticks(range(len(rows)))
     ax.set_yticklabels(rows)
     ax.invert_yaxis()
@@ -84,27 +98,43 @@ def gantt(rows: Sequence[str], bars: Sequence[Bar], failures: Sequence[tuple[flo
     if faults:
         handles.append(plt.Line2D([0], [0], color=FAULT_COLOUR, linestyle="--"))
         names.append("injected fault")
-    ax.legend(handles, names, loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=len(names), frameon=False)
-    ax.set_title("Leaf statuses over simulated time (\u25bc: a FAILURE)", pad=24)
+    # below the axis label, in space of its own (above the axes it covered the title and the faults' names)
+    fig.legend(handles, names, loc="outside lower center", ncols=len(names), frameon=False)
+    ax.set_title("Leaf statuses over simulated time (\u25bc: a FAILURE)", pad=24 if faults else 6)
     return _png(fig)
 
 
 def series(t_s: NDArray[np.float64], values: NDArray[np.float64], labels: Sequence[str], title: str,
-           ylabel: str, failures_s: Sequence[float] = ()) -> bytes:
+           ylabel: str, failures_s: Sequence[float] = (), faults: Sequence[tuple[float, str]] = ()) -> bytes:
+    """Curves over simulated time (one per column of ``values``), a thin red dashed line where a leaf failed and
+    a dashed orange line where an injected fault fired; the legend below the axis label, in space of its own."""
     plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(10, 3.2))
+    fig, ax = plt.subplots(figsize=(10, 3.4), layout="constrained")
     values = values.reshape(len(t_s), -1)
     for j in range(values.shape[1]):
-        ax.plot(t_s, values[:, j], label=labels[j] if j < len(labels) else str(j), linewidth=1.3)
+        ax.plot(t_s, values[:, j], label=labels[j] if j < len(labels) else str(j),
+                color=CURVE_COLOURS[j % len(CURVE_COLOURS)], linewidth=CURVE_WIDTHS[min(j, len(CURVE_WIDTHS) - 1)],
+                linestyle=CURVE_DASHES[j % len(CURVE_DASHES)])
     for t in failures_s:
         ax.axvline(t, color="#d64545", linestyle="--", linewidth=0.8)
+    for t, _text in faults:
+        ax.axvline(t, color=FAULT_COLOUR, linestyle="--", linewidth=1.6)
     ax.set_xlabel("simulated time (s)")
     ax.set_ylabel(ylabel)
     ax.set_title(title)
     ax.grid(alpha=0.3)
-    if values.shape[1] > 1:
-        ax.legend(fontsize=8, ncol=min(values.shape[1], 6), loc="upper center", bbox_to_anchor=(0.5, -0.22),
-                  frameon=False)
+    handles, names = ax.get_legend_handles_labels()
+    if values.shape[1] <= 1:
+        handles, names = [], []
+    if failures_s:
+        handles.append(plt.Line2D([0], [0], color="#d64545", linestyle="--", linewidth=0.8))
+        names.append("a leaf failed")
+    if faults:
+        handles.append(plt.Line2D([0], [0], color=FAULT_COLOUR, linestyle="--", linewidth=1.6))
+        names.append("injected fault")
+    if handles:
+        fig.legend(handles, names, fontsize=8, ncols=min(len(names), 5), loc="outside lower center",
+                   frameon=False)
     return _png(fig)
 
 

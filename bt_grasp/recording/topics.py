@@ -22,14 +22,18 @@ RUN_METADATA_NAME = "bt_grasp.run"
 #:    ``time_origin_ns``), URDF frame names, every link on /tf, the robot's meshes, CameraCalibration.
 #: 3: ``/bt/tick.leaves`` keyed by each leaf's path (:func:`leaf_key`), no longer by its bare name, and the
 #:    Foxglove layout of the tree that ran attached to the log (``foxglove/layout.json``).
-LOG_FORMAT_VERSION = "3"
-READABLE_LOG_FORMATS: tuple[str, ...] = ("1", "2", "3")
+#: 4: ``/bt/attempts``: one message per grasp or placement attempt (what, where, how it ended, what it ruled out;
+#:    ``bt_grasp.behaviours.attempts``). Nothing else changed: a format-3 log reads as one with no attempts.
+LOG_FORMAT_VERSION = "4"
+READABLE_LOG_FORMATS: tuple[str, ...] = ("1", "2", "3", "4")
 #: metadata key: the wall-clock time (ns since the Unix epoch) at which simulated time 0 is placed
 TIME_ORIGIN_KEY = "time_origin_ns"
 
 TREE = "/bt/tree"
 TICK = "/bt/tick"
 EVENTS = "/bt/events"
+#: one message per grasp or placement attempt, written when it ended (bt_grasp.behaviours.attempts)
+ATTEMPTS = "/bt/attempts"
 FAULTS = "/faults"
 RESULT = "/run/result"
 JOINT_STATE = "/robot/joint_state"
@@ -54,7 +58,7 @@ JUDGE_OBJECTS = "/judge/true_objects"
 INTERVENTIONS = "/control/interventions"
 
 #: Topics whose messages are JSON objects.
-JSON_TOPICS: tuple[str, ...] = (TREE, TICK, EVENTS, FAULTS, RESULT, JOINT_STATE, TRAJECTORY)
+JSON_TOPICS: tuple[str, ...] = (TREE, TICK, EVENTS, FAULTS, RESULT, JOINT_STATE, TRAJECTORY, ATTEMPTS)
 #: Topics whose messages are Foxglove protobuf messages, with their schema names.
 PROTOBUF_TOPICS: dict[str, str] = {
     TF: "foxglove.FrameTransforms",
@@ -139,6 +143,41 @@ JSON_SCHEMAS: dict[str, JsonObject] = {
     ),
     EVENTS: _object("bt_grasp.Event", {"tick": _INT, "kind": _STR, "payload": _FREE}, ["kind", "payload"]),
     FAULTS: _object("bt_grasp.Fault", {"tick": _INT, "fault": _FREE}, ["fault"]),
+    ATTEMPTS: _object(
+        "bt_grasp.Attempt",
+        {
+            "index": _INT,
+            "kind": {"type": "string", "enum": ["grasp", "place"]},
+            "leaf": _STR,  # the path of the leaf that made it (PlanGrasp for a grasp)
+            "tick": _INT,
+            "end_tick": _INT,
+            "end_leaf": _STR,
+            "outcome": {"type": "string",
+                        "enum": ["SUCCEEDED", "FAILED", "STALLED", "BLOCKED", "UNFINISHED", "SKIPPED"]},
+            "reason": _STR,
+            "object": {"type": "object", "properties": {"centroid_m": _FLOATS, "size_m": _FLOATS,
+                                                        "yaw_deg": {"type": "number"}, "label": _STR,
+                                                        "class_name": _STR, "shape_class": _STR,
+                                                        "color_name": _STR}},
+            "family": {"type": "string", "enum": ["top", "side", "long_axis", "rim"]},
+            "approach": _STR,
+            "tcp_xyz_m": _FLOATS,
+            "approach_dir": _FLOATS,
+            "closing_dir": _FLOATS,
+            "T_base_tcp": _FLOATS,  # row-major 4x4
+            "width_m": {"type": "number"},
+            "moved": {"type": "boolean"},
+            "excluded": {"type": "array", "items": {"type": "object", "properties": {
+                "what": _STR, "by": _INT, "rule": _STR, "detail": _STR}}},
+            "place_pose": _FLOATS,  # x, y, surface z (m), yaw (deg), base frame
+            "T_tcp_object": _FLOATS,
+            # the release tool poses a placement found blocked before the arm moved (objects: Foxglove takes no
+            # arrays of arrays)
+            "blocked": {"type": "array", "items": {"type": "object", "properties": {"T_base_tcp": _FLOATS}}},
+            "every_turn_blocked": {"type": "boolean"},
+        },
+        ["index", "kind", "outcome", "object", "family"],
+    ),
     RESULT: _object("bt_grasp.RunResult", {"success": {"type": "boolean"}, "reason": _STR,
                                            "failed_leaf": _STR, "ticks": _INT, "sim_time_s": {"type": "number"}},
                     []),

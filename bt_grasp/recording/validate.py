@@ -212,6 +212,17 @@ def fault_message(value: JsonValue) -> LoggedFault:
     return cast("LoggedFault", _stamped(value))  # what the checks make sure of
 
 
+def attempt_message(value: JsonValue) -> JsonObject:
+    """A ``/bt/attempts`` message, checked: its index, kind, outcome and object are there (the rest is shown as
+    written; ``bt_grasp.behaviours.attempts.repeats`` reads the poses)."""
+    msg = _stamped(value)
+    _int(msg, "index")
+    for key in ("kind", "outcome", "family"):
+        _str(msg, key)
+    _object(msg.get("object"), "object")
+    return msg
+
+
 def intervention_message(value: JsonValue) -> LoggedIntervention:
     """A ``/control/interventions`` message, checked (when the reader loads it: the topic is not one
     ``parse_json`` checks, so a log written before interventions were checked still opens)."""
@@ -222,7 +233,7 @@ def intervention_message(value: JsonValue) -> LoggedIntervention:
 CHECKS: dict[str, Callable[[JsonValue], Mapping[str, object]]] = {
     topics.TICK: tick_message, topics.TREE: tree_message, topics.RESULT: result_message,
     topics.JOINT_STATE: joint_state_message, topics.TRAJECTORY: trajectory_message, topics.EVENTS: event_message,
-    topics.FAULTS: fault_message,
+    topics.FAULTS: fault_message, topics.ATTEMPTS: attempt_message,
 }
 
 

@@ -568,6 +568,11 @@ class RunRecorder:
         for listener in self.event_listeners:
             listener(kind, payload)
 
+    def write_attempt(self, stamp_ns: int, attempt: Mapping[str, object]) -> None:
+        """One grasp or placement attempt that ended, on /bt/attempts (``Attempt.to_json`` of
+        ``bt_grasp.behaviours.attempts``)."""
+        self._write_json(topics.ATTEMPTS, stamp_ns, to_jsonable(attempt))
+
     def write_fault(self, stamp_ns: int, tick: int, fault: Mapping[str, object]) -> None:
         """One firing of an injected fault on /faults."""
         self._write_json(topics.FAULTS, stamp_ns, {"tick": int(tick), "fault": to_jsonable(fault)})

@@ -96,7 +96,7 @@ def request_adapter() -> TypeAdapter[EpisodeRequest]:
     """Episode requests on the wire: typed JSON, validated field by field (no pickle)."""
     from pydantic import TypeAdapter
 
-    from bt_grasp.episode import EpisodeRequest
+    from bt_grasp.episode import EpisodeRequest  # deferred: the episode stack loads on decoding, not on import
 
     return TypeAdapter(EpisodeRequest)
 
@@ -105,6 +105,6 @@ def request_adapter() -> TypeAdapter[EpisodeRequest]:
 def result_adapter() -> TypeAdapter[EpisodeResult]:
     from pydantic import TypeAdapter
 
-    from bt_grasp.episode import EpisodeResult
+    from bt_grasp.episode import EpisodeResult  # deferred: as above
 
     return TypeAdapter(EpisodeResult)

@@ -78,7 +78,7 @@ def _handle(message: dict[str, Any], worlds: Any, version: str) -> tuple[str, di
         return "stale", {"code_version": version}
     from pydantic import ValidationError
 
-    from bt_grasp.episode import EpisodeRequest, run_episode
+    from bt_grasp.episode import EpisodeRequest, run_episode  # deferred: loads in the resident, on a request
 
     try:
         request = request_adapter().validate_python(message.get("request"))
@@ -175,7 +175,7 @@ class _Runner:
 
 
 def serve(idle_s: float = IDLE_TIMEOUT_S) -> None:
-    from bt_grasp.episode import WarmWorlds
+    from bt_grasp.episode import WarmWorlds  # deferred: the episode stack loads in the resident process only
 
     if _hold_the_lock() is None:
         log.info("another resident process serves %s; leaving", socket_path())
@@ -189,7 +189,7 @@ def serve(idle_s: float = IDLE_TIMEOUT_S) -> None:
     state = {"busy": 0.0, "last": time.monotonic()}
     threading.Thread(target=_watchdog, args=(state, idle_s), daemon=True).start()
     runner = _Runner(WarmWorlds(), version, state)
-    import bt_grasp.behaviours  # noqa: F401  (warm the imports before the first request)
+    import bt_grasp.behaviours  # noqa: F401  # deferred: warms the leaves' imports before the first request
 
     while True:
         try:

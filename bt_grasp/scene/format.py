@@ -213,7 +213,7 @@ def load_scene(path: str | Path) -> Scene:
     check_choose(scene, path, lines)
     feeds = [(i, f.feed.objects) for i, f in enumerate(scene.fixtures) if isinstance(f, Conveyor) and f.feed]
     if any(o.is_mesh for o in scene.objects) or any(o.is_mesh for _, objects in feeds for o in objects):
-        from bt_grasp.scene.meshes import attach_geometry  # trimesh is imported only for scenes with meshes
+        from bt_grasp.scene.meshes import attach_geometry  # deferred: trimesh is imported only for scenes with meshes
 
         table = max(scene.table.size_m[0], scene.table.size_m[1])
         packages = _package_folders(scene, path, lines)
@@ -225,8 +225,8 @@ def load_scene(path: str | Path) -> Scene:
 
 
 def _note_objects_beyond_the_gripper(scene: Scene) -> None:
-    from bt_grasp.scene.graspability import object_warning
-    from bt_grasp.scene.notices import notice
+    from bt_grasp.scene.graspability import object_warning  # deferred: only scenes with mesh objects need it
+    from bt_grasp.scene.notices import notice  # deferred: as above
 
     for obj in scene.objects:
         if obj.is_mesh:

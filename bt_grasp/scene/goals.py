@@ -6,13 +6,16 @@ Kinds (the ``kind`` key selects one)::
     goal: {kind: place, object: red_box, at: target_marker}        # resting on a marker (or at_xy_m: [x, y])
     goal: {kind: stack, object: red_box, on: blue_box}             # resting centred on another object
     goal: {kind: sort, rules: [{color: red, into: left_tray}, {color: blue, into: right_tray}]}
-    goal: {kind: clear, into: bin}                                 # every object placed into the bin
+    goal: {kind: clear, into: bin}                                 # every object inside the bin, let go, at rest
     goal: {kind: collect, into: bin, count: 3}                     # at least 3 objects placed into the bin
 
-Placed objects (place, stack, sort, clear or collect into a container) must be released (not touching the fingers),
-upright within :data:`UPRIGHT_DEG`, still for :data:`STILL_S` of simulated time after release, and set down,
-not dropped (fallen less than :data:`MAX_DROP_M` after the fingers opened). The judge in ``bt_grasp.sim``
-checks these with the simulator's ground truth; the pipeline never reads them.
+Placed objects (place, stack, sort, collect) must be released (not touching the fingers), upright within
+:data:`UPRIGHT_DEG` (the key ``upright``, true by default: ``upright: false`` leaves it out), still for
+:data:`STILL_S` of simulated time after release, and set down, not dropped (fallen less than :data:`MAX_DROP_M`
+after the fingers opened). Clearing into a container means what a user clearing a table into a bin means:
+every object inside it, released and at rest, whichever way up and however it got there (``upright: true`` and
+``set_down: true`` ask for those too). The judge in ``bt_grasp.sim`` checks these with the simulator's ground
+truth; the pipeline never reads them.
 """
 
 from __future__ import annotations
@@ -54,6 +57,7 @@ class PlaceGoal(StrictModel):
     at: Name | None = None  # a fixture (marker, tray, ...) whose centre is the target
     at_xy_m: tuple[float, float] | None = None  # or a world (x, y) on the table
     tolerance_m: PositiveFloat = 0.01
+    upright: bool = True  # it must stand as it stood (tilted at most UPRIGHT_DEG)
 
     @model_validator(mode="after")
     def _one_target(self) -> PlaceGoal:
@@ -71,6 +75,7 @@ class StackGoal(StrictModel):
     on: Name
     xy_tolerance_m: PositiveFloat = 0.03
     z_tolerance_m: PositiveFloat = 0.005
+    upright: bool = True  # the stacked object must stand as it stood (tilted at most UPRIGHT_DEG)
 
 
 class SortRule(StrictModel):
@@ -88,13 +93,23 @@ class SortGoal(StrictModel):
 
     kind: Literal["sort"]
     rules: Annotated[tuple[SortRule, ...], Field(min_length=1)]
+    upright: bool = True  # each object must stand as it stood (tilted at most UPRIGHT_DEG)
 
 
 class ClearGoal(StrictModel):
-    """Every object leaves the work area; with ``into``, each is placed (not dropped) inside that container."""
+    """Every object leaves the work area; with ``into``, each is inside that container, released and at rest
+    (``upright``: also standing as it stood; ``set_down``: also set down, not dropped)."""
 
     kind: Literal["clear"]
     into: Name | None = None
+    upright: bool = False
+    set_down: bool = False
+
+    @model_validator(mode="after")
+    def _placed_keys_need_into(self) -> ClearGoal:
+        if (self.upright or self.set_down) and self.into is None:
+            raise ValueError("'upright' and 'set_down' judge objects placed into a container: give 'into' too")
+        return self
 
 
 class CollectGoal(StrictModel):

@@ -117,7 +117,7 @@ def _private_cache(folder: Path) -> Path:
 
 
 def cache_key(geometry: MeshGeometry, params: CoacdParams) -> str:
-    from importlib.metadata import version
+    from importlib.metadata import version  # deferred: start-up time (only when a cache key is made)
 
     text = json.dumps({"format": CACHE_FORMAT, "sha256": geometry.sha256, "scale": list(geometry.scale),
                        "coacd": version("coacd"),

@@ -380,7 +380,7 @@ def checked_resolver(found: MeshFiles) -> Any:
     touches the disk (a name not read here is 'not found': the decoder goes on without it)."""
     import trimesh
 
-    class CheckedFiles(trimesh.resolvers.Resolver):  # type: ignore[misc]
+    class CheckedFiles(trimesh.resolvers.Resolver):
         def __init__(self) -> None:
             self.file_name = found.main
 

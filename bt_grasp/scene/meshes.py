@@ -40,7 +40,7 @@ from bt_grasp.scene.mesh_files import (
 from bt_grasp.scene.mesh_geometry import MeshGeometry, Vec3, VisualPart
 from bt_grasp.scene.notices import notice
 from bt_grasp.scene.objects import DEFAULT_MESH_RGB, MESH_SUFFIXES
-from bt_grasp.scene.urdf_object import MeshRef, Primitive, UrdfPart
+from bt_grasp.scene.urdf_object import MeshRef, Primitive, UrdfObject, UrdfPart
 
 log = logging.getLogger(__name__)
 
@@ -75,7 +75,7 @@ def attach_geometry(objects: Sequence[SceneObject], table_size_m: float, source:
             else:
                 assert obj.urdf is not None
                 geometry = read_urdf_object(folder / obj.urdf, obj.scale_xyz, source, line, obj.name, packages,
-                                            scale_line)
+                                            scale_line, from_visual=obj.collision == "from_visual")
         _check_size(geometry, table_size_m, source, scale_line, obj.name)
         obj.with_geometry(geometry)
 
@@ -114,10 +114,14 @@ def read_mesh_object(path: Path, scale: Vec3, source: str | Path, line: int | No
 
 
 def read_urdf_object(path: Path, scale: Vec3, source: str | Path, line: int | None, name: str,
-                     packages: Mapping[str, Path] | None = None, scale_line: int | None = None) -> MeshGeometry:
+                     packages: Mapping[str, Path] | None = None, scale_line: int | None = None,
+                     from_visual: bool = False) -> MeshGeometry:
     """A ``shape: urdf`` object (:mod:`bt_grasp.scene.urdf_object`: one rigid body, mesh or primitive parts);
-    errors in the URDF name the URDF's line, a missing mesh the line that names it."""
-    from bt_grasp.scene.urdf_object import read_urdf
+    errors in the URDF name the URDF's line, a missing mesh the line that names it. ``from_visual`` (the scene's
+    ``collision: from_visual``): the object collides as what is drawn, its ``<collision>`` parts not read; the
+    drawn mesh is made convex pieces as any collision mesh is (a convex body its hull, else CoACD, cached under a
+    hash of the drawn geometry)."""
+    from bt_grasp.scene.urdf_object import read_urdf  # deferred: the URDF reader loads only for shape: urdf objects
 
     urdf = read_urdf(_read(path, source, line, name), path, packages)
     _check_scale_keeps_shapes(urdf.visuals + urdf.collisions, scale, source, line, name)
@@ -128,6 +132,9 @@ def read_urdf_object(path: Path, scale: Vec3, source: str | Path, line: int | No
             files[ref.path] = _load_mesh_file(ref.path, path, part_line, name, solid=solid, urdf=True)
         return files[ref.path]
 
+    if from_visual:
+        return _urdf_from_visual(urdf, path, scale, source, line, name, scale_line,
+                                 lambda ref, ln: load(ref, ln, False))
     hasher = hashlib.sha256(b"bt_grasp urdf collision 1")
     pieces = []
     piece_faces: list[int] = []
@@ -143,6 +150,23 @@ def read_urdf_object(path: Path, scale: Vec3, source: str | Path, line: int | No
     _check_scaled(vertices * np.asarray(scale), source, scale_line or line, name)
     return _geometry(vertices * np.asarray(scale), faces, hasher.hexdigest(), collision_path, scale, visuals, drawn,
                      path, where, name, rgb=rgb, mass_kg=urdf.mass_kg, piece_faces=tuple(piece_faces))
+
+
+def _urdf_from_visual(urdf: UrdfObject, path: Path, scale: Vec3, source: str | Path, line: int | None, name: str,
+                      scale_line: int | None, load: Callable[[MeshRef, int | None], _LoadedMesh]) -> MeshGeometry:
+    """A URDF object whose collision geometry is its drawn mesh (scaled already: the scale is 1 from here on).
+    Its hash is of the drawn triangles, so an edited drawing is decomposed again and the file's own collision
+    shapes are never taken for these."""
+    visuals, drawn, rgb = _visual_parts(urdf.visuals, scale, name, load)
+    vertices, faces = drawn
+    _check_scaled(vertices, source, scale_line or line, name)
+    hasher = hashlib.sha256(b"bt_grasp urdf collision from_visual 1")
+    hasher.update(np.round(vertices, 9).tobytes())
+    hasher.update(np.ascontiguousarray(faces, dtype=np.int64).tobytes())
+    drawn_path = next((p.geometry.path for p in urdf.visuals if isinstance(p.geometry, MeshRef)), path)
+    where = urdf.visuals[0].line if urdf.visuals else line
+    return _geometry(vertices, faces, hasher.hexdigest(), drawn_path, (1.0, 1.0, 1.0), visuals, None, path, where,
+                     name, rgb=rgb, mass_kg=urdf.mass_kg)
 
 
 def _check_scale_keeps_shapes(parts: tuple[UrdfPart, ...], scale: Vec3, source: str | Path, line: int | None,

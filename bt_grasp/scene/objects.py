@@ -66,6 +66,10 @@ DEFAULT_MESH_RGB: tuple[float, float, float] = (0.6, 0.6, 0.6)
 #: poses drawn from the seed (``stable``: with the chance it lands so when dropped; ``any_stable``: every distinct
 #: rest pose equally likely). See :mod:`bt_grasp.scene.layout`.
 RestPoseRule = Literal["modelled", "stable", "any_stable"]
+#: what a URDF object collides as (``collision``): the collision parts its file names (``file``), or the drawn
+#: mesh (``from_visual``: for object sets whose collision files are coarse hulls, a mug's cup filled solid),
+#: made convex pieces by the same cached decomposition (:mod:`bt_grasp.scene.mesh_cache`)
+CollisionSource = Literal["file", "from_visual"]
 
 
 class SceneObject(StrictModel):
@@ -89,6 +93,7 @@ class SceneObject(StrictModel):
     pose: ObjectPose
     randomize: Randomize = Randomize()
     rest_pose: RestPoseRule = "modelled"  # mesh and urdf objects: how the object is set down (drawn per seed)
+    collision: CollisionSource = "file"  # urdf objects: collide as the collision parts (file) or the drawn mesh
     _geometry: MeshGeometry | None = PrivateAttr(default=None)
 
     @model_validator(mode="after")
@@ -108,6 +113,8 @@ class SceneObject(StrictModel):
                 raise ValueError(f"'scale' is for mesh or urdf objects, not a {self.shape} (give size_m)")
             if self.rest_pose != "modelled":
                 raise ValueError(f"'rest_pose' is for mesh or urdf objects, not a {self.shape}")
+            if self.collision != "file":
+                raise ValueError(f"'collision' is for urdf objects, not a {self.shape} (it collides as its shape)")
             return self
         file_key = self.shape  # "mesh" or "urdf"
         other = "urdf" if file_key == "mesh" else "mesh"
@@ -119,6 +126,9 @@ class SceneObject(StrictModel):
             raise ValueError(f"a {self.shape} object's size comes from its file and 'scale', not size_m")
         if self.mass_kg is not None and self.density_kg_m3 is not None:
             raise ValueError("give mass_kg or density_kg_m3, not both")
+        if self.shape == "mesh" and self.collision != "file":
+            raise ValueError("'collision: from_visual' is for urdf objects: a mesh object collides as its drawn "
+                             "mesh already")
         if self.mesh is not None and not self.mesh.lower().endswith(MESH_SUFFIXES):
             raise ValueError(f"mesh file '{self.mesh}' is not one of {', '.join(MESH_SUFFIXES)}")
         return self

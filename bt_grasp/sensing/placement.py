@@ -17,13 +17,11 @@ from bt_grasp.errors import InputError
 from bt_grasp.geometry import Mat4
 from bt_grasp.hardware.tool_poses import ToolPose
 from bt_grasp.interfaces import CameraIntrinsics, Mount, RGBDFrame
-from bt_grasp.perception.calibration_file import CalibrationFile
+from bt_grasp.perception.calibration_file import CalibrationFile, intrinsics_problem
 from bt_grasp.perception.config import PerceptionConfig
 from bt_grasp.robot_description import BASE_LINK
 
 CAMERA_FRAME = "camera_color_optical_frame"
-#: a calibration's intrinsics and the source's agree when every focal length and principal point is this close, px
-INTRINSICS_TOLERANCE_PX = 0.01
 
 
 @dataclass(frozen=True)
@@ -48,21 +46,6 @@ class Placement:
     @property
     def T_out_camera(self) -> Mat4:
         return np.asarray(self.T_out_pipeline @ self.T_pipeline_camera, dtype=float)
-
-
-def intrinsics_problem(calibration: CalibrationFile, source: CameraIntrinsics) -> str | None:
-    """Why a calibration was not made with this source's colour intrinsics, or None."""
-    cal = calibration.intrinsics
-    if (cal.width_px, cal.height_px) != (source.width_px, source.height_px):
-        return (f"it was made for a {cal.width_px}x{cal.height_px} picture, but the source's colour stream is "
-                f"{source.width_px}x{source.height_px}")
-    off = max(abs(a - b) for a, b in ((cal.fx_px, source.fx_px), (cal.fy_px, source.fy_px),
-                                      (cal.cx_px, source.cx_px), (cal.cy_px, source.cy_px)))
-    if off > INTRINSICS_TOLERANCE_PX:
-        return (f"its intrinsics (fx {cal.fx_px:.2f}, fy {cal.fy_px:.2f}, cx {cal.cx_px:.2f}, cy {cal.cy_px:.2f} px) "
-                f"are not the source's (fx {source.fx_px:.2f}, fy {source.fy_px:.2f}, cx {source.cx_px:.2f}, "
-                f"cy {source.cy_px:.2f} px): it was made with another camera or resolution")
-    return None
 
 
 class FramePlacer:

@@ -178,7 +178,8 @@ class SimCamera:
         rgba = camera.get_picture("Color")
         if rgba.dtype == np.uint8:  # the log camera's 8-bit colour
             return np.ascontiguousarray(rgba[..., :3])
-        return np.clip(np.round(rgba[..., :3] * 255.0), 0, 255).astype(np.uint8)
+        rgb: NDArray[np.uint8] = np.clip(np.round(rgba[..., :3] * 255.0), 0, 255).astype(np.uint8)
+        return rgb
 
     def capture(self) -> RGBDFrame | None:
         color, depth = self.render_true()

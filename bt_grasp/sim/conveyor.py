@@ -22,8 +22,7 @@ import numpy as np
 import sapien
 
 from bt_grasp.geometry import make_T, rot_z
-from bt_grasp.scene.conveyor import SLAT_PITCH_M, SLAT_THICKNESS_M, Feed
-from bt_grasp.scene.fixtures import Conveyor
+from bt_grasp.scene.conveyor import SLAT_PITCH_M, SLAT_THICKNESS_M, Conveyor, Feed
 from bt_grasp.scene.layout import draw_rest
 from bt_grasp.sim.fixtures import BUILDERS, FIXTURE_FRICTION
 from bt_grasp.sim.objects import PlacedObject, resting_z_m
@@ -34,7 +33,7 @@ _SLAT_GAP_M = 0.001
 _SLAT_RGB = (0.12, 0.12, 0.13)
 
 
-def build_conveyor_frame(scene: sapien.Scene, fixture: Conveyor) -> sapien.Entity:  # type: ignore[override]
+def build_conveyor_frame(scene: sapien.Scene, fixture: Conveyor) -> sapien.Entity:
     """The static frame under the belt (its top ``SLAT_THICKNESS_M`` below the belt surface)."""
     builder = scene.create_actor_builder()
     frame_h = fixture.height_m - SLAT_THICKNESS_M

@@ -79,7 +79,7 @@ class DepthImager:
         self._scene.update_render()
         self._component.take_picture()
         position = self._component.get_picture("Position")
-        depth = (-position[..., 2]).astype(np.float32)
+        depth: NDArray[np.float32] = (-position[..., 2]).astype(np.float32)
         depth[position[..., 3] >= 1.0] = 0.0
         depth[depth < 0] = 0.0
         return depth

@@ -7,6 +7,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable
 
+import numpy as np
 import sapien
 
 from bt_grasp.robot_description import FINGER_JOINT
@@ -22,6 +23,7 @@ class SimDisturbances:
 
     def __init__(self, world: World) -> None:
         self._world = world
+        self._bodies: dict[object, str] | None = None  # each object's dynamic body -> its name
 
     def object_names(self) -> tuple[str, ...]:
         return tuple(self._world.objects)
@@ -43,6 +45,28 @@ class SimDisturbances:
             raise ValueError(f"object '{name}' is not a dynamic body that can be pushed")
         body.wake_up()
         body.set_linear_velocity(list(velocity_m_s))  # a push (an impulse), not a teleport
+
+    def objects_touching_fingers(self) -> frozenset[str]:
+        """The objects a finger pad touches now (a contact with a non-zero impulse), from one pass over the
+        contacts; reading them changes nothing in the world."""
+        world = self._world
+        if world.physics_steps == 0:  # no contacts exist before the first physics step
+            return frozenset()
+        fingers = {world.robot.links[name] for name in FINGER_LINKS}
+        if self._bodies is None:
+            self._bodies = {}
+            for object_name, entity in world.objects.items():
+                body = entity.find_component_by_type(sapien.physx.PhysxRigidDynamicComponent)
+                if body is not None:
+                    self._bodies[body] = object_name
+        touched: set[str] = set()
+        for contact in world.scene.get_contacts():
+            a, b = contact.bodies[0], contact.bodies[1]
+            other = b if a in fingers else a if b in fingers else None
+            name = self._bodies.get(other) if other is not None else None
+            if name is not None and any(float(np.linalg.norm(p.impulse)) > 0 for p in contact.points):
+                touched.add(name)
+        return frozenset(touched)
 
     def weaken_grip(self, friction: float | None, force_n: float | None
                     ) -> tuple[dict[str, float], Callable[[], None]]:

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bt_grasp.geometry import Mat4
+from bt_grasp.geometry import Mat4, signed_mm
 from bt_grasp.interfaces import Mount
 from bt_grasp.scene.fixtures import Container
 from bt_grasp.scene.goals import ClearGoal, CollectGoal, Goal, PickGoal, PlaceGoal, SortGoal, StackGoal
@@ -189,10 +189,14 @@ def _check_clear(judge: Judge, goal: Goal) -> Verdict:
                    lifted_objects=tuple(n for n, r in rises.items() if r > LIFTED_M), objects_in_workspace=left)
 
 
-def _placed_conditions(judge: Judge, placements: list[Placement]) -> list[Condition]:
-    """One condition per placement criterion over every object (naming the ones that miss it)."""
+def _placed_conditions(judge: Judge, placements: list[Placement], upright: bool = True,
+                       set_down: bool = True) -> list[Condition]:
+    """One condition per placement criterion over every object (naming the ones that miss it): released,
+    upright (when the goal asks), resting, set down (when the goal asks)."""
     out = []
-    for criterion in (Criterion.RELEASED, Criterion.UPRIGHT, Criterion.RESTING, Criterion.SET_DOWN):
+    wanted = (Criterion.RELEASED, *((Criterion.UPRIGHT,) if upright else ()), Criterion.RESTING,
+              *((Criterion.SET_DOWN,) if set_down else ()))
+    for criterion in wanted:
         misses = [detail for p in placements for c, detail in p.problems() if c == criterion.value]
         measured = "; ".join(p.measured()[criterion.value] for p in placements)
         out.append(Condition(criterion, not misses, "; ".join(misses) if misses else measured))
@@ -222,9 +226,9 @@ def _check_place(judge: Judge, goal: Goal) -> Verdict:
     bottom = extent.bottom_z_m - surface
     at = off <= goal.tolerance_m and abs(bottom) <= 0.005
     detail = (f"{goal.object} {off * 100:.1f} cm from the target (tolerance {goal.tolerance_m * 100:.1f} cm), "
-              f"its bottom {bottom * 1000:.0f} mm above the target surface")
-    conditions = [Condition(Criterion.TARGET_EXISTS, True, goal.object), *_placed_conditions(judge, [p]),
-                  Condition(Criterion.AT_TARGET, at, detail)]
+              f"its bottom {signed_mm(bottom, 'above', 'below')} the target surface")
+    conditions = [Condition(Criterion.TARGET_EXISTS, True, goal.object),
+                  *_placed_conditions(judge, [p], upright=goal.upright), Condition(Criterion.AT_TARGET, at, detail)]
     return Verdict(goal, tuple(conditions), goal.object)
 
 
@@ -239,15 +243,17 @@ def _check_stack(judge: Judge, goal: Goal) -> Verdict:
     dz = upper_at.bottom_z_m - lower_at.top_z_m
     ok = off <= goal.xy_tolerance_m and abs(dz) <= goal.z_tolerance_m and lower.upright
     detail = (f"{goal.object} {off * 100:.1f} cm off {goal.on}'s centre (at most {goal.xy_tolerance_m * 100:.0f}), "
-              f"{dz * 1000:+.0f} mm from resting on its top (at most {goal.z_tolerance_m * 1000:.0f})"
+              f"its bottom {signed_mm(dz, 'above', 'below')} {goal.on}'s top (at most "
+              f"{goal.z_tolerance_m * 1000:.0f} mm)"
               + ("" if lower.upright else f", {goal.on} tilts {lower.tilt_deg:.0f} deg"))
     conditions = [Condition(Criterion.TARGET_EXISTS, True, f"{goal.object} on {goal.on}"),
-                  *_placed_conditions(judge, [top]), Condition(Criterion.ON_TOP, ok, detail)]
+                  *_placed_conditions(judge, [top], upright=goal.upright), Condition(Criterion.ON_TOP, ok, detail)]
     return Verdict(goal, tuple(conditions), goal.object)
 
 
-def _in_container(judge: Judge, goal: Goal, wanted: dict[str, str]) -> Verdict:
-    """Each object of ``wanted`` (name -> container) placed inside its container, on its floor."""
+def _in_container(judge: Judge, goal: Goal, wanted: dict[str, str], upright: bool, set_down: bool) -> Verdict:
+    """Each object of ``wanted`` (name -> container) inside its container, on its floor, released and at rest
+    (and upright, and set down, when asked)."""
     scene = judge._world.config
     if not wanted:
         return Verdict(goal, (Condition(Criterion.TARGET_EXISTS, False, "no object the goal is about"),))
@@ -260,7 +266,8 @@ def _in_container(judge: Judge, goal: Goal, wanted: dict[str, str]) -> Verdict:
                   and extent.bottom_z_m <= box.surface_z_m + 0.01)
         if not inside:
             outside.append(f"{p.name} not on the floor of {wanted[p.name]}")
-    conditions = [Condition(Criterion.TARGET_EXISTS, True, ", ".join(wanted)), *_placed_conditions(judge, placements),
+    conditions = [Condition(Criterion.TARGET_EXISTS, True, ", ".join(wanted)),
+                  *_placed_conditions(judge, placements, upright, set_down),
                   Condition(Criterion.IN_CONTAINER, not outside, "; ".join(outside) or "every object inside")]
     return Verdict(goal, tuple(conditions), objects_in_workspace=judge.objects_in_workspace())
 
@@ -268,12 +275,15 @@ def _in_container(judge: Judge, goal: Goal, wanted: dict[str, str]) -> Verdict:
 def _check_sort(judge: Judge, goal: Goal) -> Verdict:
     assert isinstance(goal, SortGoal)
     wanted = {n: rule.into for rule in goal.rules for n in judge.objects_of_color(rule.color)}
-    return _in_container(judge, goal, wanted)
+    return _in_container(judge, goal, wanted, upright=goal.upright, set_down=True)
 
 
 def _check_clear_into(judge: Judge, goal: Goal) -> Verdict:
+    """Every object inside the container, released and at rest (what a user clearing a table into a bin means:
+    any way up, dropped in or set down), unless the goal asks ``upright``/``set_down`` too."""
     assert isinstance(goal, ClearGoal) and goal.into is not None
-    return _in_container(judge, goal, {n: goal.into for n in judge._oracle.object_names()})
+    return _in_container(judge, goal, {n: goal.into for n in judge._oracle.object_names()},
+                         upright=goal.upright, set_down=goal.set_down)
 
 
 def _check_collect(judge: Judge, goal: Goal) -> Verdict:

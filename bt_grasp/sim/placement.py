@@ -59,12 +59,14 @@ class Placement:
     def measured(self) -> dict[str, str]:
         """Criterion value -> what was measured, for a verdict's details."""
         fall_m = self.fall_after_release_m
-        fall = "never released" if fall_m is None else f"fell {fall_m * 1000:.0f} mm"
+        fall_mm = None if fall_m is None else round(fall_m * 1000)  # an int: never "-0"
+        fall = ("was never released" if fall_mm is None else f"rose {-fall_mm} mm after release" if fall_mm < 0
+                else f"fell {fall_mm} mm after release")
         return {
             "released": f"{self.name} {'touches a finger' if self.touching_fingers else 'free of the fingers'}",
             "upright": f"{self.name} tilts {self.tilt_deg:.1f} deg",
             "resting": f"{self.name} still {self.still_for_s:.1f} s",
-            "set_down": f"{self.name} {fall} after release",
+            "set_down": f"{self.name} {fall}",
         }
 
     def problems(self) -> list[tuple[str, str]]:

@@ -44,7 +44,7 @@ class World:
         self, scene_config: Scene, seed: int, *, camera_mount: str | None = None, source: str | Path = "scene",
         robot_urdf: Path | None = None,
     ) -> None:
-        """``robot_urdf``: the robot with another gripper (``bt_grasp.sim.twin.gripper_models``); None: bt_grasp's."""
+        """``robot_urdf``: the robot with another gripper (``bt_grasp.cell.grippers``); None: bt_grasp's."""
         self.config = scene_config
         self._seed_streams(seed)
         self.clock = ManualClock()

@@ -45,6 +45,7 @@ class FailureReason(enum.StrEnum):
     DROPPED = "DROPPED"  # the held object left the fingers while it was carried
     PLACE_BLOCKED = "PLACE_BLOCKED"  # the place target is occupied, or the descent met something early
     COUNT_EXCEEDED = "COUNT_EXCEEDED"  # ObjectCount: more objects than the port ``max`` allows
+    SAFETY_LIMIT = "SAFETY_LIMIT"  # a real cell refused a motion before sending it (workspace box, table, caps)
 
 
 @dataclass(frozen=True)
@@ -100,6 +101,7 @@ _DESCRIPTIONS: dict[FailureReason, str] = {
     FailureReason.DROPPED: "The held object left the fingers while it was carried.",
     FailureReason.PLACE_BLOCKED: "The place target is occupied, or the descent met something early.",
     FailureReason.COUNT_EXCEEDED: "ObjectCount saw more objects than its port max allows.",
+    FailureReason.SAFETY_LIMIT: "A real cell refused a motion before sending it (workspace box, table, caps).",
 }
 
 

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 from typing import Protocol, TypedDict
 
 from bt_grasp.interfaces import Stepper
+from bt_grasp.tree.failure_kinds import false_by_design
 from bt_grasp.tree.introspect import bt_status_name
 from bt_grasp.tree.loader import LoadedTree
 from bt_grasp.tree.node import BtNode, BtStatus
@@ -55,10 +56,10 @@ class TickStatuses(TypedDict):
 class TickGate(Protocol):
     """Consulted between ticks (``bt_grasp.control.Controller``): once before the first tick (tick 0) and after
     every tick that did not end the run, before the physics steps; it may hold (a paused run: simulated time
-    stands still). ``failures``: (leaf path, leaf name, reason, message) of every FAILURE a leaf returned in
-    the tick. Returns True to stop the run there."""
+    stands still). ``failures``: every FAILURE a leaf returned in the tick, each saying whether it was false by
+    design. Returns True to stop the run there."""
 
-    def between_ticks(self, tick: int, failures: Sequence[tuple[str, str, str | None, str]] = ()) -> bool: ...
+    def between_ticks(self, tick: int, failures: Sequence[FailureEvent] = ()) -> bool: ...
 
 
 @dataclass
@@ -156,8 +157,11 @@ class TreeRunner:
             records = tick_records(self._nodes, watch)
             self.stream.append({"tick": tick, "status": {rec["path"]: rec["status"] for rec in records}})
             # every FAILURE a leaf returned during this tick, also those a retry inside the tick hid again
+            this_tick: list[FailureEvent] = []
             for node, reason, message, order in watch.failed:
-                event = FailureEvent(tick, stamp, node.name, node.bt_path, reason, message, _by_design(node, reason))
+                event = FailureEvent(tick, stamp, node.name, node.bt_path, reason, message, false_by_design(
+                    is_leaf=True, kind=node.bt_kind.value, parent_type=_parent_type(node), reason=reason))
+                this_tick.append(event)
                 if reason is not None:
                     failures.append(event)
                 if not event.by_design:
@@ -174,8 +178,7 @@ class TreeRunner:
                 self.on_tick(tick, self.tree)
             if status.completed:
                 break
-            if gate is not None and gate.between_ticks(
-                    tick, [(n.bt_path, n.name, reason, message) for n, reason, message, _ in watch.failed]):
+            if gate is not None and gate.between_ticks(tick, this_tick):
                 stopped = True
                 break
             self.stepper.step(self.steps_per_tick)
@@ -246,13 +249,9 @@ class _TickWatch:
             self.failed.append((node, getattr(node, "failure_reason", None), node.feedback_message, self.order))
 
 
-def _by_design(node: BtNode, reason: str | None) -> bool:
-    """A condition asked by a Fallback (its "no" selects the next child), or one answering "no" with no
-    reason: control flow, not a fault (replay's failures view applies the same rule to a log)."""
-    if node.bt_kind is not NodeKind.CONDITION:
-        return False
+def _parent_type(node: BtNode) -> str | None:
     parent = node.parent
-    return reason is None or (parent is not None and "Fallback" in getattr(parent, "bt_type", ""))
+    return None if parent is None else str(getattr(parent, "bt_type", ""))
 
 
 def _what_followed(shown: Sequence[tuple[FailureEvent, int]], restarts: Sequence[tuple[str, int, int]],

@@ -83,6 +83,14 @@ def test_one_candidate_per_tick_until_one_is_reachable() -> None:
     assert "candidate 2" in tree.find("PlanGrasp").feedback_message
 
 
+def test_a_candidate_that_fails_is_named_once() -> None:
+    """Issue 43, finding 8: the feedback read "candidate 0: candidate 0: pre-grasp unreachable"."""
+    tree, _, _ = _setup(PLAN, FakeKinematics(failures=1), FakePlanner())
+    assert _ticks(tree, 1) == ["RUNNING"]
+    message = tree.find("PlanGrasp").feedback_message
+    assert message.startswith("candidate 0: ") and message.count("candidate 0") == 1, message
+
+
 def _counts() -> tuple[int, int]:
     """The 5 cm cube's footprint grasps (four), then how many grasps sampled from its fitted box are not near-same
     as one of them: the sampling draws from the run's GRASPS stream (``bt_grasp.seeds``; ``fake_cell``'s seed 0),

@@ -18,6 +18,7 @@ import pytest
 from studio_driver import ROBOT_LINKS, open_in_studio, serving, skip_without_browser
 
 from bt_grasp.foxglove.tree_layout import layout_for_tree_file
+from tests.terminal_stderr import TerminalStderr
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -42,15 +43,14 @@ def _wait_for_port(port: int, proc: subprocess.Popen[str], timeout_s: float) -> 
     raise AssertionError(f"nothing listens on {port} after {timeout_s} s")
 
 
-def _wait_for_line(proc: subprocess.Popen[str], prefix: str, timeout_s: float,
+def _wait_for_line(run: TerminalStderr, prefix: str, timeout_s: float,
                    seen: list[str] | None = None) -> None:
-    """Read the run's progress (stderr) until a line starts with ``prefix`` (a reader thread: it may stay
-    silent); the lines read are appended to ``seen``."""
+    """Read the run's progress (stderr, a terminal: the run draws its progress on one only) until a line starts
+    with ``prefix`` (a reader thread: it may stay silent); the lines read are appended to ``seen``."""
     found = threading.Event()
 
     def read() -> None:
-        assert proc.stderr is not None
-        for line in proc.stderr:
+        for line in run.lines():
             if seen is not None:
                 seen.append(line)
             if line.startswith(prefix):
@@ -67,18 +67,19 @@ def test_live_run_shows_whole_in_foxglove(tmp_path: Path) -> None:
     port = _free_port()
     # slower than real time (at 0.03x: tick 100 after ~33 s, the pick's end after ~245 s) so the run is still
     # going while Studio starts, subscribes, draws (waited for, up to 100 s) and is looked at
-    proc = subprocess.Popen(
+    run = TerminalStderr(
         [sys.executable, "-m", "bt_grasp.cli.main", "run", str(ROOT / "trees/pick.xml"),
          "--scene", str(ROOT / "scenes/tabletop.yaml"), "--live", str(port), "--realtime", "0.03",
          "--max-ticks", "1000"],
-        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
+        stdout=subprocess.DEVNULL, text=True, cwd=tmp_path,
         env={**os.environ, "PYTHONPATH": str(ROOT), "PYTHONUNBUFFERED": "1", "COLUMNS": "200",
              "TMPDIR": str(tmp_path)},  # where the run writes its layout (it has no log)
     )
+    proc = run.proc
     try:
         _wait_for_port(port, proc, 120)
         said: list[str] = []
-        _wait_for_line(proc, "tick   100", 120, said)  # Perceive (tick 1) is over; nobody has watched yet
+        _wait_for_line(run, "tick   100", 120, said)  # Perceive (tick 1) is over; nobody has watched yet
         # the layout the run wrote for its tree (its leaves' rows, by path), as it told the user
         told = next(line for line in said if line.startswith("live: "))
         layout = Path(told.rsplit("(layout: ", 1)[1].strip().rstrip(")"))
@@ -91,8 +92,7 @@ def test_live_run_shows_whole_in_foxglove(tmp_path: Path) -> None:
     finally:
         proc.kill()
         proc.wait()
-        if proc.stderr is not None:
-            proc.stderr.close()
+        run.close()
     assert report.errors == []
     assert report.problems == [] and report.problem_count == 0, report.problems
     assert set(ROBOT_LINKS) <= set(report.frames), report.frames

@@ -384,11 +384,11 @@ def test_a_malformed_command_is_one_sentence(data: Any, words: str) -> None:
 def test_a_bad_breakpoint_spec_is_one_sentence(spec: str, problem: str) -> None:
     with pytest.raises(InputError) as info:
         parse_breakpoint(spec)
-    assert info.value.message == (f"--break: '{spec}': {problem}; expected node:NAME, fail, fail:REASON, bb:KEY, "
-                                  "tick:N or time:S")
+    assert info.value.message == (f"--break: '{spec}': {problem}; expected node:NAME, fail, fail:REASON, fail:all, "
+                                  "bb:KEY, tick:N or time:S")
 
 
-@pytest.mark.parametrize("spec", ["node:pick/Perceive", "fail", "fail:NO_DETECTION", "bb:object", "tick:0",
-                                  "time:2.5"])
+@pytest.mark.parametrize("spec", ["node:pick/Perceive", "fail", "fail:NO_DETECTION", "fail:all", "bb:object",
+                                  "tick:0", "time:2.5"])
 def test_a_breakpoint_spec_round_trips(spec: str) -> None:
     assert parse_breakpoint(spec).spec == spec

@@ -115,3 +115,21 @@ def test_confusion_matrix_rows_true_columns_predicted() -> None:
         (1, 0, 0, 0),  # background: one bar predicted where nothing was
     )
     assert [c.predictions for c in report.per_class] == [2, 0, 1]
+
+
+def test_the_table_counts_the_predictions_its_ap_scores() -> None:
+    """Issue 43, finding 11: two bar labels, one found at 0.9 and one at 0.1 (under the pipeline's 0.25): AP50 is
+    0.995 because AP scores every prediction from 0.01 up (as Ultralytics does), so the table's prediction count is
+    that one (2), with the pipeline's own count (1) beside it, and the table says which is which."""
+    from bt_grasp.detector.evaluate import format_report
+
+    two_bars = [Boxes.of([BAR, _shifted(BAR, 200)], [0, 0])]
+    report = evaluate(two_bars, [Boxes.of([BAR, _shifted(BAR, 200)], [0, 0], [0.9, 0.1])], NAMES)
+    assert report.per_class[0].ap50 == pytest.approx(0.995)
+    bar = report.per_class[0]
+    assert (bar.labels, bar.scored, bar.predictions) == (2, 2, 1)
+    text = format_report(report)
+    row = next(line for line in text.splitlines() if line.startswith("bar "))
+    assert row.split()[:4] == ["bar", "2", "2", "1"], text
+    assert "score >= 0.01" in text and "> 0.25" in text, text  # the table says which predictions each count holds
+    assert max(len(line) for line in text.splitlines()) <= 80, text

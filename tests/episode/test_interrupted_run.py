@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 
 from bt_grasp.cli.main import main
+from tests.terminal_stderr import TerminalStderr
 
 REPO = Path(__file__).resolve().parents[2]
 LINE = "bt-grasp: error: interrupted (Ctrl-C)"
@@ -28,21 +29,25 @@ def _ctrl_c_reaches_the_child() -> None:
 @pytest.mark.sim
 def test_ctrl_c_mid_run_finishes_the_log_marked_interrupted(tmp_path: Path) -> None:
     log = tmp_path / "run.mcap"
-    proc = subprocess.Popen(
+    # stderr on a terminal, where the run draws its progress (never into a pipe): tick 100 is waited for there
+    run = TerminalStderr(
         [sys.executable, "-m", "bt_grasp.cli.main", "run", "trees/pick.xml", "--scene", "scenes/tabletop.yaml",
          "--log", str(log), "--realtime", "0.3"],  # slowed down: tick 100 comes long before the end
-        cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=_ctrl_c_reaches_the_child,
+        cwd=REPO, stdout=subprocess.PIPE, text=True, preexec_fn=_ctrl_c_reaches_the_child,
     )
-    assert proc.stderr is not None
+    proc = run.proc
     seen = []
-    for line in proc.stderr:
+    lines = run.lines()
+    for line in lines:
         seen.append(line)
         if line.startswith("tick   100"):
             proc.send_signal(signal.SIGINT)
             break
-    out, rest = proc.communicate(timeout=120)
-    assert proc.returncode == 130, "".join(seen) + rest
-    assert rest.strip().splitlines() == [LINE] and out == ""
+    rest = [line for line in lines if not line.startswith("tick ")]  # until the command ends: its last words
+    out, _ = proc.communicate(timeout=120)
+    run.close()
+    assert proc.returncode == 130, "\n".join(seen + rest)
+    assert [line.strip() for line in rest] == [LINE] and out == ""
     replay = subprocess.run([sys.executable, "-m", "bt_grasp.cli.main", "replay", str(log), "--json"],
                             cwd=REPO, capture_output=True, text=True, timeout=120)
     assert replay.returncode == 0, replay.stderr

@@ -28,7 +28,7 @@ def test_run_json_prints_one_typed_object(tmp_path: Path) -> None:
     summary = json.loads(proc.stdout)  # the whole of stdout is one JSON object
     assert summary == json.loads(written.read_text())
     assert summary["success"] is True and summary["seed"] == 3 and isinstance(summary["ticks"], int)
-    assert "tick " in proc.stderr  # the live progress went to stderr
+    assert "tick " not in proc.stderr  # live progress is drawn on a terminal only, never into a pipe
 
 
 def test_run_json_and_interactive_do_not_go_together(capsys: pytest.CaptureFixture[str]) -> None:

@@ -153,6 +153,7 @@ class FakePhysics:
         self.pad_friction = 1.0
         self.force_limit_n = 40.0
         self.velocities: dict[str, tuple[float, float, float]] = {}
+        self.touching: set[str] = set()  # what the fingers touch now
 
     def object_names(self) -> tuple[str, ...]:
         return tuple(self.colors)
@@ -165,6 +166,9 @@ class FakePhysics:
 
     def set_velocity(self, name: str, velocity_m_s: tuple[float, float, float]) -> None:
         self.velocities[name] = velocity_m_s
+
+    def objects_touching_fingers(self) -> frozenset[str]:
+        return frozenset(self.touching)
 
     def weaken_grip(self, friction: float | None, force_n: float | None) -> tuple[dict[str, float], Any]:
         details: dict[str, float] = {}

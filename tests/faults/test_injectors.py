@@ -218,6 +218,24 @@ def test_object_nudge_pushes_the_target_with_a_friction_sized_impulse() -> None:
     assert recorder.faults[0][2]["details"]["object"] == "blue_box"
 
 
+@pytest.mark.parametrize("touched", [False, True])
+def test_a_push_says_which_object_it_hit_and_whether_the_tree_ever_touched_it(touched: bool) -> None:
+    """Issue 43, finding 2: a nudge on an object the fingers never touched in the run says so in the run's result."""
+    r = rig(color="blue")
+    injector, _ = install(r, "nudge@PlanGrasp:dx_m=0.03")
+    r.nodes["PlanGrasp"].enter()
+    injector.after_tick(1)
+    if touched:
+        r.physics.touching.add("blue_box")  # the fingers on it for one tick, after the push
+    injector.after_tick(2)
+    r.physics.touching.clear()
+    injector.after_tick(3)
+    (firing,) = injector.report()
+    assert (firing.kind, firing.target, firing.target_touched, firing.missed) == ("object_nudge", "blue_box", touched,
+                                                                                 not touched)
+    assert ("never touched blue_box" in firing.sentence()) is not touched
+
+
 def test_object_nudge_of_an_unknown_object_is_refused_before_the_run() -> None:
     with pytest.raises(InputError, match="no object 'cup'"):
         install(rig(), "nudge@PlanGrasp:object=cup")

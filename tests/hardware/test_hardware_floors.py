@@ -9,7 +9,7 @@ import ast
 
 from test_architecture import PKG, _imports
 
-DEVICE_LIBRARIES = ("pyrealsense2",)
+DEVICE_LIBRARIES = ("pyrealsense2", "rtde_control", "rtde_receive", "rtde_io", "dashboard_client", "script_client")
 
 
 def _is(name: str, prefixes: tuple[str, ...]) -> bool:

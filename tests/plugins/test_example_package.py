@@ -6,6 +6,7 @@ failure reasons are matched by FailureIs and show in `replay --failures` and the
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 import sysconfig
@@ -102,8 +103,12 @@ def test_the_installed_example_is_found_by_its_entry_point(venv_python: Path, tm
     assert ("TestNode", "FAILURE") in tick_1 and ("FailureIs", "SUCCESS") in tick_1  # matched GRIPPER_TOO_NARROW
     assert "failure_reason" not in out["blackboard"]  # the tree succeeded: the recovered failure is cleared
 
-    own_tests = subprocess.run([str(venv_python), "-m", "pytest", "-q", "-p", "no:cacheprovider", "-W", "error",
-                                str(EXAMPLE / "tests")], capture_output=True, text=True, timeout=300, cwd=EXAMPLE)
+    # the example's own run, alone: not a worker of this run's xdist, and without plugins the machine's Python
+    # happens to carry (pytest-benchmark warns, an error under -W error, when it sees xdist)
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("PYTEST_XDIST", "PYTEST_CURRENT"))}
+    own_tests = subprocess.run([str(venv_python), "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p", "no:xdist",
+                                "-p", "no:benchmark", "-W", "error", str(EXAMPLE / "tests")],
+                               env=env, capture_output=True, text=True, timeout=300, cwd=EXAMPLE)
     assert own_tests.returncode == 0, own_tests.stdout + own_tests.stderr
     assert "2 passed" in own_tests.stdout
 

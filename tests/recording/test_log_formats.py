@@ -26,7 +26,7 @@ def test_a_format_1_log_still_reads_with_simulated_times() -> None:
     assert log.robot_at(3) is not None
 
 
-def test_a_format_2_log_reads_simulated_times_back(tmp_path: Path) -> None:
+def test_today_s_log_reads_simulated_times_back(tmp_path: Path) -> None:
     path = tmp_path / "run.mcap"
     with RunRecorder(path, metadata={"seed": "0"}, handle_signals=False, time_origin_ns=1_700_000_000 * 10**9) as rec:
         rec.write_tick(1, 10_000_000, [{"uid": 1, "path": "A", "type": "Action", "name": "A", "kind": "Action",
@@ -34,7 +34,7 @@ def test_a_format_2_log_reads_simulated_times_back(tmp_path: Path) -> None:
                        {"q_rad": [0.0] * 6, "gripper_width_m": 0.05})
         rec.write_log(10_000_000, "INFO", "test", "hello")
     log = open_log(path)
-    assert log.metadata["log_format"] == topics.LOG_FORMAT_VERSION == "3"
+    assert log.metadata["log_format"] == topics.LOG_FORMAT_VERSION == "4"
     assert log.time_origin_ns == 1_700_000_000 * 10**9
     assert log.ticks[0].stamp_ns == 10_000_000
     assert log.logs[0]["stamp_ns"] == 10_000_000
@@ -50,7 +50,7 @@ def test_an_unknown_format_is_refused_in_one_sentence(tmp_path: Path) -> None:
     with pytest.raises(LogFileError) as info:
         open_log(path)
     message = str(info.value)
-    assert "log format 99" in message and "reads formats 1 and 2 and 3" in message
+    assert "log format 99" in message and "reads formats 1 and 2 and 3 and 4" in message
     assert message.count(". ") == 0
 
 

@@ -83,13 +83,13 @@ def test_every_output_names_a_node_by_the_same_path(walked: dict[str, Any], monk
     summary = json.loads(_cli("replay", str(log), "--json", cwd=folder))
     assert summary["failed_path"] in names and summary["failed_path"] == row["failed_path"]
     assert set(summary["retries_per_leaf"]) | set(summary["failures_per_leaf"]) <= names
-    assert "PickObject::18/Perceive::27" in summary["retries_per_leaf"]  # the dropped frame, retried
+    assert "PickObject::18/Perceive::28" in summary["retries_per_leaf"]  # the dropped frame, retried
     failures = json.loads(_cli("replay", str(log), "--failures", "--json", cwd=folder))
     assert failures and {f["path"] for f in failures} <= names
     assert {c["path"] for f in failures for c in f["recovery"]} <= names
     assert {p for f in failures for p in f["propagated_to"]} <= names
     text = _cli("replay", str(log), "--failures", cwd=folder)
-    assert "PickObject::18/Perceive::27  NO_FRAME" in text
+    assert "PickObject::18/Perceive::28  NO_FRAME" in text
     shown = set(re.findall(r"(\S+) \(tick \d+\) (?:RUN|OK|FAIL|idle|skip)", text))
     assert shown and shown <= names
     tick = json.loads(_cli("replay", str(log), "--tick", "30", "--json", cwd=folder))["tree"]
@@ -109,7 +109,7 @@ def test_every_output_names_a_node_by_the_same_path(walked: dict[str, Any], monk
     page = report.build_report(run, folder / "report.html").html_path.read_text()
     rows_drawn = gantt[0][0]
     assert rows_drawn and set(rows_drawn) <= set(leaves)
-    assert "PickObject::18/Perceive::27" in rows_drawn
+    assert "PickObject::18/Perceive::28" in rows_drawn
     table = page[page.index("<h2>Failures and recovery"):page.index("<h3>Injected faults")]
     cells = set(re.findall(r"<td>tick \d+</td><td>([^<]+)</td>", table))
     assert "frame_drop@Perceive#1: no frame" in page
@@ -117,7 +117,7 @@ def test_every_output_names_a_node_by_the_same_path(walked: dict[str, Any], monk
 
     # the campaign's results row
     assert row["failed_path"] in names and row["failed_path"] == run.result["failed_path"]
-    assert row["retries"] == {"PickObject::18/Perceive::27": 1} == run.result["retries"]
+    assert row["retries"] == {"PickObject::18/Perceive::28": 1} == run.result["retries"]
     assert row["failed_leaf"] == row["failed_path"].rsplit("/", 1)[-1].split("::")[0]
 
     # Foxglove: the leaves on /bt/tick and the layout attached to the log, one row per leaf, by path

@@ -140,3 +140,38 @@ def test_cleared_into_the_bin_succeeds_and_is_not_sorted() -> None:
     assert clear.success, clear.conditions
     sort = s.verdict({"kind": "sort", "rules": [{"color": "red", "into": "left_tray"}]})
     assert _failed(sort) == "in_container"
+
+
+def test_dropped_into_the_bin_is_cleared_as_a_user_means_it() -> None:
+    # issue 46: clearing into a bin means every object inside it, let go and at rest, whichever way it got there;
+    # the earlier definition (set down, upright) is still there to ask for
+    s = Script()
+    s.move("red_box", (0.58, 0.36), 0.004, 0.10)  # let go 10 cm above the bin's floor: dropped in
+    s.move("blue_box", (0.66, 0.36), 0.004, 0.003)
+    clear = s.verdict({"kind": "clear", "into": "bin"})
+    assert [c.criterion.value for c in clear.conditions] == ["target_exists", "released", "resting", "in_container"]
+    assert clear.success, clear.conditions
+    strict = s.verdict({"kind": "clear", "into": "bin", "upright": True, "set_down": True})
+    assert [c.criterion.value for c in strict.conditions] == [
+        "target_exists", "released", "upright", "resting", "set_down", "in_container"]
+    assert _failed(strict) == "set_down", strict.conditions  # dropped 10 cm
+
+
+def test_upright_is_a_goal_key() -> None:
+    from bt_grasp.scene.goals import ClearGoal, PlaceGoal, SortGoal, StackGoal
+    from bt_grasp.sim.judge import _placed_conditions
+    from bt_grasp.sim.placement import Placement
+
+    assert PlaceGoal(kind="place", object="a", at="m").upright is True
+    assert StackGoal(kind="stack", object="a", on="b").upright is True
+    assert SortGoal(kind="sort", rules=[{"color": "red", "into": "t"}]).upright is True  # type: ignore[list-item]
+    assert ClearGoal(kind="clear", into="bin").upright is False
+    with pytest.raises(ValueError, match="give 'into' too"):
+        ClearGoal(kind="clear", upright=True)
+    lying = Placement("can", (0.5, 0.3, 0.02), tilt_deg=90.0, touching_fingers=False, released=True,
+                      still_for_s=2.0, fall_after_release_m=0.001)
+    asked = _placed_conditions(None, [lying])  # type: ignore[arg-type]
+    assert [(c.criterion.value, c.met) for c in asked] == [
+        ("released", True), ("upright", False), ("resting", True), ("set_down", True)]
+    not_asked = _placed_conditions(None, [lying], upright=False, set_down=False)  # type: ignore[arg-type]
+    assert [(c.criterion.value, c.met) for c in not_asked] == [("released", True), ("resting", True)]

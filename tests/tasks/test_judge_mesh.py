@@ -200,7 +200,7 @@ def test_stacked_on_and_under_a_mesh_whose_origin_is_its_bottom(scene: object) -
     on_cube = {"kind": "stack", "object": "block", "on": "cube"}
     assert _placed(scene, {"block": _T((0.5, -0.1, 0.04))}, on_cube).success
     high = _placed(scene, {"block": _T((0.5, -0.1, 0.048))}, on_cube)
-    assert not _met(high)["on_top"] and "+8 mm from resting" in _detail(high, "on_top")
+    assert not _met(high)["on_top"] and "its bottom 8 mm above cube's top" in _detail(high, "on_top")
     on_block = {"kind": "stack", "object": "cube", "on": "block"}
     assert _placed(scene, {"cube": _T((0.5, 0.0, 0.12))}, on_block).success
     assert not _met(_placed(scene, {"cube": _T((0.5, 0.0, 0.128))}, on_block))["on_top"]

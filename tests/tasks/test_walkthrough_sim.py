@@ -48,7 +48,7 @@ def test_the_green_tower_walkthrough_succeeds_at_three_seeds(tmp_path: Path) -> 
         result = json.loads(summary.read_text())
         assert result["success"] is True and result["tree_status"] == "SUCCESS", result
         assert result["goal"] == {"kind": "stack", "object": "small_green", "on": "big_green", "xy_tolerance_m": 0.03,
-                                  "z_tolerance_m": 0.005}, result["goal"]
+                                  "z_tolerance_m": 0.005, "upright": True}, result["goal"]
         assert all(c["met"] for c in result["judge"]["conditions"]), result["judge"]
     replay = bt("replay", "run.mcap", "--failures")
     assert replay.returncode == 0 and "Traceback" not in replay.stderr, replay.stderr

@@ -34,7 +34,7 @@ def _convert(capsys: pytest.CaptureFixture[str], source: Path, target: Path) -> 
 def test_a_commented_tree_survives_xml_yaml_xml(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     source = REPO / "trees/pick_with_recovery.xml"
     expected = _placed(source.read_text())
-    assert len(expected) == 6 and expected[1] == (
+    assert len(expected) == 7 and expected[2] == (
         "planning failed for the best grasp: try the next-ranked candidate next time", 'Sequence name="next_candidate"')
     _convert(capsys, source, tmp_path / "r.yaml")
     back = _convert(capsys, tmp_path / "r.yaml", tmp_path / "r.xml")

@@ -63,19 +63,19 @@ def test_stack_runs_dry_with_no_other_flag(capsys: pytest.CaptureFixture[str]) -
         "PickObject::8/IsGrasped::10 IDLE -> SUCCESS",
         "PickObject::8/holding_or_pick RUNNING -> SUCCESS",
         "PickObject::8             RUNNING -> SUCCESS",
-        "PlaceOnObject::50         IDLE -> RUNNING",
-        "PlaceOnObject::50/RetryUntilSuccessful::51 IDLE -> RUNNING",
-        "PlaceOnObject::50/place_on_or_recover IDLE -> RUNNING",
-        "PlaceOnObject::50/place_on IDLE -> RUNNING",
-        "PlaceOnObject::50/IsGrasped::54 IDLE -> SUCCESS",
-        "PlaceOnObject::50/PlaceOn::55 IDLE -> SUCCESS",
-        "PlaceOnObject::50/place_on RUNNING -> SUCCESS",
-        "PlaceOnObject::50/place_on_or_recover RUNNING -> SUCCESS",
-        "PlaceOnObject::50/RetryUntilSuccessful::51 RUNNING -> SUCCESS",
-        "PlaceOnObject::50         RUNNING -> SUCCESS",
+        "PlaceOnObject::56         IDLE -> RUNNING",
+        "PlaceOnObject::56/RetryUntilSuccessful::57 IDLE -> RUNNING",
+        "PlaceOnObject::56/place_on_or_recover IDLE -> RUNNING",
+        "PlaceOnObject::56/place_on IDLE -> RUNNING",
+        "PlaceOnObject::56/IsGrasped::60 IDLE -> SUCCESS",
+        "PlaceOnObject::56/PlaceOn::61 IDLE -> SUCCESS",
+        "PlaceOnObject::56/place_on RUNNING -> SUCCESS",
+        "PlaceOnObject::56/place_on_or_recover RUNNING -> SUCCESS",
+        "PlaceOnObject::56/RetryUntilSuccessful::57 RUNNING -> SUCCESS",
+        "PlaceOnObject::56         RUNNING -> SUCCESS",
         "pick_then_stack           RUNNING -> SUCCESS",
         "RetryUntilSuccessful::4   RUNNING -> SUCCESS",
-        "MoveHome::73              IDLE -> SUCCESS",
+        "MoveHome::97              IDLE -> SUCCESS",
         "stack                     RUNNING -> SUCCESS",
     ]
     assert lines[-1] == "[0.000]: stack                     SUCCESS -> IDLE"  # BT.CPP's tickOnce resets the root
@@ -87,39 +87,42 @@ def test_stack_runs_dry_with_no_other_flag(capsys: pytest.CaptureFixture[str]) -
 #: child it completed is reset to IDLE by its parent, and ForceFailure fails the attempt again
 ATTEMPT_IK = [
     "Attempt::6/OpenGripper::8 IDLE -> SUCCESS",
-    "Attempt::6/Perceive::9 IDLE -> SUCCESS",
-    "Attempt::6/PlanGrasp::10 IDLE -> FAILURE",
+    "Attempt::6/see_or_search IDLE -> RUNNING",
+    "Attempt::6/Perceive::10 IDLE -> SUCCESS",
+    "Attempt::6/Perceive::10 SUCCESS -> IDLE",  # the Fallback resets the child that succeeded (search_lost not run)
+    "Attempt::6/see_or_search RUNNING -> SUCCESS",
+    "Attempt::6/PlanGrasp::16 IDLE -> FAILURE",
     "Attempt::6/OpenGripper::8 SUCCESS -> IDLE",
-    "Attempt::6/Perceive::9 SUCCESS -> IDLE",
-    "Attempt::6/PlanGrasp::10 FAILURE -> IDLE",
+    "Attempt::6/see_or_search SUCCESS -> IDLE",
+    "Attempt::6/PlanGrasp::16 FAILURE -> IDLE",
     "Attempt::6/attempt RUNNING -> FAILURE",
     "Attempt::6/attempt FAILURE -> IDLE",
     "Attempt::6 RUNNING -> FAILURE",
-    "ForceFailure::14 IDLE -> RUNNING",
-    "Recover::15 IDLE -> RUNNING",
-    "Recover::15/recover IDLE -> RUNNING",
-    "Recover::15/by_reason IDLE -> RUNNING",
-    "Recover::15/next_candidate IDLE -> RUNNING",
-    "Recover::15/FailureIs::19 IDLE -> FAILURE",  # PLAN_FAILED? no
-    "Recover::15/FailureIs::19 FAILURE -> IDLE",
-    "Recover::15/next_candidate RUNNING -> FAILURE",
-    "Recover::15/next_candidate_ik IDLE -> RUNNING",
-    "Recover::15/FailureIs::22 IDLE -> SUCCESS",  # IK_UNREACHABLE? yes
-    "Recover::15/Script::23 IDLE -> SUCCESS",  # skip += 1
-    "Recover::15/FailureIs::22 SUCCESS -> IDLE",
-    "Recover::15/Script::23 SUCCESS -> IDLE",
-    "Recover::15/next_candidate_ik RUNNING -> SUCCESS",
-    "Recover::15/next_candidate FAILURE -> IDLE",  # the Fallback resets the child that failed before
-    "Recover::15/next_candidate_ik SUCCESS -> IDLE",
-    "Recover::15/by_reason RUNNING -> SUCCESS",
-    "Recover::15/by_reason SUCCESS -> IDLE",
-    "Recover::15/recover RUNNING -> SUCCESS",
-    "Recover::15/recover SUCCESS -> IDLE",
-    "Recover::15 RUNNING -> SUCCESS",
-    "Recover::15 SUCCESS -> IDLE",
-    "ForceFailure::14 RUNNING -> FAILURE",
+    "ForceFailure::20 IDLE -> RUNNING",
+    "Recover::21 IDLE -> RUNNING",
+    "Recover::21/recover IDLE -> RUNNING",
+    "Recover::21/by_reason IDLE -> RUNNING",
+    "Recover::21/next_candidate IDLE -> RUNNING",
+    "Recover::21/FailureIs::25 IDLE -> FAILURE",  # PLAN_FAILED? no
+    "Recover::21/FailureIs::25 FAILURE -> IDLE",
+    "Recover::21/next_candidate RUNNING -> FAILURE",
+    "Recover::21/next_candidate_ik IDLE -> RUNNING",
+    "Recover::21/FailureIs::28 IDLE -> SUCCESS",  # IK_UNREACHABLE? yes
+    "Recover::21/Script::29 IDLE -> SUCCESS",  # skip += 1
+    "Recover::21/FailureIs::28 SUCCESS -> IDLE",
+    "Recover::21/Script::29 SUCCESS -> IDLE",
+    "Recover::21/next_candidate_ik RUNNING -> SUCCESS",
+    "Recover::21/next_candidate FAILURE -> IDLE",  # the Fallback resets the child that failed before
+    "Recover::21/next_candidate_ik SUCCESS -> IDLE",
+    "Recover::21/by_reason RUNNING -> SUCCESS",
+    "Recover::21/by_reason SUCCESS -> IDLE",
+    "Recover::21/recover RUNNING -> SUCCESS",
+    "Recover::21/recover SUCCESS -> IDLE",
+    "Recover::21 RUNNING -> SUCCESS",
+    "Recover::21 SUCCESS -> IDLE",
+    "ForceFailure::20 RUNNING -> FAILURE",
     "Attempt::6 FAILURE -> IDLE",
-    "ForceFailure::14 FAILURE -> IDLE",
+    "ForceFailure::20 FAILURE -> IDLE",
     "attempt_or_recover RUNNING -> FAILURE",
     "attempt_or_recover FAILURE -> IDLE",  # RetryUntilSuccessful resets it and asks for a wake-up
 ]
@@ -154,30 +157,30 @@ def test_a_grasp_that_closes_on_nothing_walks_the_regrasp_branch(capsys: pytest.
     # after the attempt (OpenGripper, Perceive, PlanGrasp, Approach SUCCESS; Grasp FAILURE): the two
     # next_candidate branches fail on their FailureIs, regrasp matches GRASP_EMPTY and its robot leaves run
     walk = moves(result, resets=False)
-    first = walk[walk.index("ForceFailure::14 IDLE -> RUNNING"): walk.index("ForceFailure::14 RUNNING -> FAILURE")]
+    first = walk[walk.index("ForceFailure::20 IDLE -> RUNNING"): walk.index("ForceFailure::20 RUNNING -> FAILURE")]
     assert first == [
-        "ForceFailure::14 IDLE -> RUNNING",
-        "Recover::15 IDLE -> RUNNING",
-        "Recover::15/recover IDLE -> RUNNING",
-        "Recover::15/by_reason IDLE -> RUNNING",
-        "Recover::15/next_candidate IDLE -> RUNNING",
-        "Recover::15/FailureIs::19 IDLE -> FAILURE",
-        "Recover::15/next_candidate RUNNING -> FAILURE",
-        "Recover::15/next_candidate_ik IDLE -> RUNNING",
-        "Recover::15/FailureIs::22 IDLE -> FAILURE",
-        "Recover::15/next_candidate_ik RUNNING -> FAILURE",
-        "Recover::15/regrasp IDLE -> RUNNING",
-        "Recover::15/Fallback::25 IDLE -> RUNNING",
-        "Recover::15/FailureIs::26 IDLE -> SUCCESS",  # GRASP_EMPTY
-        "Recover::15/Fallback::25 RUNNING -> SUCCESS",
-        "Recover::15/OpenGripper::28 IDLE -> SUCCESS",
-        "Recover::15/Retreat::29 IDLE -> SUCCESS",
-        "Recover::15/MoveHome::30 IDLE -> SUCCESS",
-        "Recover::15/Script::31 IDLE -> SUCCESS",  # skip := 0
-        "Recover::15/regrasp RUNNING -> SUCCESS",
-        "Recover::15/by_reason RUNNING -> SUCCESS",
-        "Recover::15/recover RUNNING -> SUCCESS",
-        "Recover::15 RUNNING -> SUCCESS",
+        "ForceFailure::20 IDLE -> RUNNING",
+        "Recover::21 IDLE -> RUNNING",
+        "Recover::21/recover IDLE -> RUNNING",
+        "Recover::21/by_reason IDLE -> RUNNING",
+        "Recover::21/next_candidate IDLE -> RUNNING",
+        "Recover::21/FailureIs::25 IDLE -> FAILURE",
+        "Recover::21/next_candidate RUNNING -> FAILURE",
+        "Recover::21/next_candidate_ik IDLE -> RUNNING",
+        "Recover::21/FailureIs::28 IDLE -> FAILURE",
+        "Recover::21/next_candidate_ik RUNNING -> FAILURE",
+        "Recover::21/regrasp IDLE -> RUNNING",
+        "Recover::21/Fallback::31 IDLE -> RUNNING",
+        "Recover::21/FailureIs::32 IDLE -> SUCCESS",  # GRASP_EMPTY
+        "Recover::21/Fallback::31 RUNNING -> SUCCESS",
+        "Recover::21/OpenGripper::34 IDLE -> SUCCESS",
+        "Recover::21/Retreat::35 IDLE -> SUCCESS",
+        "Recover::21/MoveHome::36 IDLE -> SUCCESS",
+        "Recover::21/Script::37 IDLE -> SUCCESS",  # skip := 0
+        "Recover::21/regrasp RUNNING -> SUCCESS",
+        "Recover::21/by_reason RUNNING -> SUCCESS",
+        "Recover::21/recover RUNNING -> SUCCESS",
+        "Recover::21 RUNNING -> SUCCESS",
     ]
 
 
@@ -187,11 +190,11 @@ def test_a_running_outcome_spreads_over_ticks(capsys: pytest.CaptureFixture[str]
     # tick 1: the attempt runs up to Lift, which stays RUNNING; tick 2 changes nothing (every node on the way
     # stays RUNNING: no line); at tick 3 (20 ms later) Lift succeeds and the Sequences complete upwards
     assert code == 0 and lines[0] == "tick 1: RUNNING"
-    assert lines[13] == "[0.000]: Attempt::6/Lift::13       IDLE -> RUNNING"
-    assert [line for line in lines[14:] if not line.endswith("-> IDLE")] == [
+    assert lines[16] == "[0.000]: Attempt::6/Lift::19       IDLE -> RUNNING"
+    assert [line for line in lines[17:] if not line.endswith("-> IDLE")] == [
         "tick 2: RUNNING",
         "tick 3: SUCCESS",
-        "[0.020]: Attempt::6/Lift::13       RUNNING -> SUCCESS",
+        "[0.020]: Attempt::6/Lift::19       RUNNING -> SUCCESS",
         "[0.020]: Attempt::6/attempt        RUNNING -> SUCCESS",
         "[0.020]: Attempt::6                RUNNING -> SUCCESS",
         "[0.020]: attempt_or_recover        RUNNING -> SUCCESS",
@@ -230,8 +233,8 @@ def test_random_mode_is_reproducible_and_explores_failures(capsys: pytest.Captur
         (
             "Teleport=success",
             "--outcome 'Teleport=success': the name 'Teleport' matches no leaf of this tree (by type, name or full "
-            "path; stand-ins: Approach, Grasp, Lift, LoadCalibration, MoveHome, OpenGripper, Perceive, PlanGrasp, "
-            "Retreat)",
+            "path; stand-ins: Approach, FindLost, Grasp, Lift, LoadCalibration, MoveHome, OpenGripper, Perceive, "
+            "PerceiveAll, PlanGrasp, Retreat)",
         ),
         (
             "PlanGrasp=failure:SLIPPED",
@@ -247,8 +250,8 @@ def test_random_mode_is_reproducible_and_explores_failures(capsys: pytest.Captur
         ("PlanGrasp", "--outcome 'PlanGrasp': is not NAME=OUTCOME[,OUTCOME...], each success, failure[:REASON] or "
                       "running:N[:failure[:REASON]]"),
         ("Plan*=failure", "--outcome 'Plan*=failure': the pattern 'Plan*' matches no leaf of this tree (by type, name "
-                          "or full path; stand-ins: Approach, Grasp, Lift, LoadCalibration, MoveHome, OpenGripper, "
-                          "Perceive, PlanGrasp, Retreat)"),
+                          "or full path; stand-ins: Approach, FindLost, Grasp, Lift, LoadCalibration, MoveHome, "
+                          "OpenGripper, Perceive, PerceiveAll, PlanGrasp, Retreat)"),
     ],
 )
 def test_a_bad_outcome_is_one_sentence_and_exit_2(

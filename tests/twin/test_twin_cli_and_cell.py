@@ -56,11 +56,16 @@ def test_the_written_cell_file_loads_and_matches_the_scene(twin: TwinProcess) ->
     assert cell.gripper.pad_size_m == (0.022, 0.00635, 0.0375)
     assert cell.camera.kind == "twin" and cell.camera.mount == "eye-to-hand"
     assert cell.calibration is not None
-    # the same file (scenes/tabletop.calibration.yaml links to the copy bt_grasp ships in bt_grasp/assets/)
-    shipped = (REPO / "scenes" / "tabletop.calibration.yaml").resolve()
-    assert (twin.cell_path.parent / cell.calibration).resolve() == shipped
+    # a copy of the scene's, of the cell's own beside it: `calibrate --cell` replaces the copy, never the scene's file
+    # (scenes/tabletop.calibration.yaml links to the one bt_grasp ships in bt_grasp/assets/)
+    own = twin.cell_path.parent / cell.calibration
+    assert own.parent == twin.cell_path.parent and own.name.endswith(".calibration.yaml") and not own.is_symlink()
+    assert own.read_bytes() == (REPO / "scenes" / "tabletop.calibration.yaml").read_bytes()
     assert cell.table_plane.normal == (0.0, 0.0, 1.0) and cell.table_plane.offset_m == 0.0
     assert cell.workspace.min_m == (0.25, -0.35, 0.0) and cell.workspace.max_m == (0.75, 0.35, 0.5)
+    assert cell.workspace.objects_up_to_m == 0.30 and cell.table_plane.x_m == (-0.15, 0.85)
+    assert cell.camera.eye_to_hand is not None and cell.camera.eye_to_hand.position_m == (1.05, 0.0, 0.75)
+    assert cell.arm.home_q_rad != (0.0, -1.9, 1.9, -1.57, -1.57, 0.0)  # the 2F-85 is longer: the wrist stands higher
 
 
 def test_a_cell_file_is_loaded_strictly(tmp_path: Path) -> None:
@@ -71,7 +76,7 @@ def test_a_cell_file_is_loaded_strictly(tmp_path: Path) -> None:
     scene_path = REPO / "scenes" / "pick_and_place.yaml"
     path = write_cell(load_scene(scene_path), scene_path, TwinConfig(), tmp_path / "cell.yaml")
     cell = load_cell(path)
-    assert [f.name for f in cell.fixtures] == ["target_marker"] and cell.fixtures[0].boxes[0].solid is False
+    assert [f.name for f in cell.fixtures] == ["target_marker"] and cell.fixtures[0].kind == "marker"
     text = path.read_text()
     path.write_text(text.replace("  payload_kg:", "  payload_kgs:"))
     with pytest.raises(ConfigError, match=r"cell.yaml:\d+: .*payload_kgs"):

@@ -14,8 +14,8 @@ import time
 import numpy as np
 import pytest
 
+from bt_grasp.cell.grippers import ROBOTIQ_2F85
 from bt_grasp.sim.twin.control_script import UR_RTDE_1_6_5_CB3, ControlScript, fingerprint, recognise
-from bt_grasp.sim.twin.gripper_models import ROBOTIQ_2F85
 from bt_grasp.sim.twin.motion import Decelerate, JointMove, Profile, T_to_pose, pose_to_T, rotation_vector
 from bt_grasp.sim.twin.netio import IoLoop, Protocol
 from bt_grasp.sim.twin.outputs import GETTERS

@@ -9,9 +9,9 @@ of bt_grasp stays on simulated time. ``docs/twin.md`` is the user's guide.
 Modules: ``twin`` (composition), ``controller`` + ``arm`` + ``motion`` + ``kinematics`` (the controller),
 ``script_program`` + ``control_script`` + ``commands`` (ur_rtde's control script, run by its handshake),
 ``rtde_types`` + ``rtde_server`` + ``outputs`` + ``state`` (RTDE), ``dashboard``, ``script_port``,
-``gripper_port`` + ``robotiq`` + ``gripper_models`` (the gripper), ``control_port`` + ``faults`` (the twin's
-own port), ``camera_worker`` (rendering in a process of its own), ``netio`` (sockets), ``realtime`` (the clock),
-``plant`` (the SAPIEN side), ``config``.
+``gripper_port`` + ``robotiq`` (the gripper; its models are ``bt_grasp.cell.grippers``), ``control_port`` +
+``faults`` (the twin's own port), ``camera_worker`` (rendering in a process of its own) + ``camera_port`` (its frames
+for a run), ``netio`` (sockets), ``realtime`` (the clock), ``plant`` (the SAPIEN side), ``config``.
 """
 
 from bt_grasp.sim.twin.config import TwinConfig

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from bt_grasp.sim.twin.gripper_models import GripperName
+from bt_grasp.cell.format import TWIN_CAMERA_PORT
+from bt_grasp.cell.grippers import GripperName
 from bt_grasp.sim.twin.rtde_server import ControllerVersion
 
 RTDE_PORT = 30004
@@ -12,6 +13,7 @@ DASHBOARD_PORT = 29999
 SCRIPT_PORT = 30003  # the "secondary/real-time" script port ur_rtde uploads its control script to
 GRIPPER_PORT = 63352  # the Robotiq URCap's socket
 CONTROL_PORT = 30100  # the twin's own: faults, the judge, the camera (not a UR port)
+CAMERA_PORT = TWIN_CAMERA_PORT  # the twin's own: camera frames for a run (not a UR port; bt_grasp.sim.twin.camera_port)
 
 
 @dataclass(frozen=True)
@@ -49,6 +51,9 @@ class TwinConfig:
     #: a message begun must be finished within this, on every port
     message_timeout_s: float = 5.0
     control_port: int = CONTROL_PORT
+    camera_port: int = CAMERA_PORT
+    #: the calibration board screwed to the gripper (``bt-grasp twin --board``), as for ``calibrate --cell``
+    board: bool = False
     #: ask for real-time scheduling of the controller's cycle (SCHED_FIFO priority; None: do not ask)
     realtime_priority: int | None = 10
 

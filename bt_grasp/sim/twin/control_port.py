@@ -5,10 +5,12 @@ One request per line, one JSON object per line back: ``{"ok": true, ...}`` or ``
     status                            the controller's modes, the measured period, the camera's frames
     fault protective-stop             (and pendant-stop, drop-connections [SECONDS], gripper-silent,
                                       gripper-answers: bt_grasp.sim.twin.faults)
+    goal                              the goal the judge checks unless a run names one (the scene's, or a pick)
     judge                             the verdict on the scene's goal, or a pick of the default colour
     judge {"kind": "pick", ...}       the verdict on that goal (a scene file's goal, as JSON)
     camera capture                    render one frame now
     camera on [HZ] | camera off       render continuously (default 15 Hz) or stop
+    truth camera                      the true camera pose (ground truth: for tests and benchmarks only)
 """
 
 from __future__ import annotations
@@ -37,7 +39,11 @@ class TwinControl(Protocol):
 
     def judge(self, goal_json: str | None) -> dict[str, Any]: ...
 
+    def goal(self) -> dict[str, Any]: ...
+
     def camera(self, action: str, rate_hz: float | None) -> dict[str, Any]: ...
+
+    def truth(self, what: str) -> dict[str, Any]: ...
 
 
 class ControlSession(Session):
@@ -70,7 +76,7 @@ class ControlSession(Session):
     def _handle(self, line: str) -> dict[str, Any]:
         words = line.split(maxsplit=1)
         if not words:
-            raise RequestError("an empty request; expected status, fault, judge or camera")
+            raise RequestError("an empty request; expected status, fault, goal, judge, camera or truth")
         verb, rest = words[0], (words[1] if len(words) > 1 else "")
         if verb == "status" and not rest:
             return self.twin.status()
@@ -108,4 +114,8 @@ class ControlSession(Session):
             if parts in (["off"], ["capture"]):
                 return self.twin.camera(parts[0], None)
             raise RequestError(f"camera takes on [HZ], off or capture, got {rest!r}")
-        raise RequestError(f"unknown request {verb!r}; expected status, fault, judge or camera")
+        if verb == "goal" and not rest:
+            return self.twin.goal()
+        if verb == "truth":
+            return self.twin.truth(rest)
+        raise RequestError(f"unknown request {verb!r}; expected status, fault, goal, judge, camera or truth")

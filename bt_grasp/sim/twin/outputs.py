@@ -54,7 +54,7 @@ _GETTERS: dict[str, Getter] = {
     "safety_mode": lambda s: int(s.safety_mode),
     "safety_status": lambda s: int(s.safety_mode),
     "actual_tool_accelerometer": lambda s: (0.0, 0.0, -9.81),
-    "speed_scaling": lambda s: s.speed_fraction,
+    "speed_scaling": lambda s: 1.0,  # the trajectory limiter's own scaling: not modelled (the slider is below)
     "target_speed_fraction": lambda s: s.speed_fraction,
     "actual_momentum": lambda s: 0.0,
     "actual_main_voltage": lambda s: MAIN_VOLTAGE_V,

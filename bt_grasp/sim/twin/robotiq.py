@@ -17,7 +17,7 @@ from __future__ import annotations
 import threading
 from typing import Protocol
 
-from bt_grasp.sim.twin.gripper_models import GripperModel
+from bt_grasp.cell.grippers import GripperModel
 
 POS_OPEN = 3  # counts at full opening
 POS_CLOSED = 230  # counts with the pads together

@@ -19,18 +19,20 @@ from typing import Any
 import numpy as np
 from pydantic import TypeAdapter, ValidationError
 
+from bt_grasp.cell.grippers import GRIPPERS, BoardLayout, GripperName, T_tool_board, robot_urdf_path_with
 from bt_grasp.interfaces import RGBDFrame
 from bt_grasp.scene.format import Scene, load_scene
 from bt_grasp.scene.goals import Goal
 from bt_grasp.scene.run_goal import goal_for_run
 from bt_grasp.sim.judge import Judge, Verdict, cannot_judge
-from bt_grasp.sim.twin.camera_worker import PoseSnapshot, TwinCamera
-from bt_grasp.sim.twin.config import DASHBOARD_PORT, GRIPPER_PORT, RTDE_PORT, SCRIPT_PORT, TwinConfig
+from bt_grasp.sim.twin.camera_port import CameraPort, D435Description
+from bt_grasp.sim.twin.camera_worker import D435Pair, PoseSnapshot, TwinCamera
+from bt_grasp.sim.twin.cell_writer import home_for
+from bt_grasp.sim.twin.config import CAMERA_PORT, DASHBOARD_PORT, GRIPPER_PORT, RTDE_PORT, SCRIPT_PORT, TwinConfig
 from bt_grasp.sim.twin.control_port import ControlSession, RequestError
 from bt_grasp.sim.twin.controller import Controller
 from bt_grasp.sim.twin.dashboard import DashboardSession
 from bt_grasp.sim.twin.faults import TwinFault
-from bt_grasp.sim.twin.gripper_models import GRIPPERS, GripperName, robot_urdf_path_with
 from bt_grasp.sim.twin.gripper_port import GripperSession, GripperSilence
 from bt_grasp.sim.twin.kinematics import UrKinematics
 from bt_grasp.sim.twin.netio import IoLoop, Protocol
@@ -48,11 +50,11 @@ DEFAULT_CAMERA_HZ = 15.0
 DEFAULT_DROP_S = 1.0
 
 
-def check_ports_free(host: str, control_port: int) -> None:
+def check_ports_free(host: str, control_port: int, camera_port: int = CAMERA_PORT) -> None:
     """Raise OSError naming the first of the twin's ports that cannot be bound on ``host`` (before a world is
     built: a taken address fails in a moment, not after the simulator started)."""
     for name, port in (("RTDE", RTDE_PORT), ("dashboard", DASHBOARD_PORT), ("script", SCRIPT_PORT),
-                       ("gripper", GRIPPER_PORT), ("control", control_port)):
+                       ("gripper", GRIPPER_PORT), ("control", control_port), ("camera", camera_port)):
         with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
             probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
             try:
@@ -73,6 +75,10 @@ class Twin:
         urdf = robot_urdf_path_with(self.config.gripper)
         self.world = World(self.scene, self.seed, source=self.scene_path,
                            robot_urdf=None if self.config.gripper == GripperName.BT_GRASP else urdf)
+        #: where the arm starts: the scene's home, with a longer gripper's TCP where bt_grasp's is at home (the
+        #: cell file's home; bt_grasp.sim.twin.cell_writer.home_for)
+        self.home_q = home_for(self.scene, self.gripper_model)
+        self.world.robot.reset(self.home_q)
         self.plant = SapienPlant(self.world)
         self.inputs = InputBank()
         self.gripper = Robotiq2F85(self.gripper_model, self.plant)
@@ -97,9 +103,16 @@ class Twin:
             Protocol("control", self.config.control_port, lambda link: ControlSession(link, self), 4, timeout),
         ], realtime_priority=(self.config.realtime_priority or 0) - 1 or None)
         self.loop = RealtimeLoop(self.config.period_s, self._cycle, realtime_priority=self.config.realtime_priority)
-        self._camera = TwinCamera(str(self.scene_path), self.seed,
-                                  None if self.config.gripper == GripperName.BT_GRASP else str(urdf),
-                                  self.world.camera.intrinsics, self.world.camera.mount)
+        #: the calibration board on the gripper (``--board``): its layout and true pose on tool0 (the palm's frame)
+        self.board: tuple[BoardLayout, np.ndarray] | None = None
+        if self.config.board:
+            layout = BoardLayout()
+            self.board = (layout, T_tool_board(self.gripper_model, layout))
+        board_arg = None if self.board is None else (self.board[0].as_dict(), self.board[1].tolist())
+        self._camera = TwinCamera(str(self.scene_path), self.seed, self.config.gripper.value,
+                                  self.world.camera.intrinsics, self.world.camera.mount, board_arg)
+        self.camera_port = CameraPort(self.config.host, self.config.camera_port, self._d435_description(),
+                                      self.capture_d435, self.config.message_timeout_s)
         self._stream_stop = threading.Event()
         self._stream: threading.Thread | None = None
         self._started = False
@@ -108,13 +121,19 @@ class Twin:
     def start(self) -> None:
         """Bind every port (OSError naming the port if one is taken), then serve."""
         self.io.bind()
+        try:
+            self.camera_port.bind()
+        except OSError:
+            self.io.close_listeners()
+            raise
         self._camera.start()
         self.io.start()
+        self.camera_port.start()
         self.loop.start()
         self._started = True
-        log.info("twin serving %s on %s (RTDE %d, dashboard %d, script %d, gripper %d, control %d)",
+        log.info("twin serving %s on %s (RTDE %d, dashboard %d, script %d, gripper %d, control %d, camera %d)",
                  self.scene_path.name, self.config.host, RTDE_PORT, DASHBOARD_PORT, SCRIPT_PORT, GRIPPER_PORT,
-                 self.config.control_port)
+                 self.config.control_port, self.config.camera_port)
 
     def stop(self) -> None:
         self._stream_stop.set()
@@ -122,6 +141,7 @@ class Twin:
             self._stream.join(timeout=2.0)
         self.loop.stop()
         self.io.stop()
+        self.camera_port.stop()
         if self._started:
             self._camera.stop()
         self._started = False
@@ -138,6 +158,7 @@ class Twin:
             "robot_mode": state.robot_mode.name, "safety_mode": state.safety_mode.name,
             "runtime_state": state.runtime_state.name, "timestamp_s": round(state.timestamp_s, 6),
             "actual_q": [round(float(v), 6) for v in state.actual_q],
+            "actual_qd": [round(float(v), 6) for v in state.actual_qd],
             "gripper_opening_m": round(self.plant.opening_m(), 5),
             **{k: round(v, 3) for k, v in self.loop.period_stats().items()}, "realtime": self.loop.realtime,
             "camera_frames": frames.frames, "camera_render_ms": round(frames.mean_render_ms, 2),
@@ -171,6 +192,11 @@ class Twin:
         goal = goal or goal_for_run(self.scene, {})
         with self.controller.lock:
             return self._judge.check(goal)
+
+    def goal(self) -> dict[str, Any]:
+        """The goal a run is judged on unless it names one (the task's declaration, as a scene file gives a
+        simulated run: not ground truth)."""
+        return {"goal": goal_for_run(self.scene, {}).model_dump(mode="json")}
 
     def judge(self, goal_json: str | None) -> dict[str, Any]:
         goal: Goal | None = None
@@ -207,6 +233,29 @@ class Twin:
     def capture(self) -> RGBDFrame:
         """One camera frame of the cell as it is now (rendered in the camera process)."""
         return self._camera.capture(self.snapshot())
+
+    def capture_d435(self) -> D435Pair:
+        """One frame of the cell as it is now as a D435 delivers it: colour and the depth imager's own picture."""
+        return self._camera.capture_d435(self.snapshot())
+
+    def _d435_description(self) -> D435Description:
+        from bt_grasp.sim.depth_imager import DepthImagerModel  # deferred: the render-side model, once
+
+        color = self.world.camera.intrinsics
+        model = DepthImagerModel.d435(color.width_px, color.height_px)
+        return D435Description(color, model.intrinsics, model.T_color_depth, self.world.camera.mount.value)
+
+    def truth(self, what: str) -> dict[str, Any]:
+        """Ground truth for tests and benchmarks (the judge's side, never the pipeline's): ``camera``, the true
+        camera pose in the base frame (eye-to-hand) or on the tool (eye-in-hand)."""
+        if what != "camera":
+            raise RequestError(f"truth takes camera, got {what!r}")
+        from bt_grasp.sim.judge import true_camera_pose  # deferred: the oracle only when the truth is asked for
+
+        mount = self.world.camera.mount.value
+        with self.controller.lock:
+            T = true_camera_pose(self.world, mount, "tool0")
+        return {"mount": mount, "T_true": [[float(v) for v in row] for row in T]}
 
     def camera(self, action: str, rate_hz: float | None) -> dict[str, Any]:
         if action == "capture":

@@ -12,17 +12,23 @@ gripper's arc (about 10 mm of vertical travel over the stroke), and the body is 
 from __future__ import annotations
 
 import enum
-import hashlib
-import os
-import tempfile
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
 from xml.etree.ElementTree import Element, tostring
 
 import defusedxml.ElementTree as SafeET
+import numpy as np
+from numpy.typing import NDArray
 
-from bt_grasp.robot_description import GRIPPER_LINKS, MAX_OPENING_M, TCP_LINK, robot_urdf_path, robot_urdf_text
+from bt_grasp.robot_description import (
+    GRIPPER_LINKS,
+    MAX_OPENING_M,
+    TCP_LINK,
+    robot_urdf_path,
+    robot_urdf_text,
+    sealed_urdf_path,
+)
 
 
 class GripperName(enum.StrEnum):
@@ -42,6 +48,7 @@ class GripperModel:
     mass_kg: float
     speed_range_m_s: tuple[float, float]  # opening speed (Robotiq's SPE 0..255)
     force_range_n: tuple[float, float]  # grip force (Robotiq's FOR 0..255)
+    palm_above_tcp_m: float = 0.040  # the underside of the gripper's body lies this far above the TCP
 
 
 BT_GRASP = GripperModel(
@@ -51,8 +58,48 @@ BT_GRASP = GripperModel(
 ROBOTIQ_2F85 = GripperModel(
     name=GripperName.ROBOTIQ_2F85, stroke_m=0.085, pad_size_m=(0.022, 0.00635, 0.0375), tcp_z_m=0.1745,
     tcp_to_fingertip_m=0.02, mass_kg=0.925, speed_range_m_s=(0.020, 0.150), force_range_n=(20.0, 235.0),
+    palm_above_tcp_m=round(0.1745 - 0.125, 4),  # the body box reaches 0.125 m from the flange (below)
 )
 GRIPPERS: dict[GripperName, GripperModel] = {g.name: g for g in (BT_GRASP, ROBOTIQ_2F85)}
+
+
+@dataclass(frozen=True)
+class BoardLayout:
+    """A ChArUco board's layout (the default is the one ``bt-grasp calibrate`` uses: 5 x 7 squares of 35 mm)."""
+
+    dictionary: str = "DICT_5X5_100"
+    squares_x: int = 5
+    squares_y: int = 7
+    square_m: float = 0.035
+    marker_m: float = 0.026
+
+    @property
+    def size_m(self) -> tuple[float, float]:
+        return self.squares_x * self.square_m, self.squares_y * self.square_m
+
+    def as_dict(self) -> dict[str, str | int | float]:
+        return {"dictionary": self.dictionary, "squares_x": self.squares_x, "squares_y": self.squares_y,
+                "square_m": self.square_m, "marker_m": self.marker_m}
+
+
+#: a board screwed to a gripper stands this far beyond its finger tips (clear of the fingers)
+BOARD_BEYOND_TIPS_M = 0.01
+
+
+def board_standoff_m(gripper: GripperModel) -> float:
+    """How far from the flange a calibration board on ``gripper`` stands (bt_grasp's own: 0.11 m, as always)."""
+    return round(gripper.tcp_z_m + gripper.tcp_to_fingertip_m + BOARD_BEYOND_TIPS_M, 6)
+
+
+def T_tool_board(gripper: GripperModel, layout: BoardLayout) -> NDArray[np.float64]:
+    """The board's corner frame on ``tool0``: centred on the tool axis at :func:`board_standoff_m`, its printed side
+    facing away from the flange (board z = -tool z)."""
+    R = np.diag([1.0, -1.0, -1.0])
+    width, height = layout.size_m
+    T = np.eye(4)
+    T[:3, :3] = R
+    T[:3, 3] = np.array([0.0, 0.0, board_standoff_m(gripper)]) - R @ np.array([width / 2, height / 2, 0.0])
+    return T
 
 # --- the 2F-85 as URDF (metres) --------------------------------------------------------------------------
 _PAD_W, _PAD_T, _PAD_L = ROBOTIQ_2F85.pad_size_m
@@ -95,7 +142,7 @@ def _finger(side: str, sign: int) -> str:
 
 
 ROBOTIQ_2F85_URDF = f"""<?xml version="1.0"?>
-<!-- A Robotiq 2F-85 as a parallel jaw (bt_grasp.sim.twin.gripper_models says what is approximated). -->
+<!-- A Robotiq 2F-85 as a parallel jaw (bt_grasp.cell.grippers says what is approximated). -->
 <robot name="robotiq_2f85">
   <link name="gripper_palm">
     <inertial><origin xyz="0 0 {_BODY[2] / 2}"/><mass value="0.8"/><inertia {_box_inertia(0.8, _BODY)}/></inertial>
@@ -137,16 +184,9 @@ def robot_urdf_with(gripper: GripperName) -> str:
 
 @cache
 def robot_urdf_path_with(gripper: GripperName) -> Path:
-    """The merged URDF with ``gripper`` as a file (cached by content beside bt_grasp's own)."""
+    """The merged URDF with ``gripper`` as a file only this process can reach (a sealed in-memory file, as
+    :func:`bt_grasp.robot_description.robot_urdf_path`: nothing written beside bt_grasp's files or trusted from a
+    cache)."""
     if gripper == GripperName.BT_GRASP:
         return robot_urdf_path()
-    text = robot_urdf_with(gripper)
-    digest = hashlib.sha256(text.encode()).hexdigest()[:16]
-    folder = robot_urdf_path().parent
-    path = folder / f"ur5_{gripper.value}_{digest}.urdf"
-    if not path.exists():
-        fd, tmp = tempfile.mkstemp(dir=folder, suffix=".urdf")
-        with os.fdopen(fd, "w") as handle:
-            handle.write(text)
-        os.replace(tmp, path)
-    return path
+    return sealed_urdf_path(f"ur5_{gripper.value}.urdf", robot_urdf_with(gripper))
