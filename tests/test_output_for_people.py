@@ -33,7 +33,8 @@ def _bt(*args: str, cwd: Path = REPO) -> subprocess.CompletedProcess[str]:
 
 def _readable(text: str) -> None:
     for line in text.splitlines():
-        assert len(line) <= 80, f"{len(line)} columns: {line!r}"
+        whole_path = len(line.split()) == 1 and "/" in line  # a path alone on its line: whole, so it copy-pastes
+        assert len(line) <= 80 or whole_path, f"{len(line)} columns: {line!r}"
         assert not any(mark in line for mark in ELLIPSIS), f"a value cut: {line!r}"
 
 

@@ -38,7 +38,7 @@ def calibrate(
     """Hand-eye calibrate the simulated camera (or a real cell's: --cell) with a ChArUco board and write the
     calibration file."""
     if cell is not None:
-        from bt_grasp.cli.cell_calibrate_cmd import calibrate_on_cell
+        from bt_grasp.cli.cell_calibrate_options import calibrate_on_cell
 
         calibrate_on_cell(cell, out, poses, seed, yes, as_json)
         return

@@ -225,7 +225,7 @@ def run(
     """Run a task tree on the simulated cell (or a real one: --cell). Exit code 0 on task success (judged by physics),
     1 on failure."""
     if cell is not None or scene is None:
-        from bt_grasp.cli.cell_run_cmd import cell_request, refuse_simulator_options, run_cell
+        from bt_grasp.cli.cell_run_options import cell_request, refuse_simulator_options, run_cell
 
         if scene is not None or cell is None:
             raise InputError("--scene", "give one of --scene SCENE (the simulator) or --cell CELL (a real cell), "

@@ -20,7 +20,7 @@ def _interrupt(signum: int, frame: object) -> None:
 
 
 def calibrate_on_cell(cell: Path, out: Path | None, poses: int, seed: int, yes: bool, as_json: bool) -> None:
-    from bt_grasp.cli.cell_run_cmd import ask
+    from bt_grasp.cli.cell_run_options import ask
     from bt_grasp.episode.cell_calibration import calibrate_cell, calibration_target
     from bt_grasp.files.output_files import check_output_file
 
