@@ -447,6 +447,7 @@ def test_bench_eval_one_seed_one_worker() -> None:
 
 @pytest.mark.sim
 @pytest.mark.real_client
+@pytest.mark.serial
 def test_twin_serves_until_ctrl_c_and_writes_its_cell_file(tmp_path: Path) -> None:
     import signal
     import time
@@ -478,6 +479,7 @@ def test_twin_serves_until_ctrl_c_and_writes_its_cell_file(tmp_path: Path) -> No
 @pytest.mark.sim
 @pytest.mark.slow
 @pytest.mark.real_client
+@pytest.mark.serial
 def test_bench_twin_one_seed_through_ur_rtde_judged_by_the_twins_physics(tmp_path: Path) -> None:
     """Done-when 1's seed in `make test` (the 20-seed figure is docs/real-cell.md's): its log replays, and
     `replay --resim` says in one sentence why a wall-clock run cannot be re-simulated."""
