@@ -39,7 +39,7 @@ from numpy.typing import NDArray
 from bt_grasp.behaviours.base import RobotLeaf
 from bt_grasp.behaviours.belt_watch import BeltTarget
 from bt_grasp.behaviours.gripper import empty_below_m
-from bt_grasp.behaviours.reasons import FailureReason, Reason
+from bt_grasp.behaviours.reasons import FailureReason
 from bt_grasp.seeds import Stream
 from bt_grasp.tree.node_api import Status, action, input_port, output_port
 
@@ -47,8 +47,7 @@ if TYPE_CHECKING:
     from bt_grasp.motion.intercept import Approach, BeltGrasp, InterceptPlanner
     from bt_grasp.perception.results import Detection, GraspCandidate
 
-INTERCEPT_MISSED = Reason("INTERCEPT_MISSED", "The object on the belt can no longer be intercepted: it will have "
-                                              "left the arm's reach before the grasp would be over.")
+INTERCEPT_MISSED = FailureReason.INTERCEPT_MISSED
 
 #: the tool descends along an approach at most this far from straight down, degrees
 MAX_TILT_DEG = 30.0

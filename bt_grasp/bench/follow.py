@@ -33,6 +33,8 @@ from bt_grasp.episode.result import EpisodeResult
 from bt_grasp.tree.loader import LoadedTree
 
 SCENES = {"eye-to-hand": "scenes/conveyor.yaml", "eye-in-hand": "scenes/conveyor_eye_in_hand.yaml"}
+#: FollowTarget's scenes: the object on the belt from the start (the pick scenes feed theirs in from upstream)
+FOLLOW_SCENES = {"eye-to-hand": "scenes/conveyor_follow.yaml", "eye-in-hand": "scenes/conveyor_follow_eye_in_hand.yaml"}
 HOUSEHOLD_SCENE = "scenes/conveyor_household.yaml"
 SORT_SCENE = "scenes/conveyor_sort.yaml"
 FOLLOW_TREE = "trees/follow_conveyor.xml"
@@ -50,8 +52,8 @@ _FOLLOW_TICKS = 800
 
 
 def scene_at_speed(repo: Path, mount: str, speed_m_s: float, folder: Path) -> Path:
-    """A copy of the mount's conveyor scene with the belt at ``speed_m_s``."""
-    return scene_file_at_speed(repo / SCENES[mount], speed_m_s, folder)
+    """A copy of the mount's following scene with the belt at ``speed_m_s``."""
+    return scene_file_at_speed(repo / FOLLOW_SCENES[mount], speed_m_s, folder)
 
 
 def scene_file_at_speed(source: Path, speed_m_s: float, folder: Path) -> Path:
@@ -71,6 +73,11 @@ def scene_file_at_speed(source: Path, speed_m_s: float, folder: Path) -> Path:
 
 def _pct(values: Sequence[float], q: float) -> float:
     return float(np.percentile(values, q)) if len(values) else float("nan")
+
+
+def _figure(value: float) -> float | None:
+    """A figure for JSON: None (null) where there was nothing to measure (NaN is not JSON, RFC 8259)."""
+    return None if value != value else value
 
 
 def _follow_errors(episode: Episode, target: str) -> tuple[list[float], Callable[[int, LoadedTree], None]]:
@@ -121,8 +128,8 @@ def run_tracking_bench(repo: Path, speeds_m_s: Sequence[float], seeds: int, moun
                                  f"median {_pct(sample, 50) * 1e3:.1f} mm, {result.reason or 'running'}")
                 mm = [e * 1e3 for e in errors]
                 rows.append({"mount": mount, "speed_cm_s": round(speed * 100, 1), "episodes": seeds,
-                             "samples": len(mm), "median_mm": _pct(mm, 50), "p95_mm": _pct(mm, 95),
-                             "max_mm": max(mm) if mm else float("nan"), "target_lost": lost})
+                             "samples": len(mm), "median_mm": _figure(_pct(mm, 50)), "p95_mm": _figure(_pct(mm, 95)),
+                             "max_mm": max(mm) if mm else None, "target_lost": lost})
     return {"rows": rows, "elapsed_s": time.perf_counter() - t0}
 
 
@@ -193,9 +200,9 @@ def run_sort_bench(repo: Path, speed_m_s: float, seeds: int, first_seed: int = 0
                          f"{'' if result.success else _failure(result)} {result.sim_time_s:.1f} s")
     return {"mount": "eye-to-hand", "speed_cm_s": round(speed_m_s * 100, 1), "episodes": seeds, "successes": ok,
             "success_rate": ok / max(seeds, 1), "failures": reasons, "first_seed": first_seed,
-            "objects_per_episode": goal.count, "picks_per_min_median": _pct(rates, 50),
-            "picks_per_min_min": min(rates) if rates else float("nan"),
-            "picks_per_min_max": max(rates) if rates else float("nan"),
+            "objects_per_episode": goal.count, "picks_per_min_median": _figure(_pct(rates, 50)),
+            "picks_per_min_min": min(rates) if rates else None,
+            "picks_per_min_max": max(rates) if rates else None,
             "perception_latency_s": latency, "elapsed_s": time.perf_counter() - t0}
 
 

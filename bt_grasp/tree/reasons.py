@@ -46,6 +46,7 @@ class FailureReason(enum.StrEnum):
     PLACE_BLOCKED = "PLACE_BLOCKED"  # the place target is occupied, or the descent met something early
     COUNT_EXCEEDED = "COUNT_EXCEEDED"  # ObjectCount: more objects than the port ``max`` allows
     SAFETY_LIMIT = "SAFETY_LIMIT"  # a real cell refused a motion before sending it (workspace box, table, caps)
+    INTERCEPT_MISSED = "INTERCEPT_MISSED"  # the object on the belt will have left the reach before the grasp is over
 
 
 @dataclass(frozen=True)
@@ -102,6 +103,8 @@ _DESCRIPTIONS: dict[FailureReason, str] = {
     FailureReason.PLACE_BLOCKED: "The place target is occupied, or the descent met something early.",
     FailureReason.COUNT_EXCEEDED: "ObjectCount saw more objects than its port max allows.",
     FailureReason.SAFETY_LIMIT: "A real cell refused a motion before sending it (workspace box, table, caps).",
+    FailureReason.INTERCEPT_MISSED: "The object on the belt can no longer be intercepted: it will have left the "
+                                    "arm's reach before the grasp would be over.",
 }
 
 

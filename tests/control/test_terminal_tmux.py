@@ -2,7 +2,8 @@
 the screen (issue 25, Done when 1 for the terminal). Bad ``--break``/``--interactive`` input is exit 2, one line.
 
 The end-to-end run: trees/pick.xml on the tabletop, ``--break node:Grasp``. Paused before tick 1: ``f`` (break
-on failure on), ``s`` (tick 1: everything up to Approach ran), ``b`` with a bad value (one sentence, nothing
+on failure on), ``s`` (tick 1: Perceive waits for its detections, 0.1 s of simulated time), ``n 10`` (tick 11:
+everything up to Approach ran), ``b`` with a bad value (one sentence, nothing
 changes), ``b lift_height=0.15``, ``o 0`` (the red box, as Perceive chose), ``x frame_drop``; ``p`` runs to the
 breakpoint before Grasp; ``n 5`` steps five ticks; ``q`` stops the run, the log is finished and lists the four
 interventions and the stop.
@@ -109,13 +110,16 @@ def test_the_terminal_front_end_in_tmux(tmux: Tmux, tmp_path: Path) -> None:
     tmux.keys("f")
     tmux.wait_for("break on failure: on")
     tmux.keys("s")
-    screen = tmux.wait_for("tick 1 ", "stepped to tick 1", "0: red at")
+    screen = tmux.wait_for("tick 1 ", "stepped to tick 1")
+    assert "Perceive  RUNNING" in screen  # the frame is taken; its detections reach the tree 0.1 s later
+    tmux.answer("n", "10")
+    screen = tmux.wait_for("tick 11 ", "stepped to tick 11", "0: red at")
     assert "Perceive  SUCCESS" in screen and "Approach  RUNNING" in screen
     tmux.answer("b", "lift_height=high")
     screen = tmux.wait_for("does not fit")
     assert "interventions: 0" in screen
     tmux.answer("b", "lift_height=0.15")
-    tmux.wait_for("interventions: 1", "tick 1: lift_height = 0.15")
+    tmux.wait_for("interventions: 1", "tick 11: lift_height = 0.15")
     tmux.answer("o", "0")
     tmux.wait_for("interventions: 2", "target = object 0 (red)")
     tmux.answer("x", "frame_drop frames=1")

@@ -42,14 +42,14 @@ def _json(capsys: pytest.CaptureFixture[str], *args: object) -> dict:  # type: i
 
 @pytest.fixture(scope="module")
 def recordings(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
-    """Household seed 0 (a mug among 3-5 objects), tabletop seed 0, the empty table with 5 frames and with 1."""
+    """Household seed 0 (a mug among 3-5 objects), tabletop seed 0, the empty table with 10 frames and with 1."""
     from bt_grasp.sensing.record_scene import record_scene
 
     folder = tmp_path_factory.mktemp("scene-recordings")
     return {
         "household": record_scene(HOUSEHOLD, 0, folder / "household.db3", 1).path,
         "tabletop": record_scene(REPO / "scenes/tabletop.yaml", 0, folder / "tabletop.db3", 1).path,
-        "empty5": record_scene(EMPTY, 0, folder / "empty5.db3", 5).path,
+        "empty10": record_scene(EMPTY, 0, folder / "empty10.db3", 10).path,
         "empty1": record_scene(EMPTY, 0, folder / "empty1.db3", 1).path,
     }
 
@@ -101,18 +101,21 @@ def test_the_tree_picks_the_grasp_perceive_ranks_first_for_the_mug(
     assert run["blackboard"]["target"]["class_name"] == "mug"
 
 
-@pytest.mark.parametrize(("name", "reason"), [("empty5", "NO_DETECTION"), ("empty1", "NO_FRAME")])
+@pytest.mark.parametrize(("name", "reason", "leaf"), [("empty10", "NO_DETECTION", "FindLost"),
+                                                      ("empty1", "NO_FRAME", "PerceiveAll")])
 def test_an_empty_table_is_no_detection_and_a_spent_recording_is_no_frame(
-    name: str, reason: str, recordings: dict[str, Path], capsys: pytest.CaptureFixture[str]
+    name: str, reason: str, leaf: str, recordings: dict[str, Path], capsys: pytest.CaptureFixture[str]
 ) -> None:
-    # pick_class tries 5 times: 5 frames of an empty table fail each attempt in SelectObject; a 1-frame
-    # recording is spent after the first attempt, and PerceiveAll's next capture is a dropped frame
+    # pick_class tries 5 times, each looking twice on an empty table (PerceiveAll, then search_lost's look from
+    # home): 10 frames fail every attempt, the last in FindLost (a stand-in here: it reads the run's attempts, which
+    # a dry run has none of, so it is told to find nothing); a 1-frame recording is spent after the first look, and
+    # search_lost's PerceiveAll gets a dropped frame
     code, out, err = _cli(capsys, "tree", "run", PICK_CLASS, "--dry", "--camera", recordings[name], "--calibration",
-                          TABLETOP_CAL, "--set", "class=mug", "--json")
+                          TABLETOP_CAL, "--set", "class=mug", "--outcome", "FindLost=failure:NO_DETECTION", "--json")
     assert code == 1 and err == ""
     run = json.loads(out)
     assert run["status"] == "FAILURE" and run["blackboard"]["failure_reason"] == reason
-    assert run["blackboard"]["failed_leaf"] == ("SelectObject" if reason == "NO_DETECTION" else "PerceiveAll")
+    assert run["blackboard"]["failed_leaf"] == leaf
 
 
 def test_without_a_calibration_everything_is_in_the_camera_frame(

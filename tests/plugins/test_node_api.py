@@ -52,7 +52,7 @@ def _tree(body: str) -> str:
 
 def test_every_shipped_node_is_a_class_declared_and_registered_with_the_node_api() -> None:
     registry = robot_registry(installed=False)
-    assert len(registry) == 68  # BT.CPP's 42 built-ins and bt_grasp's 26 robot leaves
+    assert len(registry) == 76  # BT.CPP's 42 built-ins and bt_grasp's 34 robot leaves
     for spec in registry.specs():
         node_class = spec.factory
         assert isinstance(node_class, type), spec.name
