@@ -154,7 +154,7 @@ def test_the_benchmark_changes_only_the_belt_speed(tmp_path: Path) -> None:
     from bt_grasp.bench.follow import scene_at_speed
 
     path = scene_at_speed(REPO, "eye-in-hand", 0.1, tmp_path)
-    scene, original = load_scene(path), load_scene(REPO / "scenes/conveyor_eye_in_hand.yaml")
+    scene, original = load_scene(path), load_scene(REPO / "scenes/conveyor_follow_eye_in_hand.yaml")
     assert scene.fixtures[0].speed_m_s == 0.1  # type: ignore[union-attr]
     assert scene.model_copy(update={"fixtures": original.fixtures, "calibration": original.calibration}) == original
     assert Path(str(scene.calibration)).is_file()
