@@ -25,12 +25,12 @@ import contextlib
 import logging
 import time
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from bt_grasp.geometry import Mat4
+from bt_grasp.hardware.device_objects import RsObject
 from bt_grasp.hardware.realsense_settings import DepthFilter, RealSenseSettings
 from bt_grasp.interfaces import CameraIntrinsics, Mount, RGBDFrame
 
@@ -59,12 +59,12 @@ class StreamInfo:
     distortion: str  # the colour stream's distortion model and whether its coefficients are all zero
 
 
-def intrinsics_of(profile: Any) -> CameraIntrinsics:
+def intrinsics_of(profile: RsObject) -> CameraIntrinsics:
     i = profile.as_video_stream_profile().get_intrinsics()
     return CameraIntrinsics(int(i.width), int(i.height), float(i.fx), float(i.fy), float(i.ppx), float(i.ppy))
 
 
-def matrix_of(extrinsics: Any) -> Mat4:
+def matrix_of(extrinsics: RsObject) -> Mat4:
     """``rs.extrinsics`` (rotation column-major) as a 4x4 transform."""
     T = np.eye(4)
     T[:3, :3] = np.asarray(extrinsics.rotation, dtype=float).reshape(3, 3, order="F")
@@ -78,8 +78,8 @@ class RealSenseCamera:
     Build one with :func:`bt_grasp.hardware.realsense_open.open_recording` or ``open_device``.
     """
 
-    def __init__(self, rs: Any, pipeline: Any, profile: Any, settings: RealSenseSettings, mount: Mount,
-                 source: str, playback: Any | None = None) -> None:
+    def __init__(self, rs: RsObject, pipeline: RsObject, profile: RsObject, settings: RealSenseSettings, mount: Mount,
+                 source: str, playback: RsObject | None = None) -> None:
         self._rs = rs
         self._pipeline = pipeline
         self._settings = settings
@@ -143,7 +143,7 @@ class RealSenseCamera:
 
     # -- frames -------------------------------------------------------------------------------------------------------
 
-    def _next_pair(self) -> tuple[Any, int] | None:
+    def _next_pair(self) -> tuple[RsObject, int] | None:
         if self._ended:
             return None
         timeout_ms = self._settings.timeout_ms if self._playback is None else max(self._settings.timeout_ms,
@@ -190,9 +190,9 @@ class RealSenseCamera:
             pixels = pixels[..., 2::-1]
         return np.ascontiguousarray(pixels[..., :3], dtype=np.uint8)
 
-    def _make_filters(self, filters: tuple[DepthFilter, ...]) -> list[Any]:
+    def _make_filters(self, filters: tuple[DepthFilter, ...]) -> list[RsObject]:
         rs = self._rs
-        blocks: list[Any] = []
+        blocks: list[RsObject] = []
         smooth = [f for f in filters if f in (DepthFilter.SPATIAL, DepthFilter.TEMPORAL)]
         if smooth:
             blocks.append(rs.disparity_transform(True))
@@ -222,7 +222,7 @@ class RealSenseCamera:
         self.close()
 
 
-def _info(rs: Any, device: Any, key: Any) -> str:
+def _info(rs: RsObject, device: RsObject, key: RsObject) -> str:
     return str(device.get_info(key)) if device.supports(key) else ""
 
 

@@ -9,10 +9,10 @@ from __future__ import annotations
 import json
 import logging
 from pathlib import Path
-from typing import Any
 
 from bt_grasp.errors import InputError
 from bt_grasp.files.bounded_io import read_user_file
+from bt_grasp.hardware.device_objects import RsObject
 from bt_grasp.hardware.realsense_camera import COLOR_FORMATS, RealSenseCamera
 from bt_grasp.hardware.realsense_lib import pyrealsense2
 from bt_grasp.hardware.realsense_settings import RealSenseSettings
@@ -58,14 +58,14 @@ def open_recording(path: str | Path, settings: RealSenseSettings = RealSenseSett
     return RealSenseCamera(rs, pipeline, profile, settings, mount, str(path), playback=playback)
 
 
-def _check_color_format(rs: Any, profile: Any, source: str | Path, pipeline: Any) -> None:
+def _check_color_format(rs: RsObject, profile: RsObject, source: str | Path, pipeline: RsObject) -> None:
     fmt = str(profile.get_stream(rs.stream.color).format()).removeprefix("format.")
     if fmt not in COLOR_FORMATS:
         pipeline.stop()
         raise RecordingError(source, f"streams colour as {fmt}; bt_grasp reads {', '.join(COLOR_FORMATS)}")
 
 
-def choose_device(context: Any, serial: str | None) -> Any:
+def choose_device(context: RsObject, serial: str | None) -> RsObject:
     """The device with ``serial`` (or the only one when None) among ``context``'s; DeviceError otherwise."""
     rs = pyrealsense2("a live RealSense camera")
     devices = list(context.query_devices())
@@ -96,7 +96,7 @@ def read_preset(path: str | Path) -> str:
     return data.decode("utf-8")
 
 
-def load_preset(device: Any, serial: str, path: str | Path) -> None:
+def load_preset(device: RsObject, serial: str, path: str | Path) -> None:
     """Load a Viewer preset into the device's D400 advanced mode (the Viewer's own call); DeviceError when the device
     has no advanced mode, has it turned off, or refuses the preset."""
     rs = pyrealsense2("a RealSense Viewer preset")
@@ -117,8 +117,8 @@ def load_preset(device: Any, serial: str, path: str | Path) -> None:
     log.info("loaded the preset %s into %s", path, serial)
 
 
-def start_device(context: Any, serial: str | None, settings: RealSenseSettings,
-                 record_to: Path | None = None) -> tuple[Any, Any, Any, str]:
+def start_device(context: RsObject, serial: str | None, settings: RealSenseSettings,
+                 record_to: Path | None = None) -> tuple[RsObject, RsObject, RsObject, str]:
     """Choose the device, load the preset, start the pipeline on it with the settings' streams (and the library's
     recorder when ``record_to``): (pipeline, profile, device, serial)."""
     rs = pyrealsense2("a live RealSense camera")
@@ -147,7 +147,7 @@ def start_device(context: Any, serial: str | None, settings: RealSenseSettings,
 
 
 def open_device(serial: str | None = None, settings: RealSenseSettings = RealSenseSettings(),
-                mount: Mount = Mount.EYE_TO_HAND, context: Any = None) -> RealSenseCamera:
+                mount: Mount = Mount.EYE_TO_HAND, context: RsObject = None) -> RealSenseCamera:
     """A live device (``serial``, or the only one connected) streaming the settings' depth and colour, its
     auto-exposure settling frames skipped. ``context``: the pyrealsense2 context to find it in (default: a new
     one, which lists the USB devices)."""

@@ -19,12 +19,12 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from bt_grasp.geometry import Mat4
+from bt_grasp.hardware.device_objects import RsObject
 from bt_grasp.hardware.realsense_lib import pyrealsense2
 from bt_grasp.interfaces import CameraIntrinsics
 
@@ -52,11 +52,11 @@ class D435Streams:
     name: str = SIMULATED_NAME
 
 
-def _ignore(event: Any) -> None:
+def _ignore(event: RsObject) -> None:
     return None
 
 
-def rs_intrinsics(rs: Any, i: CameraIntrinsics, model: Any) -> Any:
+def rs_intrinsics(rs: RsObject, i: CameraIntrinsics, model: RsObject) -> RsObject:
     """``rs.intrinsics`` of a pinhole camera (zero distortion coefficients, the given model)."""
     out = rs.intrinsics()
     out.width, out.height = i.width_px, i.height_px
@@ -66,7 +66,7 @@ def rs_intrinsics(rs: Any, i: CameraIntrinsics, model: Any) -> Any:
     return out
 
 
-def rs_extrinsics(rs: Any, T: Mat4) -> Any:
+def rs_extrinsics(rs: RsObject, T: Mat4) -> RsObject:
     """``rs.extrinsics`` of a rigid transform (librealsense stores the rotation column-major)."""
     T = np.asarray(T, dtype=float)
     out = rs.extrinsics()
@@ -96,11 +96,12 @@ class SoftwareD435:
         self.device.register_info(rs.camera_info.name, streams.name)
         self.device.register_info(rs.camera_info.serial_number, streams.serial)
         self.device.register_info(rs.camera_info.product_line, "D400")
-        self._recorder: Any = None
+        self._recorder: RsObject = None
         self._started = False
-        self._kept: list[Any] = []
+        self._kept: list[RsObject] = []
 
-    def _video_stream(self, kind: Any, uid: int, i: CameraIntrinsics, fmt: Any, bpp: int, model: Any) -> Any:
+    def _video_stream(self, kind: RsObject, uid: int, i: CameraIntrinsics, fmt: RsObject, bpp: int,
+                      model: RsObject) -> RsObject:
         vs = self._rs.video_stream()
         vs.type, vs.index, vs.uid = kind, 0, uid
         vs.width, vs.height, vs.fps, vs.bpp, vs.fmt = i.width_px, i.height_px, self.streams.fps, bpp, fmt
@@ -109,13 +110,13 @@ class SoftwareD435:
 
     # -- as a live device ----------------------------------------------------------------------------------------
 
-    def add_to(self, context: Any) -> None:
+    def add_to(self, context: RsObject) -> None:
         """Make the device one of ``context``'s devices (found by serial number; see the module docstring)."""
         kept = self._kept
         context.set_devices_changed_callback(lambda event: kept.append(event.get_new_devices()))
         self.device.add_to(context)
 
-    def release(self, context: Any) -> None:
+    def release(self, context: RsObject) -> None:
         """After the pipeline that read it stopped: the context's notification no longer reaches this device, and the
         device lists kept for it are let go."""
         context.set_devices_changed_callback(_ignore)

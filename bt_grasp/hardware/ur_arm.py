@@ -35,7 +35,7 @@ import math
 import threading
 import time
 from collections.abc import Callable
-from typing import Any, Protocol
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -48,6 +48,7 @@ from bt_grasp.hardware.cell_faults import (
     ControllerState,
     fault_from_state,
 )
+from bt_grasp.hardware.device_objects import RtdeObject
 from bt_grasp.hardware.robotiq_client import Robotiq2F85Client
 from bt_grasp.hardware.ur_lib import ur_rtde
 from bt_grasp.robot_description import ARM_JOINTS
@@ -97,8 +98,8 @@ class UrArm:
         self.gripper = gripper
         self.guard = guard
         self.period_s = 1.0 / arm.control_rate_hz
-        self.control: Any = None
-        self.receive: Any = None
+        self.control: RtdeObject = None
+        self.receive: RtdeObject = None
         self.stopped_by: CellFault | None = None
         self._last_target: NDArray[np.float64] | None = None
         self._target_since = time.monotonic()
@@ -371,12 +372,12 @@ class UrArm:
             self.stop()
         raise fault
 
-    def _synchronous(self, call: Callable[[], Any], what: str, timeout_s: float | None = None,
-                     control: Any = None) -> Any:
+    def _synchronous(self, call: Callable[[], RtdeObject], what: str, timeout_s: float | None = None,
+                     control: RtdeObject = None) -> RtdeObject:
         """A ur_rtde call that waits for the controller's answer, bounded: it runs in a thread of its own (ur_rtde lets
         go of the interpreter while it waits), and an answer that does not come within ``timeout_s`` is a lost
         connection (a controller that went away: ur_rtde would wait, and try to reconnect, for seconds)."""
-        result: list[Any] = []
+        result: list[RtdeObject] = []
         error: list[BaseException] = []
 
         def run() -> None:
@@ -401,7 +402,7 @@ class UrArm:
             raise error[0]
         return result[0] if result else None
 
-    def _gripper(self, call: Any) -> None:
+    def _gripper(self, call: RtdeObject) -> None:
         try:
             call()
         except CellFault as fault:
@@ -432,10 +433,10 @@ class UrArm:
 
 
 #: ur_rtde interfaces of controllers that went away, being let go (never destroyed while ur_rtde reconnects)
-_LET_GO: list[Any] = []
+_LET_GO: list[RtdeObject] = []
 
 
-def _let_go(interface: Any) -> None:
+def _let_go(interface: RtdeObject) -> None:
     """Disconnect ``interface`` in a daemon thread, waiting at most a second for it; it is kept alive either way."""
     _LET_GO.append(interface)
     thread = threading.Thread(target=interface.disconnect, name="ur_rtde-let-go", daemon=True)
