@@ -26,14 +26,13 @@ from numpy.typing import NDArray
 from bt_grasp.behaviours.base import RobotLeaf
 from bt_grasp.behaviours.grasp_plan import GraspPlan
 from bt_grasp.behaviours.motion_job import PathFailure
-from bt_grasp.behaviours.motion_leaves import PLAN_GRASP_PORTS, PLAN_GRASP_REASONS, PlanGrasp
+from bt_grasp.behaviours.motion_leaves import PLAN_GRASP_PORTS, PLAN_GRASP_REASONS, PlanGrasp, detection_box
 from bt_grasp.behaviours.objects import object_list
 from bt_grasp.behaviours.place import (
     _HELD_PORTS,
     RELEASE_IK_SEEDS,
     RELEASE_IK_SOLUTIONS,
     _PlaceBase,
-    detection_box,
     held_offset,
     place_options,
     same_object,
