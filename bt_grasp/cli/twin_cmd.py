@@ -95,14 +95,14 @@ def twin(
 
         write(config_scene, scene, config, write_cell, the_twin.board)
         typer.echo(f"cell file: {write_cell}")
+    stop = threading.Event()  # set before the ports open: a Ctrl-C while the twin starts stops it cleanly too
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
     try:
         the_twin.start()
     except OSError as exc:
         the_twin.stop()
         raise taken(exc) from None
-    stop = threading.Event()
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda *_: stop.set())
     if camera_hz > 0:
         the_twin.camera("on", camera_hz)
     typer.echo(f"twin of {scene} serving {model.value} on {host}: RTDE 30004, dashboard 29999, script 30003, "
