@@ -22,6 +22,8 @@ from pathlib import Path
 
 import pytest
 
+from bt_grasp.bench.twin_process import free_loopback
+
 REPO = Path(__file__).resolve().parents[2]
 
 #: Wall-clock bounds. Issue 40's figures (a fault seen within one period + 50 ms, the period's 99th percentile under
@@ -31,28 +33,7 @@ REPO = Path(__file__).resolve().parents[2]
 #: bound the wall time generously: on this 2-core machine shared by several test runs a client's wake-up alone was
 #: measured late by 75 ms (a gripper timeout of 58 ms seen after 75 ms), which is the load, not the twin.
 STRICT_TIMING = os.environ.get("BT_GRASP_STRICT_TIMING") == "1"
-PORTS = (30004, 29999, 30003, 63352, 30100, 30101)
 START_TIMEOUT_S = 90.0
-
-
-def free_loopback(salt: int = 0) -> str:
-    """A 127.x.y.z address on which every twin port is free now."""
-    base = (os.getpid() * 7 + salt * 131) % 200
-    for k in range(60):
-        host = f"127.{61 + (base + k) % 190}.{(os.getpid() + k) % 250 + 1}.{2 + k % 200}"
-        socks = []
-        try:
-            for port in PORTS:
-                s = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
-                socks.append(s)
-                s.bind((host, port))
-            return host
-        except OSError:
-            continue
-        finally:
-            for s in socks:
-                s.close()
-    raise RuntimeError("no loopback address with the twin's ports free")
 
 
 def control(host: str, line: str, timeout_s: float = 30.0) -> dict[str, object]:

@@ -224,6 +224,8 @@ class IoLoop:
         except (BlockingIOError, OSError):
             return
         peer = f"{addr[0]}:{addr[1]}"
+        # the wall clock on purpose: the twin is a real-time controller for real-time clients (ur_rtde), as a robot
+        # is; no simulated run reads it, and a real-cell run against a twin is a wall-clock run whose log says so
         if time.monotonic() < self._refuse_until and proto.name not in self._spared:
             sock.close()  # the "dropped connection" fault is still on
             return
