@@ -263,13 +263,14 @@ class _PlaceBase(RobotLeaf):
     def _all_tried_before(self) -> Status:
         """Every orientation this grip allows failed before: PLACE_BLOCKED at once, nothing moved (a notice on the
         log; the grip held cannot place the object: ``GripBlocksPlace``)."""
-        first = self._excluded[0]
+        tried = [e for e in self._excluded if e.rule != "room"]  # a learned margin is a note, not a try
+        first = tried[0] if tried else self._excluded[0]
         self._recorded = True
         self.log_attempt(self.cell.attempts.skipped(
             AttemptKind.PLACE, self.bt_path, self.tick_now(), self._held, np.eye(4), self._grip_family,
             FailureReason.PLACE_BLOCKED.value, self._excluded, grip=self._T_tcp_obj))
         return self.fail(FailureReason.PLACE_BLOCKED,
-                         f"every one of {len(self._excluded)} place orientation(s) with this grip was tried before "
+                         f"every one of {len(tried)} place orientation(s) with this grip was tried before "
                          f"and did not work; first: {first.sentence()}")
 
     def covers_every_turn(self) -> bool:
