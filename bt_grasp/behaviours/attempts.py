@@ -103,6 +103,8 @@ TOP_DOWN_DEG = 30.0
 SAME_OBJECT_M = 0.03
 #: ... and their footprints' long sides differ by at most this fraction
 SAME_SIZE_FRACTION = 0.3
+#: an object of the kind and size a failed grasp was on, this close to where it was, is that object, pushed, m
+FOLLOW_M = 0.05
 
 
 def outcome_of(reason: str | None) -> Outcome:
@@ -171,6 +173,11 @@ class ObjectSeen:
         if abs(a - b) > SAME_SIZE_FRACTION * max(a, b, 1e-6):
             return False
         return not (self.class_name and other.class_name and self.class_name != other.class_name)
+
+    def like(self, other: ObjectSeen) -> bool:
+        """Of one kind and size (wherever each was seen): footprints of a like size, the same class when both
+        were named."""
+        return ObjectSeen(other.centroid_m, self.size_m, self.yaw_deg, class_name=self.class_name).same_as(other)
 
     def describe(self) -> str:
         name = self.class_name or self.label or "object"
@@ -265,6 +272,16 @@ class Attempt:
     def failed(self) -> bool:
         return self.outcome not in (Outcome.SUCCEEDED, Outcome.UNFINISHED, Outcome.SKIPPED)
 
+    @property
+    def grip_failed(self) -> bool:
+        """A placement that says its grip will not do: the object left the fingers (DROPPED), or no orientation
+        was left to try with it (every one blocked, or a notice that each repeated a failed one). A later grasp
+        of the object with that grip repeats it."""
+        if self.kind is not AttemptKind.PLACE:
+            return False
+        return self.reason == "DROPPED" or (self.reason == "PLACE_BLOCKED"
+                                            and (self.every_turn_blocked or self.outcome is Outcome.SKIPPED))
+
     def failed_poses(self) -> tuple[Mat4, ...]:
         """The tool poses this attempt found not to work: every orientation found blocked before the arm moved,
         and the one it moved to when it failed there."""
@@ -318,6 +335,10 @@ class AttemptMemory:
     grip_blocked: bool = False
     #: objects grasp planning gave up on (no candidate, none reachable): not attempts, but failures on the object
     unplanned: list[tuple[ObjectSeen, str]] = field(default_factory=list)
+    #: objects followed from where they were seen to where they are seen now (pairs (was, now)): a failed grasp
+    #: that pushed its object a few cm, one found again by FindLost, one set down by SetDown. What was tried on
+    #: it before still counts after it moved.
+    moves: list[tuple[ObjectSeen, ObjectSeen]] = field(default_factory=list)
 
     # -- recording ---------------------------------------------------------------------------------------
 
@@ -327,6 +348,7 @@ class AttemptMemory:
         dropped: it was planned, not made)."""
         if self.current is not None and not self.current.moved:
             self.current = None
+        self._follow_after_failure(target)
         T = np.asarray(T_base_tcp, dtype=float)
         family = grasp_family(T, width_m, target)
         a = -T[:3, 2]
@@ -395,6 +417,39 @@ class AttemptMemory:
         self.attempts.append(done)
         return done
 
+    def moved(self, was: ObjectSeen, now: Detection | ObjectSeen) -> None:
+        """The object seen as ``was`` is the one seen as ``now`` (it moved): its attempts go with it."""
+        self.moves.append((was, now if isinstance(now, ObjectSeen) else ObjectSeen.of(now)))
+
+    def _follow_after_failure(self, target: Detection) -> None:
+        """A grasp on an object no attempt was made on, right after a failed grasp on one of its kind and size
+        within :data:`FOLLOW_M` of it, is on that object, pushed by the failed grasp (an L bracket slid 2.5 cm at
+        each of five slips, and each attempt counted as the first on a new object)."""
+        last = self.attempts[-1] if self.attempts else None
+        if last is None or last.kind is not AttemptKind.GRASP or not last.failed:
+            return
+        seen = ObjectSeen.of(target)
+        if math.dist(last.object.centroid_m, seen.centroid_m) > FOLLOW_M or not last.object.like(seen):
+            return
+        # an object the run tried before, other than the pushed one, is itself
+        pushed = self._identities(last.object)
+        if any(a.object.same_as(seen) and not any(a.object.same_as(i) for i in pushed) for a in self.attempts):
+            return
+        self.moved(last.object, seen)
+
+    def _identities(self, seen: ObjectSeen) -> list[ObjectSeen]:
+        """Every way the object was seen (where it was before it moved, where it went), ``seen`` first."""
+        out = [seen]
+        grew = True
+        while grew:
+            grew = False
+            for was, now in self.moves:
+                known_was, known_now = (any(x.same_as(o) for o in out) for x in (was, now))
+                if known_was != known_now:
+                    out.append(now if known_was else was)
+                    grew = True
+        return out
+
     def _next_index(self) -> int:
         return len(self.attempts) + (1 if self.current is not None else 0)
 
@@ -403,7 +458,9 @@ class AttemptMemory:
     def on(self, target: Detection | ObjectSeen, kind: AttemptKind | None = None) -> list[Attempt]:
         """The ended attempts on this object (of one kind)."""
         seen = target if isinstance(target, ObjectSeen) else ObjectSeen.of(target)
-        return [a for a in self.attempts if a.object.same_as(seen) and (kind is None or a.kind is kind)]
+        ids = self._identities(seen)
+        return [a for a in self.attempts
+                if (kind is None or a.kind is kind) and any(a.object.same_as(i) for i in ids)]
 
     def grasp_exclusion(self, target: Detection, T_base_tcp: Mat4, family: GraspFamily, what: str
                         ) -> Exclusion | None:
@@ -414,7 +471,7 @@ class AttemptMemory:
         for a in self.on(target):
             grip = a.T_base_tcp if a.kind is AttemptKind.GRASP else None
             if a.kind is AttemptKind.PLACE:
-                if a.reason != "DROPPED" or a.T_tcp_object is None:
+                if not a.grip_failed or a.T_tcp_object is None:
                     continue
                 grip = _grasp_of_place(a, target)
             if grip is None or (not a.failed and a.kind is AttemptKind.GRASP):
@@ -446,7 +503,9 @@ class AttemptMemory:
     def object_failures(self, target: Detection) -> int:
         """Failures on this object: failed attempts (grasps and placements) and grasp plannings that gave up."""
         seen = ObjectSeen.of(target)
-        return sum(1 for a in self.on(seen) if a.failed) + sum(1 for o, _ in self.unplanned if o.same_as(seen))
+        ids = self._identities(seen)
+        return (sum(1 for a in self.on(seen) if a.failed)
+                + sum(1 for o, _ in self.unplanned if any(o.same_as(i) for i in ids)))
 
     def place_exclusion(self, held: Detection, grip: Mat4, T_release: Mat4, what: str) -> Exclusion | None:
         """Why a release pose may not be tried with this grip (None: it may): a placement of this object with
@@ -461,6 +520,15 @@ class AttemptMemory:
                     return Exclusion(what, a.index, "repeat", f"with this grip the same release ({d * 1e3:.0f} mm, "
                                      f"{ang:.0f} deg) ended {a.reason or a.outcome.value} before")
         return None
+
+    def early_contacts(self, held: Detection, grip: Mat4) -> list[Attempt]:
+        """Placements of this object with this grip whose descent met something before the target (PLACE_BLOCKED
+        after the arm moved): each says the held object reaches further than its perceived shape in the fingers
+        (it hangs off-centre, or turned in the grip), so the next spot wants more room round it."""
+        r = self.rules
+        return [a for a in self.on(held, AttemptKind.PLACE)
+                if a.moved and a.reason == "PLACE_BLOCKED" and a.T_tcp_object is not None
+                and within(a.T_tcp_object, grip, r.same_m, r.same_deg)]
 
     def last_lost(self) -> Attempt | None:
         """The last failed grasp (the object it was on may have moved: a search looks for it)."""

@@ -17,12 +17,14 @@ retries:
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
+from bt_grasp.behaviours.attempts import ObjectSeen
 from bt_grasp.behaviours.base import RobotLeaf
 from bt_grasp.behaviours.grasp_plan import GraspPlan
 from bt_grasp.behaviours.motion_job import PathFailure
@@ -154,6 +156,10 @@ class SetDown(_PlaceBase):
         pose = Pose(float(T_obj[0, 3]), float(T_obj[1, 3]), float(self._surface),
                     math.degrees(math.atan2(T_obj[1, 0], T_obj[0, 0])))
         self.ports.set("pose", pose)
+        # what was tried on it goes with it (a grip no placement took is not taken again)
+        was = ObjectSeen.of(self._held)
+        centre = (pose.x_m, pose.y_m, float(self._surface) + float(self._held.size_m[2]) / 2)
+        self.cell.attempts.moved(was, dataclasses.replace(was, centroid_m=centre, yaw_deg=pose.yaw_deg or 0.0))
 
 
 @action(

@@ -75,6 +75,7 @@ class FindLost(RobotLeaf):
             return self.fail(FailureReason.NO_DETECTION, f"the {lost.describe()} of attempt #{attempt.index} is "
                              f"not among the {len(objects)} object(s) seen")
         found = objects[min(scored)[1]]
+        self.cell.attempts.moved(lost, found)  # what was tried on it goes with it
         self.ports.set("object", found)
         moved = math.dist(lost.centroid_m[:2], found.centroid_base_m[:2])
         self.feedback_message = (f"the {lost.describe()} of attempt #{attempt.index}: {moved * 100:.0f} cm from "

@@ -37,7 +37,8 @@ PEN, CAN, WEDGE = _det(0.60, -0.12, ShapeClass.ELONGATED), _det(0.42, 0.20, Shap
 
 
 def _walk(path: Path, views: list[tuple[Detection, ...]], monkeypatch: pytest.MonkeyPatch, holding: bool = False,
-          place: str = "Running:2", left_holding: bool = False) -> tuple[str, list[dict[str, str]], list[Any]]:
+          place: str = "Running:2", left_holding: bool = False, grip_blocks: bool = False
+          ) -> tuple[str, list[dict[str, str]], list[Any]]:
     """Tick the tree, PerceiveAll seeing the next of ``views`` at each look (an empty table after the last);
     the other robot leaves are stand-ins. Returns the final status, every tick's node states and the objects
     SelectObject chose, in order."""
@@ -57,7 +58,8 @@ def _walk(path: Path, views: list[tuple[Detection, ...]], monkeypatch: pytest.Mo
     # (the first rule that matches a node wins: the test's own, by name, then the generic ones by type; a
     # generic rule for a type the test set is left out, so PlaceIn's outcome is the test's)
     stand_ins = {"already_holding": "Success" if holding else "Failure", "PlaceIn": place,
-                 "still_holding": "Success" if left_holding else "Failure"}
+                 "still_holding": "Success" if left_holding else "Failure",
+                 "GripBlocksPlace": "Success" if grip_blocks else "Failure"}
     stand_ins |= {n: how for n, how in STAND_INS.items() if n != "PerceiveAll" and n not in stand_ins}
     tree = load_tree(path, robot_registry(), substitutions=stand_ins, clock=clock)
     cell = fake_cell(FakeRobot(), clock)
@@ -128,6 +130,35 @@ def test_a_place_that_fails_costs_its_round_and_the_next_round_tries_again(monke
     place = next(p for p in ticks[0] if p.split("::")[0] == "PlaceIn")
     tries = sum(1 for a, b in itertools.pairwise(ticks) if b[place] == "RUNNING" and a[place] != "RUNNING")
     assert tries == 12 * 3
+
+
+def test_an_object_no_spot_takes_with_the_grip_held_is_set_down_and_the_round_ends(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # every place fails PLACE_BLOCKED and the run's memory says nothing is left to try with the grip held
+    # (GripBlocksPlace): the round backs off 5 cm, sets the object down on the table (SetDown) and ends there, once
+    # per round; the rounds do not spend three places each on a grip that cannot place (the pybullet mug's rounds
+    # did, to the end of the run)
+    status, ticks, chosen = _walk(TREE, [(PEN,)] * 20, monkeypatch, place="Running:1:Failure:PLACE_BLOCKED",
+                                  grip_blocks=True)
+    assert status == "FAILURE" and chosen == [PEN] * 12
+
+    def starts(kind: str) -> int:
+        path = next(p for p in ticks[0] if p.split("::")[0] == kind)
+        return sum(1 for a, b in itertools.pairwise(ticks) if b[path] == "RUNNING" and a[path] != "RUNNING")
+
+    assert starts("PlaceIn") == 12 and starts("SetDown") == 12
+    # tick by tick, the leaves the first round starts after its pick: IsGrasped, PlaceIn (fails), the
+    # set-down's Retreat and SetDown; then the next round's MoveHome (no RecoverPlace, no second place)
+    started: list[str] = []
+    for before, after in zip([{}, *ticks], ticks, strict=False):
+        for path, state in after.items():
+            leaf_name = path.split("/")[-1].split("::")[0]
+            was = before.get(path, "IDLE")
+            if (state == "RUNNING" and was != "RUNNING") or (state == "SUCCESS" and was in ("IDLE", "INVALID")):
+                if leaf_name in ("MoveHome", "Lift", "IsGrasped", "PlaceIn", "Retreat", "SetDown"):
+                    started.append(leaf_name)
+    assert started[:8] == ["MoveHome", "Lift", "IsGrasped", "PlaceIn", "Retreat", "SetDown", "MoveHome", "Lift"]
 
 
 def test_one_round_runs_its_leaves_in_order(monkeypatch: pytest.MonkeyPatch) -> None:
