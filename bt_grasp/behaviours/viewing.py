@@ -37,6 +37,11 @@ CLOSE_DISTANCE_M = 0.40
 #: the work-area point a survey looks at sits this far towards the robot from the workspace's centre, m
 #: (the arm reaches a high view more easily there; the 55 x 42 degree view still covers the objects' area)
 SURVEY_PULL_M = 0.02
+#: a second look at one half of the work area (view="workspace-left" etc.), from this close, m: the survey's view
+#: does not reach the work area's edges (a box at y = -0.31 m of the default +-0.35 m was never seen)
+HALF_VIEW_DISTANCE_M = 0.45
+#: the halves of the work area a second look may take (base frame: near/far along x, left = +y)
+HALVES = ("near", "far", "left", "right")
 
 
 def parse_point(text: str) -> NDArray[np.float64] | None:
@@ -66,25 +71,47 @@ def view_point(leaf: RobotLeaf, view: str, target: Detection | None) -> tuple[ND
     if target is not None:
         c = np.asarray(target.centroid_base_m, dtype=float)
         return c, CLOSE_DISTANCE_M
-    if view == "workspace":
-        ws = leaf.cell.scene.workspace
-        centre_world = np.array([np.mean(ws.x_m), np.mean(ws.y_m), 0.0, 1.0])
-        centre = (inv(leaf.cell.scene.T_world_base()) @ centre_world)[:3]
-        centre[:2] -= SURVEY_PULL_M * centre[:2] / max(float(np.linalg.norm(centre[:2])), 1e-9)
-        return centre, SURVEY_DISTANCE_M
+    if view == "workspace" or view.startswith("workspace-"):
+        return workspace_view(leaf.cell.scene, view)
     point = parse_point(view)
     if point is None:
-        return f"view '{view}' is neither 'workspace' nor a point 'x;y;z' in the base frame"
+        return f"view '{view}' is {VIEW_CHOICES}"
     return point, CLOSE_DISTANCE_M
+
+
+VIEW_CHOICES = ("neither 'workspace', 'workspace-near', 'workspace-far', 'workspace-left', 'workspace-right' nor a "
+                "point 'x;y;z' in the base frame")
+
+
+def workspace_view(scene: Scene, view: str) -> tuple[NDArray[np.float64], float] | str:
+    """The survey of the whole work area ('workspace'), or a closer look at one half of it ('workspace-left':
+    +y, '-right', '-near': towards the robot, '-far'): (point in the base frame, distance)."""
+    ws = scene.workspace
+    x0, x1 = (float(v) for v in ws.x_m)
+    y0, y1 = (float(v) for v in ws.y_m)
+    xm, ym = (x0 + x1) / 2, (y0 + y1) / 2
+    to_base = inv(np.asarray(scene.T_world_base(), dtype=float))
+    if view == "workspace":
+        centre = (to_base @ np.array([xm, ym, 0.0, 1.0]))[:3]
+        centre[:2] -= SURVEY_PULL_M * centre[:2] / max(float(np.linalg.norm(centre[:2])), 1e-9)
+        return centre, SURVEY_DISTANCE_M
+    half = view.removeprefix("workspace-")
+    points = {"near": ((x0 + xm) / 2, ym), "far": ((xm + x1) / 2, ym), "left": (xm, (ym + y1) / 2),
+              "right": (xm, (y0 + ym) / 2)}
+    if half not in points:
+        return f"view '{view}' is {VIEW_CHOICES}"
+    x, y = points[half]
+    return (to_base @ np.array([x, y, 0.0, 1.0]))[:3], HALF_VIEW_DISTANCE_M
 
 
 @action(
     ports=[
-        input_port("view", str, "workspace", "'workspace' (survey the work area) or a point 'x;y;z' in the base frame, "
-                   "m"),
+        input_port("view", str, "workspace", "'workspace' (survey the work area), 'workspace-near', '-far', '-left' "
+                   "or '-right' (a closer look at one half of it: a second look) or a point 'x;y;z' in the base "
+                   "frame, m"),
         input_port("target", object, "", "a detection to look at (overrides view)"),
-        input_port("distance", float, 0.0, "camera-to-point distance along the optical axis, m (0: 0.62 survey, 0.40 "
-                   "close)"),
+        input_port("distance", float, 0.0, "camera-to-point distance along the optical axis, m (0: 0.62 survey, "
+                   "0.45 half, 0.40 close)"),
     ],
     reasons=(FailureReason.BAD_INPUT, FailureReason.CALIBRATION_MISSING, *MOTION_REASONS),
     needs_robot=True,
@@ -100,10 +127,16 @@ class LookAt(_MovingLeaf):
         view = self.ports.require("view", str)
         if view == "workspace" or self.ports.key("target") is not None:
             return None
-        point = parse_point(view)
-        if point is None:
-            return f"view '{view}' is neither 'workspace' nor a point 'x;y;z' in the base frame"
-        distance = self.ports.get("distance", float) or CLOSE_DISTANCE_M
+        if view.startswith("workspace-"):
+            looked = workspace_view(scene, view)
+            if isinstance(looked, str):
+                return looked
+            point, distance = looked[0], self.ports.get("distance", float) or looked[1]
+        else:
+            parsed = parse_point(view)
+            if parsed is None:
+                return f"view '{view}' is {VIEW_CHOICES}"
+            point, distance = parsed, self.ports.get("distance", float) or CLOSE_DISTANCE_M
         # deferred: pinocchio and coal come with it; a tree loads and validates without them
         from bt_grasp.motion.kinematics import ArmKinematics
 

@@ -62,8 +62,9 @@ def test_an_object_found_again_or_set_down_elsewhere_keeps_its_attempts() -> Non
     assert memory.object_failures(rolled) == 1
     # set down by SetDown from there: the grip no placement could take is not taken again where it now lies
     was = ObjectSeen.of(rolled)
-    memory.place("PlaceIn", 300, rolled, np.linalg.inv(make_T(np.eye(3), [0.0, 0.0, 0.0])) @ make_T(R_DOWN, [0, 0, 0.01]),
-                 GraspFamily.TOP, (0.3, 0.5, 0.0, 0.0), None, [np.eye(4)], True, "PLACE_BLOCKED", moved=False)
+    held_grip = make_T(R_DOWN, [0, 0, 0.01])  # the object in the tool frame: 1 cm below the tool, turned over
+    memory.place("PlaceIn", 300, rolled, held_grip, GraspFamily.TOP, (0.3, 0.5, 0.0, 0.0), None, [np.eye(4)], True,
+                 "PLACE_BLOCKED", moved=False)
     there = dataclasses.replace(was, centroid_m=(0.40, 0.30, 0.01), yaw_deg=90.0)
     memory.moved(was, there)
     now = bracket(0.40, 0.30)
