@@ -290,7 +290,7 @@ class PlanGrasp(RobotLeaf):
                 attempt = self.cell.attempts.open_grasp(self.bt_path, self.tick_now(), self._target,
                                                         plan.T_base_tcp_grasp, plan.width_m, self._excluded)
                 self.feedback_message = (f"candidate {rank} of {self._total} ({attempt.family.value}"
-                                         f"{self._screened_text()}): {plan.candidate.reason}")
+                                         f"{self._screened_text(attempt.family)}): {plan.candidate.reason}")
                 return Status.SUCCESS
             if self._next < len(self._candidates) or self._extend():
                 sentence = self._last.sentence  # most already name their candidate: never "candidate 0: candidate 0:"
@@ -388,12 +388,15 @@ class PlanGrasp(RobotLeaf):
         first = [c for c, f in kept if f not in self._avoided]
         return first + [c for c, f in kept if f in self._avoided]
 
-    def _screened_text(self) -> str:
+    def _screened_text(self, chosen: GraspFamily) -> str:
         parts = []
         if self._excluded:
             parts.append(f"{len(self._excluded)} left out by earlier attempts")
         if self._avoided:
-            parts.append("changed from " + ", ".join(sorted(f.value for f in self._avoided)))
+            avoided = ", ".join(sorted(f.value for f in self._avoided))
+            # a family to change from that is still the one chosen: no candidate of another family planned
+            parts.append(f"{avoided} again: no other family left" if chosen in self._avoided
+                         else f"changed from {avoided}")
         return "; " + "; ".join(parts) if parts else ""
 
     def _all_excluded(self) -> Status:
