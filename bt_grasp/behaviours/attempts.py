@@ -422,9 +422,9 @@ class AttemptMemory:
         self.moves.append((was, now if isinstance(now, ObjectSeen) else ObjectSeen.of(now)))
 
     def _follow_after_failure(self, target: Detection) -> None:
-        """A grasp on an object no attempt was made on, right after a failed grasp on one of its kind and size
-        within :data:`FOLLOW_M` of it, is on that object, pushed by the failed grasp (an L bracket slid 2.5 cm at
-        each of five slips, and each attempt counted as the first on a new object)."""
+        """A grasp right after a failed one, on an object of its kind and size within :data:`FOLLOW_M` of it that
+        is not another object the run tried, is on that object, pushed by the failed grasp (an L bracket slid
+        2.5 cm at each of five slips, and each attempt counted as the first on a new object)."""
         last = self.attempts[-1] if self.attempts else None
         if last is None or last.kind is not AttemptKind.GRASP or not last.failed:
             return
