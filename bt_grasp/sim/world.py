@@ -29,6 +29,12 @@ SETTLE_SPIN_RAD_S = 0.02
 #: ... for this many control periods in a row, or after SETTLE_MAX_S of simulated time
 SETTLE_STILL_TICKS = 5
 SETTLE_MAX_S = 2.0
+#: while settling (and only then) the objects' motion is damped this much (PhysX's per-second damping
+#: coefficients; the defaults, restored for the run, are 0.05 angular and 0 linear): a lying can or bottle that
+#: lands on the edge of a facet of its convex hull rolls on at 6-10 cm/s with the defaults (PhysX has no rolling
+#: resistance), so runs began with it rolling off the table (learned seeds 128, 146, 169)
+SETTLE_ANGULAR_DAMPING = 20.0
+SETTLE_LINEAR_DAMPING = 5.0
 
 
 class World:
@@ -128,11 +134,17 @@ class World:
         """Let the objects come to rest where they were drawn: step physics one control period at a time until
         every object is still (:data:`SETTLE_SPEED_M_S`, :data:`SETTLE_SPIN_RAD_S`) for
         :data:`SETTLE_STILL_TICKS` periods, or ``max_s`` of simulated time passed. Deterministic (no wall
-        clock); the simulated time it takes passes on the world's clock before the run's first tick. Returns
-        the physics steps taken. Primitives are drawn exactly resting, so scenes without meshes skip this."""
+        clock); the simulated time it takes passes on the world's clock before the run's first tick. The objects'
+        motion is damped while they settle (:data:`SETTLE_ANGULAR_DAMPING`), the simulator's defaults restored
+        after. Returns the physics steps taken. Primitives are drawn exactly resting, so scenes without meshes
+        skip this."""
         bodies = [e.find_component_by_type(sapien.physx.PhysxRigidDynamicComponent) for e in self.objects.values()]
         still, start = 0, self._physics_steps
         limit = start + round(max_s / self.dt_s)
+        kept = [(b.get_angular_damping(), b.get_linear_damping()) for b in bodies]
+        for b in bodies:  # they come to rest, as objects set on a table do (see SETTLE_ANGULAR_DAMPING)
+            b.set_angular_damping(SETTLE_ANGULAR_DAMPING)
+            b.set_linear_damping(SETTLE_LINEAR_DAMPING)
         while self._physics_steps < limit and still < SETTLE_STILL_TICKS:
             self.step_tick()
             calm = all(
@@ -141,6 +153,9 @@ class World:
                 for b in bodies
             )
             still = still + 1 if calm else 0
+        for b, (angular, linear) in zip(bodies, kept, strict=True):  # the run's physics is the simulator's own
+            b.set_angular_damping(angular)
+            b.set_linear_damping(linear)
         log.debug("objects settled in %d physics steps", self._physics_steps - start)
         return self._physics_steps - start
 
