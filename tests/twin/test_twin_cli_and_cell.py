@@ -10,10 +10,11 @@ from pathlib import Path
 
 import pytest
 
+from bt_grasp.bench.twin_process import TwinProcess, free_loopback
 from bt_grasp.cell.format import load_cell
 from bt_grasp.cli.twin_cmd import remote_warning
 from bt_grasp.errors import ConfigError
-from tests.twin.conftest import REPO, TwinProcess, free_loopback
+from tests.twin.conftest import REPO
 
 
 def _twin_cli(*args: str) -> subprocess.CompletedProcess[str]:

@@ -14,6 +14,7 @@ import time
 import numpy as np
 import pytest
 
+from bt_grasp.bench.twin_process import free_loopback
 from bt_grasp.cell.grippers import ROBOTIQ_2F85
 from bt_grasp.sim.twin.control_script import UR_RTDE_1_6_5_CB3, ControlScript, fingerprint, recognise
 from bt_grasp.sim.twin.motion import Decelerate, JointMove, Profile, T_to_pose, pose_to_T, rotation_vector
@@ -23,7 +24,6 @@ from bt_grasp.sim.twin.robotiq import POS_CLOSED, POS_OPEN, Robotiq2F85
 from bt_grasp.sim.twin.rtde_server import ControllerVersion, RtdeHub
 from bt_grasp.sim.twin.rtde_types import INPUT_FIELDS, OUTPUT_FIELDS, FieldType, Recipe, parse_names
 from bt_grasp.sim.twin.state import ControllerState, InputBank, RuntimeState, SafetyMode
-from tests.twin.conftest import free_loopback
 
 
 # --- RTDE ----------------------------------------------------------------------------------------------------
