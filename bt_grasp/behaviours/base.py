@@ -55,3 +55,13 @@ class RobotLeaf(Leaf):
         if isinstance(value, tuple | list):
             return tuple(v for v in value if isinstance(v, Detection))
         return ()
+
+
+class HaltCancelsJob:
+    """For a robot leaf that runs a motion (``self.job``, a ``MotionJob``): when the tree halts it, the motion is
+    cancelled (the arm is brought to rest), not left running. Put it before the leaf's base class."""
+
+    def terminate(self, new_status: Status) -> None:
+        job = getattr(self, "job", None)
+        if job is not None and new_status == Status.IDLE:
+            job.cancel()

@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from bt_grasp.behaviours.base import RobotLeaf
+from bt_grasp.behaviours.base import HaltCancelsJob, RobotLeaf
 from bt_grasp.behaviours.belt_watch import BeltTarget, BeltWatch, belt_axis, conveyor_named
 from bt_grasp.behaviours.motion_job import MotionJob, PathFailure, Segment
 from bt_grasp.behaviours.reasons import MOTION_REASONS, FailureReason
@@ -93,7 +93,7 @@ def _within_reach(axis: BeltAxis, reach_m: float) -> float:
     reasons=(FailureReason.BAD_INPUT, *MOTION_REASONS),
     needs_robot=True,
 )
-class BeltWaitPose(_OnBelt):
+class BeltWaitPose(HaltCancelsJob, _OnBelt):
     """Move the tool over the belt's upstream reach, pointing down, ready to intercept what comes."""
 
     def initialise(self) -> None:
@@ -162,11 +162,6 @@ class BeltWaitPose(_OnBelt):
             self.job.cancel()
             return self.fail(outcome.reason, outcome.sentence)
         return Status.SUCCESS
-
-    def terminate(self, new_status: Status) -> None:
-        job = getattr(self, "job", None)
-        if job is not None and new_status == Status.IDLE:
-            job.cancel()
 
 
 @action(

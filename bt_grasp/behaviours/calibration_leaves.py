@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from pathlib import Path
 
-from bt_grasp.behaviours.base import RobotLeaf
+from bt_grasp.behaviours.base import HaltCancelsJob, RobotLeaf
 from bt_grasp.behaviours.calibration_job import CalibrationJob
 from bt_grasp.behaviours.reasons import FailureReason
 from bt_grasp.errors import ConfigError
@@ -51,7 +51,7 @@ class LoadCalibration(RobotLeaf):
     reasons=(FailureReason.CALIBRATION_FAILED, FailureReason.PLAN_FAILED, FailureReason.TRACKING_ERROR),
     needs_robot=True,
 )
-class Calibrate(RobotLeaf):
+class Calibrate(HaltCancelsJob, RobotLeaf):
     """Hand-eye calibration: move the ChArUco board through diverse views, capture, solve; one view per step."""
 
     def initialise(self) -> None:
@@ -74,11 +74,6 @@ class Calibrate(RobotLeaf):
 
             save_calibration(outcome.calibration, Path(str(file)))
         return Status.SUCCESS
-
-    def terminate(self, new_status: Status) -> None:
-        job = getattr(self, "job", None)
-        if job is not None and new_status == Status.IDLE:
-            job.cancel()
 
 
 def needs_calibration_board(nodes: Iterable[object]) -> bool:

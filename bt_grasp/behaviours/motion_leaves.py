@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bt_grasp.behaviours.attempts import AttemptKind, Exclusion, GraspFamily, grasp_family
-from bt_grasp.behaviours.base import RobotLeaf
+from bt_grasp.behaviours.base import HaltCancelsJob, RobotLeaf
 from bt_grasp.behaviours.grasp_plan import GraspPlan
 from bt_grasp.behaviours.gripper import empty_below_m, planned_width_m
 from bt_grasp.behaviours.hang import HeldObject, lift_rise_m
@@ -183,7 +183,7 @@ def cartesian_fn(leaf: RobotLeaf, T_goal_fn: PoseFn, scene: PlanningScene) -> Pa
     return compute
 
 
-class _MovingLeaf(RobotLeaf):
+class _MovingLeaf(HaltCancelsJob, RobotLeaf):
     """Runs a MotionJob across ticks; halting cancels the motion (the arm holds where it is)."""
 
     def segments(self) -> list[Segment] | Status:
@@ -224,11 +224,6 @@ class _MovingLeaf(RobotLeaf):
 
     def failed_in(self, reason: FailureReason, segment: str) -> None:
         """The motion failed in ``segment`` (a leaf whose motion is part of an attempt ends it here)."""
-
-    def terminate(self, new_status: Status) -> None:
-        job = getattr(self, "job", None)
-        if job is not None and new_status == Status.IDLE:
-            job.cancel()
 
 
 _GRASP = input_port("grasp", object, "{grasp}", "the grasp to approach (from PlanGrasp)")

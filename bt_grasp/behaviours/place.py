@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bt_grasp.behaviours.attempts import AttemptKind, Exclusion, grasp_family
-from bt_grasp.behaviours.base import RobotLeaf
+from bt_grasp.behaviours.base import HaltCancelsJob, RobotLeaf
 from bt_grasp.behaviours.fixture_mask import inside_fixture
 from bt_grasp.behaviours.grasp_plan import MOVED_RAD, GraspPose
 from bt_grasp.behaviours.gripper import EMPTY_WIDTH_M, GRASP_FORCE_N
@@ -173,7 +173,7 @@ def _raised(T: Mat4, dz: float) -> Mat4:
     return out
 
 
-class _PlaceBase(RobotLeaf):
+class _PlaceBase(HaltCancelsJob, RobotLeaf):
     """Choose the orientation, carry, descend, open, retreat. Subclasses say where the object goes
     (:meth:`target_pose`)."""
 
@@ -545,11 +545,6 @@ class _PlaceBase(RobotLeaf):
         placed = replace(held, centroid_base_m=(float(xyz[0]), float(xyz[1]), float(xyz[2] - self._gap)),
                          yaw_rad=yaw, footprint_base_m=(), points_base_m=None)
         self.ports.set("placed", (*self._placed_before(), placed))
-
-    def terminate(self, new_status: Status) -> None:
-        job = getattr(self, "job", None)
-        if job is not None and new_status == Status.IDLE:
-            job.cancel()
 
 
 @action(
