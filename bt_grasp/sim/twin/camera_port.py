@@ -36,6 +36,7 @@ import numpy as np
 
 from bt_grasp.interfaces import CameraIntrinsics
 from bt_grasp.sim.twin.camera_worker import D435Pair
+from bt_grasp.sim.twin.netio import listening_socket
 
 log = logging.getLogger(__name__)
 
@@ -87,14 +88,7 @@ class CameraPort:
         self._number = 0
 
     def bind(self) -> None:
-        sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
-        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        try:
-            sock.bind((self.host, self.port))
-        except OSError as exc:
-            sock.close()
-            raise OSError(exc.errno, f"{self.host}:{self.port} (camera): {exc.strerror}") from exc
-        sock.listen(4)
+        sock = listening_socket(self.host, self.port, "camera", backlog=4)
         sock.settimeout(0.2)
         self._sock = sock
 

@@ -99,6 +99,19 @@ class Link:
             self.sock.shutdown(socket.SHUT_RDWR)
 
 
+def listening_socket(host: str, port: int, name: str, backlog: int) -> socket.socket:
+    """A TCP socket listening on host:port (address reuse on: a twin restarted at once binds again); an OSError naming
+    the address and the port's use when it is taken."""
+    sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    try:
+        sock.bind((host, port))
+    except OSError as exc:
+        sock.close()
+        raise OSError(exc.errno, f"{host}:{port} ({name}): {exc.strerror}") from exc
+    sock.listen(backlog)
+    return sock
+
 @dataclass(frozen=True)
 class Protocol:
     """A port the twin serves."""
@@ -133,15 +146,11 @@ class IoLoop:
     def bind(self) -> None:
         """Bind every port (OSError naming the port when one is taken); nothing is served until :meth:`start`."""
         for proto in self.protocols:
-            sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
-            sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
             try:
-                sock.bind((self.host, proto.port))
-            except OSError as exc:
-                sock.close()
+                sock = listening_socket(self.host, proto.port, proto.name, backlog=16)
+            except OSError:
                 self.close_listeners()
-                raise OSError(exc.errno, f"{self.host}:{proto.port} ({proto.name}): {exc.strerror}") from exc
-            sock.listen(16)
+                raise
             sock.setblocking(False)
             self._listeners[sock] = proto
 
