@@ -82,6 +82,19 @@ def _walk(path: Path, views: list[tuple[Detection, ...]], monkeypatch: pytest.Mo
     raise AssertionError("the tree did not finish in 3000 ticks")
 
 
+def _leaves_started(ticks: list[dict[str, str]], kinds: tuple[str, ...]) -> list[str]:
+    """The leaves of these kinds in the order they started (went RUNNING, or SUCCESS at once), tick by tick."""
+    started: list[str] = []
+    for before, after in zip([{}, *ticks], ticks, strict=False):
+        for path, state in after.items():
+            leaf_name = path.split("/")[-1].split("::")[0]
+            was = before.get(path, "IDLE")
+            began = (state == "RUNNING" and was != "RUNNING") or (state == "SUCCESS" and was in ("IDLE", "INVALID"))
+            if began and leaf_name in kinds:
+                started.append(leaf_name)
+    return started
+
+
 def test_clear_household_fits_its_scene() -> None:
     scene = load_scene(REPO / "scenes" / "household_clear.yaml")
     tree = load_tree(TREE, robot_registry(), clock=ManualClock())
@@ -150,14 +163,7 @@ def test_an_object_no_spot_takes_with_the_grip_held_is_set_down_and_the_round_en
     assert starts("PlaceIn") == 12 and starts("SetDown") == 12
     # tick by tick, the leaves the first round starts after its pick: IsGrasped, PlaceIn (fails), the
     # set-down's Retreat and SetDown; then the next round's MoveHome (no RecoverPlace, no second place)
-    started: list[str] = []
-    for before, after in zip([{}, *ticks], ticks, strict=False):
-        for path, state in after.items():
-            leaf_name = path.split("/")[-1].split("::")[0]
-            was = before.get(path, "IDLE")
-            began = (state == "RUNNING" and was != "RUNNING") or (state == "SUCCESS" and was in ("IDLE", "INVALID"))
-            if began and leaf_name in ("MoveHome", "Lift", "IsGrasped", "PlaceIn", "Retreat", "SetDown"):
-                started.append(leaf_name)
+    started = _leaves_started(ticks, ("MoveHome", "Lift", "IsGrasped", "PlaceIn", "Retreat", "SetDown"))
     assert started[:8] == ["MoveHome", "Lift", "IsGrasped", "PlaceIn", "Retreat", "SetDown", "MoveHome", "Lift"]
 
 
@@ -166,16 +172,8 @@ def test_one_round_runs_its_leaves_in_order(monkeypatch: pytest.MonkeyPatch) -> 
     # MoveHome, PerceiveAll (the view), SelectObject (the can), OpenGripper, PlanGrasp, Approach, Grasp, Lift,
     # IsGrasped (holding), PlaceIn; then the next round's MoveHome
     _, ticks, _ = _walk(TREE, [(CAN,), ()], monkeypatch)
-    started: list[str] = []
-    for before, after in zip([{}, *ticks], ticks, strict=False):
-        for path, state in after.items():
-            leaf_name = path.split("/")[-1].split("::")[0]
-            was = before.get(path, "IDLE")
-            began = (state == "RUNNING" and was != "RUNNING") or (state == "SUCCESS" and was in ("IDLE", "INVALID"))
-            if began \
-                    and leaf_name in ("MoveHome", "PerceiveAll", "SelectObject", "OpenGripper", "PlanGrasp",
-                                      "Approach", "Grasp", "Lift", "IsGrasped", "PlaceIn"):
-                started.append(leaf_name)
+    started = _leaves_started(ticks, ("MoveHome", "PerceiveAll", "SelectObject", "OpenGripper", "PlanGrasp",
+                                      "Approach", "Grasp", "Lift", "IsGrasped", "PlaceIn"))
     assert started[:11] == ["MoveHome", "PerceiveAll", "SelectObject", "OpenGripper", "PlanGrasp", "Approach",
                             "Grasp", "Lift", "IsGrasped", "PlaceIn", "MoveHome"]
 

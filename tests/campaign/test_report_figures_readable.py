@@ -37,20 +37,6 @@ def _rows(episodes_per_worker: int = 4) -> list[dict[str, Any]]:
     return rows
 
 
-@pytest.fixture
-def drawn(monkeypatch: pytest.MonkeyPatch) -> list[Any]:
-    """Each figure a plot function draws, caught where it is turned into PNG bytes."""
-    caught: list[Any] = []
-    real = plots._png
-
-    def keep(fig: Any) -> bytes:
-        caught.append(fig)
-        return real(fig)
-
-    monkeypatch.setattr(plots, "_png", keep)
-    return caught
-
-
 @pytest.mark.parametrize("name", ["success", "failures", "retries", "comparison"])
 def test_no_legend_covers_a_label_a_bar_or_an_error_bar(name: str, drawn: list[Any]) -> None:
     rows = _rows()

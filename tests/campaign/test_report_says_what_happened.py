@@ -40,16 +40,9 @@ def _rows() -> list[dict[str, Any]]:
 
 
 @pytest.fixture
-def figures(monkeypatch: pytest.MonkeyPatch) -> dict[str, Any]:
+def figures(drawn: list[Any]) -> dict[str, Any]:
     """Each plot's matplotlib Figure, caught where it is turned into PNG bytes."""
-    caught: list[Any] = []
-    real = plots._png
-
-    def keep(fig: Any) -> bytes:
-        caught.append(fig)
-        return real(fig)
-
-    monkeypatch.setattr(plots, "_png", keep)
+    caught = drawn
     rows = _rows()
     out = {}
     for name, draw in (("success", lambda: plots.success_by_group(rows, "c")),
