@@ -40,8 +40,6 @@ SURVEY_PULL_M = 0.02
 #: a second look at one half of the work area (view="workspace-left" etc.), from this close, m: the survey's view
 #: does not reach the work area's edges (a box at y = -0.31 m of the default +-0.35 m was never seen)
 HALF_VIEW_DISTANCE_M = 0.45
-#: the halves of the work area a second look may take (base frame: near/far along x, left = +y)
-HALVES = ("near", "far", "left", "right")
 
 
 def parse_point(text: str) -> NDArray[np.float64] | None:
