@@ -43,8 +43,17 @@ def open_recording(path: str | Path, settings: RealSenseSettings = RealSenseSett
         # not in real time, set on the device the pipeline will start, before it starts: a pipeline started in
         # real time drops the frames that arrive before both sensors stream (often the first pair)
         resolved = config.resolve(rs.pipeline_wrapper(pipeline))
-        resolved.get_device().as_playback().set_real_time(False)
+        device = resolved.get_device().as_playback()
+        device.set_real_time(False)
+        # paused until both sensors stream: librealsense's playback starts reading the file when the first of its
+        # sensors starts and drops what it reads for a sensor not yet started, and it takes each start on its reading
+        # thread after pipeline.start returned (its status reads "stopped" until then). resume() returns once the
+        # reading thread took both starts, so from here "stopped" means the file ended. A 1-frame household
+        # recording lost its only pair once in CI (never in 1,000 tries here, loaded or not).
+        device.pause()
         profile = pipeline.start(config)
+        playback = profile.get_device().as_playback()
+        playback.resume()
     except RuntimeError as exc:
         raise library_problem(path, exc) from None
     kinds = {str(s.stream_type()) for s in profile.get_streams()}
@@ -54,7 +63,6 @@ def open_recording(path: str | Path, settings: RealSenseSettings = RealSenseSett
         pipeline.stop()
         raise RecordingError(path, f"holds no {' and no '.join(missing)} stream (bt_grasp needs both)")
     _check_color_format(rs, profile, path, pipeline)
-    playback = profile.get_device().as_playback()
     return RealSenseCamera(rs, pipeline, profile, settings, mount, str(path), playback=playback)
 
 
