@@ -64,7 +64,7 @@ def test_a_one_frame_recording_gives_its_frame_at_every_opening(tmp_path: Path) 
     played. A 1-frame household recording came back empty once in CI; 15 openings here, each its frame, then the
     end."""
     path = tmp_path / "one.db3"
-    ((depth, color),) = write_recording(path, 1)
+    ((_depth, color),) = write_recording(path, 1)
     for _ in range(15):
         with open_recording(path) as camera:
             frame = camera.capture()
