@@ -94,6 +94,19 @@ def _check_tables(path: Path) -> None:
         raise RecordingError(path, "holds no image stream (a RealSense recording of depth and colour is needed)")
 
 
+def frames_held(path: str | Path) -> dict[str, int]:
+    """How many pictures a ``.db3`` recording holds per image stream (its image-data topics), read from the file
+    itself: what a playback that returned fewer frames should have returned."""
+    uri = f"{Path(path).resolve().as_uri()}?mode=ro&immutable=1"
+    db = sqlite3.connect(uri, uri=True)
+    try:
+        rows = db.execute("SELECT t.name, COUNT(*) FROM messages m JOIN topics t ON m.topic_id = t.id "
+                          "WHERE t.name LIKE '%/image/data%' GROUP BY t.name").fetchall()
+    finally:
+        db.close()
+    return {str(name): int(count) for name, count in rows}
+
+
 def library_problem(path: str | Path, exc: Exception) -> RecordingError:
     """pyrealsense2's refusal of a recording as one sentence (its own reason, shortened to its last clause)."""
     text = " ".join(str(exc).split())

@@ -24,6 +24,7 @@ from numpy.typing import NDArray
 
 from bt_grasp.detector.kinds import DetectorKind
 from bt_grasp.geometry import rotation_angle_rad
+from bt_grasp.hardware.recording_file import frames_held
 from bt_grasp.interfaces import Mount, RGBDFrame
 from bt_grasp.perception.calibration_file import calibration_for_scene
 from bt_grasp.scene.format import Scene, load_scene
@@ -249,7 +250,9 @@ def _depth(scene_path: Path, config: Scene, seed: int, frames: int, out: Path
     record_scene(scene_path, seed, out, frames, config=config, on_frame=simulated.append)
     played = _recorded_depth(out, frames)
     if len(played) != len(simulated):
-        raise RuntimeError(f"{out}: {len(played)} of the {len(simulated)} frames recorded came back")
+        held = ", ".join(f"{count} on {name}" for name, count in sorted(frames_held(out).items()))
+        raise RuntimeError(f"{out}: {len(played)} of the {len(simulated)} frames recorded came back (the file holds "
+                           f"{held or 'no picture'})")
     recorded = np.concatenate([r.ravel() for r in played])
     own = np.concatenate([s.aligned_depth_m.ravel() for s in simulated])
     return depth_stats(recorded, own), recorded, simulated

@@ -16,7 +16,7 @@ from rs_fixtures import H, W, streams, write_recording
 from bt_grasp.cli.main import main
 from bt_grasp.errors import InputError
 from bt_grasp.hardware.realsense_open import open_recording
-from bt_grasp.hardware.recording_file import RecordingError, RecordingFormat, check_recording
+from bt_grasp.hardware.recording_file import RecordingError, RecordingFormat, check_recording, frames_held
 from bt_grasp.hardware.tool_poses import ToolPose, poses_path, read_poses, write_poses
 
 REPO = Path(__file__).resolve().parents[2]
@@ -38,6 +38,8 @@ def recording(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, list[tupl
 def test_every_frame_plays_back_in_order_through_the_pipeline_and_align(recording: tuple) -> None:
     path, written = recording
     assert check_recording(path) is RecordingFormat.DB3
+    held = frames_held(path)  # what a playback that came back short is told the file holds
+    assert sorted(held.values()) == [12, 12] and all("/image/data" in name for name in held), held
     with open_recording(path) as camera:
         info = camera.info
         frames = []
