@@ -22,10 +22,17 @@ along the pads as it turns can sink further (a bowl held at its rim's top with t
 45 degrees and sank 4.4 cm where 4.1 were allowed: the judge's 1 cm of slack covers that much). The box alone
 is a poor guide for a tilted approach: the wide bowl's box reaches far along a tilted axis (2.9 cm allowed
 there). The allowance is capped at :data:`MAX_HANG_M`.
+
+Held by a wall (a rim grasp: the pads close on a wall much thinner than the object, as a plate's or a bowl's
+rim), the object can also slide in the pads' plane as it turns, until it hangs from the held material farthest
+from its centre: the lever is then that distance when it is longer than |c - p| (the held material: the visible
+points between the pads within their length). The household plate held 6.8 cm from its centre hung from its
+outer rim, 8.2 cm out, and rose 13.2 of 15 cm with the turn alone allowed (learned held-out seeds 134 and 190).
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -80,16 +87,32 @@ def between_pads_base_m(T_base_tcp: NDArray[np.float64], points_base_m: NDArray[
     return np.asarray(pts[inside], dtype=np.float64)
 
 
-def hang_allowance_m(held_base_m: Sequence[float] | NDArray[np.float64], centre_base_m: Sequence[float]) -> float:
+def hang_allowance_m(held_base_m: Sequence[float] | NDArray[np.float64], centre_base_m: Sequence[float],
+                     slide_lever_m: float = 0.0) -> float:
     """How far the object's centre may sink relative to the tool by turning about the point it is held at (base
-    frame, m), in [0, MAX_HANG_M]; 0 when either point is not finite."""
+    frame, m), in [0, MAX_HANG_M]; 0 when either point is not finite. ``slide_lever_m``: a longer lever the object
+    may end up hanging by when it slides in the pads (a rim grasp: :func:`wall_lever_m`)."""
     held = np.asarray(held_base_m, dtype=float).reshape(3)
     centre = np.asarray(centre_base_m, dtype=float).reshape(3)
     if not (np.all(np.isfinite(held)) and np.all(np.isfinite(centre))):
         return 0.0
     lever = centre - held
-    sink = float(np.linalg.norm(lever)) + float(lever[2])
+    length = max(float(np.linalg.norm(lever)), float(slide_lever_m) if math.isfinite(slide_lever_m) else 0.0)
+    sink = length + float(lever[2])
     return min(MAX_HANG_M, max(0.0, sink))
+
+
+def wall_lever_m(T_base_tcp: NDArray[np.float64], material_base_m: NDArray[np.float64],
+                 centre_base_m: Sequence[float]) -> float:
+    """The farthest the held material (points between the pads, within the pads' length along the approach)
+    lies from the object's centre, m; 0 with no such point."""
+    T = np.asarray(T_base_tcp, dtype=float)
+    pts = np.asarray(material_base_m, dtype=float).reshape(-1, 3)
+    along = (pts - T[:3, 3]) @ T[:3, 2]
+    held = pts[(along >= -PAD_BEHIND_TCP_M) & (along <= TCP_TO_FINGERTIP_M)]
+    if not len(held):
+        return 0.0
+    return float(np.max(np.linalg.norm(held - np.asarray(centre_base_m, dtype=float).reshape(1, 3), axis=1)))
 
 
 @dataclass(frozen=True)
@@ -104,19 +127,23 @@ class HeldObject:
     width_m: float = 0.0
 
 
-def lift_rise_m(height_m: float, T_base_tcp: NDArray[np.float64] | None, held: HeldObject | None) -> float:
+def lift_rise_m(height_m: float, T_base_tcp: NDArray[np.float64] | None, held: HeldObject | None,
+                by_wall: bool = False) -> float:
     """How far the tool rises so that the object rises ``height_m``: the height plus the hang allowance when the
     grasp's pose and the object are known, else the height alone. Where the object is held comes from its visible
-    points between the pads (at least :data:`MIN_POINTS_HELD`); without them, from its box."""
+    points between the pads (at least :data:`MIN_POINTS_HELD`); without them, from its box. ``by_wall``: a rim
+    grasp, whose object may slide in the pads until it hangs from the farthest held point (seen points only)."""
     if T_base_tcp is None or held is None:
         return float(height_m)
     material = np.zeros((0, 3))
     if held.points_base_m is not None:
         material = between_pads_base_m(T_base_tcp, held.points_base_m, held.width_m)
-    if len(material) < MIN_POINTS_HELD:
+    seen = len(material) >= MIN_POINTS_HELD
+    if not seen:
         material = box_corners_base_m(held.centre_base_m, held.size_m, held.yaw_rad)
-    return float(height_m) + hang_allowance_m(held_point_base_m(T_base_tcp, material), held.centre_base_m)
+    slide = wall_lever_m(T_base_tcp, material, held.centre_base_m) if by_wall and seen else 0.0
+    return float(height_m) + hang_allowance_m(held_point_base_m(T_base_tcp, material), held.centre_base_m, slide)
 
 
 __all__ = ["MAX_HANG_M", "PAD_BEHIND_TCP_M", "HeldObject", "between_pads_base_m", "box_corners_base_m",
-           "hang_allowance_m", "held_point_base_m", "lift_rise_m"]
+           "hang_allowance_m", "held_point_base_m", "lift_rise_m", "wall_lever_m"]

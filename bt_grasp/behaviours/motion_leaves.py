@@ -512,7 +512,8 @@ class Lift(_MovingLeaf):
     Without ``target`` the tool rises ``height``. With it (and a grasp on the blackboard) the object is what
     rises ``height``: the tool rises further by how far the object's perceived centre may sink by turning about
     where the pads hold it (:func:`~bt_grasp.behaviours.hang.lift_rise_m`: 0 for a grasp through the centre or
-    above it, about the lever's length for a centre level with the grip, as a bowl held by its rim). When that
+    above it, about the lever's length for a centre level with the grip, as a bowl held by its rim; for a rim
+    grasp, the lever to the farthest held point seen, as the object may slide in the pads). When that
     higher line is out of reach or blocked, the tool rises ``height`` alone."""
 
     def segments(self) -> list[Segment] | Status:
@@ -527,7 +528,10 @@ class Lift(_MovingLeaf):
             target.centroid_base_m, target.size_m, target.yaw_rad,
             None if target.points_base_m is None else np.asarray(target.points_base_m, dtype=float),
             planned_width_m(grasp) or 0.0)
-        rise = lift_rise_m(height, None if T_grasp is None else np.asarray(T_grasp, dtype=float), held)
+        by_wall = (target is not None and T_grasp is not None
+                   and grasp_family(np.asarray(T_grasp, dtype=float), planned_width_m(grasp) or 0.0,
+                                    target) is GraspFamily.RIM)
+        rise = lift_rise_m(height, None if T_grasp is None else np.asarray(T_grasp, dtype=float), held, by_wall)
         # deferred: scipy comes with it; a tree loads and validates without it
         from bt_grasp.motion.planning_scene import PlanningScene
 

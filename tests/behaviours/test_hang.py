@@ -18,6 +18,7 @@ from bt_grasp.behaviours.hang import (
     hang_allowance_m,
     held_point_base_m,
     lift_rise_m,
+    wall_lever_m,
 )
 from bt_grasp.geometry import make_T
 
@@ -99,6 +100,35 @@ def test_the_visible_points_between_the_pads_say_where_a_tilted_grasp_holds() ->
     assert lift_rise_m(0.15, T, seen) == pytest.approx(0.15 + expected)
     few = HeldObject(*box, points_base_m=wall[:9], width_m=0.008)  # under 10 points between the pads: the box
     assert lift_rise_m(0.15, T, few) == pytest.approx(0.15 + hang_allowance_m(from_box, box[0]))
+
+
+def test_a_plate_held_by_its_rim_may_hang_from_its_outer_edge() -> None:
+    # the household plate (164 mm across, 22 mm high, centre 11 mm up), held top-down 68 mm out with the pads 39 mm
+    # apart (they span 48.5-87.5 mm out: the rim and the edge between them), the tcp 30 mm up. Its seen points
+    # between the pads: the top near the rim and the outer edge (82 mm out). Held from its top (8 mm ahead of the
+    # tcp) to the tips (20 mm): at 16 mm up. Turning about that point its centre sinks |c - p| - 5 mm = 63.2 mm; held
+    # by a wall it may slide in the pads until it hangs from its edge: 82.7 mm - 5 mm = 77.7 mm (seeds 134 and 190
+    # of the learned held-out set: the plate rose 13.2 and 13.5 cm of 15 with the first, 15.3 and 14.8 with the
+    # second)
+    T = _top_down(0.0, -0.068, 0.030)
+    top = [(x, y, 0.022) for x in (-0.008, 0.0, 0.008) for y in np.linspace(-0.080, -0.052, 8)]
+    edge = [(x, -math.sqrt(0.082**2 - x**2), z) for x in (-0.008, 0.0, 0.008) for z in (0.0, 0.011, 0.022)]
+    beyond = [(0.0, 0.060, 0.022), (0.05, -0.03, 0.022)]  # the plate's other side and a point off the pads
+    points = np.array(top + edge + beyond)
+    plate = HeldObject((0.0, 0.0, 0.011), (0.164, 0.164, 0.022), 0.0, points_base_m=points, width_m=0.039)
+    between = between_pads_base_m(T, points, 0.039)
+    assert len(between) == len(top) + len(edge)
+    held = held_point_base_m(T, between)
+    assert np.allclose(held, (0.0, -0.068, 0.016))
+    turn = math.hypot(0.068, 0.005) - 0.005
+    assert lift_rise_m(0.15, T, plate) == pytest.approx(0.15 + turn)
+    far = math.sqrt(0.082**2 + 0.011**2)  # its edge at the table or at its top, 82 mm out
+    assert wall_lever_m(T, between, plate.centre_base_m) == pytest.approx(far)
+    assert lift_rise_m(0.15, T, plate, by_wall=True) == pytest.approx(0.15 + far - 0.005)
+    # without seen points (its box): no sliding lever, the turn alone (a box's corners are not its held wall)
+    boxed = HeldObject((0.0, 0.0, 0.011), (0.164, 0.164, 0.022), 0.0)
+    assert lift_rise_m(0.15, T, boxed, by_wall=True) == pytest.approx(lift_rise_m(0.15, T, boxed))
+    assert hang_allowance_m(held, plate.centre_base_m, math.nan) == pytest.approx(turn)
 
 
 def test_without_a_grasp_or_an_object_the_lift_is_the_height() -> None:
