@@ -48,6 +48,11 @@ class ConfigError(InputError):
     """A configuration file (scene, calibration, fault plan, ...) is invalid."""
 
 
+class LayoutError(ConfigError):
+    """A scene whose objects cannot be laid out without overlapping for one seed: the seed's draw, not the file,
+    is the problem (another seed may lay them out). A benchmark over many seeds lists such a seed and goes on."""
+
+
 class TreeFileError(InputError):
     """A behaviour-tree file (XML or YAML) is invalid."""
 

@@ -26,6 +26,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, NotRequired, TypedDict
 
+from bt_grasp.errors import LayoutError
 from bt_grasp.interfaces import Mount
 from bt_grasp.process.environment import machine_description
 
@@ -71,6 +72,8 @@ class PickBench(TypedDict):
     detector: NotRequired[str]
     targets: NotRequired[dict[int, str]]
     worlds: NotRequired[str]
+    #: seeds whose objects the scene cannot lay out without overlapping (bt_grasp.errors.LayoutError): not run
+    unplaced_seeds: NotRequired[dict[int, str]]
 
 
 def default_pick_trees(detector: str = "geometric") -> list[Path]:
@@ -123,6 +126,7 @@ def run_pick_bench(
         worlds: WorldSource = WarmWorlds() if warm else FreshWorlds()
         report["worlds"] = ("warm (a renderer kept warm; each episode's world built afresh)" if warm
                             else "fresh (a new world per episode)")
+        unplaced: dict[int, str] = {}
         for tree in trees:
             runs: list[EpisodeResult] = []
             for seed in range(first_seed, first_seed + seeds):
@@ -135,9 +139,21 @@ def run_pick_bench(
                 elif color != "red":
                     request = replace(request, goal=PickGoal(kind="pick", color=color or None),
                                       blackboard={**request.blackboard, "color": color})
-                runs.append(run_episode(request, worlds=worlds))
+                try:
+                    runs.append(run_episode(request, worlds=worlds))
+                except LayoutError as exc:  # this seed's draw, not the file: listed, and the others still run
+                    unplaced[seed] = exc.problem
+                    if progress is not None:
+                        progress(f"{tree.name} seed {seed}: not run: {exc.problem}")
+                    continue
                 if progress is not None:
                     progress(f"{tree.name} seed {seed}: {_outcome(runs[-1])}")
+            if not runs:
+                first = min(unplaced)
+                raise LayoutError(scene, f"none of seeds {first_seed}..{first_seed + seeds - 1} lays the objects out "
+                                  f"without overlapping (seed {first}: {unplaced[first]})")
+            if unplaced:
+                report["unplaced_seeds"] = dict(sorted(unplaced.items()))
             ok = [r for r in runs if r.success]
             report["trees"][str(tree)] = {
                 "runs": len(runs),

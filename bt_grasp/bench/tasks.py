@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import TypedDict
 
 from bt_grasp.defaults import DEFAULT_MAX_TICKS
+from bt_grasp.errors import LayoutError
 from bt_grasp.scene.goals import ClearGoal
 
 #: repository root (trees/ and scenes/ live there)
@@ -57,6 +58,8 @@ class TaskSummary(TypedDict):
     seeds: str
     failures: dict[str, int]
     failed_seeds: list[int]
+    #: seeds whose objects the scene cannot lay out without overlapping (bt_grasp.errors.LayoutError): not run
+    unplaced_seeds: dict[int, str]
     sim_time_s_median: float
     wall_time_s_median: float
 
@@ -70,6 +73,7 @@ class TaskFigures:
     successes: int = 0
     failures: Counter[str] = field(default_factory=Counter)  # "reason / failed condition" -> count
     failed_seeds: list[int] = field(default_factory=list)
+    unplaced_seeds: dict[int, str] = field(default_factory=dict)
     sim_time_s: list[float] = field(default_factory=list)
     wall_time_s: list[float] = field(default_factory=list)
     successes_strict: int | None = None
@@ -85,12 +89,14 @@ class TaskFigures:
             "seeds": f"{self.seeds[0]}..{self.seeds[-1]}" if self.seeds else "",
             "failures": dict(self.failures),
             "failed_seeds": self.failed_seeds,
+            "unplaced_seeds": self.unplaced_seeds,
             "sim_time_s_median": round(statistics.median(self.sim_time_s), 2) if self.sim_time_s else 0.0,
             "wall_time_s_median": round(statistics.median(self.wall_time_s), 2) if self.wall_time_s else 0.0,
         }
 
 
-Progress = Callable[[str, int, bool, str], None]
+#: (task, seed, success or None when the seed was not run, why)
+Progress = Callable[[str, int, bool | None, str], None]
 
 
 def run_task_bench(tasks: Sequence[Task], seeds: int, first_seed: int = 0, root: Path = REPO,
@@ -109,10 +115,16 @@ def run_task_bench(tasks: Sequence[Task], seeds: int, first_seed: int = 0, root:
         worlds = WarmWorlds()
         for seed in range(first_seed, first_seed + seeds):
             t0 = time.perf_counter()
-            result = run_episode(EpisodeRequest(tree=tree, scene=scene, seed=seed,
-                                                blackboard=run_blackboard(),  # `bt-grasp run`'s
-                                                max_ticks=task.max_ticks,
-                                                also_judge=() if strict is None else (strict,)), worlds=worlds)
+            try:
+                result = run_episode(EpisodeRequest(tree=tree, scene=scene, seed=seed,
+                                                    blackboard=run_blackboard(),  # `bt-grasp run`'s
+                                                    max_ticks=task.max_ticks,
+                                                    also_judge=() if strict is None else (strict,)), worlds=worlds)
+            except LayoutError as exc:  # this seed's draw, not the file: listed, and the others still run
+                figures.unplaced_seeds[seed] = exc.problem
+                if progress is not None:
+                    progress(task.name, seed, None, exc.problem)
+                continue
             if strict is not None and figures.successes_strict is not None:
                 figures.successes_strict += int(result.tree_status == "SUCCESS" and result.also_judged[0].success)
             figures.seeds.append(seed)

@@ -145,8 +145,9 @@ def tasks(
 
     err = Console(stderr=True)
 
-    def progress(name: str, seed: int, ok: bool, why: str) -> None:  # stderr: stdout stays one JSON object
-        err.print(f"{name} seed {seed}: {'success' if ok else 'FAILURE ' + why}", highlight=False, markup=False)
+    def progress(name: str, seed: int, ok: bool | None, why: str) -> None:  # stderr: stdout stays one JSON object
+        outcome = "success" if ok else ("not run: " if ok is None else "FAILURE ") + why
+        err.print(f"{name} seed {seed}: {outcome}", highlight=False, markup=False)
 
     figures = run_task_bench(chosen, seeds, first_seed, progress=progress)
     rows = [f.summary() for f in figures]
@@ -166,6 +167,10 @@ def tasks(
         table.add_row(f["task"], f"{f['successes']}/{f['episodes']}{also}", f"{f['success_rate']:.0%}",
                       f"{f['sim_time_s_median']:.1f}", f"{f['wall_time_s_median']:.1f}", failures)
     Console().print(table)
+    for f in rows:
+        for seed, problem in f["unplaced_seeds"].items():
+            Console().print(f"{f['task']} seed {seed} not run: {problem} (the scene's objects do not fit at this seed)",
+                            highlight=False, markup=False)
     Console().print(f"machine: {summary['machine']}")
 
 

@@ -70,6 +70,9 @@ def pick(
         )
     console = Console()
     console.print(table)
+    for seed, problem in report.get("unplaced_seeds", {}).items():
+        console.print(f"seed {seed} not run: {problem} (the scene's objects do not fit at this seed)", highlight=False,
+                      markup=False)
     for tree, r in report["trees"].items():
         for name, o in r["per_object"].items():
             reasons = ", ".join(f"{k} x{v}" for k, v in o["failure_reasons"].items()) or "-"

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import sapien
 
-from bt_grasp.errors import ConfigError
+from bt_grasp.errors import ConfigError, LayoutError
 from bt_grasp.files.safe_path import join_under
 from bt_grasp.geometry import Mat4, convex_hull_xy, make_T, rot_z
 from bt_grasp.scene.mesh_cache import collision_shapes
@@ -115,7 +115,7 @@ def draw_poses(
             if clear:
                 break
         else:
-            raise ConfigError(source, f"cannot place object '{obj.name}' without overlapping others", "objects")
+            raise LayoutError(source, f"cannot place object '{obj.name}' without overlapping others", "objects")
         z = resting_z_m(obj, table_top_z_m, R_rest)
         placed.append(PlacedObject(obj, _turned(make_T(rot_z(yaw), [x, y, z]), R_rest)))
     return placed
