@@ -14,6 +14,7 @@ an L's empty corner was ranked first.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -148,8 +149,7 @@ def _block(x: float, y: float, size: tuple[float, float, float]) -> Detection:
     return Detection("object", (0, 0, 1, 1), (x, y, size[2] / 2), size, 0.0, 100, 1.0)
 
 
-def test_a_pen_clear_only_near_one_end_is_found_by_drawing_contacts_more_densely(
-        monkeypatch: pytest.MonkeyPatch) -> None:
+def test_a_pen_clear_only_near_one_end_is_found_by_drawing_contacts_more_densely() -> None:
     """A lying pen between two 6 cm blocks 25 mm from its axis on either side, which leave only its last 30 mm on
     -x clear: the open pads (85 mm apart) fit only there. 64 contacts drawn over its cloud miss that stretch
     (household seed 76 in the simulator: NOTHING_TO_GRASP); drawn again four times as densely, they find it."""
@@ -159,9 +159,10 @@ def test_a_pen_clear_only_near_one_end_is_found_by_drawing_contacts_more_densely
     cx = pen.centroid_base_m[0]
     length = 0.073 + 0.1 - 0.030  # from 10 cm past the pen's +x end to 30 mm short of its -x end
     blocks = [_block(cx + 0.1 - length / 2, side * (0.025 + 0.03), (length, 0.06, 0.06)) for side in (1.0, -1.0)]
-    with monkeypatch.context() as once:
-        once.setattr(antipodal, "DENSER_SAMPLES", 1)
-        assert not rank_grasps(pen, (pen, *blocks), viewpoint_base_m=CAMERA).ok
+    s = AntipodalSettings()
+    assert not antipodal.sampled_grasps(pen, (pen, *blocks), s, viewpoint_base_m=CAMERA)  # the first draw
+    denser = replace(s, samples=antipodal.DENSER_SAMPLES * s.samples)
+    assert antipodal.sampled_grasps(pen, (pen, *blocks), denser, viewpoint_base_m=CAMERA)  # the second finds it
     result = rank_grasps(pen, (pen, *blocks), viewpoint_base_m=CAMERA)
     assert result.ok, result.message
     along = result.candidates[0].T_base_tcp_grasp[0, 3] - cx
