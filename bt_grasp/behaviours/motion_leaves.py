@@ -528,10 +528,10 @@ class Lift(_MovingLeaf):
             target.centroid_base_m, target.size_m, target.yaw_rad,
             None if target.points_base_m is None else np.asarray(target.points_base_m, dtype=float),
             planned_width_m(grasp) or 0.0)
-        by_wall = (target is not None and T_grasp is not None
-                   and grasp_family(np.asarray(T_grasp, dtype=float), planned_width_m(grasp) or 0.0,
-                                    target) is GraspFamily.RIM)
-        rise = lift_rise_m(height, None if T_grasp is None else np.asarray(T_grasp, dtype=float), held, by_wall)
+        T = None if T_grasp is None else np.asarray(T_grasp, dtype=float)
+        by_wall = (target is not None and T is not None
+                   and grasp_family(T, planned_width_m(grasp) or 0.0, target) is GraspFamily.RIM)
+        rise = lift_rise_m(height, T, held, by_wall)
         # deferred: scipy comes with it; a tree loads and validates without it
         from bt_grasp.motion.planning_scene import PlanningScene
 

@@ -75,10 +75,14 @@ def _check_sqlite_size(path: Path, head: bytes, size: int) -> None:
         raise RecordingError(path, f"is truncated: {size} bytes, its header says {pages * page_size}")
 
 
+def _read_only(path: str | Path) -> sqlite3.Connection:
+    """The recording's database, opened read-only and immutable (nothing of it is written or locked)."""
+    return sqlite3.connect(f"{Path(path).resolve().as_uri()}?mode=ro&immutable=1", uri=True)
+
+
 def _check_tables(path: Path) -> None:
-    uri = f"{path.resolve().as_uri()}?mode=ro&immutable=1"
     try:
-        db = sqlite3.connect(uri, uri=True)
+        db = _read_only(path)
     except sqlite3.Error as exc:
         raise RecordingError(path, f"cannot be opened as a database ({exc})") from None
     try:
@@ -97,8 +101,7 @@ def _check_tables(path: Path) -> None:
 def frames_held(path: str | Path) -> dict[str, int]:
     """How many pictures a ``.db3`` recording holds per image stream (its image-data topics), read from the file
     itself: what a playback that returned fewer frames should have returned."""
-    uri = f"{Path(path).resolve().as_uri()}?mode=ro&immutable=1"
-    db = sqlite3.connect(uri, uri=True)
+    db = _read_only(path)
     try:
         rows = db.execute("SELECT t.name, COUNT(*) FROM messages m JOIN topics t ON m.topic_id = t.id "
                           "WHERE t.name LIKE '%/image/data%' GROUP BY t.name").fetchall()
